@@ -1,0 +1,57 @@
+// The system mass matrix and the equations of motion 𝓜(q) q̈ = τ − bias(q, q̇).
+//
+// Pipeline: update_kinematics(q) → [mass_matrix] → update_velocities(v) → bias / inverse /
+// forward dynamics.  Each stage reads what the earlier ones cached in Data.
+#pragma once
+
+#include "soadyn/data.hpp"
+#include "soadyn/model.hpp"
+
+#include <string_view>
+
+namespace soadyn {
+
+// 𝓜 by the note's three-step procedure: J = Ψ_D G column by column, Q = M J, 𝓜 = Jᵀ Q.
+// O(N²) and kept as the readable reference.  Needs [kin].
+void mass_matrix_literal(const Model& model, const Data& data, MatX& M_out);
+
+// 𝓜 = Gᵀ Ψ_Dᵀ M Ψ_D G (eq. 14) from composite inertias: one tip-to-base sweep
+// K_p += D_iᵀ K_i D_i and, per body, a walk up its ancestors.  O(N·depth).  Needs [kin];
+// fills data.Mass (both triangles).
+void mass_matrix(const Model& model, Data& data);
+
+// bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D a + b): Coriolis, centrifugal, gyroscopic and gravity.
+// Needs [kin] and [vel]; fills data.bias.
+void bias_forces(const Model& model, Data& data);
+
+// τ = 𝓜 q̈ + bias with the same two sweeps.  Needs [kin] and [vel]; fills data.tau.
+void inverse_dynamics(const Model& model, Data& data, const VecX& qdd);
+
+enum class FdMethod {
+  Dense,   // composite 𝓜, then Cholesky
+  Sparse,  // composite 𝓜 factored in place as LᵀDL along the tree (no fill-in off ancestor chains)
+  ON       // articulated-body recursion (the factored inverse mass matrix); 𝓜 never formed
+};
+std::string_view to_string(FdMethod m);
+FdMethod parse_fd_method(std::string_view s);  // "dense", "sparse", "on"; throws soadyn::Error
+
+// q̈ = 𝓜⁻¹ (τ − bias).  Needs [kin] and [vel]; fills data.qdd (Dense and Sparse also fill
+// data.Mass and data.bias).
+void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method);
+
+// The tree-sparse route in two parts, for reuse: factor data.Mass into data.L, then solve in place.
+void ltdl_factor(const Model& model, Data& data);
+void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x);
+
+// T = ½ Σ (ω_iᵀ I_i ω_i + m_i ṙ_iᵀ ṙ_i)   (eq. 9).  Needs [vel].
+double kinetic_energy(const Model& model, const Data& data);
+// V = −Σ m_i g·r_i over every body with mass, the world-welded ones included.  Needs [kin].
+double potential_energy(const Model& model, const Data& data);
+
+struct Momentum {
+  Vec3 linear = Vec3::Zero();   // Σ m_i ṙ_i
+  Vec3 angular = Vec3::Zero();  // Σ I_i ω_i + r_i × m_i ṙ_i, about the inertial origin
+};
+Momentum momentum(const Model& model, const Data& data);
+
+}  // namespace soadyn

@@ -1,0 +1,55 @@
+// Per-state arrays, sized once from a Model.  Each field names the stage that fills it:
+//   [kin]  update_kinematics(q)      [vel] update_velocities(v)
+//   [crb]  mass_matrix               [rne] bias_forces / inverse_dynamics
+//   [fd]   forward_dynamics
+// No algorithm allocates once a Data exists.
+#pragma once
+
+#include "soadyn/inertia.hpp"
+#include "soadyn/model.hpp"
+
+#include <Eigen/Cholesky>
+
+#include <vector>
+
+namespace soadyn {
+
+struct Data {
+  explicit Data(const Model& model);
+
+  // [kin] positions, all inertial (the note's symbols)
+  std::vector<Mat3> R;                 // body i frame → inertial (C_i^in)
+  Mat3X eta;                           // η_i, joint point of body i (its frame origin)
+  Mat3X d;                             // d_i = η_i − η_parent(i)   (η_i itself at a root)
+  Mat3X s;                             // s_i = r_i − η_i, joint to cm
+  Mat3X r;                             // r_i, centre of mass
+  Mat6X G;                             // 6×nv: columns idx_v[i].. are G_i (g_i in [g;0] or [0;g])
+  std::vector<Mat3> I_cm;              // I_i about the cm
+  std::vector<SpatialInertia> M;       // M_i about η_i   (eq. 12)
+
+  // [vel] velocities and velocity-product terms
+  Mat6X V;                             // v_i = [ω_i; η̇_i]      (eq. 4: v = Ψ_D G q̇)
+  Mat6X Vbar;                          // v̄_i = [ω_i; ṙ_i]      (eq. 5: v̄ = S v)
+  Mat6X a;                             // Ḋ_i v_p + Ġ_i q̇_i, and [0; −g] at roots
+  Mat6X b;                             // gyroscopic force pair about η_i
+
+  // [crb] system mass matrix
+  std::vector<SpatialInertia> K;       // composite inertia of the subtree of i, about η_i
+  MatX Mass;                           // 𝓜 (eq. 14), nv×nv, full symmetric
+
+  // [rne] and [fd]
+  Mat6X A;                             // joint accelerations v̇_i
+  Mat6X F;                             // joint force pairs about η_i
+  VecX bias;                           // bias(q, q̇) incl. gravity, nv
+  VecX tau;                            // inverse dynamics result, nv
+  VecX qdd;                            // forward dynamics result, nv
+  MatX L;                              // 𝓜 factored in place as LᵀDL (tree-sparse route)
+  Eigen::LLT<MatX> llt;                // 𝓜 = L Lᵀ (dense route)
+  std::vector<Mat6> P;                 // articulated inertias (O(N) route)
+  Mat6X z;                             // articulated bias forces
+  std::vector<Mat6G> U;                // U_i = P_i G_i
+  std::vector<MatGG> Dinv;             // (G_iᵀ P_i G_i)⁻¹
+  VecX u;                              // τ_i − G_iᵀ z_i
+};
+
+}  // namespace soadyn

@@ -1,0 +1,25 @@
+// Kinematics at a state: every quantity the note needs, in inertial coordinates.
+#pragma once
+
+#include "soadyn/data.hpp"
+#include "soadyn/model.hpp"
+
+namespace soadyn {
+
+// [kin] R_i, η_i, d_i, s_i, r_i, G_i, I_i and M_i at configuration q (size nq).
+void update_kinematics(const Model& model, Data& data, const VecX& q);
+
+// [vel] v = Ψ_D G q̇ (eq. 4), v̄ = S v (eq. 5), and the velocity-product terms a_i, b_i used by the
+// dynamics.  Needs [kin].  v has size nv.
+void update_velocities(const Model& model, Data& data, const VecX& v);
+
+// The note's 6×6 blocks of body i at the current [kin] state.
+Mat6 D_matrix(const Data& data, int i);  // D_i = [e 0; −d̃_i e]   (0 at a root: the note's D_1)
+Mat6 S_matrix(const Data& data, int i);  // S_i = [e 0; −s̃_i e]
+Mat6 M_matrix(const Data& data, int i);  // M_i = S_iᵀ M̄_i S_i   (eq. 12)
+Mat6G G_matrix(const Model& model, const Data& data, int i);  // G_i, 6×nv_i
+
+// J = S Ψ_D G (eq. 7): 6N×nv, rows 6i..6i+5 give v̄_i = [ω_i; ṙ_i].  Needs [kin].
+void jacobian(const Model& model, const Data& data, MatX& J);
+
+}  // namespace soadyn

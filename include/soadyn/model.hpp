@@ -1,0 +1,74 @@
+// The constant tree: parents in parent-first order, joints, placements and mass properties.
+//
+// A Model is built once from a list of BodySpec and never changes while algorithms run; all
+// per-state arrays live in Data (data.hpp).  Building it validates everything a user can get
+// wrong and merges fixed joints into their parents, so a model carries only the DOFs its scene has.
+#pragma once
+
+#include "soadyn/joint.hpp"
+#include "soadyn/types.hpp"
+
+#include <string>
+#include <vector>
+
+namespace soadyn {
+
+// A rigid transform: rotation R (child → parent) and translation p (in the parent frame).
+struct Placement {
+  Mat3 R = Mat3::Identity();
+  Vec3 p = Vec3::Zero();
+};
+
+// One body as a user describes it.
+struct BodySpec {
+  std::string name;
+  std::string joint_name;               // defaults to the body's name
+  int parent = -1;                      // index in the spec list; -1 = the ground
+  JointType joint = JointType::Revolute;
+  Vec3 axis = Vec3::UnitZ();            // joint axis in the joint frame (normalized on build)
+  Placement placement;                  // joint frame in the parent body frame (world for -1)
+  double mass = 0.0;                    // must be > 0 (≥ 0 for a body merged by a fixed joint)
+  Vec3 com = Vec3::Zero();              // centre of mass in the body frame
+  Mat3 inertia = Mat3::Zero();          // about the centre of mass, body frame
+};
+
+class Model {
+ public:
+  // Validates the specs and builds the model; throws soadyn::Error naming the body, the field,
+  // what was expected and what was got.
+  static Model build(const std::vector<BodySpec>& specs, const Vec3& gravity = Vec3::Zero());
+
+  int nbodies = 0;  // N, moving bodies after fixed joints are merged
+  int nq = 0;       // configuration size
+  int nv = 0;       // velocity size (rates of the note's q̇)
+
+  std::vector<int> parent;                 // parent(i) < i, or -1 for the ground
+  std::vector<JointType> joint_type;
+  std::vector<Vec3> axis;                  // unit axis in the joint frame
+  std::vector<Placement> placement;        // joint frame in the parent body frame
+  std::vector<double> mass;
+  std::vector<Vec3> com;                   // body frame
+  std::vector<Mat3> inertia;               // about the cm, body frame
+  std::vector<int> idx_q, idx_v;           // first q / v index of each body
+  std::vector<int> nq_i, nv_i;             // sizes of each joint
+  std::vector<std::string> body_names, joint_names;
+  std::vector<std::vector<std::string>> merged_names;  // bodies welded into body i by fixed joints
+  std::vector<int> dof_parent;             // λ(k): parent DOF of DOF k, -1 at a root (for LᵀDL)
+  std::vector<int> dof_body;               // body owning DOF k
+  int depth = 0;                           // longest chain from the ground (nilpotency of Φ_D)
+
+  double world_mass = 0.0;                 // bodies welded to the world: mass and first moment,
+  Vec3 world_first_moment = Vec3::Zero();  // kept for the potential energy only
+  Vec3 gravity = Vec3::Zero();             // uniform gravity, m/s²
+
+  int body_index(const std::string& name) const;   // -1 when absent
+  int joint_index(const std::string& name) const;  // body index of the named joint, -1 when absent
+  bool has_free_joint() const;
+  VecX neutral_configuration() const;
+  void normalize(Eigen::Ref<VecX> q) const;  // unit quaternions of free joints
+  // q̇ from (q, v), and q ⊕ h v (see joint.hpp)
+  void qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const;
+  VecX integrate(const VecX& q, const VecX& v, double h) const;
+};
+
+}  // namespace soadyn

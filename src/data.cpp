@@ -1,0 +1,38 @@
+#include "soadyn/data.hpp"
+
+namespace soadyn {
+
+Data::Data(const Model& m)
+    : R(m.nbodies, Mat3::Identity()),
+      eta(Mat3X::Zero(3, m.nbodies)),
+      d(Mat3X::Zero(3, m.nbodies)),
+      s(Mat3X::Zero(3, m.nbodies)),
+      r(Mat3X::Zero(3, m.nbodies)),
+      G(Mat6X::Zero(6, m.nv)),
+      I_cm(m.nbodies, Mat3::Zero()),
+      M(m.nbodies),
+      V(Mat6X::Zero(6, m.nbodies)),
+      Vbar(Mat6X::Zero(6, m.nbodies)),
+      a(Mat6X::Zero(6, m.nbodies)),
+      b(Mat6X::Zero(6, m.nbodies)),
+      K(m.nbodies),
+      Mass(MatX::Zero(m.nv, m.nv)),
+      A(Mat6X::Zero(6, m.nbodies)),
+      F(Mat6X::Zero(6, m.nbodies)),
+      bias(VecX::Zero(m.nv)),
+      tau(VecX::Zero(m.nv)),
+      qdd(VecX::Zero(m.nv)),
+      L(MatX::Zero(m.nv, m.nv)),
+      llt(m.nv),
+      P(m.nbodies, Mat6::Zero()),
+      z(Mat6X::Zero(6, m.nbodies)),
+      Dinv(m.nbodies),
+      u(VecX::Zero(m.nv)) {
+  U.reserve(m.nbodies);
+  for (int i = 0; i < m.nbodies; ++i) {
+    U.emplace_back(Mat6G::Zero(6, m.nv_i[i]));
+    Dinv[i] = MatGG::Zero(m.nv_i[i], m.nv_i[i]);
+  }
+}
+
+}  // namespace soadyn

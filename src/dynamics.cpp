@@ -1,0 +1,169 @@
+#include "soadyn/algorithms.hpp"
+#include "soadyn/kinematics.hpp"
+#include "soadyn/operators.hpp"
+
+namespace soadyn {
+
+namespace {
+
+// the note's A = Ψ_D (G q̈ + a), then F = Ψ_Dᵀ (M A + b), projected: τ = Gᵀ F
+void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
+  const DOperator D{data.d};
+  data.A = data.a;
+  if (qdd)
+    for (int i = 0; i < model.nbodies; ++i)
+      data.A.col(i).noalias() += data.G.middleCols(model.idx_v[i], model.nv_i[i]) *
+                                 qdd->segment(model.idx_v[i], model.nv_i[i]);
+  psi_base_to_tip(model.parent, D, [&](int i) { return data.A.col(i); });
+  for (int i = 0; i < model.nbodies; ++i) data.F.col(i) = data.M[i] * data.A.col(i) + data.b.col(i);
+  psi_tip_to_base(model.parent, D, [&](int i) { return data.F.col(i); });
+  for (int i = 0; i < model.nbodies; ++i)
+    out.segment(model.idx_v[i], model.nv_i[i]).noalias() =
+        data.G.middleCols(model.idx_v[i], model.nv_i[i]).transpose() * data.F.col(i);
+}
+
+// Dᵀ P D for a general 6×6 P = [A B; Bᵀ C] and D = [e 0; −d̃ e]:
+//   [A − B d̃ + d̃ Bᵀ − d̃ C d̃,  B + d̃ C;  Bᵀ − C d̃,  C]
+void add_congruence_D(Mat6& out, const Mat6& P, const Vec3& d) {
+  const Mat3 dt = skew(d);
+  const Mat3 B = P.topRightCorner<3, 3>(), C = P.bottomRightCorner<3, 3>();
+  const Mat3 TR = B + dt * C;
+  out.topLeftCorner<3, 3>() += P.topLeftCorner<3, 3>() - TR * dt + dt * B.transpose();
+  out.topRightCorner<3, 3>() += TR;
+  out.bottomLeftCorner<3, 3>() += TR.transpose();
+  out.bottomRightCorner<3, 3>() += C;
+}
+
+void aba(const Model& model, Data& data, const VecX& tau) {
+  // tip to base: articulated inertias P_i and bias forces z_i
+  for (int i = 0; i < model.nbodies; ++i) {
+    data.P[i] = data.M[i].matrix();
+    data.z.col(i) = data.b.col(i);
+  }
+  for (int i = model.nbodies - 1; i >= 0; --i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    const auto Gi = data.G.middleCols(vi, ni);
+    // U_i = P_i G_i,  𝒟_i = G_iᵀ U_i,  u_i = τ_i − G_iᵀ z_i
+    data.U[i].noalias() = data.P[i] * Gi;
+    const MatGG Dd = Gi.transpose() * data.U[i];
+    data.Dinv[i] = Dd.inverse();
+    data.u.segment(vi, ni).noalias() = tau.segment(vi, ni) - Gi.transpose() * data.z.col(i);
+    if (p < 0) continue;
+    // P⁺ = P − U 𝒟⁻¹ Uᵀ;  z⁺ = z + P⁺ a + U 𝒟⁻¹ u;  P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺
+    const Mat6G UD = data.U[i] * data.Dinv[i];
+    Mat6 Pa = data.P[i];
+    Pa.noalias() -= UD * data.U[i].transpose();
+    Vec6 za = data.z.col(i);
+    za.noalias() += Pa * data.a.col(i);
+    za.noalias() += UD * data.u.segment(vi, ni);
+    add_congruence_D(data.P[p], Pa, data.d.col(i));
+    DOperator{data.d}.add_apply_transpose(i, za, data.z.col(p));
+  }
+  // base to tip: A' = D_i A_p + a_i,  q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A'),  A_i = A' + G_i q̈_i
+  for (int i = 0; i < model.nbodies; ++i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    Vec6 Ai = data.a.col(i);
+    if (p >= 0) DOperator{data.d}.add_apply(i, data.A.col(p), Ai);
+    const VecG rhs = data.u.segment(vi, ni) - data.U[i].transpose() * Ai;
+    data.qdd.segment(vi, ni).noalias() = data.Dinv[i] * rhs;
+    Ai.noalias() += data.G.middleCols(vi, ni) * data.qdd.segment(vi, ni);
+    data.A.col(i) = Ai;
+  }
+}
+
+}  // namespace
+
+void bias_forces(const Model& model, Data& data) { rnea(model, data, nullptr, data.bias); }
+
+void inverse_dynamics(const Model& model, Data& data, const VecX& qdd) { rnea(model, data, &qdd, data.tau); }
+
+std::string_view to_string(FdMethod m) {
+  switch (m) {
+    case FdMethod::Dense: return "dense";
+    case FdMethod::Sparse: return "sparse";
+    case FdMethod::ON: return "on";
+  }
+  return "?";
+}
+
+FdMethod parse_fd_method(std::string_view s) {
+  if (s == "dense") return FdMethod::Dense;
+  if (s == "sparse") return FdMethod::Sparse;
+  if (s == "on") return FdMethod::ON;
+  throw Error("forward-dynamics method: expected one of dense, sparse, on; got '" + std::string(s) + "'");
+}
+
+void ltdl_factor(const Model& model, Data& data) {
+  // 𝓜 = Lᵀ D L along the DOF tree λ (Featherstone's LTDL): entries off ancestor chains stay zero
+  MatX& H = data.L;
+  H = data.Mass;
+  const auto& lambda = model.dof_parent;
+  for (int k = model.nv - 1; k >= 0; --k) {
+    for (int i = lambda[k]; i >= 0; i = lambda[i]) {
+      const double a = H(k, i) / H(k, k);
+      for (int j = i; j >= 0; j = lambda[j]) H(i, j) -= a * H(k, j);
+      H(k, i) = a;
+    }
+  }
+}
+
+void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x) {
+  const MatX& H = data.L;
+  const auto& lambda = model.dof_parent;
+  // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip)
+  for (int k = model.nv - 1; k >= 0; --k)
+    for (int i = lambda[k]; i >= 0; i = lambda[i]) x(i) -= H(k, i) * x(k);
+  for (int k = 0; k < model.nv; ++k) x(k) /= H(k, k);
+  for (int k = 0; k < model.nv; ++k)
+    for (int i = lambda[k]; i >= 0; i = lambda[i]) x(k) -= H(k, i) * x(i);
+}
+
+void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method) {
+  switch (method) {
+    case FdMethod::Dense:
+      mass_matrix(model, data);
+      bias_forces(model, data);
+      data.llt.compute(data.Mass);
+      if (data.llt.info() != Eigen::Success) throw Error("forward dynamics: the mass matrix is not positive definite");
+      data.qdd = tau - data.bias;
+      data.llt.solveInPlace(data.qdd);
+      return;
+    case FdMethod::Sparse:
+      mass_matrix(model, data);
+      bias_forces(model, data);
+      ltdl_factor(model, data);
+      data.qdd = tau - data.bias;
+      ltdl_solve(model, data, data.qdd);
+      return;
+    case FdMethod::ON:
+      aba(model, data, tau);
+      return;
+  }
+}
+
+double kinetic_energy(const Model& model, const Data& data) {
+  double T = 0.0;
+  for (int i = 0; i < model.nbodies; ++i) {
+    const Vec3 w = data.Vbar.col(i).head<3>(), rd = data.Vbar.col(i).tail<3>();
+    T += 0.5 * (w.dot(data.I_cm[i] * w) + model.mass[i] * rd.squaredNorm());
+  }
+  return T;
+}
+
+double potential_energy(const Model& model, const Data& data) {
+  Vec3 first_moment = model.world_first_moment;
+  for (int i = 0; i < model.nbodies; ++i) first_moment += model.mass[i] * data.r.col(i);
+  return -model.gravity.dot(first_moment);
+}
+
+Momentum momentum(const Model& model, const Data& data) {
+  Momentum h;
+  for (int i = 0; i < model.nbodies; ++i) {
+    const Vec3 p = model.mass[i] * data.Vbar.col(i).tail<3>();
+    h.linear += p;
+    h.angular += data.I_cm[i] * data.Vbar.col(i).head<3>() + Vec3(data.r.col(i)).cross(p);
+  }
+  return h;
+}
+
+}  // namespace soadyn

@@ -1,0 +1,90 @@
+#include "soadyn/kinematics.hpp"
+
+#include "soadyn/operators.hpp"
+
+namespace soadyn {
+
+void update_kinematics(const Model& model, Data& data, const VecX& q) {
+  for (int i = 0; i < model.nbodies; ++i) {
+    const int p = model.parent[i];
+    const Mat3 Rp = p < 0 ? Mat3::Identity() : data.R[p];
+    const Vec3 eta_p = p < 0 ? Vec3::Zero() : Vec3(data.eta.col(p));
+    // body frame = parent frame · placement · joint motion(q)
+    const Mat3 Rj = Rp * model.placement[i].R;
+    Mat3 Rm;
+    Vec3 pm;
+    joint_motion(model.joint_type[i], model.axis[i], q.data() + model.idx_q[i], Rm, pm);
+    data.R[i].noalias() = Rj * Rm;
+    data.eta.col(i) = eta_p + Rp * model.placement[i].p + Rj * pm;
+    // d_i = η_i − η_p;  s_i = C_i com_i;  r_i = η_i + s_i
+    data.d.col(i) = data.eta.col(i) - eta_p;
+    data.s.col(i) = data.R[i] * model.com[i];
+    data.r.col(i) = data.eta.col(i) + data.s.col(i);
+    joint_subspace(model.joint_type[i], model.axis[i], Rj, data.G.middleCols(model.idx_v[i], model.nv_i[i]));
+    // I_i = C_i I C_iᵀ;  M_i = [I_i − m s̃ s̃, m s̃; −m s̃, m e]   (eq. 12)
+    data.I_cm[i].noalias() = data.R[i] * model.inertia[i] * data.R[i].transpose();
+    data.M[i] = SpatialInertia::from_body(model.mass[i], data.s.col(i), data.I_cm[i]);
+  }
+}
+
+void update_velocities(const Model& model, Data& data, const VecX& v) {
+  // (3)-(4) v = Φ_D v + G q̇  ⇒  v = Ψ_D G q̇
+  for (int i = 0; i < model.nbodies; ++i)
+    data.V.col(i).noalias() = data.G.middleCols(model.idx_v[i], model.nv_i[i]) *
+                              v.segment(model.idx_v[i], model.nv_i[i]);
+  data.a = data.V;  // keep G_i q̇_i for the velocity-product terms below
+  psi_base_to_tip(model.parent, DOperator{data.d}, [&](int i) { return data.V.col(i); });
+
+  for (int i = 0; i < model.nbodies; ++i) {
+    const int p = model.parent[i];
+    const Vec3 w = data.V.col(i).head<3>();
+    const Vec3 s = data.s.col(i);
+    // (5) v̄_i = S_i v_i: ṙ_i = η̇_i + ω_i × s_i
+    data.Vbar.col(i) << w, data.V.col(i).tail<3>() + w.cross(s);
+    // a_i = Ḋ_i v_p + Ġ_i q̇_i with ḋ_i = η̇_i − η̇_p and ġ_i = ω_p × g_i:
+    //   a_i = [ω_p × (G q̇)_ω; ω_p × (ḋ_i + (G q̇)_η)]; gravity enters as a base acceleration −g
+    if (p < 0) {
+      data.a.col(i) << Vec3::Zero(), -model.gravity;
+    } else {
+      const Vec3 wp = data.V.col(p).head<3>();
+      const Vec6 Gv = data.a.col(i);
+      const Vec3 ddot = data.V.col(i).tail<3>() - data.V.col(p).tail<3>();
+      data.a.col(i) << wp.cross(Gv.head<3>()), wp.cross(ddot + Gv.tail<3>());
+    }
+    // gyroscopic force about η_i: f = m ω × (ω × s),  n = ω × I ω + s × f
+    const Vec3 f = model.mass[i] * w.cross(w.cross(s));
+    data.b.col(i) << w.cross(data.I_cm[i] * w) + s.cross(f), f;
+  }
+}
+
+Mat6 D_matrix(const Data& data, int i) {
+  Mat6 D = Mat6::Identity();
+  D.bottomLeftCorner<3, 3>() = -skew(data.d.col(i));
+  return D;
+}
+
+Mat6 S_matrix(const Data& data, int i) {
+  Mat6 S = Mat6::Identity();
+  S.bottomLeftCorner<3, 3>() = -skew(data.s.col(i));
+  return S;
+}
+
+Mat6 M_matrix(const Data& data, int i) { return data.M[i].matrix(); }
+
+Mat6G G_matrix(const Model& model, const Data& data, int i) {
+  return data.G.middleCols(model.idx_v[i], model.nv_i[i]);
+}
+
+void jacobian(const Model& model, const Data& data, MatX& J) {
+  // (7) J = S Ψ_D G: all columns at once, one base-to-tip sweep over 6×nv blocks
+  J.setZero(6 * model.nbodies, model.nv);
+  for (int i = 0; i < model.nbodies; ++i)
+    J.block(6 * i, model.idx_v[i], 6, model.nv_i[i]) = G_matrix(model, data, i);
+  psi_base_to_tip(model.parent, DOperator{data.d}, [&](int i) { return J.middleRows<6>(6 * i); });
+  for (int i = 0; i < model.nbodies; ++i) {
+    auto Ji = J.middleRows<6>(6 * i);
+    Ji.bottomRows<3>() -= skew(data.s.col(i)) * Ji.topRows<3>();  // S_i = [e 0; −s̃_i e]
+  }
+}
+
+}  // namespace soadyn

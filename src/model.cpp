@@ -1,0 +1,225 @@
+#include "soadyn/model.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <sstream>
+
+namespace soadyn {
+
+namespace {
+
+std::string fmt(double x) {
+  std::ostringstream os;
+  os.precision(10);
+  os << x;
+  return os.str();
+}
+
+std::string fmt(const Eigen::MatrixXd& m) {
+  std::ostringstream os;
+  os.precision(10);
+  os << "[";
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    if (r) os << "; ";
+    for (Eigen::Index c = 0; c < m.cols(); ++c) os << (c ? " " : "") << m(r, c);
+  }
+  os << "]";
+  return os.str();
+}
+
+[[noreturn]] void refuse(const BodySpec& b, int i, const std::string& field, const std::string& expected,
+                         const std::string& got) {
+  throw Error("body '" + b.name + "' (index " + std::to_string(i) + "): " + field + ": expected " +
+              expected + ", got " + got);
+}
+
+void check_finite(const BodySpec& b, int i, const std::string& field, const Eigen::MatrixXd& m) {
+  if (!m.allFinite()) refuse(b, i, field, "finite numbers", fmt(m));
+}
+
+// The checks every user-supplied body must pass.
+void validate(const BodySpec& b, int i) {
+  if (b.parent < -1 || b.parent >= i)
+    refuse(b, i, "parent", "a body listed before it (index -1.." + std::to_string(i - 1) + ")",
+           std::to_string(b.parent));
+  check_finite(b, i, "mass", Eigen::Matrix<double, 1, 1>::Constant(b.mass));
+  check_finite(b, i, "centre of mass", b.com);
+  check_finite(b, i, "inertia", b.inertia);
+  check_finite(b, i, "axis", b.axis);
+  check_finite(b, i, "placement rotation", b.placement.R);
+  check_finite(b, i, "placement translation", b.placement.p);
+  const bool fixed = b.joint == JointType::Fixed;
+  if (fixed ? !(b.mass >= 0.0) : !(b.mass > 0.0))
+    refuse(b, i, "mass", fixed ? "a mass >= 0" : "a positive mass", fmt(b.mass));
+  const Mat3 R = b.placement.R;
+  if ((R.transpose() * R - Mat3::Identity()).norm() > 1e-9 || R.determinant() < 0)
+    refuse(b, i, "placement rotation", "a proper rotation matrix", fmt(R));
+  if (b.joint == JointType::Revolute || b.joint == JointType::Prismatic) {
+    if (!(b.axis.norm() > 1e-12)) refuse(b, i, "axis", "a non-zero vector", fmt(b.axis.transpose()));
+  }
+  if (b.joint == JointType::Free) {
+    if (b.parent != -1) refuse(b, i, "joint", "a free joint only at a root (parent = ground)", "a parent");
+    if (!b.placement.R.isIdentity(1e-12) || !b.placement.p.isZero(0.0))
+      refuse(b, i, "placement", "none for a free joint (its q is the body's pose in the world)",
+             "a non-identity placement");
+  }
+  if (b.mass == 0.0) {
+    if (!b.inertia.isZero(0.0)) refuse(b, i, "inertia", "zero for a massless body", fmt(b.inertia));
+    return;
+  }
+  const Mat3& I = b.inertia;
+  const double scale = I.cwiseAbs().maxCoeff();
+  if ((I - I.transpose()).cwiseAbs().maxCoeff() > 1e-9 * std::max(scale, 1e-300))
+    refuse(b, i, "inertia", "a symmetric matrix", fmt(I));
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (I + I.transpose()), Eigen::EigenvaluesOnly);
+  const Vec3 l = es.eigenvalues();  // ascending
+  if (!(l(0) > 0.0))
+    refuse(b, i, "inertia", "a positive definite matrix", "principal moments " + fmt(l.transpose()));
+  // triangle inequality: each principal moment is at most the sum of the other two
+  if (l(2) > (l(0) + l(1)) * (1.0 + 1e-9))
+    refuse(b, i, "inertia",
+           "principal moments obeying the triangle inequality (largest <= sum of the others)",
+           "principal moments " + fmt(l.transpose()));
+}
+
+// Where a spec body ends up: the model body it is welded into (-1 = the world) and its frame there.
+struct Target {
+  int body = -1;
+  Placement X;  // spec body frame in the target body frame
+};
+
+Placement compose(const Placement& a, const Placement& b) { return {a.R * b.R, a.p + a.R * b.p}; }
+
+// mass properties of two bodies about their common centre of mass, in one frame
+void merge_mass(double& m, Vec3& c, Mat3& I, double m2, const Vec3& c2, const Mat3& I2) {
+  const double mt = m + m2;
+  if (mt == 0.0) return;
+  const Vec3 ct = (m * c + m2 * c2) / mt;
+  auto shift = [&](double mk, const Vec3& ck) {  // parallel axes: m (|δ|² e − δ δᵀ)
+    const Vec3 dlt = ck - ct;
+    return Mat3(mk * (dlt.squaredNorm() * Mat3::Identity() - dlt * dlt.transpose()));
+  };
+  I = I + shift(m, c) + I2 + shift(m2, c2);
+  m = mt;
+  c = ct;
+}
+
+}  // namespace
+
+Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
+  if (!gravity.allFinite()) throw Error("gravity: expected finite numbers, got " + fmt(gravity.transpose()));
+  for (int i = 0; i < int(specs.size()); ++i) validate(specs[i], i);
+
+  Model m;
+  m.gravity = gravity;
+  std::vector<Target> target(specs.size());
+  for (int i = 0; i < int(specs.size()); ++i) {
+    const BodySpec& b = specs[i];
+    const Target parent_target = b.parent < 0 ? Target{} : target[b.parent];
+    const Placement joint_in_target = compose(parent_target.X, b.placement);
+    if (b.joint == JointType::Fixed) {
+      // welded: merge mass properties into the parent's model body (or the world)
+      target[i] = {parent_target.body, joint_in_target};
+      const Mat3 Rt = joint_in_target.R;
+      const Vec3 c = joint_in_target.p + Rt * b.com;
+      const Mat3 I = Rt * b.inertia * Rt.transpose();
+      if (parent_target.body < 0) {
+        m.world_mass += b.mass;
+        m.world_first_moment += b.mass * c;
+      } else {
+        const int t = parent_target.body;
+        merge_mass(m.mass[t], m.com[t], m.inertia[t], b.mass, c, I);
+        m.merged_names[t].push_back(b.name);
+      }
+      continue;
+    }
+    const int k = m.nbodies++;
+    target[i] = {k, Placement{}};
+    m.parent.push_back(parent_target.body);
+    m.joint_type.push_back(b.joint);
+    m.axis.push_back(b.joint == JointType::Free ? Vec3::Zero() : Vec3(b.axis.normalized()));
+    m.placement.push_back(joint_in_target);
+    m.mass.push_back(b.mass);
+    m.com.push_back(b.com);
+    m.inertia.push_back(0.5 * (b.inertia + b.inertia.transpose()));
+    m.body_names.push_back(b.name);
+    m.joint_names.push_back(b.joint_name.empty() ? b.name : b.joint_name);
+    m.merged_names.emplace_back();
+    m.idx_q.push_back(m.nq);
+    m.idx_v.push_back(m.nv);
+    m.nq_i.push_back(joint_nq(b.joint));
+    m.nv_i.push_back(joint_nv(b.joint));
+    m.nq += joint_nq(b.joint);
+    m.nv += joint_nv(b.joint);
+  }
+
+  // merged bodies must still be valid rigid bodies
+  for (int k = 0; k < m.nbodies; ++k) {
+    if (m.merged_names[k].empty()) continue;
+    BodySpec merged;
+    merged.name = m.body_names[k];
+    merged.joint = JointType::Revolute;
+    merged.mass = m.mass[k];
+    merged.inertia = m.inertia[k];
+    validate(merged, k);
+  }
+
+  // DOF tree for the LᵀDL factorization: λ(k) and the depth (nilpotency of Φ_D)
+  std::vector<int> level(m.nbodies, 0);
+  for (int i = 0; i < m.nbodies; ++i) {
+    const int p = m.parent[i];
+    level[i] = p < 0 ? 1 : level[p] + 1;
+    m.depth = std::max(m.depth, level[i]);
+    for (int j = 0; j < m.nv_i[i]; ++j) {
+      const int k = m.idx_v[i] + j;
+      m.dof_body.push_back(i);
+      if (j > 0) m.dof_parent.push_back(k - 1);
+      else m.dof_parent.push_back(p < 0 ? -1 : m.idx_v[p] + m.nv_i[p] - 1);
+    }
+  }
+  return m;
+}
+
+int Model::body_index(const std::string& name) const {
+  for (int i = 0; i < nbodies; ++i)
+    if (body_names[i] == name) return i;
+  return -1;
+}
+
+int Model::joint_index(const std::string& name) const {
+  for (int i = 0; i < nbodies; ++i)
+    if (joint_names[i] == name) return i;
+  return -1;
+}
+
+bool Model::has_free_joint() const {
+  for (auto t : joint_type)
+    if (t == JointType::Free) return true;
+  return false;
+}
+
+VecX Model::neutral_configuration() const {
+  VecX q(nq);
+  for (int i = 0; i < nbodies; ++i) joint_neutral(joint_type[i], q.data() + idx_q[i]);
+  return q;
+}
+
+void Model::normalize(Eigen::Ref<VecX> q) const {
+  for (int i = 0; i < nbodies; ++i)
+    if (joint_type[i] == JointType::Free) q.segment<4>(idx_q[i] + 3).normalize();
+}
+
+void Model::qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const {
+  for (int i = 0; i < nbodies; ++i)
+    joint_qdot(joint_type[i], q.data() + idx_q[i], v.data() + idx_v[i], qd.data() + idx_q[i]);
+}
+
+VecX Model::integrate(const VecX& q, const VecX& v, double h) const {
+  VecX out(nq);
+  for (int i = 0; i < nbodies; ++i)
+    joint_integrate(joint_type[i], q.data() + idx_q[i], v.data() + idx_v[i], h, out.data() + idx_q[i]);
+  return out;
+}
+
+}  // namespace soadyn

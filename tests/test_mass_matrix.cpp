@@ -1,0 +1,303 @@
+// The system mass matrix: the note's four hand-derived examples, literal procedure vs composite
+// algorithm on random trees, 𝓜 = ∂²T/∂q̇² with T from finite-differenced body motion, SPD.
+#include "test_util.hpp"
+
+#include <Eigen/Eigenvalues>
+
+using namespace soadyn;
+using namespace soadyn::test;
+
+namespace {
+
+const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
+
+BodySpec random_body(Rng& rng, const std::string& name, int parent, JointType j, const Vec3& axis) {
+  BodySpec b;
+  b.name = name;
+  b.parent = parent;
+  b.joint = j;
+  b.axis = axis;
+  b.mass = rng.uniform(0.3, 5.0);
+  b.com = rng.vec3(-1, 1);
+  b.inertia = rng.inertia();
+  return b;
+}
+
+struct Computed {
+  MatX literal, composite;
+};
+
+Computed both(const Model& model, Data& data, const VecX& q) {
+  update_kinematics(model, data, q);
+  Computed c;
+  mass_matrix_literal(model, data, c.literal);
+  mass_matrix(model, data);
+  c.composite = data.Mass;
+  return c;
+}
+
+constexpr int kTrials = 200;
+
+// Example 1, pendulum with a moving base: 𝓜 = [m1 + m2, m2 L cos θ; m2 L cos θ, I2zz + m2 L²]
+TEST(NoteExamples, Example1PendulumOnCart) {
+  Rng rng(1);
+  for (int t = 0; t < kTrials; ++t) {
+    auto cart = random_body(rng, "cart", -1, JointType::Prismatic, ex);
+    auto pend = random_body(rng, "pendulum", 0, JointType::Revolute, ez);
+    const double L = rng.uniform(0.1, 3.0);
+    pend.com = Vec3(0, -L, 0);  // s_2 = L (sin θ e_x − cos θ e_y)
+    const Model model = Model::build({cart, pend});
+    Data data(model);
+    const double x = rng.uniform(-5, 5), th = rng.uniform(-4, 4);
+    const Computed c = both(model, data, Eigen::Vector2d(x, th));
+    const double m1 = cart.mass, m2 = pend.mass, Izz = pend.inertia(2, 2);
+    MatX expected(2, 2);
+    expected << m1 + m2, m2 * L * std::cos(th), m2 * L * std::cos(th), Izz + m2 * L * L;
+    ASSERT_TRUE(near_rel(c.literal, expected, 1e-12)) << "trial " << t;
+    ASSERT_TRUE(near_rel(c.composite, expected, 1e-12)) << "trial " << t;
+  }
+}
+
+// Example 2, double pendulum about e_x: (N6) expanded, r1 = s1, r2 = d2 + s2
+TEST(NoteExamples, Example2DoublePendulum) {
+  Rng rng(2);
+  for (int t = 0; t < kTrials; ++t) {
+    auto b1 = random_body(rng, "upper", -1, JointType::Revolute, ex);
+    auto b2 = random_body(rng, "lower", 0, JointType::Revolute, ex);
+    b2.placement.p = rng.vec3(-1, 1);
+    const Model model = Model::build({b1, b2});
+    Data data(model);
+    const Computed c = both(model, data, Eigen::Vector2d(rng.uniform(-4, 4), rng.uniform(-4, 4)));
+    const Mat3 I1 = data.I_cm[0], I2 = data.I_cm[1];
+    const Vec3 s1 = data.s.col(0), s2 = data.s.col(1), d2 = data.d.col(1);
+    const Mat3 r1 = skew(s1), r2 = skew(d2 + s2), S2 = skew(s2);
+    const double m1 = b1.mass, m2 = b2.mass;
+    MatX expected(2, 2);
+    expected << ex.dot((I1 + I2 - m1 * r1 * r1 - m2 * r2 * r2) * ex), ex.dot((I2 - m2 * r2 * S2) * ex),
+        ex.dot((I2 - m2 * S2 * r2) * ex), ex.dot((I2 - m2 * S2 * S2) * ex);
+    ASSERT_TRUE(near_rel(c.literal, expected, 1e-12)) << "trial " << t;
+    ASSERT_TRUE(near_rel(c.composite, expected, 1e-12)) << "trial " << t;
+  }
+}
+
+// Example 3, satellite with two arrays: the 8×8 matrix with the free root, e_x = C_1 [1,0,0].
+// The note takes η_1 = 0 (r_1 = s_1); for a satellite anywhere, every r_j is measured from η_1.
+TEST(NoteExamples, Example3SatelliteWithTwoArrays) {
+  Rng rng(3);
+  for (int t = 0; t < kTrials; ++t) {
+    auto bus = random_body(rng, "bus", -1, JointType::Free, Vec3::Zero());
+    auto a2 = random_body(rng, "array_left", 0, JointType::Revolute, ex);
+    auto a3 = random_body(rng, "array_right", 0, JointType::Revolute, ex);
+    a2.placement.p = rng.vec3(-2, 2);
+    a3.placement.p = rng.vec3(-2, 2);
+    const Model model = Model::build({bus, a2, a3});
+    Data data(model);
+    VecX q(9);
+    const bool at_origin = t % 2 == 0;
+    q.head<3>() = at_origin ? Vec3::Zero() : rng.vec3(-10, 10);
+    q.segment<4>(3) = Eigen::Vector4d::Random().normalized();
+    q.tail<2>() = Eigen::Vector2d(rng.uniform(-4, 4), rng.uniform(-4, 4));
+    const Computed c = both(model, data, q);
+
+    const Vec3 e = data.R[0] * ex;
+    double mbar = 0.0;
+    Vec3 h = Vec3::Zero();
+    Mat3 I00 = Mat3::Zero();
+    std::vector<Vec3> r(3);
+    for (int j = 0; j < 3; ++j) {
+      r[j] = data.r.col(j) - data.eta.col(0);  // r_1 = s_1, r_j = d_j + s_j
+      const double mj = model.mass[j];
+      I00 += data.I_cm[j] - mj * skew(r[j]) * skew(r[j]);
+      mbar += mj;
+      h += mj * r[j];
+    }
+    const Vec3 cbar = h / mbar;
+    MatX expected = MatX::Zero(8, 8);
+    expected.block<3, 3>(0, 0) = I00;
+    expected.block<3, 3>(0, 3) = mbar * skew(cbar);
+    expected.block<3, 3>(3, 0) = -mbar * skew(cbar);
+    expected.block<3, 3>(3, 3) = mbar * Mat3::Identity();
+    for (int j = 1; j < 3; ++j) {
+      const double mj = model.mass[j];
+      const Mat3 Ij = data.I_cm[j], S = skew(data.s.col(j)), Rj = skew(r[j]);
+      expected.block<3, 1>(0, 5 + j) = (Ij - mj * Rj * S) * e;
+      expected.block<3, 1>(3, 5 + j) = -mj * S * e;
+      expected.block<1, 3>(5 + j, 0) = e.transpose() * (Ij - mj * S * Rj);
+      expected.block<1, 3>(5 + j, 3) = e.transpose() * mj * S;
+      expected(5 + j, 5 + j) = e.dot((Ij - mj * S * S) * e);
+    }
+    ASSERT_TRUE(near_rel(c.literal, expected, 1e-12)) << "trial " << t;
+    ASSERT_TRUE(near_rel(c.composite, expected, 1e-12)) << "trial " << t;
+  }
+}
+
+// Example 4, 3-link arm, (P7).  Discrepancy in the note: the hinge axes of joints 2 and 3 are
+// written e_x, but they turn with θ_1 about e_z.  (P7) holds with e_x read as the inertial image
+// of body 1's x axis, C_1 e_x = g_2 = g_3; with the literal inertial e_x it holds only at
+// θ_1 = 0 (mod π).  We test the corrected reading, and that the literal one fails elsewhere.
+MatX example4_closed_form(const Model& model, const Data& data, const Vec3& e) {
+  const Vec3 eta2 = data.eta.col(1);  // η_2 = d_2 (η_1 = 0)
+  std::vector<Vec3> r(3);
+  std::vector<Mat3> I(3);
+  for (int j = 0; j < 3; ++j) {
+    r[j] = data.r.col(j);
+    I[j] = data.I_cm[j];
+  }
+  auto m = [&](int j) { return model.mass[j]; };
+  auto sk = [](const Vec3& v) { return skew(v); };
+  const Mat3 S3 = sk(data.s.col(2)), E2 = sk(eta2);
+  MatX M(3, 3);
+  Mat3 A11 = Mat3::Zero(), A12 = Mat3::Zero(), A22 = Mat3::Zero(), A21 = Mat3::Zero();
+  for (int j = 0; j < 3; ++j) A11 += I[j] - m(j) * sk(r[j]) * sk(r[j]);
+  for (int j = 1; j < 3; ++j) {
+    A12 += I[j] - m(j) * sk(r[j]) * (sk(r[j]) - E2);
+    A21 += I[j] - m(j) * (sk(r[j]) - E2) * sk(r[j]);
+    A22 += I[j] - m(j) * (sk(r[j]) - E2) * (sk(r[j]) - E2);
+  }
+  M(0, 0) = ez.dot(A11 * ez);
+  M(0, 1) = ez.dot(A12 * e);
+  M(0, 2) = ez.dot((I[2] - m(2) * sk(r[2]) * S3) * e);
+  M(1, 0) = e.dot(A21 * ez);
+  M(1, 1) = e.dot(A22 * e);
+  M(1, 2) = e.dot((I[2] - m(2) * (sk(r[2]) - E2) * S3) * e);
+  M(2, 0) = e.dot((I[2] - m(2) * S3 * sk(r[2])) * ez);
+  M(2, 1) = e.dot((I[2] - m(2) * S3 * (sk(r[2]) - E2)) * e);
+  M(2, 2) = e.dot((I[2] - m(2) * S3 * S3) * e);
+  return M;
+}
+
+TEST(NoteExamples, Example4ThreeLinkArm) {
+  Rng rng(4);
+  int literal_reading_failures = 0;
+  for (int t = 0; t < kTrials; ++t) {
+    auto b1 = random_body(rng, "base", -1, JointType::Revolute, ez);
+    auto b2 = random_body(rng, "upper_arm", 0, JointType::Revolute, ex);
+    auto b3 = random_body(rng, "forearm", 1, JointType::Revolute, ex);
+    b2.placement.p = rng.vec3(-1, 1);
+    b3.placement.p = rng.vec3(-1, 1);
+    const Model model = Model::build({b1, b2, b3});
+    Data data(model);
+    const Eigen::Vector3d q(rng.uniform(0.2, 2.9), rng.uniform(-4, 4), rng.uniform(-4, 4));
+    const Computed c = both(model, data, q);
+    const Vec3 g2 = data.R[0] * ex;  // C_1 e_x
+    const MatX expected = example4_closed_form(model, data, g2);
+    ASSERT_TRUE(near_rel(c.literal, expected, 1e-12)) << "trial " << t;
+    ASSERT_TRUE(near_rel(c.composite, expected, 1e-12)) << "trial " << t;
+    if (!near_rel(c.composite, example4_closed_form(model, data, ex), 1e-6)) ++literal_reading_failures;
+  }
+  EXPECT_EQ(literal_reading_failures, kTrials) << "the literal inertial e_x should fail for θ_1 in (0.2, 2.9)";
+  // and at θ_1 = 0 both readings agree
+  Rng rng0(40);
+  auto b1 = random_body(rng0, "base", -1, JointType::Revolute, ez);
+  auto b2 = random_body(rng0, "upper_arm", 0, JointType::Revolute, ex);
+  auto b3 = random_body(rng0, "forearm", 1, JointType::Revolute, ex);
+  b2.placement.p = rng0.vec3();
+  b3.placement.p = rng0.vec3();
+  const Model model = Model::build({b1, b2, b3});
+  Data data(model);
+  const Computed c = both(model, data, Eigen::Vector3d(0.0, 0.7, -1.3));
+  EXPECT_TRUE(near_rel(c.composite, example4_closed_form(model, data, ex), 1e-12));
+}
+
+// literal procedure = composite algorithm on random trees
+struct TreeCase {
+  const char* name;
+  TreeOptions options;
+  friend void PrintTo(const TreeCase& c, std::ostream* os) { *os << c.name; }
+};
+
+class RandomTrees : public ::testing::TestWithParam<TreeCase> {};
+
+TEST_P(RandomTrees, LiteralEqualsCompositeAndIsSPD) {
+  const TreeCase& tc = GetParam();
+  for (int seed = 0; seed < 5; ++seed) {
+    Rng rng(100 * seed + tc.options.n);
+    const Model model = random_model(rng, tc.options);
+    Data data(model);
+    const Computed c = both(model, data, random_q(rng, model));
+    ASSERT_TRUE(near_rel(c.composite, c.literal, 1e-12)) << tc.name << " seed " << seed;
+    ASSERT_TRUE(near_rel(c.composite, c.composite.transpose(), 0.0)) << "not symmetric";
+    Eigen::LLT<MatX> llt(c.composite);
+    ASSERT_EQ(llt.info(), Eigen::Success) << "not positive definite";
+    const Eigen::SelfAdjointEigenSolver<MatX> es(c.composite);
+    ASSERT_GT(es.eigenvalues().minCoeff(), 0.0);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Trees, RandomTrees,
+    ::testing::Values(TreeCase{"chain8", {.n = 8, .branching = 0.0}},
+                      TreeCase{"chain200", {.n = 200, .branching = 0.0}},
+                      TreeCase{"branched50", {.n = 50, .branching = 0.7}},
+                      TreeCase{"mixed60", {.n = 60, .branching = 0.5, .prismatic = 0.4}},
+                      TreeCase{"free40", {.n = 40, .branching = 0.5, .prismatic = 0.2, .free_root = true}},
+                      TreeCase{"free200", {.n = 200, .branching = 0.3, .prismatic = 0.3, .free_root = true}},
+                      TreeCase{"fixed30", {.n = 30, .branching = 0.5, .prismatic = 0.2, .fixed = 8}}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+// T from eq. (9) with ω_i and ṙ_i by central differences of the body poses along q ⊕ h v —
+// independent of the velocity sweep — and 𝓜_jk = T(e_j + e_k) − T(e_j) − T(e_k).
+double kinetic_energy_fd(const Model& model, const VecX& q, const VecX& v) {
+  const double h = 1e-5;
+  Data plus(model), minus(model), mid(model);
+  update_kinematics(model, plus, model.integrate(q, v, h));
+  update_kinematics(model, minus, model.integrate(q, v, -h));
+  update_kinematics(model, mid, q);
+  double T = 0.0;
+  for (int i = 0; i < model.nbodies; ++i) {
+    const Vec3 rdot = (plus.r.col(i) - minus.r.col(i)) / (2 * h);
+    const Mat3 W = (plus.R[i] - minus.R[i]) / (2 * h) * mid.R[i].transpose();  // Ṙ Rᵀ = ω̃
+    const Vec3 w(W(2, 1), W(0, 2), W(1, 0));
+    T += 0.5 * (w.dot(mid.I_cm[i] * w) + model.mass[i] * rdot.squaredNorm());
+  }
+  return T;
+}
+
+TEST(MassMatrix, IsSecondDerivativeOfKineticEnergy) {
+  for (int seed = 0; seed < 6; ++seed) {
+    Rng rng(900 + seed);
+    const Model model = random_model(rng, {.n = 9, .branching = 0.5, .prismatic = 0.3, .free_root = seed % 2 == 0});
+    Data data(model);
+    const VecX q = random_q(rng, model);
+    update_kinematics(model, data, q);
+    mass_matrix(model, data);
+    MatX Mfd(model.nv, model.nv);
+    const MatX E = MatX::Identity(model.nv, model.nv);
+    for (int j = 0; j < model.nv; ++j)
+      for (int k = 0; k < model.nv; ++k)
+        Mfd(j, k) = kinetic_energy_fd(model, q, E.col(j) + E.col(k)) - kinetic_energy_fd(model, q, E.col(j)) -
+                    kinetic_energy_fd(model, q, E.col(k));
+    EXPECT_TRUE(near_rel(Mfd, data.Mass, 1e-7)) << "seed " << seed;
+
+    // T = ½ q̇ᵀ 𝓜 q̇, with T from eq. (9) on the swept body velocities (eq. 6), and from the FD motion
+    const VecX v = random_v(rng, model, 2.0);
+    update_velocities(model, data, v);
+    const double T_quad = 0.5 * v.dot(data.Mass * v);
+    EXPECT_NEAR(kinetic_energy(model, data), T_quad, 1e-12 * std::max(1.0, T_quad));
+    EXPECT_NEAR(kinetic_energy_fd(model, q, v), T_quad, 1e-7 * std::max(1.0, T_quad));
+  }
+}
+
+// J = S Ψ_D G gives v̄ = J q̇ (eq. 6), and 𝓜 = Jᵀ M̄ J (eq. 12)
+TEST(MassMatrix, JacobianGivesBodyVelocitiesAndFactorsM) {
+  Rng rng(77);
+  const Model model = random_model(rng, {.n = 30, .branching = 0.5, .prismatic = 0.3, .free_root = true});
+  Data data(model);
+  update_kinematics(model, data, random_q(rng, model));
+  const VecX v = random_v(rng, model);
+  update_velocities(model, data, v);
+  MatX J;
+  jacobian(model, data, J);
+  const VecX vbar = J * v;
+  EXPECT_TRUE(near_rel(Eigen::Map<const VecX>(vbar.data(), vbar.size()),
+                       Eigen::Map<const VecX>(data.Vbar.data(), data.Vbar.size()), 1e-12));
+  MatX Mbar = MatX::Zero(6 * model.nbodies, 6 * model.nbodies);
+  for (int i = 0; i < model.nbodies; ++i) {
+    Mbar.block<3, 3>(6 * i, 6 * i) = data.I_cm[i];
+    Mbar.block<3, 3>(6 * i + 3, 6 * i + 3) = model.mass[i] * Mat3::Identity();
+  }
+  mass_matrix(model, data);
+  EXPECT_TRUE(near_rel(J.transpose() * Mbar * J, data.Mass, 1e-12));
+}
+
+}  // namespace
