@@ -30,8 +30,8 @@ std::string fmt(const Eigen::MatrixXd& m) {
 
 [[noreturn]] void refuse(const BodySpec& b, int i, const std::string& field, const std::string& expected,
                          const std::string& got) {
-  throw Error("body '" + b.name + "' (index " + std::to_string(i) + "): " + field + ": expected " +
-              expected + ", got " + got);
+  throw ModelError(i, "body '" + b.name + "' (index " + std::to_string(i) + ")",
+                   field + ": expected " + expected + ", got " + got);
 }
 
 void check_finite(const BodySpec& b, int i, const std::string& field, const Eigen::MatrixXd& m) {
@@ -114,6 +114,7 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
   Model m;
   m.gravity = gravity;
   std::vector<Target> target(specs.size());
+  std::vector<int> spec_of;  // spec index of each model body
   for (int i = 0; i < int(specs.size()); ++i) {
     const BodySpec& b = specs[i];
     const Target parent_target = b.parent < 0 ? Target{} : target[b.parent];
@@ -136,6 +137,7 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
     }
     const int k = m.nbodies++;
     target[i] = {k, Placement{}};
+    spec_of.push_back(i);
     m.parent.push_back(parent_target.body);
     m.joint_type.push_back(b.joint);
     m.axis.push_back(b.joint == JointType::Free ? Vec3::Zero() : Vec3(b.axis.normalized()));
@@ -162,7 +164,7 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
     merged.joint = JointType::Revolute;
     merged.mass = m.mass[k];
     merged.inertia = m.inertia[k];
-    validate(merged, k);
+    validate(merged, spec_of[k]);
   }
 
   // DOF tree for the LᵀDL factorization: λ(k) and the depth (nilpotency of Φ_D)

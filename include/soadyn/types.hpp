@@ -38,4 +38,13 @@ class Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A model refused by Model::build; `spec` is the index of the offending body in the spec list.
+class ModelError : public Error {
+ public:
+  ModelError(int spec, const std::string& where, const std::string& detail)
+      : Error(where + ": " + detail), spec(spec), detail(detail) {}
+  int spec;            // index in the spec list
+  std::string detail;  // "field: expected …, got …", without the body's name
+};
+
 }  // namespace soadyn

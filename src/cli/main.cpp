@@ -1,1 +1,37 @@
-int main() { return 0; }
+// soadyn: the command-line front end.
+//   soadyn inspect MODEL ...   𝓜(q), bias, q̈, energy and momentum at one state
+//   soadyn run SCENARIO ...    simulate, log to HDF5
+#include "cli.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args = soadyn::cli::join_negative_values(argc, argv);
+  CLI::App app{"soadyn: dynamics of tree-structured rigid multibody systems (the note's O(N) operators)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", SOADYN_VERSION);
+  soadyn::cli::InspectOptions inspect;
+  soadyn::cli::add_inspect(app, inspect);
+  soadyn::cli::RunOptions run;
+  soadyn::cli::add_run(app, run);
+  try {
+    std::vector<std::string> reversed(args.rbegin(), args.rend() - 1);
+    app.parse(reversed);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
+  }
+  try {
+    if (app.got_subcommand("inspect")) return soadyn::cli::run_inspect(inspect);
+    if (app.got_subcommand("run")) return soadyn::cli::run_simulation(run);
+  } catch (const soadyn::Error& e) {
+    std::cerr << "soadyn: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "soadyn: error: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

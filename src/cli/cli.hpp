@@ -1,0 +1,40 @@
+// The subcommands of the soadyn executable.
+#pragma once
+
+#include "soadyn/types.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace soadyn::cli {
+
+// "--q -0.5,1" → "--q=-0.5,1" for the list options, so a leading minus is a value, not an option.
+std::vector<std::string> join_negative_values(int argc, char** argv);
+
+// "a,b,c" → numbers; throws soadyn::Error naming the option and the bad item.
+std::vector<double> parse_list(const std::string& option, const std::string& text);
+
+struct InspectOptions {
+  std::string model;
+  std::string q, qd, tau, gravity;
+  bool free_root = false;
+  bool json = false;
+  std::string method = "on";
+};
+void add_inspect(CLI::App& app, InspectOptions& o);
+int run_inspect(const InspectOptions& o);
+
+struct RunOptions {
+  std::string scenario;
+  std::string output;
+  std::optional<std::string> method;
+  std::optional<double> rtol, atol, dt, t_end, output_dt;
+  bool quiet = false;
+};
+void add_run(CLI::App& app, RunOptions& o);
+int run_simulation(const RunOptions& o);
+
+}  // namespace soadyn::cli

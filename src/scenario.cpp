@@ -1,0 +1,469 @@
+#include "soadyn/scenario.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+namespace soadyn {
+
+namespace {
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] != b[j - 1])});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string did_you_mean(const std::string& got, const std::vector<std::string>& choices) {
+  std::string best;
+  size_t best_d = std::string::npos;
+  for (const auto& c : choices) {
+    const size_t d = edit_distance(got, c);
+    if (d < best_d) best_d = d, best = c;
+  }
+  if (!best.empty() && best_d <= std::max<size_t>(2, got.size() / 3)) return "; did you mean '" + best + "'?";
+  std::string all;
+  for (const auto& c : choices) all += (all.empty() ? "" : ", ") + c;
+  return choices.empty() ? "" : " (expected one of: " + all + ")";
+}
+
+// Reads YAML nodes and reports every mistake as file:line:column: field: message.
+struct Reader {
+  std::string file;
+
+  [[noreturn]] void fail(const YAML::Mark& m, const std::string& field, const std::string& msg) const {
+    std::string where = file;
+    if (m.line >= 0) where += ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
+    throw Error(where + ": " + field + ": " + msg);
+  }
+  [[noreturn]] void fail(const YAML::Node& n, const std::string& field, const std::string& msg) const {
+    fail(n.Mark(), field, msg);
+  }
+
+  static std::string show(const YAML::Node& n) {
+    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsSequence()) return "a list";
+    if (n.IsMap()) return "a map";
+    return "nothing";
+  }
+
+  void keys(const YAML::Node& map, const std::string& field, const std::vector<std::string>& allowed) const {
+    if (!map.IsMap()) fail(map, field, "expected a map, got " + show(map));
+    std::set<std::string> seen;
+    for (auto it = map.begin(); it != map.end(); ++it) {
+      const std::string k = it->first.Scalar();
+      if (std::find(allowed.begin(), allowed.end(), k) == allowed.end())
+        fail(it->first, field, "unknown key '" + k + "'" + did_you_mean(k, allowed));
+      if (!seen.insert(k).second) fail(it->first, field, "duplicate key '" + k + "'");
+    }
+  }
+
+  YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& field) const {
+    const YAML::Node n = map[key];
+    if (!n || n.IsNull()) fail(map, field, "missing required field '" + key + "'");
+    return n;
+  }
+
+  double number(const YAML::Node& n, const std::string& field) const {
+    if (!n.IsScalar()) fail(n, field, "expected a number, got " + show(n));
+    double x;
+    try {
+      x = n.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(n, field, "expected a number, got " + show(n));
+    }
+    if (!std::isfinite(x)) fail(n, field, "expected a finite number, got " + show(n));
+    return x;
+  }
+
+  double positive(const YAML::Node& n, const std::string& field) const {
+    const double x = number(n, field);
+    if (!(x > 0)) fail(n, field, "expected a positive number, got " + show(n));
+    return x;
+  }
+
+  std::string string(const YAML::Node& n, const std::string& field) const {
+    if (!n.IsScalar() || n.Scalar().empty()) fail(n, field, "expected a name, got " + show(n));
+    return n.Scalar();
+  }
+
+  bool boolean(const YAML::Node& n, const std::string& field) const {
+    try {
+      if (n.IsScalar()) return n.as<bool>();
+    } catch (const YAML::Exception&) {
+    }
+    fail(n, field, "expected true or false, got " + show(n));
+  }
+
+  VecX numbers(const YAML::Node& n, const std::string& field, int size) const {
+    if (size == 1 && !n.IsScalar()) fail(n, field, "expected a number, got " + show(n));
+    if (!n.IsSequence()) fail(n, field, "expected a list of " + std::to_string(size) + " numbers, got " + show(n));
+    if (int(n.size()) != size)
+      fail(n, field, "expected " + std::to_string(size) + " numbers, got " + std::to_string(n.size()));
+    VecX v(size);
+    for (int k = 0; k < size; ++k) v(k) = number(n[k], field + "[" + std::to_string(k) + "]");
+    return v;
+  }
+
+  Vec3 vec3(const YAML::Node& n, const std::string& field) const { return numbers(n, field, 3); }
+
+  // rpy: R = Rz(yaw) Ry(pitch) Rx(roll)
+  static Mat3 rpy(const Vec3& a) {
+    return (Eigen::AngleAxisd(a.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(a.y(), Vec3::UnitY()) *
+            Eigen::AngleAxisd(a.x(), Vec3::UnitX()))
+        .toRotationMatrix();
+  }
+
+  // inertia: [ixx, iyy, izz], {ixx, iyy, izz, ixy, ixz, iyz}, or a 3×3 list of rows
+  Mat3 inertia(const YAML::Node& n, const std::string& field) const {
+    Mat3 I = Mat3::Zero();
+    if (n.IsMap()) {
+      keys(n, field, {"ixx", "iyy", "izz", "ixy", "ixz", "iyz"});
+      I(0, 0) = number(require(n, "ixx", field), field + ".ixx");
+      I(1, 1) = number(require(n, "iyy", field), field + ".iyy");
+      I(2, 2) = number(require(n, "izz", field), field + ".izz");
+      if (n["ixy"]) I(0, 1) = I(1, 0) = number(n["ixy"], field + ".ixy");
+      if (n["ixz"]) I(0, 2) = I(2, 0) = number(n["ixz"], field + ".ixz");
+      if (n["iyz"]) I(1, 2) = I(2, 1) = number(n["iyz"], field + ".iyz");
+      return I;
+    }
+    if (n.IsSequence() && n.size() == 3 && n[0].IsSequence()) {
+      for (int r = 0; r < 3; ++r) I.row(r) = vec3(n[r], field + "[" + std::to_string(r) + "]").transpose();
+      return I;
+    }
+    if (n.IsSequence() && n.size() == 3) return vec3(n, field).asDiagonal();
+    fail(n, field,
+         "expected [ixx, iyy, izz], a map {ixx, iyy, izz, ixy, ixz, iyz} or a 3x3 list, got " + show(n));
+  }
+};
+
+const std::vector<std::string> kMethods = {"cvode-adams", "cvode-bdf", "rk4", "euler", "symplectic-euler",
+                                           "implicit-midpoint"};
+
+JointType joint_type(const Reader& rd, const YAML::Node& n, const std::string& field) {
+  const std::string t = rd.string(n, field);
+  if (t == "revolute") return JointType::Revolute;
+  if (t == "prismatic") return JointType::Prismatic;
+  if (t == "free") return JointType::Free;
+  if (t == "fixed") return JointType::Fixed;
+  rd.fail(n, field, "unknown joint type '" + t + "'" + did_you_mean(t, {"revolute", "prismatic", "free", "fixed"}));
+}
+
+struct BodyNodes {
+  std::vector<BodySpec> specs;
+  std::vector<YAML::Node> nodes;
+};
+
+BodyNodes read_bodies(const Reader& rd, const YAML::Node& list) {
+  if (!list.IsSequence() || list.size() == 0) rd.fail(list, "bodies", "expected a non-empty list of bodies");
+  BodyNodes out;
+  std::map<std::string, int> index;
+  // every body's declared parent, to tell a cycle from a parent listed too late
+  std::map<std::string, std::string> declared_parent;
+  for (size_t k = 0; k < list.size(); ++k) {
+    const YAML::Node& b = list[k];
+    if (b.IsMap() && b["name"] && b["name"].IsScalar())
+      declared_parent[b["name"].Scalar()] = b["parent"] && b["parent"].IsScalar() ? b["parent"].Scalar() : "world";
+  }
+  std::set<std::string> joint_names;
+  for (size_t k = 0; k < list.size(); ++k) {
+    const YAML::Node& b = list[k];
+    const std::string f = "bodies[" + std::to_string(k) + "]";
+    rd.keys(b, f, {"name", "parent", "joint", "origin", "mass", "com", "inertia"});
+    BodySpec s;
+    s.name = rd.string(rd.require(b, "name", f), f + ".name");
+    const std::string fb = "body '" + s.name + "'";
+    if (index.count(s.name) || s.name == "world") rd.fail(b["name"], fb + ".name", "duplicate body name '" + s.name + "'");
+
+    const std::string parent = b["parent"] ? rd.string(b["parent"], fb + ".parent") : "world";
+    if (parent == "world") {
+      s.parent = -1;
+    } else if (auto it = index.find(parent); it != index.end()) {
+      s.parent = it->second;
+    } else if (declared_parent.count(parent)) {
+      // follow the declared parents from `parent`: back to this body means a cycle
+      std::string chain = s.name + " -> " + parent, at = parent;
+      std::set<std::string> visited{s.name};
+      bool cycle = false;
+      while (declared_parent.count(at) && !visited.count(at)) {
+        visited.insert(at);
+        at = declared_parent[at];
+        chain += " -> " + at;
+        if (at == s.name) {
+          cycle = true;
+          break;
+        }
+      }
+      if (cycle || parent == s.name) rd.fail(b["parent"], fb + ".parent", "cycle in the tree: " + chain);
+      rd.fail(b["parent"], fb + ".parent",
+              "parent '" + parent + "' is listed after '" + s.name + "'; list every parent before its children");
+    } else {
+      std::vector<std::string> names{"world"};
+      for (auto& [n, i] : index) names.push_back(n);
+      rd.fail(b["parent"], fb + ".parent", "no body named '" + parent + "'" + did_you_mean(parent, names));
+    }
+
+    const YAML::Node j = rd.require(b, "joint", fb);
+    rd.keys(j, fb + ".joint", {"type", "name", "axis"});
+    s.joint = joint_type(rd, rd.require(j, "type", fb + ".joint"), fb + ".joint.type");
+    s.joint_name = j["name"] ? rd.string(j["name"], fb + ".joint.name") : s.name;
+    if (s.joint != JointType::Fixed && !joint_names.insert(s.joint_name).second)
+      rd.fail(j["name"] ? j["name"] : b["name"], fb + ".joint.name", "duplicate joint name '" + s.joint_name + "'");
+    if (s.joint == JointType::Revolute || s.joint == JointType::Prismatic) {
+      s.axis = rd.vec3(rd.require(j, "axis", fb + ".joint"), fb + ".joint.axis");
+      if (!(s.axis.norm() > 1e-12)) rd.fail(j["axis"], fb + ".joint.axis", "expected a non-zero axis, got [0, 0, 0]");
+    } else if (j["axis"]) {
+      rd.fail(j["axis"], fb + ".joint.axis", "a " + std::string(to_string(s.joint)) + " joint has no axis");
+    }
+
+    if (const YAML::Node o = b["origin"]) {
+      if (s.joint == JointType::Free)
+        rd.fail(o, fb + ".origin", "a free joint has no origin: its q is the body's pose in the world");
+      rd.keys(o, fb + ".origin", {"xyz", "rpy"});
+      if (o["xyz"]) s.placement.p = rd.vec3(o["xyz"], fb + ".origin.xyz");
+      if (o["rpy"]) s.placement.R = Reader::rpy(rd.vec3(o["rpy"], fb + ".origin.rpy"));
+    }
+    const YAML::Node mass = rd.require(b, "mass", fb);
+    s.mass = rd.number(mass, fb + ".mass");
+    const bool massless_weld = s.joint == JointType::Fixed && s.mass == 0.0;
+    if (!(s.mass > 0) && !massless_weld)
+      rd.fail(mass, fb + ".mass", "expected a positive mass, got " + Reader::show(mass));
+    if (b["com"]) s.com = rd.vec3(b["com"], fb + ".com");
+    if (!massless_weld) s.inertia = rd.inertia(rd.require(b, "inertia", fb), fb + ".inertia");
+    else if (b["inertia"]) s.inertia = rd.inertia(b["inertia"], fb + ".inertia");
+
+    index[s.name] = int(k);
+    out.specs.push_back(s);
+    out.nodes.push_back(b);
+  }
+  return out;
+}
+
+// Model::build's refusals, located at the offending body's line
+Model build_located(const Reader& rd, const BodyNodes& bodies, const Vec3& gravity) {
+  try {
+    return Model::build(bodies.specs, gravity);
+  } catch (const ModelError& e) {
+    const int k = e.spec >= 0 && e.spec < int(bodies.nodes.size()) ? e.spec : 0;
+    rd.fail(bodies.nodes[k], "body '" + bodies.specs[k].name + "'", e.detail);
+  }
+}
+
+int find_joint(const Reader& rd, const Model& m, const YAML::Node& key, const std::string& field) {
+  const std::string name = rd.string(key, field);
+  const int i = m.joint_index(name);
+  if (i < 0) rd.fail(key, field, "no joint named '" + name + "'" + did_you_mean(name, m.joint_names));
+  return i;
+}
+
+void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q0, VecX& v0) {
+  rd.keys(n, "initial", {"q", "qd"});
+  for (const char* part : {"q", "qd"}) {
+    const YAML::Node values = n[part];
+    if (!values) continue;
+    const std::string f = std::string("initial.") + part;
+    if (!values.IsMap()) rd.fail(values, f, "expected a map from joint name to value, got " + Reader::show(values));
+    const bool is_q = std::string(part) == "q";
+    for (auto it = values.begin(); it != values.end(); ++it) {
+      const int i = find_joint(rd, m, it->first, f);
+      const std::string fj = f + "." + it->first.Scalar();
+      const int size = is_q ? m.nq_i[i] : m.nv_i[i];
+      VecX x = size == 1 && it->second.IsScalar() ? VecX::Constant(1, rd.number(it->second, fj))
+                                                   : rd.numbers(it->second, fj, size);
+      if (is_q && m.joint_type[i] == JointType::Free) {
+        const double norm = x.segment<4>(3).norm();
+        if (std::abs(norm - 1.0) > 1e-6)
+          rd.fail(it->second, fj, "expected a unit quaternion [w, x, y, z] after the position, got norm " +
+                                      std::to_string(norm));
+        x.segment<4>(3) /= norm;
+      }
+      (is_q ? q0.segment(m.idx_q[i], size) : v0.segment(m.idx_v[i], size)) = x;
+    }
+  }
+}
+
+void read_simulation(const Reader& rd, const YAML::Node& n, SimulationSettings& s) {
+  rd.keys(n, "simulation", {"t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics"});
+  if (n["t_end"]) s.t_end = rd.positive(n["t_end"], "simulation.t_end");
+  if (n["output_dt"]) s.output_dt = rd.positive(n["output_dt"], "simulation.output_dt");
+  if (n["rtol"]) s.rtol = rd.positive(n["rtol"], "simulation.rtol");
+  if (n["atol"]) s.atol = rd.positive(n["atol"], "simulation.atol");
+  if (n["dt"]) s.dt = rd.positive(n["dt"], "simulation.dt");
+  if (n["max_step"]) s.max_step = rd.positive(n["max_step"], "simulation.max_step");
+  if (n["max_steps"]) {
+    const double x = rd.positive(n["max_steps"], "simulation.max_steps");
+    if (x != std::floor(x) || x > 1e15) rd.fail(n["max_steps"], "simulation.max_steps", "expected a whole number");
+    s.max_steps = long(x);
+  }
+  if (n["method"]) {
+    s.method = rd.string(n["method"], "simulation.method");
+    if (std::find(kMethods.begin(), kMethods.end(), s.method) == kMethods.end())
+      rd.fail(n["method"], "simulation.method", "unknown method '" + s.method + "'" + did_you_mean(s.method, kMethods));
+  }
+  if (n["dynamics"]) {
+    s.dynamics = rd.string(n["dynamics"], "simulation.dynamics");
+    if (s.dynamics != "dense" && s.dynamics != "sparse" && s.dynamics != "on")
+      rd.fail(n["dynamics"], "simulation.dynamics",
+              "unknown route '" + s.dynamics + "'" + did_you_mean(s.dynamics, {"dense", "sparse", "on"}));
+  }
+}
+
+void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, Inputs& in) {
+  rd.keys(n, "inputs", {"torques", "springs", "dampers"});
+  auto each = [&](const char* part, auto&& read_one) {
+    const YAML::Node list = n[part];
+    if (!list) return;
+    const std::string f = std::string("inputs.") + part;
+    if (!list.IsSequence()) rd.fail(list, f, "expected a list, got " + Reader::show(list));
+    for (size_t k = 0; k < list.size(); ++k) {
+      const std::string fk = f + "[" + std::to_string(k) + "]";
+      const YAML::Node e = list[k];
+      if (!e.IsMap()) rd.fail(e, fk, "expected a map, got " + Reader::show(e));
+      const YAML::Node jn = rd.require(e, "joint", fk);
+      const int i = find_joint(rd, m, jn, fk + ".joint");
+      if (m.nv_i[i] != 1)
+        rd.fail(jn, fk + ".joint", "inputs act on revolute or prismatic joints; '" + jn.Scalar() + "' is " +
+                                       std::string(to_string(m.joint_type[i])));
+      read_one(e, fk, i);
+    }
+  };
+  each("torques", [&](const YAML::Node& e, const std::string& f, int i) {
+    rd.keys(e, f, {"joint", "constant", "amplitude", "frequency", "phase"});
+    TorqueInput t{m.joint_names[i], m.idx_v[i]};
+    if (e["constant"]) t.constant = rd.number(e["constant"], f + ".constant");
+    if (e["amplitude"]) t.amplitude = rd.number(e["amplitude"], f + ".amplitude");
+    if (e["frequency"]) t.frequency = rd.number(e["frequency"], f + ".frequency");
+    if (e["phase"]) t.phase = rd.number(e["phase"], f + ".phase");
+    in.torques.push_back(t);
+  });
+  each("springs", [&](const YAML::Node& e, const std::string& f, int i) {
+    rd.keys(e, f, {"joint", "stiffness", "rest"});
+    SpringInput s{m.joint_names[i], m.idx_v[i], m.idx_q[i]};
+    s.stiffness = rd.number(rd.require(e, "stiffness", f), f + ".stiffness");
+    if (s.stiffness < 0) rd.fail(e["stiffness"], f + ".stiffness", "expected a stiffness >= 0");
+    if (e["rest"]) s.rest = rd.number(e["rest"], f + ".rest");
+    in.springs.push_back(s);
+  });
+  each("dampers", [&](const YAML::Node& e, const std::string& f, int i) {
+    rd.keys(e, f, {"joint", "damping"});
+    DamperInput d{m.joint_names[i], m.idx_v[i]};
+    d.damping = rd.number(rd.require(e, "damping", f), f + ".damping");
+    if (d.damping < 0) rd.fail(e["damping"], f + ".damping", "expected a damping >= 0");
+    in.dampers.push_back(d);
+  });
+}
+
+bool is_urdf_path(const std::string& path) {
+  const std::string ext = std::filesystem::path(path).extension().string();
+  return ext == ".urdf" || ext == ".URDF" || ext == ".xml";
+}
+
+}  // namespace
+
+void Inputs::evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const {
+  tau.setZero();
+  for (const auto& u : torques)
+    tau(u.dof) += u.constant + u.amplitude * std::sin(2 * std::numbers::pi * u.frequency * t + u.phase);
+  for (const auto& s : springs) tau(s.dof) -= s.stiffness * (q(s.coord) - s.rest);
+  for (const auto& d : dampers) tau(d.dof) -= d.damping * v(d.dof);
+}
+
+double Inputs::spring_energy(const VecX& q) const {
+  double V = 0.0;
+  for (const auto& s : springs) V += 0.5 * s.stiffness * (q(s.coord) - s.rest) * (q(s.coord) - s.rest);
+  return V;
+}
+
+std::string read_text_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory, expected a file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open the file for reading");
+  std::ostringstream os;
+  os << in.rdbuf();
+  if (in.bad()) throw Error(path + ": read error");
+  const std::string text = os.str();
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw Error(path + ": the file is empty");
+  return text;
+}
+
+Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root) {
+  const Reader rd{path};
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    rd.fail(e.mark, "YAML syntax", e.msg);
+  }
+  if (!root || root.IsNull()) throw Error(path + ": the file is empty");
+  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "free_root", "initial", "simulation", "inputs"});
+
+  Scenario sc;
+  sc.path = path;
+  sc.text = text;
+  sc.name = root["name"] ? rd.string(root["name"], "name") : std::filesystem::path(path).stem().string();
+  if (root["description"]) sc.description = root["description"].as<std::string>("");
+  const Vec3 gravity = root["gravity"] ? rd.vec3(root["gravity"], "gravity") : Vec3::Zero();
+
+  if (root["urdf"] && root["bodies"]) rd.fail(root["urdf"], "urdf", "give either 'bodies' or 'urdf', not both");
+  if (root["urdf"]) {
+    const std::string rel = rd.string(root["urdf"], "urdf");
+    const std::filesystem::path p = std::filesystem::path(path).parent_path() / rel;
+    const bool free = free_root || (root["free_root"] && rd.boolean(root["free_root"], "free_root"));
+    try {
+      sc.model = load_urdf(p.string(), free, gravity);
+    } catch (const Error& e) {
+      rd.fail(root["urdf"], "urdf", e.what());
+    }
+  } else {
+    if (root["free_root"]) rd.fail(root["free_root"], "free_root", "applies to 'urdf' models; give the root a free joint");
+    const BodyNodes bodies = read_bodies(rd, rd.require(root, "bodies", "scenario"));
+    if (free_root) throw Error(path + ": --free-root applies to URDF models; give the root body a free joint");
+    sc.model = build_located(rd, bodies, gravity);
+  }
+
+  sc.q0 = sc.model.neutral_configuration();
+  sc.v0 = VecX::Zero(sc.model.nv);
+  if (root["initial"]) read_initial(rd, root["initial"], sc.model, sc.q0, sc.v0);
+  if (root["simulation"]) read_simulation(rd, root["simulation"], sc.simulation);
+  if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.inputs);
+  return sc;
+}
+
+Scenario load_scenario(const std::string& path, bool free_root, const std::optional<Vec3>& gravity) {
+  const std::string text = read_text_file(path);
+  Scenario sc;
+  if (is_urdf_path(path)) {
+    sc.path = path;
+    sc.text = text;
+    sc.name = std::filesystem::path(path).stem().string();
+    sc.model = parse_urdf(text, path, free_root, gravity.value_or(Vec3(0, 0, -9.81)));
+    sc.q0 = sc.model.neutral_configuration();
+    sc.v0 = VecX::Zero(sc.model.nv);
+  } else {
+    sc = parse_scenario(text, path, free_root);
+    if (gravity) sc.model.gravity = *gravity;
+  }
+  return sc;
+}
+
+Model load_urdf(const std::string& path, bool free_root, const Vec3& gravity) {
+  return parse_urdf(read_text_file(path), path, free_root, gravity);
+}
+
+}  // namespace soadyn
