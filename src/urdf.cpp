@@ -31,6 +31,35 @@ struct XmlIndex {
   std::map<std::string, int> joint_line, link_line;
 };
 
+// The link graph must be a tree before urdfdom sees it: urdfdom leaks the shared_ptr cycle it
+// builds for a cyclic graph, and its message names no line.
+void check_tree(const tinyxml2::XMLElement* robot, const std::string& path) {
+  std::map<std::string, std::pair<std::string, int>> parent_of;  // child link → (parent link, line)
+  for (auto* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
+    const auto* p = e->FirstChildElement("parent");
+    const auto* c = e->FirstChildElement("child");
+    const char* pl = p ? p->Attribute("link") : nullptr;
+    const char* cl = c ? c->Attribute("link") : nullptr;
+    const std::string at = path + ":" + std::to_string(e->GetLineNum()) + ": joint '" + e->Attribute("name") + "'";
+    if (!pl) throw Error(at + ": expected <parent link=\"...\"/>");
+    if (!cl) throw Error(at + ": expected <child link=\"...\"/>");
+    if (std::string(pl) == cl) throw Error(at + ": link '" + std::string(cl) + "' is its own parent");
+    if (parent_of.count(cl))
+      throw Error(at + ": link '" + std::string(cl) + "' already has a parent joint (line " +
+                  std::to_string(parent_of[cl].second) + "); a URDF is a tree");
+    parent_of[cl] = {pl, e->GetLineNum()};
+  }
+  for (const auto& [link, pl] : parent_of) {
+    std::string at = link, chain = link;
+    for (size_t steps = 0; parent_of.count(at); ++steps) {
+      at = parent_of[at].first;
+      chain += " <- " + at;
+      if (at == link || steps > parent_of.size())
+        throw Error(path + ":" + std::to_string(pl.second) + ": URDF: cycle in the links: " + chain);
+    }
+  }
+}
+
 XmlIndex index_xml(const std::string& xml, const std::string& path) {
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS)
@@ -57,6 +86,7 @@ XmlIndex index_xml(const std::string& xml, const std::string& path) {
       idx.link_line[name] = e->GetLineNum();
     }
   }
+  check_tree(robot, path);
   return idx;
 }
 

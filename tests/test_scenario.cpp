@@ -377,6 +377,18 @@ TEST(BadUrdf, MovingLinkWithoutMassAndBadInertia) {
   EXPECT_THAT(urdf_error_of(bad), HasSubstr("triangle inequality"));
 }
 
+TEST(BadUrdf, CyclesAndTwoParents) {
+  const std::string in = "<inertial><mass value=\"1\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>";
+  auto j = [](const std::string& n, const std::string& p, const std::string& c) {
+    return "<joint name=\"" + n + "\" type=\"continuous\"><parent link=\"" + p + "\"/><child link=\"" + c + "\"/></joint>\n";
+  };
+  const std::string links = "<link name=\"a\">" + in + "</link>\n<link name=\"b\">" + in + "</link>\n<link name=\"c\">" + in + "</link>\n";
+  EXPECT_THAT(urdf_error_of("<robot name=\"r\">\n" + links + j("j1", "b", "c") + j("j2", "c", "b") + "</robot>"),
+              HasSubstr("cycle in the links"));
+  EXPECT_THAT(urdf_error_of("<robot name=\"r\">\n" + links + j("j1", "a", "c") + j("j2", "b", "c") + "</robot>"),
+              HasSubstr("robot.urdf:6: joint 'j2': link 'c' already has a parent joint (line 5)"));
+}
+
 TEST(BadUrdf, UnsupportedJointType) {
   const std::string xml =
       "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"><inertial><mass value=\"1\"/>"

@@ -1,0 +1,23 @@
+// libFuzzer target: scenario text → model → mass matrix and bias.  Any exception other than
+// soadyn::Error, any crash, leak or hang is a finding.
+#include "soadyn/algorithms.hpp"
+#include "soadyn/kinematics.hpp"
+#include "soadyn/scenario.hpp"
+
+#include <cstdint>
+#include <string>
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+    const soadyn::Scenario sc = soadyn::parse_scenario(text, "fuzz.yaml");
+    if (sc.model.nbodies > 64) return 0;
+    soadyn::Data d(sc.model);
+    soadyn::update_kinematics(sc.model, d, sc.q0);
+    soadyn::mass_matrix(sc.model, d);
+    soadyn::update_velocities(sc.model, d, sc.v0);
+    soadyn::bias_forces(sc.model, d);
+  } catch (const soadyn::Error&) {
+  }
+  return 0;
+}

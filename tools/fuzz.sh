@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Build the libFuzzer targets with Debian clang (address + undefined sanitizers) in build-fuzz/,
+# or run one of them for a bounded time on a seed corpus made from scenarios/ and tests/fuzz/seeds/.
+#   tools/fuzz.sh build
+#   tools/fuzz.sh run scenario|urdf SECONDS
+# Exits 77 (skipped) when clang with libFuzzer is not installed.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+CLANG=$(command -v clang++ || command -v clang++-14 || true)
+if [[ -z "$CLANG" ]]; then echo "fuzz: clang++ not installed, skipped"; exit 77; fi
+if ! ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1; then
+  echo "fuzz: libFuzzer runtime (libclang-rt-*-dev) not installed, skipped"; exit 77
+fi
+
+case "${1:-}" in
+  build)
+    CXX="$CLANG" cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSOADYN_FUZZ=ON \
+      -DSOADYN_BUILD_TESTS=OFF -DSOADYN_BUILD_BENCH=OFF -DSOADYN_NATIVE=OFF >/dev/null
+    cmake --build build-fuzz -j "$(nproc)" --target fuzz_scenario fuzz_urdf
+    ;;
+  run)
+    target=$2 seconds=$3
+    corpus=build-fuzz/corpus_$target
+    rm -rf "$corpus" && mkdir -p "$corpus"
+    if [[ $target == scenario ]]; then cp scenarios/*.yaml "$corpus/"; else cp tests/fuzz/seeds/*.urdf "$corpus/"; fi
+    mkdir -p build-fuzz/findings_$target
+    log=build-fuzz/fuzz_$target.log
+    status=0
+    ASAN_OPTIONS=detect_leaks=1 ./build-fuzz/fuzz_$target "$corpus" -max_total_time="$seconds" -timeout=10 \
+      -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 -artifact_prefix=build-fuzz/findings_$target/ \
+      >"$log" 2>&1 || status=$?
+    grep -E "^(INFO: seed corpus|stat::number_of_executed_units|stat::peak_rss)" "$log" || true
+    if ((status != 0)); then
+      echo "fuzz_$target found a problem (exit $status):"
+      grep -A40 -E "==[0-9]+==ERROR|deadly signal|Test unit written" "$log" | head -80
+    fi
+    exit "$status"
+    ;;
+  *) echo "usage: tools/fuzz.sh build | run scenario|urdf SECONDS" >&2; exit 2 ;;
+esac
