@@ -5,7 +5,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(
-  cmake g++ make pkg-config
+  cmake gcc g++ make pkg-config
   libeigen3-dev googletest libgtest-dev libgmock-dev libbenchmark-dev
   libsundials-dev libhdf5-dev libyaml-cpp-dev liburdfdom-dev libtinyxml2-dev libcli11-dev
   python3-numpy python3-h5py python3-matplotlib

@@ -1,0 +1,77 @@
+// Time integration of 𝓜(q) q̈ = τ(t, q, q̇) − bias(q, q̇) with state y = [q; v].
+//
+// One interface, several methods:
+//   cvode-adams        SUNDIALS CVODE, Adams–Moulton, fixed-point iteration (non-stiff)
+//   cvode-bdf          SUNDIALS CVODE, BDF, Newton with a dense direct solver, difference-quotient
+//                      Jacobian (stiff)
+//   euler              explicit Euler (order 1)
+//   symplectic-euler   semi-implicit Euler: v ← v + h q̈(q, v), then q ← q ⊕ h v (order 1, symplectic)
+//   rk4                classical Runge–Kutta (order 4)
+//   implicit-midpoint  y ← y + h f((y + y⁺)/2), Newton iterations (order 2, symplectic, A-stable):
+//                      the one fixed-step baseline that stays stable on stiff scenes
+// Free roots keep a unit quaternion: CVODE projects it (CVodeSetProjFn); fixed-step methods
+// renormalize after each step.
+#pragma once
+
+#include "soadyn/algorithms.hpp"
+#include "soadyn/scenario.hpp"
+
+#include <memory>
+#include <string>
+
+namespace soadyn {
+
+// A run that went unstable or that the integrator could not continue.
+class SimulationError : public Error {
+ public:
+  SimulationError(const std::string& what, double t) : Error(what), t(t) {}
+  double t;
+};
+
+// ẏ = f(t, y) for the model with its inputs.
+class System {
+ public:
+  System(const Model& model, const Inputs& inputs, FdMethod method);
+  int size() const { return model.nq + model.nv; }
+  // ẏ = [q̇(q, v); q̈]; counts evaluations
+  void rhs(double t, const double* y, double* ydot);
+  // the name of component k of y ("theta2 (q)", "bus.wz (v)")
+  std::string component_name(int k) const;
+
+  const Model& model;
+  const Inputs& inputs;
+  FdMethod method;
+  Data data;
+  VecX q, v, tau, qd;
+  long rhs_evals = 0;
+};
+
+struct IntegratorStats {
+  long steps = 0;
+  long rhs_evals = 0;
+  long jac_evals = 0;
+  long error_test_failures = 0;
+  long nonlinear_iterations = 0;
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  // advance (t, y) to t_out; throws SimulationError when the run cannot continue
+  virtual void advance(double t_out, double& t, VecX& y) = 0;
+  virtual IntegratorStats stats() const = 0;
+  // how the quaternion of a free root is kept unit ("none" without a free joint)
+  virtual std::string quaternion_handling() const = 0;
+};
+
+std::unique_ptr<Integrator> make_integrator(const std::string& method, System& system,
+                                            const SimulationSettings& settings, double t0, const VecX& y0);
+
+// The CVODE integrators (cvode.cpp)
+std::unique_ptr<Integrator> make_cvode(bool bdf, System& system, const SimulationSettings& settings, double t0,
+                                       const VecX& y0);
+
+// "where it failed": the first non-finite component, or -1
+int first_non_finite(const VecX& y);
+
+}  // namespace soadyn

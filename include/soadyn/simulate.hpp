@@ -1,0 +1,52 @@
+// Running a scenario: integrate, observe, log.
+#pragma once
+
+#include "soadyn/integrators.hpp"
+#include "soadyn/scenario.hpp"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace soadyn {
+
+// What is logged at every output time.
+struct Sample {
+  double t = 0.0;
+  VecX q, qd, qdd;
+  double kinetic = 0.0, potential = 0.0, total = 0.0;  // potential includes joint springs
+  Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+};
+
+struct RunSummary {
+  std::string method;
+  std::string quaternion_handling;
+  double output_dt = 0.0;             // as used: a whole number of steps for fixed-step methods
+  IntegratorStats stats;
+  double cpu_seconds = 0.0;
+  std::string status = "running";     // "completed", or the error
+  double t_reached = 0.0;
+  bool completed = false;
+  double max_relative_energy_error = 0.0;   // max |E(t) − E(0)| / max(|E(0)|, peak T)
+  double final_relative_energy_error = 0.0;
+};
+
+// Receives samples and the run's state as it goes (the HDF5 log implements it).
+class RunObserver {
+ public:
+  virtual ~RunObserver() = default;
+  virtual void on_sample(const Sample& s) = 0;
+  virtual void on_progress(const RunSummary&) {}
+  virtual void on_finish(const RunSummary& summary) = 0;
+};
+
+// Evaluates the logged quantities at (t, q, v).
+Sample observe(System& system, double t, const VecX& q, const VecX& v);
+
+// Simulates sc with settings (its own `simulation` section, possibly overridden).  Never throws
+// for a run that fails midway: the summary says how it ended (completed = false) and the
+// observer has everything logged up to then.  Throws soadyn::Error for bad settings.
+RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer = nullptr,
+                    std::vector<Sample>* samples = nullptr);
+
+}  // namespace soadyn

@@ -1,0 +1,222 @@
+// CVODE behind the Integrator interface.  Every SUNDIALS handle has a move-only owner; no C++
+// exception crosses a C callback (it is stored and rethrown after CVode returns); SUNDIALS error
+// messages become soadyn errors.
+#include "soadyn/integrators.hpp"
+
+#include <cvode/cvode.h>
+#include <cvode/cvode_proj.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <cmath>
+#include <exception>
+#include <memory>
+#include <sstream>
+
+namespace soadyn {
+
+namespace {
+
+// move-only owners of SUNDIALS handles
+struct ContextDeleter {
+  void operator()(SUNContext c) const { SUNContext_Free(&c); }
+};
+struct VectorDeleter {
+  void operator()(N_Vector v) const { N_VDestroy(v); }
+};
+struct MatrixDeleter {
+  void operator()(SUNMatrix m) const { SUNMatDestroy(m); }
+};
+struct LinSolDeleter {
+  void operator()(SUNLinearSolver s) const { SUNLinSolFree(s); }
+};
+struct NonlinSolDeleter {
+  void operator()(SUNNonlinearSolver s) const { SUNNonlinSolFree(s); }
+};
+struct CvodeDeleter {
+  void operator()(void* mem) const { CVodeFree(&mem); }
+};
+using ContextPtr = std::unique_ptr<std::remove_pointer_t<SUNContext>, ContextDeleter>;
+using VectorPtr = std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorDeleter>;
+using MatrixPtr = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, MatrixDeleter>;
+using LinSolPtr = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, LinSolDeleter>;
+using NonlinSolPtr = std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver>, NonlinSolDeleter>;
+using CvodePtr = std::unique_ptr<void, CvodeDeleter>;
+
+Eigen::Map<VecX> map(N_Vector v) { return {N_VGetArrayPointer(v), N_VGetLength(v)}; }
+
+class Cvode : public Integrator {
+ public:
+  Cvode(bool bdf, System& sys, const SimulationSettings& s, double t0, const VecX& y0)
+      : sys_(sys), bdf_(bdf), max_steps_(s.max_steps) {
+    SUNContext ctx = nullptr;
+    check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create");
+    ctx_.reset(ctx);
+    y_.reset(N_VNew_Serial(sys.size(), ctx_.get()));
+    if (!y_) throw Error("CVODE: could not allocate the state vector");
+    map(y_.get()) = y0;
+    mem_.reset(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, ctx_.get()));
+    if (!mem_) throw Error("CVODE: CVodeCreate failed");
+    void* mem = mem_.get();
+    check(CVodeSetErrHandlerFn(mem, &Cvode::on_error, this), "CVodeSetErrHandlerFn");
+    check(CVodeInit(mem, &Cvode::rhs, t0, y_.get()), "CVodeInit");
+    check(CVodeSetUserData(mem, this), "CVodeSetUserData");
+    check(CVodeSStolerances(mem, s.rtol, s.atol), "CVodeSStolerances");
+    if (s.max_step > 0) check(CVodeSetMaxStep(mem, s.max_step), "CVodeSetMaxStep");
+    if (bdf) {
+      // stiff: Newton iterations with a dense direct solver; Jacobian by difference quotients
+      A_.reset(SUNDenseMatrix(sys.size(), sys.size(), ctx_.get()));
+      ls_.reset(SUNLinSol_Dense(y_.get(), A_.get(), ctx_.get()));
+      if (!A_ || !ls_) throw Error("CVODE: could not allocate the dense linear solver");
+      check(CVodeSetLinearSolver(mem, ls_.get(), A_.get()), "CVodeSetLinearSolver");
+    } else {
+      // non-stiff: fixed-point (functional) iterations, no Jacobian
+      nls_.reset(SUNNonlinSol_FixedPoint(y_.get(), 0, ctx_.get()));
+      if (!nls_) throw Error("CVODE: could not allocate the fixed-point solver");
+      check(CVodeSetNonlinearSolver(mem, nls_.get()), "CVodeSetNonlinearSolver");
+    }
+    if (sys.model.has_free_joint()) {
+      projection_ = CVodeSetProjFn(mem, &Cvode::project) == CV_SUCCESS;
+      error_message_.clear();
+    }
+  }
+
+  void advance(double t_out, double& t, VecX& y) override {
+    const long left = max_steps_ - stats().steps;
+    if (left <= 0) fail(t, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
+    check(CVodeSetMaxNumSteps(mem_.get(), left), "CVodeSetMaxNumSteps");
+    double t_reached = t;
+    const int flag = CVode(mem_.get(), t_out, y_.get(), &t_reached, CV_NORMAL);
+    if (pending_) {
+      auto e = pending_;
+      pending_ = nullptr;
+      std::rethrow_exception(e);
+    }
+    t = t_reached;
+    y = map(y_.get());
+    if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
+    if (flag < 0) {
+      std::string why = flag == CV_TOO_MUCH_WORK ? "too much work (the maximum number of steps)" : CVodeGetReturnFlagName(flag);
+      if (!error_message_.empty()) why += ": " + error_message_;
+      fail(t, why);
+    }
+    if (const int bad = first_non_finite(y); bad >= 0)
+      throw SimulationError("unstable at t = " + std::to_string(t) + " s: " + sys_.component_name(bad) + " is not finite", t);
+  }
+
+  IntegratorStats stats() const override {
+    IntegratorStats s;
+    void* mem = mem_.get();
+    long v = 0;
+    CVodeGetNumSteps(mem, &v);
+    s.steps = v;
+    CVodeGetNumRhsEvals(mem, &v);
+    s.rhs_evals = v;
+    CVodeGetNumErrTestFails(mem, &v);
+    s.error_test_failures = v;
+    CVodeGetNumNonlinSolvIters(mem, &v);
+    s.nonlinear_iterations = v;
+    if (bdf_) {
+      CVodeGetNumJacEvals(mem, &v);
+      s.jac_evals = v;
+      CVodeGetNumLinRhsEvals(mem, &v);  // difference-quotient Jacobian evaluations of f
+      s.rhs_evals += v;
+    }
+    return s;
+  }
+
+  std::string quaternion_handling() const override {
+    if (!sys_.model.has_free_joint()) return "none";
+    return projection_ ? "CVODE projection (CVodeSetProjFn) onto the unit quaternion"
+                       : "normalized in the dynamics and at every output (CVODE projection needs BDF)";
+  }
+
+ private:
+  static int rhs(double t, N_Vector y, N_Vector ydot, void* user) {
+    auto* self = static_cast<Cvode*>(user);
+    try {
+      self->sys_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+      // a non-finite derivative is recoverable: CVODE retries with a smaller step
+      return map(ydot).allFinite() ? 0 : 1;
+    } catch (...) {
+      self->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  // unit quaternions: corr = normalized − current; the error's component along the quaternion removed
+  static int project(double, N_Vector ycur, N_Vector corr, double, N_Vector err, void* user) {
+    auto* self = static_cast<Cvode*>(user);
+    const Model& m = self->sys_.model;
+    auto y = map(ycur);
+    auto c = map(corr);
+    c.setZero();
+    for (int i = 0; i < m.nbodies; ++i) {
+      if (m.joint_type[i] != JointType::Free) continue;
+      const int k = m.idx_q[i] + 3;
+      const Eigen::Vector4d quat = y.segment<4>(k);
+      const double n = quat.norm();
+      if (!(n > 0) || !std::isfinite(n)) return 1;
+      c.segment<4>(k) = quat / n - quat;
+      if (err) {
+        auto e = map(err);
+        const Eigen::Vector4d u = quat / n;
+        e.segment<4>(k) -= u.dot(e.segment<4>(k)) * u;
+      }
+    }
+    return 0;
+  }
+
+  static void on_error(int code, const char* module, const char* function, char* msg, void* user) {
+    auto* self = static_cast<Cvode*>(user);
+    if (code < 0) self->error_message_ = std::string(module) + "::" + function + ": " + msg;
+  }
+
+  void check(int flag, const char* call) {
+    if (flag < 0)
+      throw Error(std::string("CVODE: ") + call + " failed (" + std::to_string(flag) + ")" +
+                  (error_message_.empty() ? "" : ": " + error_message_));
+  }
+
+  // "failed at t = …: why; worst DOF: the largest weighted local error"
+  [[noreturn]] void fail(double t, const std::string& why) {
+    std::ostringstream os;
+    os << "CVODE " << (bdf_ ? "BDF" : "Adams") << " failed at t = " << t << " s: " << why;
+    VectorPtr w(N_VClone(y_.get())), e(N_VClone(y_.get()));
+    if (w && e && CVodeGetErrWeights(mem_.get(), w.get()) == CV_SUCCESS &&
+        CVodeGetEstLocalErrors(mem_.get(), e.get()) == CV_SUCCESS) {
+      const VecX weighted = (map(w.get()).array() * map(e.get()).array()).abs();
+      Eigen::Index worst = 0;
+      if (weighted.allFinite() && weighted.maxCoeff(&worst) > 0)
+        os << "; worst DOF: " << sys_.component_name(int(worst)) << " (weighted local error " << weighted(worst) << ")";
+    }
+    if (const int bad = first_non_finite(map(y_.get())); bad >= 0) os << "; " << sys_.component_name(bad) << " is not finite";
+    throw SimulationError(os.str(), t);
+  }
+
+  System& sys_;
+  bool bdf_;
+  long max_steps_;
+  bool projection_ = false;
+  std::exception_ptr pending_;
+  std::string error_message_;
+  // declared in creation order, destroyed in reverse: the CVODE memory before what it uses
+  ContextPtr ctx_;
+  VectorPtr y_;
+  MatrixPtr A_;
+  LinSolPtr ls_;
+  NonlinSolPtr nls_;
+  CvodePtr mem_;
+};
+
+}  // namespace
+
+std::unique_ptr<Integrator> make_cvode(bool bdf, System& system, const SimulationSettings& settings, double t0,
+                                       const VecX& y0) {
+  return std::make_unique<Cvode>(bdf, system, settings, t0, y0);
+}
+
+}  // namespace soadyn

@@ -1,0 +1,294 @@
+// Simulation: conservation on the four scenarios, convergence orders, HDF5 files (read back with
+// the HDF5 API), a run killed with SIGKILL, instability, inputs.
+#include "soadyn/h5log.hpp"
+#include "soadyn/simulate.hpp"
+
+#include "test_util.hpp"
+
+#include <hdf5.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <cmath>
+#include <filesystem>
+#include <thread>
+
+using namespace soadyn;
+using namespace soadyn::test;
+
+namespace {
+
+const std::string kDir = SOADYN_SOURCE_DIR "/scenarios/";
+const char* kScenarios[] = {"pendulum_on_cart", "double_pendulum", "satellite_two_arrays", "three_link_arm"};
+
+std::string tmp(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("soadyn_test_" + std::to_string(getpid()) + "_" + name)).string();
+}
+
+RunSummary run(const Scenario& sc, const std::string& method, double rtol, std::vector<Sample>* samples = nullptr,
+               double t_end = 0) {
+  SimulationSettings s = sc.simulation;
+  s.method = method;
+  s.rtol = rtol;
+  s.atol = rtol * 1e-2;
+  if (t_end > 0) s.t_end = t_end;
+  return simulate(sc, s, nullptr, samples);
+}
+
+class Conservation : public ::testing::TestWithParam<const char*> {};
+
+// CVODE Adams and BDF at rtol 1e-10: |E(t) − E(0)| / max(|E0|, peak T) ≤ 1e-7 over t_end, and the
+// drift falls ≥ 100× from rtol 1e-6 to 1e-10
+TEST_P(Conservation, EnergyDriftIsSmallAndFallsWithTolerance) {
+  const Scenario sc = load_scenario(kDir + GetParam() + ".yaml");
+  ASSERT_GE(sc.simulation.t_end, 10.0);
+  for (const char* method : {"cvode-adams", "cvode-bdf"}) {
+    const RunSummary tight = run(sc, method, 1e-10);
+    ASSERT_TRUE(tight.completed) << tight.status;
+    EXPECT_LE(tight.max_relative_energy_error, 1e-7) << GetParam() << " " << method;
+    const RunSummary loose = run(sc, method, 1e-6);
+    ASSERT_TRUE(loose.completed) << loose.status;
+    EXPECT_GE(loose.max_relative_energy_error, 100.0 * tight.max_relative_energy_error)
+        << GetParam() << " " << method << ": " << loose.max_relative_energy_error << " vs "
+        << tight.max_relative_energy_error;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenarios, Conservation, ::testing::ValuesIn(kScenarios));
+
+// the satellite: momentum conserved to 1e-9, unit quaternion to 1e-12
+TEST(Satellite, MomentumAndQuaternion) {
+  const Scenario sc = load_scenario(kDir + "satellite_two_arrays.yaml");
+  for (const char* method : {"cvode-adams", "cvode-bdf"}) {
+    std::vector<Sample> samples;
+    const RunSummary r = run(sc, method, 1e-12, &samples);
+    ASSERT_TRUE(r.completed) << r.status;
+    const Sample& s0 = samples.front();
+    const double L = s0.linear.norm(), H = s0.angular.norm();
+    ASSERT_GT(L, 1.0);
+    ASSERT_GT(H, 1.0);
+    double worst_l = 0, worst_h = 0, worst_q = 0;
+    for (const Sample& s : samples) {
+      worst_l = std::max(worst_l, (s.linear - s0.linear).norm() / L);
+      worst_h = std::max(worst_h, (s.angular - s0.angular).norm() / H);
+      worst_q = std::max(worst_q, std::abs(s.q.segment<4>(3).norm() - 1.0));
+    }
+    EXPECT_LE(worst_l, 1e-9) << method;
+    EXPECT_LE(worst_h, 1e-9) << method;
+    EXPECT_LE(worst_q, 1e-12) << method;
+    if (std::string(method) == "cvode-bdf") {
+      EXPECT_NE(r.quaternion_handling.find("CVodeSetProjFn"), std::string::npos);
+    }
+    // the bus really turned: the check is not vacuous
+    EXPECT_GT((samples.back().q.segment<4>(3) - s0.q.segment<4>(3)).norm(), 0.1);
+  }
+}
+
+// observed convergence order on the double pendulum against CVODE at rtol 1e-13
+double observed_order(const Scenario& sc, const std::string& method, double dt, double T) {
+  SimulationSettings ref = sc.simulation;
+  ref.method = "cvode-adams";
+  ref.rtol = 1e-13;
+  ref.atol = 1e-15;
+  ref.t_end = T;
+  ref.output_dt = T;
+  std::vector<Sample> r;
+  simulate(sc, ref, nullptr, &r);
+  std::vector<double> err;
+  for (double h : {dt, dt / 2, dt / 4}) {
+    SimulationSettings s = ref;
+    s.method = method;
+    s.dt = h;
+    std::vector<Sample> x;
+    const RunSummary sum = simulate(sc, s, nullptr, &x);
+    EXPECT_TRUE(sum.completed);
+    VecX e(4);
+    e << x.back().q - r.back().q, x.back().qd - r.back().qd;
+    err.push_back(e.norm());
+  }
+  const double p1 = std::log2(err[0] / err[1]), p2 = std::log2(err[1] / err[2]);
+  return 0.5 * (p1 + p2);
+}
+
+TEST(ConvergenceOrder, DoublePendulum) {
+  const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
+  EXPECT_NEAR(observed_order(sc, "rk4", 0.01, 1.0), 4.0, 0.3);
+  EXPECT_NEAR(observed_order(sc, "symplectic-euler", 1e-3, 1.0), 1.0, 0.3);
+  EXPECT_NEAR(observed_order(sc, "euler", 1e-4, 1.0), 1.0, 0.3);
+  EXPECT_NEAR(observed_order(sc, "implicit-midpoint", 0.01, 1.0), 2.0, 0.3);
+}
+
+// ---- HDF5 ----------------------------------------------------------------------------------
+
+std::vector<double> read_doubles(hid_t file, const char* path, hsize_t* rows = nullptr, hsize_t* cols = nullptr) {
+  const hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
+  EXPECT_GE(d, 0) << path;
+  if (d < 0) return {};
+  const hid_t space = H5Dget_space(d);
+  hsize_t dims[2] = {0, 1};
+  const int rank = H5Sget_simple_extent_dims(space, dims, nullptr);
+  if (rank == 1) dims[1] = 1;
+  std::vector<double> out(dims[0] * dims[1]);
+  if (!out.empty()) H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data());
+  if (rows) *rows = dims[0];
+  if (cols) *cols = dims[1];
+  H5Sclose(space);
+  H5Dclose(d);
+  return out;
+}
+
+std::string read_string_attribute(hid_t obj, const char* name) {
+  const hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
+  if (a < 0) return "(missing)";
+  const hid_t type = H5Aget_type(a);  // read in the file's own string type (UTF-8, fixed length)
+  std::string s(H5Tget_size(type), '\0');
+  H5Aread(a, type, s.data());
+  H5Tclose(type);
+  H5Aclose(a);
+  return s.substr(0, s.find('\0'));
+}
+
+double read_double_attribute(hid_t obj, const char* name) {
+  double x = std::nan("");
+  const hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
+  if (a < 0) return x;
+  H5Aread(a, H5T_NATIVE_DOUBLE, &x);
+  H5Aclose(a);
+  return x;
+}
+
+int run_cli(const std::string& args) { return std::system((std::string(SOADYN_CLI) + " " + args + " > /dev/null 2>&1").c_str()); }
+
+TEST(Hdf5, FileWrittenByRunMatchesTheInMemoryRun) {
+  const std::string out = tmp("run.h5");
+  ASSERT_EQ(run_cli("run " + kDir + "double_pendulum.yaml --t-end 2 -o " + out), 0);
+  const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
+  SimulationSettings s = sc.simulation;
+  s.t_end = 2;
+  std::vector<Sample> mem;
+  ASSERT_TRUE(simulate(sc, s, nullptr, &mem).completed);
+
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t f = H5Fopen(out.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  hsize_t rows = 0, cols = 0;
+  const auto total = read_doubles(f, "/energy/total", &rows);
+  ASSERT_EQ(rows, mem.size());
+  for (size_t k = 0; k < mem.size(); ++k) EXPECT_NEAR(total[k], mem[k].total, 1e-12 * std::abs(mem[k].total) + 1e-14);
+  const auto q = read_doubles(f, "/q", &rows, &cols);
+  EXPECT_EQ(cols, 2u);
+  EXPECT_NEAR(q[2 * (rows - 1) + 1], mem.back().q(1), 1e-12);
+  for (const char* path : {"/time", "/qd", "/qdd", "/energy/kinetic", "/energy/potential", "/momentum/linear", "/momentum/angular"}) {
+    read_doubles(f, path, &rows);
+    EXPECT_EQ(rows, mem.size()) << path;
+  }
+  const hid_t solver = H5Gopen2(f, "/solver", H5P_DEFAULT);
+  EXPECT_EQ(read_string_attribute(solver, "status"), "completed");
+  EXPECT_EQ(read_string_attribute(solver, "method"), "cvode-adams");
+  EXPECT_NEAR(read_double_attribute(solver, "t_reached"), 2.0, 1e-12);
+  EXPECT_NEAR(read_double_attribute(solver, "rtol"), 1e-10, 1e-24);
+  for (const char* a : {"steps", "rhs_evals", "jac_evals", "error_test_failures", "nonlinear_iterations", "cpu_seconds", "atol", "dt"})
+    EXPECT_GT(H5Aexists(solver, a), 0) << a;
+  H5Gclose(solver);
+  EXPECT_EQ(read_string_attribute(f, "scenario"), sc.text);
+  EXPECT_NE(read_string_attribute(f, "soadyn_version"), "(missing)");
+  const hid_t model = H5Gopen2(f, "/model", H5P_DEFAULT);
+  EXPECT_GT(H5Aexists(model, "nq"), 0);
+  EXPECT_GT(H5Lexists(model, "joint_names", H5P_DEFAULT), 0);
+  EXPECT_GT(H5Lexists(model, "parents", H5P_DEFAULT), 0);
+  H5Gclose(model);
+  H5Fclose(f);
+  std::filesystem::remove(out);
+}
+
+TEST(Hdf5, RunKilledWithSigkillLeavesAValidFile) {
+  const std::string out = tmp("killed.h5");
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const std::string scen = kDir + "double_pendulum.yaml";
+    execl(SOADYN_CLI, SOADYN_CLI, "run", scen.c_str(), "--method", "rk4", "--dt", "1e-6", "--t-end", "1000", "-q", "-o",
+          out.c_str(), (char*)nullptr);
+    _exit(127);
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  kill(pid, SIGKILL);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "the run should still have been going";
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t f = H5Fopen(out.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0) << "the file of a killed run must open";
+  hsize_t rows = 0;
+  const auto t = read_doubles(f, "/time", &rows);
+  EXPECT_GE(rows, 2u) << "at least the first flushed block";
+  for (size_t k = 1; k < t.size(); ++k) EXPECT_GT(t[k], t[k - 1]);
+  const auto E = read_doubles(f, "/energy/total", &rows);
+  EXPECT_EQ(rows, t.size());
+  const hid_t solver = H5Gopen2(f, "/solver", H5P_DEFAULT);
+  EXPECT_EQ(read_string_attribute(solver, "status"), "running");
+  EXPECT_GT(read_double_attribute(solver, "t_reached"), 0.0);
+  H5Gclose(solver);
+  H5Fclose(f);
+  std::filesystem::remove(out);
+}
+
+TEST(Instability, Rk4BeyondItsLimitStopsCleanly) {
+  const std::string out = tmp("unstable.h5");
+  const std::string err = tmp("unstable.err");
+  const int rc = std::system((std::string(SOADYN_CLI) + " run " + kDir + "double_pendulum.yaml --method rk4 --dt 0.5 -q -o " +
+                              out + " 2> " + err).c_str());
+  EXPECT_EQ(WEXITSTATUS(rc), 3);
+  std::ifstream in(err);
+  const std::string msg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(msg.find("unstable at t ="), std::string::npos) << msg;
+  EXPECT_NE(msg.find("joint 'theta"), std::string::npos) << msg;
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t f = H5Fopen(out.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  ASSERT_GE(f, 0);
+  hsize_t rows = 0;
+  read_doubles(f, "/time", &rows);
+  EXPECT_GE(rows, 1u);
+  const hid_t solver = H5Gopen2(f, "/solver", H5P_DEFAULT);
+  EXPECT_NE(read_string_attribute(solver, "status").find("unstable"), std::string::npos);
+  H5Gclose(solver);
+  H5Fclose(f);
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
+}
+
+TEST(Output, UnwritablePathIsRefusedBeforeTheRun) {
+  const std::string file = tmp("a_file");
+  std::ofstream(file) << "x";
+  EXPECT_EQ(WEXITSTATUS(run_cli("run " + kDir + "double_pendulum.yaml -o " + file + "/run.h5")), 2);
+  std::filesystem::remove(file);
+}
+
+// joint springs keep the system conservative (E includes ½ k (q − rest)²); dampers dissipate
+TEST(Inputs, SpringsConserveDampersDissipate) {
+  const std::string base = R"(gravity: [0, 0, -9.81]
+bodies:
+  - name: arm
+    joint: {type: revolute, axis: [1, 0, 0]}
+    mass: 1.0
+    com: [0, 0, -0.5]
+    inertia: [0.08, 0.08, 0.01]
+initial:
+  q: {arm: 0.5}
+simulation: {t_end: 10, rtol: 1.0e-11, atol: 1.0e-13}
+)";
+  const Scenario spring = parse_scenario(base + "inputs:\n  springs:\n    - {joint: arm, stiffness: 20, rest: 0.2}\n", "s.yaml");
+  const RunSummary rs = simulate(spring, spring.simulation);
+  ASSERT_TRUE(rs.completed);
+  EXPECT_LE(rs.max_relative_energy_error, 1e-8);
+  const Scenario damped = parse_scenario(base + "inputs:\n  dampers:\n    - {joint: arm, damping: 0.5}\n", "d.yaml");
+  std::vector<Sample> s;
+  simulate(damped, damped.simulation, nullptr, &s);
+  for (size_t k = 1; k < s.size(); ++k) EXPECT_LE(s[k].total, s[k - 1].total + 1e-9);
+  EXPECT_LT(s.back().total, s.front().total - 0.1);
+}
+
+}  // namespace

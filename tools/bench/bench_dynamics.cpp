@@ -1,0 +1,105 @@
+// Time per call against N, chains and binary trees: 𝓜 literal and composite, bias, inverse
+// dynamics, each forward-dynamics route, one full right-hand side.
+#include "models.hpp"
+
+#include "soadyn/algorithms.hpp"
+#include "soadyn/kinematics.hpp"
+
+#include <benchmark/benchmark.h>
+
+using namespace soadyn;
+
+namespace {
+
+struct Fixture {
+  Model model;
+  Data data;
+  VecX q, v, tau, qdd;
+  Fixture(int n, bool binary)
+      : model(bench::make_tree(n, binary)),
+        data(model),
+        q(bench::random_vector(model.nq, 1, 3.0)),
+        v(bench::random_vector(model.nv, 2)),
+        tau(bench::random_vector(model.nv, 3)),
+        qdd(bench::random_vector(model.nv, 4)) {
+    update_kinematics(model, data, q);
+    update_velocities(model, data, v);
+  }
+};
+
+template <bool Binary, class F>
+void run(benchmark::State& st, F&& body) {
+  Fixture f(int(st.range(0)), Binary);
+  for (auto _ : st) {
+    body(f);
+    benchmark::ClobberMemory();
+  }
+  st.counters["N"] = double(st.range(0));
+}
+
+template <bool B> void MassLiteral(benchmark::State& st) {
+  MatX M;
+  run<B>(st, [&](Fixture& f) {
+    update_kinematics(f.model, f.data, f.q);
+    mass_matrix_literal(f.model, f.data, M);
+    benchmark::DoNotOptimize(M.data());
+  });
+}
+template <bool B> void MassComposite(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    update_kinematics(f.model, f.data, f.q);
+    mass_matrix(f.model, f.data);
+    benchmark::DoNotOptimize(f.data.Mass.data());
+  });
+}
+template <bool B> void Bias(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    update_kinematics(f.model, f.data, f.q);
+    update_velocities(f.model, f.data, f.v);
+    bias_forces(f.model, f.data);
+    benchmark::DoNotOptimize(f.data.bias.data());
+  });
+}
+template <bool B> void Inverse(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    update_kinematics(f.model, f.data, f.q);
+    update_velocities(f.model, f.data, f.v);
+    inverse_dynamics(f.model, f.data, f.qdd);
+    benchmark::DoNotOptimize(f.data.tau.data());
+  });
+}
+// full right-hand side: kinematics + velocities + bias + forward dynamics
+template <bool B, FdMethod M> void Forward(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    update_kinematics(f.model, f.data, f.q);
+    update_velocities(f.model, f.data, f.v);
+    forward_dynamics(f.model, f.data, f.tau, M);
+    benchmark::DoNotOptimize(f.data.qdd.data());
+  });
+}
+
+void sizes(benchmark::internal::Benchmark* b) {
+  for (int n = 1; n <= 256; n *= 2) b->Arg(n);
+}
+void tree_sizes(benchmark::internal::Benchmark* b) {
+  for (int n : {1, 3, 7, 15, 31, 63, 127, 255}) b->Arg(n);
+}
+
+}  // namespace
+
+BENCHMARK(MassLiteral<false>)->Name("chain/mass_literal")->Apply(sizes);
+BENCHMARK(MassComposite<false>)->Name("chain/mass_composite")->Apply(sizes);
+BENCHMARK(Bias<false>)->Name("chain/bias")->Apply(sizes);
+BENCHMARK(Inverse<false>)->Name("chain/inverse")->Apply(sizes);
+BENCHMARK(Forward<false, FdMethod::Dense>)->Name("chain/rhs_dense")->Apply(sizes);
+BENCHMARK(Forward<false, FdMethod::Sparse>)->Name("chain/rhs_sparse")->Apply(sizes);
+BENCHMARK(Forward<false, FdMethod::ON>)->Name("chain/rhs_on")->Apply(sizes);
+BENCHMARK(MassLiteral<true>)->Name("tree/mass_literal")->Apply(tree_sizes);
+BENCHMARK(MassComposite<true>)->Name("tree/mass_composite")->Apply(tree_sizes);
+BENCHMARK(Bias<true>)->Name("tree/bias")->Apply(tree_sizes);
+BENCHMARK(Inverse<true>)->Name("tree/inverse")->Apply(tree_sizes);
+BENCHMARK(Forward<true, FdMethod::Dense>)->Name("tree/rhs_dense")->Apply(tree_sizes);
+BENCHMARK(Forward<true, FdMethod::Sparse>)->Name("tree/rhs_sparse")->Apply(tree_sizes);
+BENCHMARK(Forward<true, FdMethod::ON>)->Name("tree/rhs_on")->Apply(tree_sizes);
+
+BENCHMARK_MAIN();

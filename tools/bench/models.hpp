@@ -1,0 +1,40 @@
+// The benchmark mechanisms (so results compare with other libraries):
+//   chain: N bodies in series, revolute joints; joint 1 at the origin, every later joint at
+//          (0.3, 0, 0) in its parent's frame; axes cycling z, y, x; every link mass 1, centre of
+//          mass (0.15, 0, 0), inertia diag(0.01, 0.02, 0.03); gravity (0, 0, −9.81).
+//   binary tree: the same links, parent of body i is body ⌊(i−1)/2⌋.
+#pragma once
+
+#include "soadyn/model.hpp"
+
+#include <random>
+
+namespace soadyn::bench {
+
+inline Model make_tree(int n, bool binary) {
+  std::vector<BodySpec> specs(n);
+  const Vec3 axes[3] = {Vec3::UnitZ(), Vec3::UnitY(), Vec3::UnitX()};
+  for (int i = 0; i < n; ++i) {
+    BodySpec& b = specs[i];
+    b.name = "link" + std::to_string(i + 1);
+    b.joint_name = "joint" + std::to_string(i + 1);
+    b.parent = i == 0 ? -1 : (binary ? (i - 1) / 2 : i - 1);
+    b.joint = JointType::Revolute;
+    b.axis = axes[i % 3];
+    if (i > 0) b.placement.p = Vec3(0.3, 0, 0);
+    b.mass = 1.0;
+    b.com = Vec3(0.15, 0, 0);
+    b.inertia = Vec3(0.01, 0.02, 0.03).asDiagonal();
+  }
+  return Model::build(specs, Vec3(0, 0, -9.81));
+}
+
+inline VecX random_vector(int n, unsigned seed, double scale = 1.0) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(-scale, scale);
+  VecX v(n);
+  for (int k = 0; k < n; ++k) v(k) = u(gen);
+  return v;
+}
+
+}  // namespace soadyn::bench
