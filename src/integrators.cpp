@@ -54,19 +54,25 @@ namespace {
 // Fixed-step methods: n equal steps of h ≤ dt from t to t_out.
 class FixedStep : public Integrator {
  public:
-  FixedStep(System& s, double dt) : sys_(s), dt_(dt), k1_(s.size()), k2_(s.size()), k3_(s.size()), k4_(s.size()), tmp_(s.size()) {}
+  FixedStep(System& s, double dt)
+      : sys_(s), dt_(dt), k1_(s.size()), k2_(s.size()), k3_(s.size()), k4_(s.size()), tmp_(s.size()), prev_(s.size()) {}
 
   void advance(double t_out, double& t, VecX& y) override {
     const long n = std::max<long>(1, long(std::ceil((t_out - t) / dt_ * (1 - 1e-12))));
     const double h = (t_out - t) / double(n);
     for (long k = 0; k < n; ++k) {
+      prev_ = y;
       step(t, h, y);
       t = k + 1 == n ? t_out : t + h;
       ++stats_.steps;
       sys_.model.normalize(y.head(sys_.model.nq));
-      if (const int bad = first_non_finite(y); bad >= 0) {
+      if (first_non_finite(y) >= 0) {
+        // worst DOF: the largest velocity in the last finite state, the one blowing up
+        Eigen::Index worst = 0;
+        prev_.tail(sys_.model.nv).cwiseAbs().maxCoeff(&worst);
         std::ostringstream os;
-        os << "unstable at t = " << t << " s: " << sys_.component_name(bad) << " is not finite (step " << h << " s)";
+        os << "unstable at t = " << t << " s: the state is not finite after a step of " << h << " s; worst DOF "
+           << sys_.component_name(sys_.model.nq + int(worst)) << " = " << prev_(sys_.model.nq + worst) << " before it";
         throw SimulationError(os.str(), t);
       }
     }
@@ -87,7 +93,7 @@ class FixedStep : public Integrator {
 
   System& sys_;
   double dt_;
-  VecX k1_, k2_, k3_, k4_, tmp_;
+  VecX k1_, k2_, k3_, k4_, tmp_, prev_;
   IntegratorStats stats_;
 };
 
