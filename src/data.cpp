@@ -16,6 +16,8 @@ Data::Data(const Model& m)
       a(Mat6X::Zero(6, m.nbodies)),
       b(Mat6X::Zero(6, m.nbodies)),
       K(m.nbodies),
+      S0(Mat6X::Zero(6, m.nv)),
+      F0(Mat6X::Zero(6, m.nv)),
       Mass(MatX::Zero(m.nv, m.nv)),
       A(Mat6X::Zero(6, m.nbodies)),
       F(Mat6X::Zero(6, m.nbodies)),
@@ -26,6 +28,8 @@ Data::Data(const Model& m)
       llt(m.nv),
       P(m.nbodies, Mat6::Zero()),
       z(Mat6X::Zero(6, m.nbodies)),
+      U1(Mat6X::Zero(6, m.nbodies)),
+      Dinv1(VecX::Zero(m.nbodies)),
       Dinv(m.nbodies),
       u(VecX::Zero(m.nv)) {
   U.reserve(m.nbodies);

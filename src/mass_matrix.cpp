@@ -26,21 +26,29 @@ void mass_matrix(const Model& model, Data& data) {
   for (int i = model.nbodies - 1; i >= 0; --i)
     if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(data.K[i], data.d.col(i));
 
-  // 𝓜_ii = G_iᵀ K_i G_i;  for each ancestor j of i: 𝓜_ji = G_jᵀ (D_{i:j})ᵀ K_i G_i
+  // 𝓜_jk = G_jᵀ D_{i:j}ᵀ K_i G_k for DOF j on the chain of DOF k (body i), and the note's
+  // D_{i:j} = D_i ⋯ = [e 0; −(η_i − η_j)~ e] telescopes: with every column moved once to the
+  // inertial origin, F0_k = [n + η_i × f; f] for K_i G_k = [n; f] and S0_j = [a; b + η × a] for
+  // G_j = [a; b], each entry is one dot product 𝓜_jk = S0_jᵀ F0_k.
   for (int i = 0; i < model.nbodies; ++i) {
-    const int vi = model.idx_v[i], ni = model.nv_i[i];
-    Mat6G F = data.K[i].apply(data.G.middleCols(vi, ni));
-    data.Mass.block(vi, vi, ni, ni).noalias() = data.G.middleCols(vi, ni).transpose() * F;
-    for (int r = 1; r < ni; ++r)  // a multi-DOF block is symmetric only to rounding: make it exact
-      for (int c = 0; c < r; ++c) data.Mass(vi + c, vi + r) = data.Mass(vi + r, vi + c);
-    for (int j = i; model.parent[j] >= 0; ) {
-      // F ← D_jᵀ F: moment about η_parent(j) = moment about η_j + d_j × force
-      for (int c = 0; c < ni; ++c) F.col(c).head<3>() += data.d.col(j).cross(Vec3(F.col(c).tail<3>()));
-      j = model.parent[j];
-      const int vj = model.idx_v[j], nj = model.nv_i[j];
-      data.Mass.block(vj, vi, nj, ni).noalias() = data.G.middleCols(vj, nj).transpose() * F;
-      data.Mass.block(vi, vj, ni, nj) = data.Mass.block(vj, vi, nj, ni).transpose();
+    const Vec3 eta = data.eta.col(i);
+    for (int c = 0; c < model.nv_i[i]; ++c) {
+      const int k = model.idx_v[i] + c;
+      const Vec6 g = data.G.col(k);
+      const Vec6 F = data.K[i] * g;
+      data.F0.col(k) << F.head<3>() + eta.cross(F.tail<3>()), F.tail<3>();
+      data.S0.col(k) << g.head<3>(), g.tail<3>() + eta.cross(g.head<3>());
     }
+  }
+  if (model.chain && model.nv >= 32) {
+    // every DOF is an ancestor of the later ones: 𝓜_jk = S0_jᵀ F0_k above the diagonal and, by
+    // symmetry, F0_jᵀ S0_k below it — two products, no transposed copy
+    data.Mass.noalias() = data.F0.transpose() * data.S0;
+    data.Mass.triangularView<Eigen::Upper>() = data.S0.transpose() * data.F0;
+  } else {
+    for (int k = 0; k < model.nv; ++k)
+      for (int j = k; j >= 0; j = model.dof_parent[j]) data.Mass(j, k) = data.S0.col(j).dot(data.F0.col(k));
+    data.Mass.triangularView<Eigen::StrictlyLower>() = data.Mass.transpose();
   }
 }
 

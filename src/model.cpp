@@ -180,6 +180,8 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
       else m.dof_parent.push_back(p < 0 ? -1 : m.idx_v[p] + m.nv_i[p] - 1);
     }
   }
+  m.chain = true;
+  for (int k = 0; k < m.nv; ++k) m.chain = m.chain && m.dof_parent[k] == k - 1;
   return m;
 }
 

@@ -35,6 +35,8 @@ struct Data {
 
   // [crb] system mass matrix
   std::vector<SpatialInertia> K;       // composite inertia of the subtree of i, about η_i
+  Mat6X S0;                            // G_k moved to the inertial origin, D_{i:0}⁻ᵀ-wise: [a; b + η_i × a]
+  Mat6X F0;                            // K_i G_k moved to the inertial origin: [n + η_i × f; f]
   MatX Mass;                           // 𝓜 (eq. 14), nv×nv, full symmetric
 
   // [rne] and [fd]
@@ -47,8 +49,10 @@ struct Data {
   Eigen::LLT<MatX> llt;                // 𝓜 = L Lᵀ (dense route)
   std::vector<Mat6> P;                 // articulated inertias (O(N) route)
   Mat6X z;                             // articulated bias forces
-  std::vector<Mat6G> U;                // U_i = P_i G_i
-  std::vector<MatGG> Dinv;             // (G_iᵀ P_i G_i)⁻¹
+  std::vector<Mat6G> U;                // U_i = P_i G_i (multi-DOF joints)
+  Mat6X U1;                            // U_i = P_i g_i (1-DOF joints, column i)
+  VecX Dinv1;                          // 1 / (g_iᵀ P_i g_i) (1-DOF joints)
+  std::vector<MatGG> Dinv;             // (G_iᵀ P_i G_i)⁻¹ (multi-DOF joints)
   VecX u;                              // τ_i − G_iᵀ z_i
 };
 

@@ -56,6 +56,7 @@ class Model {
   std::vector<int> dof_parent;             // λ(k): parent DOF of DOF k, -1 at a root (for LᵀDL)
   std::vector<int> dof_body;               // body owning DOF k
   int depth = 0;                           // longest chain from the ground (nilpotency of Φ_D)
+  bool chain = false;                      // every DOF's parent DOF is the one before it
 
   double world_mass = 0.0;                 // bodies welded to the world: mass and first moment,
   Vec3 world_first_moment = Vec3::Zero();  // kept for the potential energy only

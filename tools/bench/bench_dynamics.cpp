@@ -37,6 +37,18 @@ void run(benchmark::State& st, F&& body) {
   st.counters["N"] = double(st.range(0));
 }
 
+template <bool B> void Kinematics(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    update_kinematics(f.model, f.data, f.q);
+    benchmark::DoNotOptimize(f.data.eta.data());
+  });
+}
+template <bool B> void Velocities(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    update_velocities(f.model, f.data, f.v);
+    benchmark::DoNotOptimize(f.data.V.data());
+  });
+}
 template <bool B> void MassLiteral(benchmark::State& st) {
   MatX M;
   run<B>(st, [&](Fixture& f) {
@@ -87,6 +99,8 @@ void tree_sizes(benchmark::internal::Benchmark* b) {
 
 }  // namespace
 
+BENCHMARK(Kinematics<false>)->Name("chain/kinematics")->Apply(sizes);
+BENCHMARK(Velocities<false>)->Name("chain/velocities")->Apply(sizes);
 BENCHMARK(MassLiteral<false>)->Name("chain/mass_literal")->Apply(sizes);
 BENCHMARK(MassComposite<false>)->Name("chain/mass_composite")->Apply(sizes);
 BENCHMARK(Bias<false>)->Name("chain/bias")->Apply(sizes);

@@ -1,0 +1,44 @@
+#!/usr/bin/python3
+"""Write the benchmark mechanisms as URDF (tools/bench/models.hpp builds the same ones in C++):
+chain_N.urdf and tree_N.urdf in the given folder.
+
+chain: N links in series, revolute joints; joint 1 at the origin, every later joint at (0.3, 0, 0)
+in its parent's frame; axes cycling z, y, x; every link mass 1, centre of mass (0.15, 0, 0),
+inertia diag(0.01, 0.02, 0.03).  Binary tree: the same links, parent of link i is link (i-1)//2.
+"""
+import os
+import sys
+
+AXES = ["0 0 1", "0 1 0", "1 0 0"]
+
+
+def urdf(n, binary):
+    out = [f'<?xml version="1.0"?>', f'<robot name="{"tree" if binary else "chain"}_{n}">',
+           '  <mujoco><compiler discardvisual="true" balanceinertia="false" fusestatic="false"/></mujoco>',
+           '  <link name="world"/>']
+    for i in range(n):
+        out.append(f'  <link name="link{i + 1}"><inertial><origin xyz="0.15 0 0"/><mass value="1"/>'
+                   f'<inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>')
+    for i in range(n):
+        parent = "world" if i == 0 else f"link{((i - 1) // 2 if binary else i - 1) + 1}"
+        xyz = "0 0 0" if i == 0 else "0.3 0 0"
+        out.append(f'  <joint name="joint{i + 1}" type="continuous"><parent link="{parent}"/>'
+                   f'<child link="link{i + 1}"/><origin xyz="{xyz}"/><axis xyz="{AXES[i % 3]}"/></joint>')
+    out.append("</robot>")
+    return "\n".join(out) + "\n"
+
+
+def main():
+    folder = sys.argv[1] if len(sys.argv) > 1 else "build/bench_models"
+    os.makedirs(folder, exist_ok=True)
+    for n in [1, 2, 4, 8, 16, 32, 64, 128, 256]:
+        with open(os.path.join(folder, f"chain_{n}.urdf"), "w") as f:
+            f.write(urdf(n, False))
+    for n in [1, 3, 7, 15, 31, 63, 127, 255]:
+        with open(os.path.join(folder, f"tree_{n}.urdf"), "w") as f:
+            f.write(urdf(n, True))
+    print(f"wrote the benchmark URDFs to {folder}")
+
+
+if __name__ == "__main__":
+    main()
