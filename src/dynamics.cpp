@@ -119,8 +119,8 @@ FdMethod parse_fd_method(std::string_view s) {
 
 void ltdl_factor(const Model& model, Data& data) {
   // 𝓜 = Lᵀ D L along the DOF tree λ (Featherstone's LTDL): entries off ancestor chains stay zero
-  MatX& H = data.L;
-  H = data.Mass;
+  auto& H = data.L;
+  H = data.Mass.transpose();  // 𝓜 is symmetric: a straight copy into row-major storage
   const auto& lambda = model.dof_parent;
   for (int k = model.nv - 1; k >= 0; --k) {
     for (int i = lambda[k]; i >= 0; i = lambda[i]) {
@@ -132,7 +132,7 @@ void ltdl_factor(const Model& model, Data& data) {
 }
 
 void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x) {
-  const MatX& H = data.L;
+  const auto& H = data.L;
   const auto& lambda = model.dof_parent;
   // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip)
   for (int k = model.nv - 1; k >= 0; --k)

@@ -45,7 +45,8 @@ struct Data {
   VecX bias;                           // bias(q, q̇) incl. gravity, nv
   VecX tau;                            // inverse dynamics result, nv
   VecX qdd;                            // forward dynamics result, nv
-  MatX L;                              // 𝓜 factored in place as LᵀDL (tree-sparse route)
+  // 𝓜 factored in place as LᵀDL (tree-sparse route); row-major: the factorization walks rows
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> L;
   Eigen::LLT<MatX> llt;                // 𝓜 = L Lᵀ (dense route)
   std::vector<Mat6> P;                 // articulated inertias (O(N) route)
   Mat6X z;                             // articulated bias forces

@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Run every benchmark, with MuJoCo as a peer (installed here if missing), and write
+# tools/results/bench.{json,csv,md,png}: time per call against N, fitted growth exponents over
+# N = 16..256, soadyn/MuJoCo ratios.  Quote ratios from one run: the machines are shared.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+if ! dpkg-query -W -f='${Status}' libmujoco-dev 2>/dev/null | grep -q "install ok installed"; then
+  if [[ $(id -u) -eq 0 ]]; then
+    apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y libmujoco-dev
+  else
+    echo "MuJoCo is not installed; the peer is skipped (sudo apt-get install -y libmujoco-dev to add it)" >&2
+  fi
+fi
+tools/setup.sh -DSOADYN_BUILD_BENCH=ON
+out=tools/results
+mkdir -p "$out" build/bench_models
+tools/bench/make_models.py build/bench_models
+SOADYN_BENCH_MODELS=build/bench_models build/soadyn_bench --benchmark_min_time="${BENCH_MIN_TIME:-0.1}" \
+  --benchmark_format=console --benchmark_out_format=json --benchmark_out="$out/bench.json"
+tools/bench/report.py "$out/bench.json" -o "$out"
