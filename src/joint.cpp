@@ -93,6 +93,26 @@ void joint_qdot(JointType t, const double* q, const double* v, double* qdot) {
   }
 }
 
+void joint_velocity(JointType t, const double* q, const double* qdot, double* v) {
+  switch (t) {
+    case JointType::Revolute:
+    case JointType::Prismatic: v[0] = qdot[0]; return;
+    case JointType::Free: {
+      // [0; ω] = 2 quaṫ ⊗ quat* / |quat|²
+      const Eigen::Quaterniond quat = free_quat(q);
+      const Eigen::Quaterniond rate(qdot[3], qdot[4], qdot[5], qdot[6]);
+      const Eigen::Quaterniond w = rate * quat.conjugate();
+      const double n2 = quat.squaredNorm();
+      v[0] = 2.0 * w.x() / n2;
+      v[1] = 2.0 * w.y() / n2;
+      v[2] = 2.0 * w.z() / n2;
+      for (int k = 0; k < 3; ++k) v[3 + k] = qdot[k];
+      return;
+    }
+    case JointType::Fixed: return;
+  }
+}
+
 void joint_integrate(JointType t, const double* q, const double* v, double h, double* q_out) {
   switch (t) {
     case JointType::Revolute:

@@ -219,6 +219,13 @@ void Model::qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const {
     joint_qdot(joint_type[i], q.data() + idx_q[i], v.data() + idx_v[i], qd.data() + idx_q[i]);
 }
 
+VecX Model::velocity(const VecX& q, const VecX& qd) const {
+  VecX v(nv);
+  for (int i = 0; i < nbodies; ++i)
+    joint_velocity(joint_type[i], q.data() + idx_q[i], qd.data() + idx_q[i], v.data() + idx_v[i]);
+  return v;
+}
+
 VecX Model::integrate(const VecX& q, const VecX& v, double h) const {
   VecX out(nq);
   for (int i = 0; i < nbodies; ++i)

@@ -167,6 +167,22 @@ TEST(ModelBuild, FixedJointMergesExactly) {
   }
 }
 
+// free-root kinematics: q̇(q, v) and back, and q̇ against the motion q ⊕ h v by central differences
+TEST(FreeRoot, QdotAndItsReverseMap) {
+  for (int seed = 0; seed < 20; ++seed) {
+    Rng rng(800 + seed);
+    const Model m = random_model(rng, {.n = 4, .branching = 0.5, .prismatic = 0.3, .free_root = true});
+    const VecX q = random_q(rng, m), v = random_v(rng, m, 3.0);
+    VecX qd(m.nq);
+    m.qdot(q, v, qd);
+    EXPECT_TRUE(near_rel(m.velocity(q, qd), v, 1e-14));
+    const double h = 1e-6;
+    const VecX fd = (m.integrate(q, v, h) - m.integrate(q, v, -h)) / (2 * h);
+    EXPECT_TRUE(near_rel(qd, fd, 1e-8)) << "seed " << seed;
+    EXPECT_NEAR(q.segment<4>(3).dot(qd.segment<4>(3)), 0.0, 1e-14) << "q̇uat keeps the norm";
+  }
+}
+
 TEST(ModelBuild, BodyWeldedToTheWorldKeepsItsPotentialEnergy) {
   auto specs = std::vector{body("ground_plate", -1), body("a", 0)};
   specs[0].joint = JointType::Fixed;

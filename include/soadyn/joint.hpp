@@ -31,6 +31,10 @@ void joint_subspace(JointType t, const Vec3& axis, const Mat3& Rj, Eigen::Ref<Ma
 // q̇ of the joint from its q and v (differs from v only for the free joint's quaternion).
 void joint_qdot(JointType t, const double* q, const double* v, double* qdot);
 
+// The reverse map, for initial conditions: v from q̇.  Free joint: ω = 2 quaṫ ⊗ quat* (the part
+// of quaṫ along quat, which would change its norm, is ignored), η̇ = ṗ.
+void joint_velocity(JointType t, const double* q, const double* qdot, double* v);
+
 // q ← q ⊕ h v: exact for revolute/prismatic; for the free joint, position + h η̇ and the
 // attitude rotated by exp(h ω) about inertial axes.
 void joint_integrate(JointType t, const double* q, const double* v, double h, double* q_out);

@@ -69,6 +69,7 @@ class Model {
   void normalize(Eigen::Ref<VecX> q) const;  // unit quaternions of free joints
   // q̇ from (q, v), and q ⊕ h v (see joint.hpp)
   void qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const;
+  VecX velocity(const VecX& q, const VecX& qd) const;  // the reverse map: v from q̇
   VecX integrate(const VecX& q, const VecX& v, double h) const;
 };
 

@@ -3,6 +3,7 @@
 #include "models.hpp"
 
 #include "soadyn/algorithms.hpp"
+#include "soadyn/integrators.hpp"
 #include "soadyn/kinematics.hpp"
 
 #include <benchmark/benchmark.h>
@@ -90,6 +91,26 @@ template <bool B, FdMethod M> void Forward(benchmark::State& st) {
   });
 }
 
+// one step of a fixed-step method, h = 1 ms, on the chain (O(N) route inside)
+void Step(benchmark::State& st, const char* method) {
+  const Model model = bench::make_tree(int(st.range(0)), false);
+  const Inputs none;
+  System sys(model, none, FdMethod::ON);
+  SimulationSettings s;
+  s.dt = 1e-3;
+  VecX y(sys.size());
+  y << bench::random_vector(model.nq, 1, 0.3), bench::random_vector(model.nv, 2, 0.1);
+  const VecX y0 = y;
+  double t = 0.0;
+  auto integrator = make_integrator(method, sys, s, t, y);
+  for (auto _ : st) {
+    y = y0;  // every iteration times the same step from the same state
+    t = 0.0;
+    integrator->advance(t + s.dt, t, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+}
+
 void sizes(benchmark::internal::Benchmark* b) {
   for (int n = 1; n <= 256; n *= 2) b->Arg(n);
 }
@@ -108,6 +129,10 @@ BENCHMARK(Inverse<false>)->Name("chain/inverse")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::Dense>)->Name("chain/rhs_dense")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::Sparse>)->Name("chain/rhs_sparse")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::ON>)->Name("chain/rhs_on")->Apply(sizes);
+BENCHMARK_CAPTURE(Step, euler, "euler")->Name("chain/step_euler")->Apply(sizes);
+BENCHMARK_CAPTURE(Step, symplectic_euler, "symplectic-euler")->Name("chain/step_symplectic_euler")->Apply(sizes);
+BENCHMARK_CAPTURE(Step, rk4, "rk4")->Name("chain/step_rk4")->Apply(sizes);
+BENCHMARK_CAPTURE(Step, implicit_midpoint, "implicit-midpoint")->Name("chain/step_implicit_midpoint")->DenseRange(1, 1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32)->Arg(64);
 BENCHMARK(MassLiteral<true>)->Name("tree/mass_literal")->Apply(tree_sizes);
 BENCHMARK(MassComposite<true>)->Name("tree/mass_composite")->Apply(tree_sizes);
 BENCHMARK(Bias<true>)->Name("tree/bias")->Apply(tree_sizes);
