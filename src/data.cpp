@@ -9,7 +9,6 @@ Data::Data(const Model& m)
       s(Mat3X::Zero(3, m.nbodies)),
       r(Mat3X::Zero(3, m.nbodies)),
       G(Mat6X::Zero(6, m.nv)),
-      I_cm(m.nbodies, Mat3::Zero()),
       M(m.nbodies),
       V(Mat6X::Zero(6, m.nbodies)),
       Vbar(Mat6X::Zero(6, m.nbodies)),

@@ -169,7 +169,7 @@ double kinetic_energy(const Model& model, const Data& data) {
   double T = 0.0;
   for (int i = 0; i < model.nbodies; ++i) {
     const Vec3 w = data.Vbar.col(i).head<3>(), rd = data.Vbar.col(i).tail<3>();
-    T += 0.5 * (w.dot(data.I_cm[i] * w) + model.mass[i] * rd.squaredNorm());
+    T += 0.5 * (w.dot(inertia_cm(data, i) * w) + model.mass[i] * rd.squaredNorm());
   }
   return T;
 }
@@ -185,7 +185,7 @@ Momentum momentum(const Model& model, const Data& data) {
   for (int i = 0; i < model.nbodies; ++i) {
     const Vec3 p = model.mass[i] * data.Vbar.col(i).tail<3>();
     h.linear += p;
-    h.angular += data.I_cm[i] * data.Vbar.col(i).head<3>() + Vec3(data.r.col(i)).cross(p);
+    h.angular += inertia_cm(data, i) * data.Vbar.col(i).head<3>() + Vec3(data.r.col(i)).cross(p);
   }
   return h;
 }

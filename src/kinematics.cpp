@@ -21,9 +21,11 @@ void update_kinematics(const Model& model, Data& data, const VecX& q) {
     data.s.col(i) = data.R[i] * model.com[i];
     data.r.col(i) = data.eta.col(i) + data.s.col(i);
     joint_subspace(model.joint_type[i], model.axis[i], Rj, data.G.middleCols(model.idx_v[i], model.nv_i[i]));
-    // I_i = C_i I C_iᵀ;  M_i = [I_i − m s̃ s̃, m s̃; −m s̃, m e]   (eq. 12)
-    data.I_cm[i].noalias() = data.R[i] * model.inertia[i] * data.R[i].transpose();
-    data.M[i] = SpatialInertia::from_body(model.mass[i], data.s.col(i), data.I_cm[i]);
+    // M_i = [I_i − m s̃ s̃, m s̃; −m s̃, m e] (eq. 12); its upper-left block, the inertia about η_i,
+    // is the body-frame one turned: C_i I_η C_iᵀ
+    data.M[i].m = model.mass[i];
+    data.M[i].h = model.mass[i] * data.s.col(i);
+    data.M[i].I.noalias() = data.R[i] * model.inertia_origin[i] * data.R[i].transpose();
   }
 }
 
@@ -51,9 +53,9 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
       const Vec3 ddot = data.V.col(i).tail<3>() - data.V.col(p).tail<3>();
       data.a.col(i) << wp.cross(Gv.head<3>()), wp.cross(ddot + Gv.tail<3>());
     }
-    // gyroscopic force about η_i: f = m ω × (ω × s),  n = ω × I ω + s × f
-    const Vec3 f = model.mass[i] * w.cross(w.cross(s));
-    data.b.col(i) << w.cross(data.I_cm[i] * w) + s.cross(f), f;
+    // gyroscopic force about η_i: f = m ω × (ω × s), n = ω × I ω + s × f = ω × (I − m s̃ s̃) ω
+    const Vec3& h = data.M[i].h;
+    data.b.col(i) << w.cross(data.M[i].I * w), w.cross(w.cross(h));
   }
 }
 
@@ -70,6 +72,11 @@ Mat6 S_matrix(const Data& data, int i) {
 }
 
 Mat6 M_matrix(const Data& data, int i) { return data.M[i].matrix(); }
+
+Mat3 inertia_cm(const Data& data, int i) {
+  const Vec3 s = data.s.col(i);
+  return data.M[i].I - data.M[i].m * (s.squaredNorm() * Mat3::Identity() - s * s.transpose());
+}
 
 Mat6G G_matrix(const Model& model, const Data& data, int i) {
   return data.G.middleCols(model.idx_v[i], model.nv_i[i]);

@@ -180,6 +180,10 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
       else m.dof_parent.push_back(p < 0 ? -1 : m.idx_v[p] + m.nv_i[p] - 1);
     }
   }
+  for (int k = 0; k < m.nbodies; ++k) {
+    const Vec3& c = m.com[k];  // parallel axes: I_η = I_cm + m (|c|² e − c cᵀ)
+    m.inertia_origin.push_back(m.inertia[k] + m.mass[k] * (c.squaredNorm() * Mat3::Identity() - c * c.transpose()));
+  }
   m.chain = true;
   for (int k = 0; k < m.nv; ++k) m.chain = m.chain && m.dof_parent[k] == k - 1;
   return m;

@@ -68,7 +68,7 @@ TEST(NoteExamples, Example2DoublePendulum) {
     const Model model = Model::build({b1, b2});
     Data data(model);
     const Computed c = both(model, data, Eigen::Vector2d(rng.uniform(-4, 4), rng.uniform(-4, 4)));
-    const Mat3 I1 = data.I_cm[0], I2 = data.I_cm[1];
+    const Mat3 I1 = inertia_cm(data, 0), I2 = inertia_cm(data, 1);
     const Vec3 s1 = data.s.col(0), s2 = data.s.col(1), d2 = data.d.col(1);
     const Mat3 r1 = skew(s1), r2 = skew(d2 + s2), S2 = skew(s2);
     const double m1 = b1.mass, m2 = b2.mass;
@@ -107,7 +107,7 @@ TEST(NoteExamples, Example3SatelliteWithTwoArrays) {
     for (int j = 0; j < 3; ++j) {
       r[j] = data.r.col(j) - data.eta.col(0);  // r_1 = s_1, r_j = d_j + s_j
       const double mj = model.mass[j];
-      I00 += data.I_cm[j] - mj * skew(r[j]) * skew(r[j]);
+      I00 += inertia_cm(data, j) - mj * skew(r[j]) * skew(r[j]);
       mbar += mj;
       h += mj * r[j];
     }
@@ -119,7 +119,7 @@ TEST(NoteExamples, Example3SatelliteWithTwoArrays) {
     expected.block<3, 3>(3, 3) = mbar * Mat3::Identity();
     for (int j = 1; j < 3; ++j) {
       const double mj = model.mass[j];
-      const Mat3 Ij = data.I_cm[j], S = skew(data.s.col(j)), Rj = skew(r[j]);
+      const Mat3 Ij = inertia_cm(data, j), S = skew(data.s.col(j)), Rj = skew(r[j]);
       expected.block<3, 1>(0, 5 + j) = (Ij - mj * Rj * S) * e;
       expected.block<3, 1>(3, 5 + j) = -mj * S * e;
       expected.block<1, 3>(5 + j, 0) = e.transpose() * (Ij - mj * S * Rj);
@@ -141,7 +141,7 @@ MatX example4_closed_form(const Model& model, const Data& data, const Vec3& e) {
   std::vector<Mat3> I(3);
   for (int j = 0; j < 3; ++j) {
     r[j] = data.r.col(j);
-    I[j] = data.I_cm[j];
+    I[j] = inertia_cm(data, j);
   }
   auto m = [&](int j) { return model.mass[j]; };
   auto sk = [](const Vec3& v) { return skew(v); };
@@ -248,7 +248,7 @@ double kinetic_energy_fd(const Model& model, const VecX& q, const VecX& v) {
     const Vec3 rdot = (plus.r.col(i) - minus.r.col(i)) / (2 * h);
     const Mat3 W = (plus.R[i] - minus.R[i]) / (2 * h) * mid.R[i].transpose();  // Ṙ Rᵀ = ω̃
     const Vec3 w(W(2, 1), W(0, 2), W(1, 0));
-    T += 0.5 * (w.dot(mid.I_cm[i] * w) + model.mass[i] * rdot.squaredNorm());
+    T += 0.5 * (w.dot(inertia_cm(mid, i) * w) + model.mass[i] * rdot.squaredNorm());
   }
   return T;
 }
@@ -293,7 +293,7 @@ TEST(MassMatrix, JacobianGivesBodyVelocitiesAndFactorsM) {
                        Eigen::Map<const VecX>(data.Vbar.data(), data.Vbar.size()), 1e-12));
   MatX Mbar = MatX::Zero(6 * model.nbodies, 6 * model.nbodies);
   for (int i = 0; i < model.nbodies; ++i) {
-    Mbar.block<3, 3>(6 * i, 6 * i) = data.I_cm[i];
+    Mbar.block<3, 3>(6 * i, 6 * i) = inertia_cm(data, i);
     Mbar.block<3, 3>(6 * i + 3, 6 * i + 3) = model.mass[i] * Mat3::Identity();
   }
   mass_matrix(model, data);

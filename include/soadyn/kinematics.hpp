@@ -18,6 +18,7 @@ Mat6 D_matrix(const Data& data, int i);  // D_i = [e 0; −d̃_i e]   (0 at a ro
 Mat6 S_matrix(const Data& data, int i);  // S_i = [e 0; −s̃_i e]
 Mat6 M_matrix(const Data& data, int i);  // M_i = S_iᵀ M̄_i S_i   (eq. 12)
 Mat6G G_matrix(const Model& model, const Data& data, int i);  // G_i, 6×nv_i
+Mat3 inertia_cm(const Data& data, int i);  // I_i about the cm, inertial: I_η + m s̃_i s̃_i
 
 // J = S Ψ_D G (eq. 7): 6N×nv, rows 6i..6i+5 give v̄_i = [ω_i; ṙ_i].  Needs [kin].
 void jacobian(const Model& model, const Data& data, MatX& J);

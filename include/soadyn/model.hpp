@@ -49,6 +49,7 @@ class Model {
   std::vector<double> mass;
   std::vector<Vec3> com;                   // body frame
   std::vector<Mat3> inertia;               // about the cm, body frame
+  std::vector<Mat3> inertia_origin;        // about the body frame's origin η_i, body frame
   std::vector<int> idx_q, idx_v;           // first q / v index of each body
   std::vector<int> nq_i, nv_i;             // sizes of each joint
   std::vector<std::string> body_names, joint_names;
