@@ -20,7 +20,25 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+import json  # noqa: E402
+import subprocess  # noqa: E402
+
 import runs  # noqa: E402
+
+MUJOCO_RK4 = os.path.join(runs.ROOT, "build", "soadyn_mujoco_rk4")  # built when MuJoCo is installed
+FIXED_BASE = {"pendulum_on_cart", "double_pendulum", "three_link_arm"}
+
+
+def mujoco_rk4(scene, dt, t_end):
+    """MuJoCo's RK4 on the same scene (same 𝓜 checked by the tool), or None"""
+    p = subprocess.run([MUJOCO_RK4, os.path.join(runs.SCENARIOS, scene + ".yaml"), repr(dt), repr(t_end)],
+                       capture_output=True, text=True, timeout=600)
+    if p.returncode != 0:
+        return None
+    r = json.loads(p.stdout)
+    r["q"], r["qd"], r["dt"] = np.array(r["q"]), np.array(r["qd"]), dt
+    r["ok"] = bool(np.abs(np.concatenate([r["q"], r["qd"]])).max() < 1e300)
+    return r
 
 SCENES = ["pendulum_on_cart", "double_pendulum", "satellite_two_arrays", "three_link_arm"]
 RTOLS = [10.0 ** -k for k in range(3, 13)]
@@ -64,6 +82,14 @@ def main():
             failed = [r for r in results if r["method"] == m and not r["ok"]]
             if failed:
                 ax[0].plot([], [], " ", label=f"  {m}: {len(failed)} runs blew up (dt >= {min(r['dt'] or 0 for r in failed):g})")
+        if os.path.exists(MUJOCO_RK4) and scene in FIXED_BASE:
+            peer = [r for r in (mujoco_rk4(scene, dt, args.t_end) for dt in DTS) if r and r["ok"]]
+            with open(os.path.join(args.out, f"wp_{scene}.csv"), "a", newline="") as f:
+                for r in peer:
+                    f.write(f"mujoco-rk4,,{r['dt']},{r['cpu']:.6g},,{state_error(r, ref):.3e},,completed\n")
+            if peer:
+                ax[0].loglog([max(r["cpu"], 1e-5) for r in peer], [max(state_error(r, ref), 1e-16) for r in peer],
+                             "x--", color="k", ms=5, label="MuJoCo 2.2 rk4 (peer)")
         ax[0].set_title(f"{scene}: state error at t = {args.t_end:g} s vs CVODE rtol 1e-13")
         ax[1].set_title("max |E(t) - E(0)| / max(|E0|, peak T)")
         for a in ax:
