@@ -22,15 +22,20 @@ void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
         data.G.middleCols(model.idx_v[i], model.nv_i[i]).transpose() * data.F.col(i);
 }
 
-// Dᵀ P D for a general 6×6 P = [A B; Bᵀ C] and D = [e 0; −d̃ e]:
-//   [A − B d̃ + d̃ Bᵀ − d̃ C d̃,  B + d̃ C;  Bᵀ − C d̃,  C]
+// Dᵀ P D for a symmetric 6×6 P = [A B; Bᵀ C] and D = [e 0; −d̃ e]:
+//   [A + X + Xᵀ + d̃ C d̃ᵀ,  B + d̃ C;  (B + d̃ C)ᵀ,  C]   with X = d̃ Bᵀ,
+// each d̃ product taken as three cross products.
 void add_congruence_D(Mat6& out, const Mat6& P, const Vec3& d) {
-  const Mat3 dt = skew(d);
   const Mat3 B = P.topRightCorner<3, 3>(), C = P.bottomRightCorner<3, 3>();
-  const Mat3 TR = B + dt * C;
-  out.topLeftCorner<3, 3>() += P.topLeftCorner<3, 3>() - TR * dt + dt * B.transpose();
-  out.topRightCorner<3, 3>() += TR;
-  out.bottomLeftCorner<3, 3>() += TR.transpose();
+  Mat3 W, X, Y;  // W = d̃ C, X = d̃ Bᵀ, Y = d̃ Wᵀ = (W d̃ᵀ)ᵀ = d̃ C d̃ᵀ (symmetric)
+  for (int c = 0; c < 3; ++c) {
+    W.col(c) = d.cross(Vec3(C.col(c)));
+    X.col(c) = d.cross(Vec3(B.row(c).transpose()));
+  }
+  for (int c = 0; c < 3; ++c) Y.col(c) = d.cross(Vec3(W.row(c).transpose()));
+  out.topLeftCorner<3, 3>() += P.topLeftCorner<3, 3>() + X + X.transpose() + Y;
+  out.topRightCorner<3, 3>() += B + W;
+  out.bottomLeftCorner<3, 3>() += (B + W).transpose();
   out.bottomRightCorner<3, 3>() += C;
 }
 
