@@ -278,6 +278,24 @@ TEST(MassMatrix, IsSecondDerivativeOfKineticEnergy) {
   }
 }
 
+// M_i = S_iᵀ M̄_i S_i (eq. 12) with M̄_i = diag(I_i, m_i e), from the 6×6 matrices themselves; and
+// SpatialInertia::from_body builds the same M_i from (m, s, I_cm)
+TEST(MassMatrix, BodyInertiaAtTheJointPointIsEq12) {
+  Rng rng(78);
+  const Model model = random_model(rng, {.n = 20, .branching = 0.5, .prismatic = 0.3, .free_root = true});
+  Data data(model);
+  update_kinematics(model, data, random_q(rng, model));
+  for (int i = 0; i < model.nbodies; ++i) {
+    Mat6 Mbar = Mat6::Zero();
+    Mbar.topLeftCorner<3, 3>() = data.R[i] * model.inertia[i] * data.R[i].transpose();
+    Mbar.bottomRightCorner<3, 3>() = model.mass[i] * Mat3::Identity();
+    const Mat6 S = S_matrix(data, i);
+    EXPECT_TRUE(near_rel(M_matrix(data, i), S.transpose() * Mbar * S, 1e-13)) << "body " << i;
+    const SpatialInertia K = SpatialInertia::from_body(model.mass[i], data.s.col(i), inertia_cm(data, i));
+    EXPECT_TRUE(near_rel(K.matrix(), S.transpose() * Mbar * S, 1e-13)) << "body " << i;
+  }
+}
+
 // J = S Ψ_D G gives v̄ = J q̇ (eq. 6), and 𝓜 = Jᵀ M̄ J (eq. 12)
 TEST(MassMatrix, JacobianGivesBodyVelocitiesAndFactorsM) {
   Rng rng(77);
