@@ -260,6 +260,24 @@ TEST(Instability, Rk4BeyondItsLimitStopsCleanly) {
   std::filesystem::remove(err);
 }
 
+// a CVODE failure (here: too much work) stops the run with the time and the worst DOF, keeps the data
+TEST(Instability, CvodeFailureNamesTimeAndWorstDof) {
+  Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
+  for (const char* method : {"cvode-adams", "cvode-bdf"}) {
+    SimulationSettings s = sc.simulation;
+    s.method = method;
+    s.max_steps = 200;  // far too few for 10 s at rtol 1e-10
+    std::vector<Sample> samples;
+    const RunSummary r = simulate(sc, s, nullptr, &samples);
+    EXPECT_FALSE(r.completed);
+    EXPECT_NE(r.status.find("failed at t ="), std::string::npos) << r.status;
+    EXPECT_NE(r.status.find("worst DOF: joint 'theta"), std::string::npos) << r.status;
+    EXPECT_GT(r.t_reached, 0.0);
+    EXPECT_LT(r.t_reached, s.t_end);
+    EXPECT_GE(samples.size(), 2u) << "what was logged before the failure is kept";
+  }
+}
+
 TEST(Output, UnwritablePathIsRefusedBeforeTheRun) {
   const std::string file = tmp("a_file");
   std::ofstream(file) << "x";
