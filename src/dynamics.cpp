@@ -182,7 +182,7 @@ double kinetic_energy(const Model& model, const Data& data) {
 double potential_energy(const Model& model, const Data& data) {
   Vec3 first_moment = model.world_first_moment;
   for (int i = 0; i < model.nbodies; ++i) first_moment += model.mass[i] * data.r.col(i);
-  return -model.gravity.dot(first_moment);
+  return 0.0 - model.gravity.dot(first_moment);  // 0 − x: never a negative zero
 }
 
 Momentum momentum(const Model& model, const Data& data) {

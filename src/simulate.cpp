@@ -34,6 +34,8 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   if (!(settings.t_end > 0) || !(settings.output_dt > 0) || !(settings.dt > 0) || !(settings.rtol > 0) ||
       !(settings.atol > 0))
     throw Error("simulation settings: t_end, output_dt, dt, rtol and atol must be positive");
+  if (m.nv == 0)
+    throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
   System sys(m, sc.inputs, parse_fd_method(settings.dynamics));
   VecX y(sys.size());
   y << sc.q0, sc.v0;

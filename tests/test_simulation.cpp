@@ -278,6 +278,22 @@ TEST(Instability, CvodeFailureNamesTimeAndWorstDof) {
   }
 }
 
+TEST(Output, ModelWithoutDegreesOfFreedomIsRefused) {
+  const Scenario sc = parse_scenario("bodies:\n  - {name: plate, joint: {type: fixed}, mass: 1.0, inertia: [0.1, 0.1, 0.1]}\n",
+                                     "weld.yaml");
+  EXPECT_EQ(sc.model.nv, 0);
+  try {
+    simulate(sc, sc.simulation);
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no degrees of freedom"), std::string::npos) << e.what();
+  }
+  const std::string file = tmp("weld.yaml");
+  std::ofstream(file) << sc.text;
+  EXPECT_EQ(WEXITSTATUS(run_cli("run " + file + " -o " + tmp("weld.h5"))), 2);
+  std::filesystem::remove(file);
+}
+
 TEST(Output, UnwritablePathIsRefusedBeforeTheRun) {
   const std::string file = tmp("a_file");
   std::ofstream(file) << "x";

@@ -73,6 +73,8 @@ int run_simulation(const RunOptions& o) {
   if (o.output_dt) s.output_dt = *o.output_dt;
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
 
+  if (sc.model.nv == 0)
+    throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
   H5Log log(out, sc, s, SOADYN_VERSION);  // refuses an unwritable path before the run starts
   Progress progress(&log, s.t_end);
   const RunSummary r = simulate(sc, s, &progress);
