@@ -399,6 +399,7 @@ std::string read_text_file(const std::string& path) {
   if (in.bad()) throw Error(path + ": read error");
   const std::string text = os.str();
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw Error(path + ": the file is empty");
+  if (text.find('\0') != std::string::npos) throw Error(path + ": a binary file, expected text (YAML or URDF)");
   return text;
 }
 

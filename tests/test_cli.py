@@ -241,6 +241,16 @@ class BadInput(unittest.TestCase):
                 f.write("bodies:\n  - name: a\n    joint: {type: revolute, axis: [0, 0, 1]}\n    mass: -1\n")
             self.refused("inspect", bad, expect="bad.yaml:4:11: body 'a'.mass: expected a positive mass")
             self.refused("inspect", d, expect="is a directory")
+            binary = os.path.join(d, "binary.yaml")
+            with open(binary, "wb") as f:
+                f.write(b"\x00\x01binary")
+            self.refused("inspect", binary, expect="a binary file, expected text")
+
+    def test_run_options(self):
+        f = f"{SCENARIOS}/double_pendulum.yaml"
+        for opt in ("--dt", "--rtol", "--atol", "--t-end", "--output-dt"):
+            self.refused("run", f, opt, "-1", expect=f"{opt}: expected a positive number, got '-1'")
+        self.refused("run", f, "--method", "rk5", expect="--method")
 
     def test_options(self):
         self.refused("inspect", f"{SCENARIOS}/double_pendulum.yaml", "--method", "fast", expect="--method")

@@ -5,11 +5,27 @@
 
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdlib>
+
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 
 namespace soadyn::cli {
+
+namespace {
+// a positive finite number, said plainly
+const CLI::Validator kPositive(
+    [](std::string& text) {
+      char* end = nullptr;
+      const double x = std::strtod(text.c_str(), &end);
+      if (text.empty() || *end != '\0' || !(x > 0) || !std::isfinite(x))
+        return "expected a positive number, got '" + text + "'";
+      return std::string();
+    },
+    "POSITIVE");
+}  // namespace
 
 void add_run(CLI::App& app, RunOptions& o) {
   CLI::App* c = app.add_subcommand(
@@ -21,11 +37,11 @@ void add_run(CLI::App& app, RunOptions& o) {
   c->add_option("-o,--output", o.output, "HDF5 output file (default out/<scenario name>.h5)");
   c->add_option("--method", o.method, "cvode-adams | cvode-bdf | rk4 | euler | symplectic-euler | implicit-midpoint")
       ->check(CLI::IsMember({"cvode-adams", "cvode-bdf", "rk4", "euler", "symplectic-euler", "implicit-midpoint"}));
-  c->add_option("--rtol", o.rtol, "CVODE relative tolerance")->check(CLI::PositiveNumber);
-  c->add_option("--atol", o.atol, "CVODE absolute tolerance")->check(CLI::PositiveNumber);
-  c->add_option("--dt", o.dt, "fixed-step methods' step, s")->check(CLI::PositiveNumber);
-  c->add_option("--t-end", o.t_end, "end time, s")->check(CLI::PositiveNumber);
-  c->add_option("--output-dt", o.output_dt, "time between logged samples, s")->check(CLI::PositiveNumber);
+  c->add_option("--rtol", o.rtol, "CVODE relative tolerance")->check(kPositive);
+  c->add_option("--atol", o.atol, "CVODE absolute tolerance")->check(kPositive);
+  c->add_option("--dt", o.dt, "fixed-step methods' step, s")->check(kPositive);
+  c->add_option("--t-end", o.t_end, "end time, s")->check(kPositive);
+  c->add_option("--output-dt", o.output_dt, "time between logged samples, s")->check(kPositive);
   c->add_flag("-q,--quiet", o.quiet, "no summary on stdout");
 }
 
