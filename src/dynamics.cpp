@@ -43,43 +43,43 @@ void aba(const Model& model, Data& data, const VecX& tau) {
   const DOperator D{data.d};
   // tip to base: articulated inertias P_i and bias forces z_i
   for (int i = 0; i < model.nbodies; ++i) {
-    data.P[i] = data.M[i].matrix();
+    const SpatialInertia& M = data.M[i];  // P_i = M_i = [I, h̃; h̃ᵀ, m e]
+    const Mat3 H = skew(M.h);
+    data.P[i] << M.I, H, H.transpose(), M.m * Mat3::Identity();
     data.z.col(i) = data.b.col(i);
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
     const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
-    Mat6 Pa;
+    Mat6& P = data.P[i];  // becomes P⁺ in place: P_i is not needed after this step
     Vec6 za;
     if (ni == 1) {
       // U = P g,  𝒟 = gᵀ U,  u = τ − gᵀ z;  P⁺ = P − U Uᵀ / 𝒟;  z⁺ = z + P⁺ a + U u / 𝒟
       const Vec6 g = data.G.col(vi);
-      const Vec6 U = data.P[i] * g;
+      const Vec6 U = P * g;
       const double Dinv = 1.0 / g.dot(U);
       const double u = tau(vi) - g.dot(data.z.col(i));
       data.U1.col(i) = U;
       data.Dinv1(i) = Dinv;
       data.u(vi) = u;
       if (p < 0) continue;
-      Pa = data.P[i];
-      Pa.noalias() -= (Dinv * U) * U.transpose();
-      za = data.z.col(i) + Pa * data.a.col(i) + (u * Dinv) * U;
+      P.noalias() -= (Dinv * U) * U.transpose();
+      za = data.z.col(i) + P * data.a.col(i) + (u * Dinv) * U;
     } else {
       // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
       const auto Gi = data.G.middleCols(vi, ni);
-      data.U[i].noalias() = data.P[i] * Gi;
+      data.U[i].noalias() = P * Gi;
       const MatGG Dd = Gi.transpose() * data.U[i];
       data.Dinv[i] = Dd.inverse();
       data.u.segment(vi, ni).noalias() = tau.segment(vi, ni) - Gi.transpose() * data.z.col(i);
       if (p < 0) continue;
       const Mat6G UD = data.U[i] * data.Dinv[i];
-      Pa = data.P[i];
-      Pa.noalias() -= UD * data.U[i].transpose();
+      P.noalias() -= UD * data.U[i].transpose();
       za = data.z.col(i);
-      za.noalias() += Pa * data.a.col(i);
+      za.noalias() += P * data.a.col(i);
       za.noalias() += UD * data.u.segment(vi, ni);
     }
     // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺
-    add_congruence_D(data.P[p], Pa, data.d.col(i));
+    add_congruence_D(data.P[p], P, data.d.col(i));
     D.add_apply_transpose(i, za, data.z.col(p));
   }
   // base to tip: A' = D_i A_p + a_i,  q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A'),  A_i = A' + G_i q̈_i
