@@ -184,7 +184,7 @@ BodyNodes read_bodies(const Reader& rd, const YAML::Node& list) {
   for (size_t k = 0; k < list.size(); ++k) {
     const YAML::Node& b = list[k];
     const std::string f = "bodies[" + std::to_string(k) + "]";
-    rd.keys(b, f, {"name", "parent", "joint", "origin", "mass", "com", "inertia"});
+    rd.keys(b, f, {"name", "parent", "joint", "origin", "mass", "com", "inertia", "inertia_rpy"});
     BodySpec s;
     s.name = rd.string(rd.require(b, "name", f), f + ".name");
     const std::string fb = "body '" + s.name + "'";
@@ -246,6 +246,11 @@ BodyNodes read_bodies(const Reader& rd, const YAML::Node& list) {
     if (b["com"]) s.com = rd.vec3(b["com"], fb + ".com");
     if (!massless_weld) s.inertia = rd.inertia(rd.require(b, "inertia", fb), fb + ".inertia");
     else if (b["inertia"]) s.inertia = rd.inertia(b["inertia"], fb + ".inertia");
+    if (b["inertia_rpy"]) {
+      // the inertia was given in axes turned by rpy from the body frame: I_body = R I Rᵀ
+      const Mat3 R = Reader::rpy(rd.vec3(b["inertia_rpy"], fb + ".inertia_rpy"));
+      s.inertia = R * s.inertia * R.transpose();
+    }
 
     index[s.name] = int(k);
     out.specs.push_back(s);

@@ -152,6 +152,30 @@ TEST(Urdf, SameMassMatrixAsTheEquivalentYaml) {
   }
 }
 
+// a hand-written scenario against the URDF it mirrors: fixed joints, rpy offsets, a skewed axis,
+// off-diagonal inertia in a turned inertial frame
+TEST(Urdf, SameAsTheHandWrittenScenario) {
+  const Model mu = load_urdf(SOADYN_SOURCE_DIR "/tests/fuzz/seeds/branched_arm.urdf", false, Vec3(0, 0, -9.81));
+  const Model my = load_scenario(SOADYN_SOURCE_DIR "/tests/data/branched_arm.yaml").model;
+  ASSERT_EQ(mu.joint_names, (std::vector<std::string>{"yaw", "left_pitch", "right_pitch", "extend"}));
+  ASSERT_EQ(my.joint_names, mu.joint_names);
+  EXPECT_EQ(mu.merged_names[0], std::vector<std::string>{"sensor"});
+  Rng rng(31);
+  for (int t = 0; t < 20; ++t) {
+    const VecX q = random_q(rng, mu), v = random_v(rng, mu);
+    Data du(mu), dy(my);
+    for (auto [m, d] : {std::pair{&mu, &du}, std::pair{&my, &dy}}) {
+      update_kinematics(*m, *d, q);
+      mass_matrix(*m, *d);
+      update_velocities(*m, *d, v);
+      bias_forces(*m, *d);
+    }
+    ASSERT_TRUE(near_rel(du.Mass, dy.Mass, 1e-12));
+    ASSERT_TRUE(near_rel(du.bias, dy.bias, 1e-12));
+    EXPECT_NEAR(potential_energy(mu, du), potential_energy(my, dy), 1e-12);
+  }
+}
+
 // the URDF's own joint order is kept when it is parent-first; otherwise depth-first from the root
 TEST(Urdf, JointOrder) {
   const std::string link = "<inertial><mass value=\"1\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>";
