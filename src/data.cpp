@@ -38,4 +38,13 @@ Data::Data(const Model& m)
   }
 }
 
+void Data::check(const Model& model, const char* where, const char* what, Eigen::Index got, int expected) const {
+  if (G.cols() != model.nv || int(R.size()) != model.nbodies)
+    throw Error(std::string(where) + ": this Data was built for another model (nv " + std::to_string(G.cols()) +
+                ", model nv " + std::to_string(model.nv) + ")");
+  if (got != expected)
+    throw Error(std::string(where) + ": " + what + ": expected " + std::to_string(expected) + " entries, got " +
+                std::to_string(got));
+}
+
 }  // namespace soadyn

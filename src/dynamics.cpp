@@ -104,7 +104,10 @@ void aba(const Model& model, Data& data, const VecX& tau) {
 
 void bias_forces(const Model& model, Data& data) { rnea(model, data, nullptr, data.bias); }
 
-void inverse_dynamics(const Model& model, Data& data, const VecX& qdd) { rnea(model, data, &qdd, data.tau); }
+void inverse_dynamics(const Model& model, Data& data, const VecX& qdd) {
+  data.check(model, "inverse_dynamics", "qdd", qdd.size(), model.nv);
+  rnea(model, data, &qdd, data.tau);
+}
 
 std::string_view to_string(FdMethod m) {
   switch (m) {
@@ -148,6 +151,7 @@ void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x) {
 }
 
 void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method) {
+  data.check(model, "forward_dynamics", "tau", tau.size(), model.nv);
   switch (method) {
     case FdMethod::Dense:
       mass_matrix(model, data);

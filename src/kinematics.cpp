@@ -5,6 +5,7 @@
 namespace soadyn {
 
 void update_kinematics(const Model& model, Data& data, const VecX& q) {
+  data.check(model, "update_kinematics", "q", q.size(), model.nq);
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i];
     const Mat3 Rp = p < 0 ? Mat3::Identity() : data.R[p];
@@ -30,6 +31,7 @@ void update_kinematics(const Model& model, Data& data, const VecX& q) {
 }
 
 void update_velocities(const Model& model, Data& data, const VecX& v) {
+  data.check(model, "update_velocities", "v", v.size(), model.nv);
   // (3)-(4) v = Φ_D v + G q̇  ⇒  v = Ψ_D G q̇
   for (int i = 0; i < model.nbodies; ++i)
     data.V.col(i).noalias() = data.G.middleCols(model.idx_v[i], model.nv_i[i]) *

@@ -183,6 +183,27 @@ TEST(FreeRoot, QdotAndItsReverseMap) {
   }
 }
 
+// vectors of the wrong size and a Data of another model are refused, not read past
+TEST(Data, WrongSizesAreRefused) {
+  Rng rng(12);
+  const Model m = random_model(rng, {.n = 5});
+  const Model other = random_model(rng, {.n = 7});
+  Data d(m), d_other(other);
+  EXPECT_THAT([&] {
+    try { update_kinematics(m, d, VecX::Zero(m.nq + 1)); } catch (const Error& e) { return std::string(e.what()); }
+    return std::string();
+  }(), HasSubstr("update_kinematics: q: expected 5 entries, got 6"));
+  update_kinematics(m, d, VecX::Zero(m.nq));
+  EXPECT_THROW(update_velocities(m, d, VecX::Zero(2)), Error);
+  update_velocities(m, d, VecX::Zero(m.nv));
+  EXPECT_THROW(inverse_dynamics(m, d, VecX::Zero(3)), Error);
+  EXPECT_THROW(forward_dynamics(m, d, VecX::Zero(9), FdMethod::ON), Error);
+  EXPECT_THAT([&] {
+    try { update_kinematics(m, d_other, VecX::Zero(m.nq)); } catch (const Error& e) { return std::string(e.what()); }
+    return std::string();
+  }(), HasSubstr("this Data was built for another model"));
+}
+
 TEST(ModelBuild, BodyWeldedToTheWorldKeepsItsPotentialEnergy) {
   auto specs = std::vector{body("ground_plate", -1), body("a", 0)};
   specs[0].joint = JointType::Fixed;

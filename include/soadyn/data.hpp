@@ -17,6 +17,10 @@ namespace soadyn {
 struct Data {
   explicit Data(const Model& model);
 
+  // always-on: the data was sized for this model and the vector has the expected size; a wrong
+  // size would otherwise read or write past an array (soadyn::Error names what and where)
+  void check(const Model& model, const char* where, const char* what, Eigen::Index got, int expected) const;
+
   // [kin] positions, all inertial (the note's symbols)
   std::vector<Mat3> R;                 // body i frame → inertial (C_i^in)
   Mat3X eta;                           // η_i, joint point of body i (its frame origin)

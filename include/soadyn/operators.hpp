@@ -9,6 +9,7 @@
 
 #include "soadyn/types.hpp"
 
+#include <cassert>
 #include <vector>
 
 namespace soadyn {
@@ -17,15 +18,19 @@ namespace soadyn {
 template <class Op, class At>
 void psi_base_to_tip(const std::vector<int>& parent, const Op& A, At&& at) {
   const int n = int(parent.size());
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < n; ++i) {
+    assert(parent[i] < i && "parent-first order");
     if (parent[i] >= 0) A.add_apply(i, at(parent[i]), at(i));  // z_i += A_i z_p
+  }
 }
 
 // z = Ψ_Aᵀ z, in place (on entry z holds x).  Children come after parents.
 template <class Op, class At>
 void psi_tip_to_base(const std::vector<int>& parent, const Op& A, At&& at) {
-  for (int i = int(parent.size()) - 1; i >= 0; --i)
+  for (int i = int(parent.size()) - 1; i >= 0; --i) {
+    assert(parent[i] < i && "parent-first order");
     if (parent[i] >= 0) A.add_apply_transpose(i, at(i), at(parent[i]));  // z_p += A_iᵀ z_i
+  }
 }
 
 // A_i = D_i = [e 0; −d̃_i e]: carries a velocity pair from η_parent to η_i; D_iᵀ carries a
