@@ -77,7 +77,7 @@ Mat6 M_matrix(const Data& data, int i) { return data.M[i].matrix(); }
 
 Mat3 inertia_cm(const Data& data, int i) {
   const Vec3 s = data.s.col(i);
-  return data.M[i].I - data.M[i].m * (s.squaredNorm() * Mat3::Identity() - s * s.transpose());
+  return data.M[i].I - parallel_axis(data.M[i].m, s);
 }
 
 Mat6G G_matrix(const Model& model, const Data& data, int i) {

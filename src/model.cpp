@@ -1,5 +1,7 @@
 #include "soadyn/model.hpp"
 
+#include "soadyn/inertia.hpp"
+
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
@@ -96,11 +98,7 @@ void merge_mass(double& m, Vec3& c, Mat3& I, double m2, const Vec3& c2, const Ma
   const double mt = m + m2;
   if (mt == 0.0) return;
   const Vec3 ct = (m * c + m2 * c2) / mt;
-  auto shift = [&](double mk, const Vec3& ck) {  // parallel axes: m (|δ|² e − δ δᵀ)
-    const Vec3 dlt = ck - ct;
-    return Mat3(mk * (dlt.squaredNorm() * Mat3::Identity() - dlt * dlt.transpose()));
-  };
-  I = I + shift(m, c) + I2 + shift(m2, c2);
+  I = I + parallel_axis(m, c - ct) + I2 + parallel_axis(m2, c2 - ct);
   m = mt;
   c = ct;
 }
@@ -181,8 +179,7 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
     }
   }
   for (int k = 0; k < m.nbodies; ++k) {
-    const Vec3& c = m.com[k];  // parallel axes: I_η = I_cm + m (|c|² e − c cᵀ)
-    m.inertia_origin.push_back(m.inertia[k] + m.mass[k] * (c.squaredNorm() * Mat3::Identity() - c * c.transpose()));
+    m.inertia_origin.push_back(m.inertia[k] + parallel_axis(m.mass[k], m.com[k]));  // I_η = I_cm − m c̃ c̃
   }
   m.chain = true;
   for (int k = 0; k < m.nv; ++k) m.chain = m.chain && m.dof_parent[k] == k - 1;

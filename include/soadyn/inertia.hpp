@@ -9,6 +9,11 @@
 
 namespace soadyn {
 
+// Parallel axes: a mass m at offset c adds m (|c|² e − c cᵀ) = −m c̃ c̃ to an inertia.
+inline Mat3 parallel_axis(double m, const Vec3& c) {
+  return m * (c.squaredNorm() * Mat3::Identity() - c * c.transpose());
+}
+
 struct SpatialInertia {
   double m = 0.0;           // mass
   Vec3 h = Vec3::Zero();    // first moment m c about the reference point
@@ -55,7 +60,7 @@ struct SpatialInertia {
     SpatialInertia K;
     K.m = mass;
     K.h = mass * s;
-    K.I = I_cm + mass * (s.squaredNorm() * Mat3::Identity() - s * s.transpose());
+    K.I = I_cm + parallel_axis(mass, s);
     return K;
   }
 };
