@@ -28,14 +28,20 @@ Sample observe(System& sys, double t, const VecX& q, const VecX& v) {
   return s;
 }
 
-RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer,
-                    std::vector<Sample>* samples) {
-  const Model& m = sc.model;
+bool is_fixed_step(const std::string& method) { return method.rfind("cvode", 0) != 0; }
+
+void check_run(const Scenario& sc, const SimulationSettings& settings) {
   if (!(settings.t_end > 0) || !(settings.output_dt > 0) || !(settings.dt > 0) || !(settings.rtol > 0) ||
       !(settings.atol > 0))
     throw Error("simulation settings: t_end, output_dt, dt, rtol and atol must be positive");
-  if (m.nv == 0)
+  if (sc.model.nv == 0)
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
+}
+
+RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer,
+                    std::vector<Sample>* samples) {
+  const Model& m = sc.model;
+  check_run(sc, settings);
   System sys(m, sc.inputs, parse_fd_method(settings.dynamics));
   VecX y(sys.size());
   y << sc.q0, sc.v0;
@@ -67,9 +73,8 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   E0 = first.total;
   record(first);
   // fixed-step methods take steps of exactly dt: outputs every whole number of steps
-  const bool fixed_step = settings.method.rfind("cvode", 0) != 0;
   const double output_dt =
-      fixed_step ? settings.dt * std::max(1.0, std::round(settings.output_dt / settings.dt)) : settings.output_dt;
+      is_fixed_step(settings.method) ? settings.dt * std::max(1.0, std::round(settings.output_dt / settings.dt)) : settings.output_dt;
   summary.output_dt = output_dt;
   const long outputs = std::max<long>(1, std::lround(std::ceil(settings.t_end / output_dt * (1 - 1e-12))));
   try {

@@ -43,6 +43,13 @@ class RunObserver {
 // Evaluates the logged quantities at (t, q, v).
 Sample observe(System& system, double t, const VecX& q, const VecX& v);
 
+// Throws soadyn::Error if sc cannot be run with settings: a setting that is not positive, or a
+// model without degrees of freedom.  simulate() calls it; call it first to refuse before any output.
+void check_run(const Scenario& sc, const SimulationSettings& settings);
+
+// Fixed-step methods (rk4, euler, …) as opposed to CVODE's.
+bool is_fixed_step(const std::string& method);
+
 // Simulates sc with settings (its own `simulation` section, possibly overridden).  Never throws
 // for a run that fails midway: the summary says how it ended (completed = false) and the
 // observer has everything logged up to then.  Throws soadyn::Error for bad settings.

@@ -89,8 +89,7 @@ int run_simulation(const RunOptions& o) {
   if (o.output_dt) s.output_dt = *o.output_dt;
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
 
-  if (sc.model.nv == 0)
-    throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
+  check_run(sc, s);                        // refuses before any output file exists
   H5Log log(out, sc, s, SOADYN_VERSION);  // refuses an unwritable path before the run starts
   Progress progress(&log, s.t_end);
   const RunSummary r = simulate(sc, s, &progress);
@@ -98,7 +97,7 @@ int run_simulation(const RunOptions& o) {
   if (!o.quiet) {
     std::printf("scenario               %s\n", sc.path.c_str());
     std::printf("method                 %s%s\n", s.method.c_str(),
-                s.method.rfind("cvode", 0) == 0 ? (" (rtol " + std::to_string(s.rtol) + ", atol " + std::to_string(s.atol) + ")").c_str()
+                !is_fixed_step(s.method) ? (" (rtol " + std::to_string(s.rtol) + ", atol " + std::to_string(s.atol) + ")").c_str()
                                                 : (" (dt " + std::to_string(s.dt) + " s)").c_str());
     std::printf("quaternion             %s\n", r.quaternion_handling.c_str());
     std::printf("status                 %s\n", r.status.c_str());
