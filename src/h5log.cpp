@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <filesystem>
+#include <type_traits>
 #include <vector>
 
 namespace soadyn {
@@ -48,18 +49,15 @@ Id group(hid_t parent, const char* name) {
   return Id(H5Gcreate2(parent, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, std::string("creating group ") + name);
 }
 
-void set_attribute(hid_t obj, const char* name, double value) {
+// a scalar numeric attribute (double or long), replaced if it exists
+template <class T>
+void set_attribute(hid_t obj, const char* name, T value) {
+  static_assert(std::is_same_v<T, double> || std::is_same_v<T, long>);
+  const hid_t type = std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_LONG;
   if (H5Aexists(obj, name) > 0) H5Adelete(obj, name);
   Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
-  Id attr(H5Acreate2(obj, name, H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
-  check(H5Awrite(attr, H5T_NATIVE_DOUBLE, &value), std::string("writing attribute ") + name);
-}
-
-void set_attribute(hid_t obj, const char* name, long value) {
-  if (H5Aexists(obj, name) > 0) H5Adelete(obj, name);
-  Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
-  Id attr(H5Acreate2(obj, name, H5T_NATIVE_LONG, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
-  check(H5Awrite(attr, H5T_NATIVE_LONG, &value), std::string("writing attribute ") + name);
+  Id attr(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
+  check(H5Awrite(attr, type, &value), std::string("writing attribute ") + name);
 }
 
 void set_attribute(hid_t obj, const char* name, const std::string& value) {
