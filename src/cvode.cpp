@@ -12,6 +12,7 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <exception>
 #include <memory>
 #include <sstream>
@@ -19,6 +20,15 @@
 namespace soadyn {
 
 namespace {
+
+// CVODE's name for a return flag (it allocates the string with malloc: freed here)
+std::string flag_name(int flag) {
+  char* name = CVodeGetReturnFlagName(flag);
+  std::string out = name ? name : "flag " + std::to_string(flag);
+  std::free(name);
+  return out;
+}
+
 
 // move-only owners of SUNDIALS handles
 struct ContextDeleter {
@@ -78,7 +88,7 @@ class Cvode : public Integrator {
       if (!nls_) throw Error("CVODE: could not allocate the fixed-point solver");
       check(CVodeSetNonlinearSolver(mem, nls_.get()), "CVodeSetNonlinearSolver");
     }
-    if (sys.model.has_free_joint()) {
+    if (sys.model.has_quaternions()) {
       projection_ = CVodeSetProjFn(mem, &Cvode::project) == CV_SUCCESS;
       error_message_.clear();
     }
@@ -99,7 +109,7 @@ class Cvode : public Integrator {
     y = map(y_.get());
     if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
     if (flag < 0) {
-      std::string why = flag == CV_TOO_MUCH_WORK ? "too much work (the maximum number of steps)" : CVodeGetReturnFlagName(flag);
+      std::string why = flag == CV_TOO_MUCH_WORK ? "too much work (the maximum number of steps)" : flag_name(flag);
       if (!error_message_.empty()) why += ": " + error_message_;
       fail(t, why);
     }
@@ -110,26 +120,27 @@ class Cvode : public Integrator {
   IntegratorStats stats() const override {
     IntegratorStats s;
     void* mem = mem_.get();
-    long v = 0;
-    CVodeGetNumSteps(mem, &v);
-    s.steps = v;
-    CVodeGetNumRhsEvals(mem, &v);
-    s.rhs_evals = v;
-    CVodeGetNumErrTestFails(mem, &v);
-    s.error_test_failures = v;
-    CVodeGetNumNonlinSolvIters(mem, &v);
-    s.nonlinear_iterations = v;
+    // every counter read is checked: a failed read would report a stale or zero count
+    auto read = [&](int (*get)(void*, long*), const char* name) {
+      long v = 0;
+      if (const int flag = get(mem, &v); flag < 0)
+        throw Error(std::string("CVODE: ") + name + " failed (" + CVodeGetReturnFlagName(flag) + ")");
+      return v;
+    };
+    s.steps = read(CVodeGetNumSteps, "CVodeGetNumSteps");
+    s.rhs_evals = read(CVodeGetNumRhsEvals, "CVodeGetNumRhsEvals");
+    s.error_test_failures = read(CVodeGetNumErrTestFails, "CVodeGetNumErrTestFails");
+    s.nonlinear_iterations = read(CVodeGetNumNonlinSolvIters, "CVodeGetNumNonlinSolvIters");
     if (bdf_) {
-      CVodeGetNumJacEvals(mem, &v);
-      s.jac_evals = v;
-      CVodeGetNumLinRhsEvals(mem, &v);  // difference-quotient Jacobian evaluations of f
-      s.rhs_evals += v;
+      s.jac_evals = read(CVodeGetNumJacEvals, "CVodeGetNumJacEvals");
+      // difference-quotient Jacobian evaluations of f
+      s.rhs_evals += read(CVodeGetNumLinRhsEvals, "CVodeGetNumLinRhsEvals");
     }
     return s;
   }
 
   std::string quaternion_handling() const override {
-    if (!sys_.model.has_free_joint()) return "none";
+    if (!sys_.model.has_quaternions()) return "none";
     return projection_ ? "CVODE projection (CVodeSetProjFn) onto the unit quaternion"
                        : "normalized in the dynamics and at every output (CVODE projection needs BDF)";
   }
@@ -155,8 +166,9 @@ class Cvode : public Integrator {
     auto c = map(corr);
     c.setZero();
     for (int i = 0; i < m.nbodies; ++i) {
-      if (m.joint_type[i] != JointType::Free) continue;
-      const int k = m.idx_q[i] + 3;
+      const int offset = joint_traits(m.joint_type[i]).quaternion;
+      if (offset < 0) continue;
+      const int k = m.idx_q[i] + offset;
       const Eigen::Vector4d quat = y.segment<4>(k);
       const double n = quat.norm();
       if (!(n > 0) || !std::isfinite(n)) return 1;

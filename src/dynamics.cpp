@@ -6,16 +6,16 @@ namespace soadyn {
 
 namespace {
 
-// the note's A = Ψ_D (G q̈ + a), then F = Ψ_Dᵀ (M A + b), projected: τ = Gᵀ F
+// the note's A = Ψ_D (G q̈ + 𝔞), then F = Ψ_Dᵀ (M A + 𝔟), projected: τ = Gᵀ F
 void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
   const DOperator D{data.d};
-  data.A = data.a;
+  data.A = data.coriolis;
   if (qdd)
     for (int i = 0; i < model.nbodies; ++i)
       data.A.col(i).noalias() += data.G.middleCols(model.idx_v[i], model.nv_i[i]) *
                                  qdd->segment(model.idx_v[i], model.nv_i[i]);
   psi_base_to_tip(model.parent, D, [&](int i) { return data.A.col(i); });
-  for (int i = 0; i < model.nbodies; ++i) data.F.col(i) = data.M[i] * data.A.col(i) + data.b.col(i);
+  for (int i = 0; i < model.nbodies; ++i) data.F.col(i) = data.M[i] * data.A.col(i) + data.gyroscopic.col(i);
   psi_tip_to_base(model.parent, D, [&](int i) { return data.F.col(i); });
   for (int i = 0; i < model.nbodies; ++i)
     out.segment(model.idx_v[i], model.nv_i[i]).noalias() =
@@ -46,7 +46,7 @@ void aba(const Model& model, Data& data, const VecX& tau) {
     const SpatialInertia& M = data.M[i];  // P_i = M_i = [I, h̃; h̃ᵀ, m e]
     const Mat3 H = skew(M.h);
     data.P[i] << M.I, H, H.transpose(), M.m * Mat3::Identity();
-    data.z.col(i) = data.b.col(i);
+    data.z.col(i) = data.gyroscopic.col(i);
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
     const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
@@ -63,19 +63,19 @@ void aba(const Model& model, Data& data, const VecX& tau) {
       data.u(vi) = u;
       if (p < 0) continue;
       P.noalias() -= (Dinv * U) * U.transpose();
-      za = data.z.col(i) + P * data.a.col(i) + (u * Dinv) * U;
+      za = data.z.col(i) + P * data.coriolis.col(i) + (u * Dinv) * U;
     } else {
       // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
       const auto Gi = data.G.middleCols(vi, ni);
       data.U[i].noalias() = P * Gi;
-      const MatGG Dd = Gi.transpose() * data.U[i];
-      data.Dinv[i] = Dd.inverse();
+      const MatGG joint_inertia = Gi.transpose() * data.U[i];  // 𝒟_i, the articulated inertia across the joint
+      data.Dinv[i] = joint_inertia.inverse();
       data.u.segment(vi, ni).noalias() = tau.segment(vi, ni) - Gi.transpose() * data.z.col(i);
       if (p < 0) continue;
       const Mat6G UD = data.U[i] * data.Dinv[i];
       P.noalias() -= UD * data.U[i].transpose();
       za = data.z.col(i);
-      za.noalias() += P * data.a.col(i);
+      za.noalias() += P * data.coriolis.col(i);
       za.noalias() += UD * data.u.segment(vi, ni);
     }
     // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺
@@ -85,7 +85,7 @@ void aba(const Model& model, Data& data, const VecX& tau) {
   // base to tip: A' = D_i A_p + a_i,  q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A'),  A_i = A' + G_i q̈_i
   for (int i = 0; i < model.nbodies; ++i) {
     const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
-    Vec6 Ai = data.a.col(i);
+    Vec6 Ai = data.coriolis.col(i);
     if (p >= 0) D.add_apply(i, data.A.col(p), Ai);
     if (ni == 1) {
       const double qdd = data.Dinv1(i) * (data.u(vi) - data.U1.col(i).dot(Ai));
@@ -109,20 +109,33 @@ void inverse_dynamics(const Model& model, Data& data, const VecX& qdd) {
   rnea(model, data, &qdd, data.tau);
 }
 
+const std::vector<FdMethodInfo>& fd_methods() {
+  static const std::vector<FdMethodInfo> table = {
+      {FdMethod::Dense, "dense", "composite mass matrix, then Cholesky"},
+      {FdMethod::Sparse, "sparse", "composite mass matrix, tree-sparse LᵀDL"},
+      {FdMethod::ArticulatedBody, "on", "O(N) articulated-body recursion"},
+  };
+  return table;
+}
+
+std::vector<std::string> fd_method_names() {
+  std::vector<std::string> names;
+  for (const auto& m : fd_methods()) names.emplace_back(m.name);
+  return names;
+}
+
 std::string_view to_string(FdMethod m) {
-  switch (m) {
-    case FdMethod::Dense: return "dense";
-    case FdMethod::Sparse: return "sparse";
-    case FdMethod::ON: return "on";
-  }
+  for (const auto& info : fd_methods())
+    if (info.method == m) return info.name;
   return "?";
 }
 
 FdMethod parse_fd_method(std::string_view s) {
-  if (s == "dense") return FdMethod::Dense;
-  if (s == "sparse") return FdMethod::Sparse;
-  if (s == "on") return FdMethod::ON;
-  throw Error("forward-dynamics method: expected one of dense, sparse, on; got '" + std::string(s) + "'");
+  for (const auto& info : fd_methods())
+    if (info.name == s) return info.method;
+  std::string all;
+  for (const auto& n : fd_method_names()) all += (all.empty() ? "" : ", ") + n;
+  throw Error("forward-dynamics method: expected one of " + all + "; got '" + std::string(s) + "'");
 }
 
 void ltdl_factor(const Model& model, Data& data) {
@@ -168,7 +181,7 @@ void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod 
       data.qdd = tau - data.bias;
       ltdl_solve(model, data, data.qdd);
       return;
-    case FdMethod::ON:
+    case FdMethod::ArticulatedBody:
       aba(model, data, tau);
       return;
   }

@@ -28,19 +28,9 @@ void System::rhs(double t, const double* y, double* ydot) {
 std::string System::component_name(int k) const {
   const bool is_q = k < model.nq;
   const int idx = is_q ? k : k - model.nq;
-  for (int i = 0; i < model.nbodies; ++i) {
-    const int first = is_q ? model.idx_q[i] : model.idx_v[i];
-    const int n = is_q ? model.nq_i[i] : model.nv_i[i];
-    if (idx < first || idx >= first + n) continue;
-    std::string name = model.joint_names[i];
-    if (model.joint_type[i] == JointType::Free) {
-      static const char* qn[] = {"x", "y", "z", "qw", "qx", "qy", "qz"};
-      static const char* vn[] = {"wx", "wy", "wz", "vx", "vy", "vz"};
-      name += std::string(".") + (is_q ? qn[idx - first] : vn[idx - first]);
-    }
-    return "joint '" + name + "' (" + (is_q ? "q" : "qd") + ")";
-  }
-  return "component " + std::to_string(k);
+  const std::vector<std::string> names = is_q ? model.q_names() : model.v_names();
+  if (idx < 0 || idx >= int(names.size())) return "component " + std::to_string(k);
+  return "joint '" + names[idx] + "' (" + (is_q ? "q" : "qd") + ")";
 }
 
 int first_non_finite(const VecX& y) {
@@ -84,7 +74,7 @@ class FixedStep : public Integrator {
     return s;
   }
   std::string quaternion_handling() const override {
-    return sys_.model.has_free_joint() ? "renormalized after each step" : "none";
+    return sys_.model.has_quaternions() ? "renormalized after each step" : "none";
   }
 
  protected:
@@ -177,16 +167,47 @@ class ImplicitMidpoint : public FixedStep {
 
 }  // namespace
 
+const std::vector<IntegratorInfo>& integrators() {
+  using S = const SimulationSettings&;
+  static const std::vector<IntegratorInfo> table = {
+      {"cvode-adams", "SUNDIALS CVODE, Adams–Moulton with fixed-point iterations (non-stiff)", false,
+       [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(false, sys, s, t0, y0); }},
+      {"cvode-bdf", "SUNDIALS CVODE, BDF with Newton and a dense direct solver (stiff)", false,
+       [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(true, sys, s, t0, y0); }},
+      {"euler", "explicit Euler, order 1", true,
+       [](System& sys, S s, double, const VecX&) -> std::unique_ptr<Integrator> { return std::make_unique<Euler>(sys, s.dt); }},
+      {"symplectic-euler", "semi-implicit Euler, order 1, symplectic", true,
+       [](System& sys, S s, double, const VecX&) -> std::unique_ptr<Integrator> {
+         return std::make_unique<SymplecticEuler>(sys, s.dt);
+       }},
+      {"rk4", "classical Runge–Kutta, order 4", true,
+       [](System& sys, S s, double, const VecX&) -> std::unique_ptr<Integrator> { return std::make_unique<RK4>(sys, s.dt); }},
+      {"implicit-midpoint", "implicit midpoint rule by Newton, order 2, symplectic and A-stable", true,
+       [](System& sys, S s, double, const VecX&) -> std::unique_ptr<Integrator> {
+         return std::make_unique<ImplicitMidpoint>(sys, s.dt);
+       }},
+  };
+  return table;
+}
+
+const IntegratorInfo* find_integrator(std::string_view name) {
+  for (const auto& info : integrators())
+    if (info.name == name) return &info;
+  return nullptr;
+}
+
+std::vector<std::string> integrator_names() {
+  std::vector<std::string> names;
+  for (const auto& info : integrators()) names.emplace_back(info.name);
+  return names;
+}
+
 std::unique_ptr<Integrator> make_integrator(const std::string& method, System& system,
                                             const SimulationSettings& settings, double t0, const VecX& y0) {
-  if (method == "cvode-adams") return make_cvode(false, system, settings, t0, y0);
-  if (method == "cvode-bdf") return make_cvode(true, system, settings, t0, y0);
-  if (method == "euler") return std::make_unique<Euler>(system, settings.dt);
-  if (method == "symplectic-euler") return std::make_unique<SymplecticEuler>(system, settings.dt);
-  if (method == "rk4") return std::make_unique<RK4>(system, settings.dt);
-  if (method == "implicit-midpoint") return std::make_unique<ImplicitMidpoint>(system, settings.dt);
-  throw Error("method: expected one of cvode-adams, cvode-bdf, rk4, euler, symplectic-euler, implicit-midpoint; got '" +
-              method + "'");
+  if (const IntegratorInfo* info = find_integrator(method)) return info->make(system, settings, t0, y0);
+  std::string all;
+  for (const auto& n : integrator_names()) all += (all.empty() ? "" : ", ") + n;
+  throw Error("method: expected one of " + all + "; got '" + method + "'");
 }
 
 }  // namespace soadyn

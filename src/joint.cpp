@@ -4,42 +4,50 @@
 
 namespace soadyn {
 
-std::string_view to_string(JointType t) {
-  switch (t) {
-    case JointType::Revolute: return "revolute";
-    case JointType::Prismatic: return "prismatic";
-    case JointType::Free: return "free";
-    case JointType::Fixed: return "fixed";
-  }
-  return "?";
+const std::vector<JointTraits>& joint_traits_table() {
+  static const std::vector<JointTraits> table = {
+      {JointType::Revolute, "revolute", 1, 1, -1, true, false, {""}, {""}},
+      {JointType::Prismatic, "prismatic", 1, 1, -1, true, false, {""}, {""}},
+      {JointType::Ball, "ball", 4, 3, 0, false, false, {"qw", "qx", "qy", "qz"}, {"wx", "wy", "wz"}},
+      {JointType::Planar, "planar", 3, 3, -1, true, false, {"x", "y", "theta"}, {"x", "y", "theta"}},
+      {JointType::Free, "free", 7, 6, 3, false, true, {"x", "y", "z", "qw", "qx", "qy", "qz"},
+       {"wx", "wy", "wz", "vx", "vy", "vz"}},
+      {JointType::Fixed, "fixed", 0, 0, -1, false, false, {}, {}},
+  };
+  return table;
 }
 
-int joint_nq(JointType t) {
-  switch (t) {
-    case JointType::Revolute:
-    case JointType::Prismatic: return 1;
-    case JointType::Free: return 7;
-    case JointType::Fixed: return 0;
-  }
-  return 0;
-}
+const JointTraits& joint_traits(JointType t) { return joint_traits_table()[static_cast<int>(t)]; }
 
-int joint_nv(JointType t) {
-  switch (t) {
-    case JointType::Revolute:
-    case JointType::Prismatic: return 1;
-    case JointType::Free: return 6;
-    case JointType::Fixed: return 0;
-  }
-  return 0;
-}
+std::string_view to_string(JointType t) { return joint_traits(t).name; }
 
 namespace {
-Eigen::Quaterniond free_quat(const double* q) {
-  // stored w, x, y, z; Eigen's constructor takes (w, x, y, z) too
-  return Eigen::Quaterniond(q[3], q[4], q[5], q[6]);
+
+// stored w, x, y, z; Eigen's constructor takes (w, x, y, z) too
+Eigen::Quaterniond quat_at(const double* q) { return Eigen::Quaterniond(q[0], q[1], q[2], q[3]); }
+
+void store(const Eigen::Quaterniond& u, double* q) {
+  q[0] = u.w();
+  q[1] = u.x();
+  q[2] = u.y();
+  q[3] = u.z();
 }
+
+// exp(h ω) as a unit quaternion
+Eigen::Quaterniond rotation_by(const Vec3& w, double h) {
+  const double wn = w.norm();
+  return wn > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(h * wn, w / wn)) : Eigen::Quaterniond::Identity();
+}
+
 }  // namespace
+
+void plane_basis(const Vec3& n, Vec3& e1, Vec3& e2) {
+  Eigen::Index k = 0;
+  n.cwiseAbs().minCoeff(&k);  // the coordinate axis least aligned with n
+  e1 = Vec3::Unit(k) - n * n(k);
+  e1.normalize();
+  e2 = n.cross(e1);
+}
 
 void joint_motion(JointType t, const Vec3& axis, const double* q, Mat3& R, Vec3& p) {
   switch (t) {
@@ -51,8 +59,19 @@ void joint_motion(JointType t, const Vec3& axis, const double* q, Mat3& R, Vec3&
       R.setIdentity();
       p = q[0] * axis;
       return;
+    case JointType::Ball:
+      R = quat_at(q).normalized().toRotationMatrix();
+      p.setZero();
+      return;
+    case JointType::Planar: {
+      Vec3 e1, e2;
+      plane_basis(axis, e1, e2);
+      R = Eigen::AngleAxisd(q[2], axis).toRotationMatrix();
+      p = q[0] * e1 + q[1] * e2;
+      return;
+    }
     case JointType::Free:
-      R = free_quat(q).normalized().toRotationMatrix();
+      R = quat_at(q + 3).normalized().toRotationMatrix();
       p = Vec3(q[0], q[1], q[2]);
       return;
     case JointType::Fixed:
@@ -62,20 +81,27 @@ void joint_motion(JointType t, const Vec3& axis, const double* q, Mat3& R, Vec3&
   }
 }
 
-void joint_subspace(JointType t, const Vec3& axis, const Mat3& Rj, Eigen::Ref<Mat6X> G) {
+void joint_subspace(JointType t, const Vec3& axis, const Mat3& Rj, const Mat3& Rb, Eigen::Ref<Mat6X> G) {
   G.setZero();
   switch (t) {
     case JointType::Revolute: G.col(0).head<3>() = Rj * axis; return;   // G_i = [g_i; 0]
     case JointType::Prismatic: G.col(0).tail<3>() = Rj * axis; return;  // G_i = [0; g_i]
-    case JointType::Free: G.setIdentity(); return;                      // G_i = e
+    case JointType::Ball: G.topRows<3>() = Rb; return;                  // G_i = [C_i; 0]
+    case JointType::Planar: {                                           // G_i = [0 0 n; e1 e2 0]
+      Vec3 e1, e2;
+      plane_basis(axis, e1, e2);
+      G.col(0).tail<3>() = Rj * e1;
+      G.col(1).tail<3>() = Rj * e2;
+      G.col(2).head<3>() = Rj * axis;
+      return;
+    }
+    case JointType::Free: G.setIdentity(); return;  // G_i = e
     case JointType::Fixed: return;
   }
 }
 
 void joint_qdot(JointType t, const double* q, const double* v, double* qdot) {
   switch (t) {
-    case JointType::Revolute:
-    case JointType::Prismatic: qdot[0] = v[0]; return;
     case JointType::Free: {
       // ṗ = η̇;  quaternion: ½ [0; ω] ⊗ quat  (ω inertial)
       const double w = q[3], x = q[4], y = q[5], z = q[6];
@@ -89,19 +115,28 @@ void joint_qdot(JointType t, const double* q, const double* v, double* qdot) {
       qdot[6] = 0.5 * (ox * y - oy * x + oz * w);
       return;
     }
-    case JointType::Fixed: return;
+    case JointType::Ball: {
+      // quaṫ = ½ quat ⊗ [0; ω]  (ω in the child's frame)
+      const double w = q[0], x = q[1], y = q[2], z = q[3];
+      const double a = v[0], b = v[1], c = v[2];
+      qdot[0] = 0.5 * (-x * a - y * b - z * c);
+      qdot[1] = 0.5 * (w * a + y * c - z * b);
+      qdot[2] = 0.5 * (w * b + z * a - x * c);
+      qdot[3] = 0.5 * (w * c + x * b - y * a);
+      return;
+    }
+    default:
+      for (int k = 0; k < joint_nv(t); ++k) qdot[k] = v[k];
+      return;
   }
 }
 
 void joint_velocity(JointType t, const double* q, const double* qdot, double* v) {
   switch (t) {
-    case JointType::Revolute:
-    case JointType::Prismatic: v[0] = qdot[0]; return;
     case JointType::Free: {
       // [0; ω] = 2 quaṫ ⊗ quat* / |quat|²
-      const Eigen::Quaterniond quat = free_quat(q);
-      const Eigen::Quaterniond rate(qdot[3], qdot[4], qdot[5], qdot[6]);
-      const Eigen::Quaterniond w = rate * quat.conjugate();
+      const Eigen::Quaterniond quat = quat_at(q + 3);
+      const Eigen::Quaterniond w = quat_at(qdot + 3) * quat.conjugate();
       const double n2 = quat.squaredNorm();
       v[0] = 2.0 * w.x() / n2;
       v[1] = 2.0 * w.y() / n2;
@@ -109,34 +144,44 @@ void joint_velocity(JointType t, const double* q, const double* qdot, double* v)
       for (int k = 0; k < 3; ++k) v[3 + k] = qdot[k];
       return;
     }
-    case JointType::Fixed: return;
+    case JointType::Ball: {
+      // [0; ω] = 2 quat* ⊗ quaṫ / |quat|²
+      const Eigen::Quaterniond quat = quat_at(q);
+      const Eigen::Quaterniond w = quat.conjugate() * quat_at(qdot);
+      const double n2 = quat.squaredNorm();
+      v[0] = 2.0 * w.x() / n2;
+      v[1] = 2.0 * w.y() / n2;
+      v[2] = 2.0 * w.z() / n2;
+      return;
+    }
+    default:
+      for (int k = 0; k < joint_nv(t); ++k) v[k] = qdot[k];
+      return;
   }
 }
 
 void joint_integrate(JointType t, const double* q, const double* v, double h, double* q_out) {
   switch (t) {
-    case JointType::Revolute:
-    case JointType::Prismatic: q_out[0] = q[0] + h * v[0]; return;
     case JointType::Free: {
-      const Vec3 w(v[0], v[1], v[2]);
-      const double wn = w.norm();
-      const Eigen::Quaterniond dq = wn > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(h * wn, w / wn))
-                                           : Eigen::Quaterniond::Identity();
-      const Eigen::Quaterniond qn = (dq * free_quat(q)).normalized();
+      // position + h η̇; attitude turned by exp(h ω) about inertial axes: quat⁺ = exp(h ω) ⊗ quat
       for (int k = 0; k < 3; ++k) q_out[k] = q[k] + h * v[3 + k];
-      q_out[3] = qn.w();
-      q_out[4] = qn.x();
-      q_out[5] = qn.y();
-      q_out[6] = qn.z();
+      store((rotation_by(Vec3(v[0], v[1], v[2]), h) * quat_at(q + 3)).normalized(), q_out + 3);
       return;
     }
-    case JointType::Fixed: return;
+    case JointType::Ball:
+      // about the child's axes: quat⁺ = quat ⊗ exp(h ω)
+      store((quat_at(q) * rotation_by(Vec3(v[0], v[1], v[2]), h)).normalized(), q_out);
+      return;
+    default:
+      for (int k = 0; k < joint_nq(t); ++k) q_out[k] = q[k] + h * v[k];
+      return;
   }
 }
 
 void joint_neutral(JointType t, double* q) {
-  for (int k = 0; k < joint_nq(t); ++k) q[k] = 0.0;
-  if (t == JointType::Free) q[3] = 1.0;
+  const JointTraits& tr = joint_traits(t);
+  for (int k = 0; k < tr.nq; ++k) q[k] = 0.0;
+  if (tr.quaternion >= 0) q[tr.quaternion] = 1.0;
 }
 
 }  // namespace soadyn

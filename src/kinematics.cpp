@@ -21,7 +21,7 @@ void update_kinematics(const Model& model, Data& data, const VecX& q) {
     data.d.col(i) = data.eta.col(i) - eta_p;
     data.s.col(i) = data.R[i] * model.com[i];
     data.r.col(i) = data.eta.col(i) + data.s.col(i);
-    joint_subspace(model.joint_type[i], model.axis[i], Rj, data.G.middleCols(model.idx_v[i], model.nv_i[i]));
+    joint_subspace(model.joint_type[i], model.axis[i], Rj, data.R[i], data.G.middleCols(model.idx_v[i], model.nv_i[i]));
     // M_i = [I_i − m s̃ s̃, m s̃; −m s̃, m e] (eq. 12); its upper-left block, the inertia about η_i,
     // is the body-frame one turned: C_i I_η C_iᵀ
     data.M[i].m = model.mass[i];
@@ -36,7 +36,7 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
   for (int i = 0; i < model.nbodies; ++i)
     data.V.col(i).noalias() = data.G.middleCols(model.idx_v[i], model.nv_i[i]) *
                               v.segment(model.idx_v[i], model.nv_i[i]);
-  data.a = data.V;  // keep G_i q̇_i for the velocity-product terms below
+  data.coriolis = data.V;  // keep G_i q̇_i for the velocity-product terms below
   psi_base_to_tip(model.parent, DOperator{data.d}, [&](int i) { return data.V.col(i); });
 
   for (int i = 0; i < model.nbodies; ++i) {
@@ -45,19 +45,20 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
     const Vec3 s = data.s.col(i);
     // (5) v̄_i = S_i v_i: ṙ_i = η̇_i + ω_i × s_i
     data.Vbar.col(i) << w, data.V.col(i).tail<3>() + w.cross(s);
-    // a_i = Ḋ_i v_p + Ġ_i q̇_i with ḋ_i = η̇_i − η̇_p and ġ_i = ω_p × g_i:
-    //   a_i = [ω_p × (G q̇)_ω; ω_p × (ḋ_i + (G q̇)_η)]; gravity enters as a base acceleration −g
+    // 𝔞_i = Ḋ_i v_p + Ġ_i q̇_i with Ḋ_i v_p = [0; ω_p × ḋ_i], ḋ_i = η̇_i − η̇_p, and
+    //   Ġ_i q̇_i = ω_p × (G_i q̇_i) (joint.hpp); gravity enters as a base acceleration −g
     if (p < 0) {
-      data.a.col(i) << Vec3::Zero(), -model.gravity;
+      data.coriolis.col(i) << Vec3::Zero(), -model.gravity;
     } else {
       const Vec3 wp = data.V.col(p).head<3>();
-      const Vec6 Gv = data.a.col(i);
       const Vec3 ddot = data.V.col(i).tail<3>() - data.V.col(p).tail<3>();
-      data.a.col(i) << wp.cross(Gv.head<3>()), wp.cross(ddot + Gv.tail<3>());
+      const Vec6 Gv = data.coriolis.col(i);
+      data.coriolis.col(i) = joint_velocity_product(wp, Gv);
+      data.coriolis.col(i).tail<3>() += wp.cross(ddot);
     }
     // gyroscopic force about η_i: f = m ω × (ω × s), n = ω × I ω + s × f = ω × (I − m s̃ s̃) ω
     const Vec3& h = data.M[i].h;
-    data.b.col(i) << w.cross(data.M[i].I * w), w.cross(w.cross(h));
+    data.gyroscopic.col(i) << w.cross(data.M[i].I * w), w.cross(w.cross(h));
   }
 }
 

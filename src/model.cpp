@@ -57,10 +57,9 @@ void validate(const BodySpec& b, int i) {
   const Mat3 R = b.placement.R;
   if ((R.transpose() * R - Mat3::Identity()).norm() > 1e-9 || R.determinant() < 0)
     refuse(b, i, "placement rotation", "a proper rotation matrix", fmt(R));
-  if (b.joint == JointType::Revolute || b.joint == JointType::Prismatic) {
-    if (!(b.axis.norm() > 1e-12)) refuse(b, i, "axis", "a non-zero vector", fmt(b.axis.transpose()));
-  }
-  if (b.joint == JointType::Free) {
+  const JointTraits& tr = joint_traits(b.joint);
+  if (tr.has_axis && !(b.axis.norm() > 1e-12)) refuse(b, i, "axis", "a non-zero vector", fmt(b.axis.transpose()));
+  if (tr.root_only) {
     if (b.parent != -1) refuse(b, i, "joint", "a free joint only at a root (parent = ground)", "a parent");
     if (!b.placement.R.isIdentity(1e-12) || !b.placement.p.isZero(0.0))
       refuse(b, i, "placement", "none for a free joint (its q is the body's pose in the world)",
@@ -138,7 +137,7 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
     spec_of.push_back(i);
     m.parent.push_back(parent_target.body);
     m.joint_type.push_back(b.joint);
-    m.axis.push_back(b.joint == JointType::Free ? Vec3::Zero() : Vec3(b.axis.normalized()));
+    m.axis.push_back(joint_traits(b.joint).has_axis ? Vec3(b.axis.normalized()) : Vec3::Zero());
     m.placement.push_back(joint_in_target);
     m.mass.push_back(b.mass);
     m.com.push_back(b.com);
@@ -186,6 +185,21 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
   return m;
 }
 
+namespace {
+std::vector<std::string> coordinate_names(const Model& m, bool of_q) {
+  std::vector<std::string> names;
+  for (int i = 0; i < m.nbodies; ++i) {
+    const JointTraits& tr = joint_traits(m.joint_type[i]);
+    for (const auto& suffix : of_q ? tr.q_labels : tr.v_labels)
+      names.push_back(suffix.empty() ? m.joint_names[i] : m.joint_names[i] + "." + std::string(suffix));
+  }
+  return names;
+}
+}  // namespace
+
+std::vector<std::string> Model::q_names() const { return coordinate_names(*this, true); }
+std::vector<std::string> Model::v_names() const { return coordinate_names(*this, false); }
+
 int Model::body_index(const std::string& name) const {
   for (int i = 0; i < nbodies; ++i)
     if (body_names[i] == name) return i;
@@ -204,6 +218,12 @@ bool Model::has_free_joint() const {
   return false;
 }
 
+bool Model::has_quaternions() const {
+  for (auto t : joint_type)
+    if (joint_traits(t).quaternion >= 0) return true;
+  return false;
+}
+
 VecX Model::neutral_configuration() const {
   VecX q(nq);
   for (int i = 0; i < nbodies; ++i) joint_neutral(joint_type[i], q.data() + idx_q[i]);
@@ -212,7 +232,7 @@ VecX Model::neutral_configuration() const {
 
 void Model::normalize(Eigen::Ref<VecX> q) const {
   for (int i = 0; i < nbodies; ++i)
-    if (joint_type[i] == JointType::Free) q.segment<4>(idx_q[i] + 3).normalize();
+    if (const int k = joint_traits(joint_type[i]).quaternion; k >= 0) q.segment<4>(idx_q[i] + k).normalize();
 }
 
 void Model::qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const {

@@ -1,5 +1,7 @@
 #include "soadyn/scenario.hpp"
 
+#include "soadyn/integrators.hpp"
+
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -152,16 +154,96 @@ struct Reader {
   }
 };
 
-const std::vector<std::string> kMethods = {"cvode-adams", "cvode-bdf", "rk4", "euler", "symplectic-euler",
-                                           "implicit-midpoint"};
 
 JointType joint_type(const Reader& rd, const YAML::Node& n, const std::string& field) {
   const std::string t = rd.string(n, field);
-  if (t == "revolute") return JointType::Revolute;
-  if (t == "prismatic") return JointType::Prismatic;
-  if (t == "free") return JointType::Free;
-  if (t == "fixed") return JointType::Fixed;
-  rd.fail(n, field, "unknown joint type '" + t + "'" + did_you_mean(t, {"revolute", "prismatic", "free", "fixed"}));
+  std::vector<std::string> names;
+  for (const JointTraits& tr : joint_traits_table()) {
+    if (tr.name == t) return tr.type;
+    names.emplace_back(tr.name);
+  }
+  rd.fail(n, field, "unknown joint type '" + t + "'" + did_you_mean(t, names));
+}
+
+// Every body's declared parent, to tell a cycle from a parent listed too late.
+std::map<std::string, std::string> declared_parents(const YAML::Node& list) {
+  std::map<std::string, std::string> declared;
+  for (size_t k = 0; k < list.size(); ++k) {
+    const YAML::Node& b = list[k];
+    if (b.IsMap() && b["name"] && b["name"].IsScalar())
+      declared[b["name"].Scalar()] = b["parent"] && b["parent"].IsScalar() ? b["parent"].Scalar() : "world";
+  }
+  return declared;
+}
+
+// body.parent: the index of a body listed before this one, or -1 for the world
+int read_parent(const Reader& rd, const YAML::Node& b, const std::string& name, const std::string& fb,
+                const std::map<std::string, int>& index, const std::map<std::string, std::string>& declared) {
+  const std::string parent = b["parent"] ? rd.string(b["parent"], fb + ".parent") : "world";
+  if (parent == "world") return -1;
+  if (auto it = index.find(parent); it != index.end()) return it->second;
+  if (declared.count(parent)) {
+    // follow the declared parents from `parent`: back to this body means a cycle
+    std::string chain = name + " -> " + parent, at = parent;
+    std::set<std::string> visited{name};
+    bool cycle = false;
+    while (declared.count(at) && !visited.count(at)) {
+      visited.insert(at);
+      at = declared.at(at);
+      chain += " -> " + at;
+      if (at == name) {
+        cycle = true;
+        break;
+      }
+    }
+    if (cycle || parent == name) rd.fail(b["parent"], fb + ".parent", "cycle in the tree: " + chain);
+    rd.fail(b["parent"], fb + ".parent",
+            "parent '" + parent + "' is listed after '" + name + "'; list every parent before its children");
+  }
+  std::vector<std::string> names{"world"};
+  for (auto& [n, i] : index) names.push_back(n);
+  rd.fail(b["parent"], fb + ".parent", "no body named '" + parent + "'" + did_you_mean(parent, names));
+}
+
+// body.joint {type, name, axis} and body.origin {xyz, rpy}
+void read_joint(const Reader& rd, const YAML::Node& b, const std::string& fb, std::set<std::string>& joint_names,
+                BodySpec& s) {
+  const YAML::Node j = rd.require(b, "joint", fb);
+  rd.keys(j, fb + ".joint", {"type", "name", "axis"});
+  s.joint = joint_type(rd, rd.require(j, "type", fb + ".joint"), fb + ".joint.type");
+  const JointTraits& tr = joint_traits(s.joint);
+  s.joint_name = j["name"] ? rd.string(j["name"], fb + ".joint.name") : s.name;
+  if (s.joint != JointType::Fixed && !joint_names.insert(s.joint_name).second)
+    rd.fail(j["name"] ? j["name"] : b["name"], fb + ".joint.name", "duplicate joint name '" + s.joint_name + "'");
+  if (tr.has_axis) {
+    s.axis = rd.vec3(rd.require(j, "axis", fb + ".joint"), fb + ".joint.axis");
+    if (!(s.axis.norm() > 1e-12)) rd.fail(j["axis"], fb + ".joint.axis", "expected a non-zero axis, got [0, 0, 0]");
+  } else if (j["axis"]) {
+    rd.fail(j["axis"], fb + ".joint.axis", "a " + std::string(tr.name) + " joint has no axis");
+  }
+  if (const YAML::Node o = b["origin"]) {
+    if (tr.root_only)
+      rd.fail(o, fb + ".origin", "a free joint has no origin: its q is the body's pose in the world");
+    rd.keys(o, fb + ".origin", {"xyz", "rpy"});
+    if (o["xyz"]) s.placement.p = rd.vec3(o["xyz"], fb + ".origin.xyz");
+    if (o["rpy"]) s.placement.R = Reader::rpy(rd.vec3(o["rpy"], fb + ".origin.rpy"));
+  }
+}
+
+// body.mass, body.com, body.inertia and body.inertia_rpy
+void read_mass_properties(const Reader& rd, const YAML::Node& b, const std::string& fb, BodySpec& s) {
+  const YAML::Node mass = rd.require(b, "mass", fb);
+  s.mass = rd.number(mass, fb + ".mass");
+  const bool massless_weld = s.joint == JointType::Fixed && s.mass == 0.0;
+  if (!(s.mass > 0) && !massless_weld) rd.fail(mass, fb + ".mass", "expected a positive mass, got " + Reader::show(mass));
+  if (b["com"]) s.com = rd.vec3(b["com"], fb + ".com");
+  if (!massless_weld) s.inertia = rd.inertia(rd.require(b, "inertia", fb), fb + ".inertia");
+  else if (b["inertia"]) s.inertia = rd.inertia(b["inertia"], fb + ".inertia");
+  if (b["inertia_rpy"]) {
+    // the inertia was given in axes turned by rpy from the body frame: I_body = R I Rᵀ
+    const Mat3 R = Reader::rpy(rd.vec3(b["inertia_rpy"], fb + ".inertia_rpy"));
+    s.inertia = R * s.inertia * R.transpose();
+  }
 }
 
 struct BodyNodes {
@@ -173,13 +255,7 @@ BodyNodes read_bodies(const Reader& rd, const YAML::Node& list) {
   if (!list.IsSequence() || list.size() == 0) rd.fail(list, "bodies", "expected a non-empty list of bodies");
   BodyNodes out;
   std::map<std::string, int> index;
-  // every body's declared parent, to tell a cycle from a parent listed too late
-  std::map<std::string, std::string> declared_parent;
-  for (size_t k = 0; k < list.size(); ++k) {
-    const YAML::Node& b = list[k];
-    if (b.IsMap() && b["name"] && b["name"].IsScalar())
-      declared_parent[b["name"].Scalar()] = b["parent"] && b["parent"].IsScalar() ? b["parent"].Scalar() : "world";
-  }
+  const std::map<std::string, std::string> declared = declared_parents(list);
   std::set<std::string> joint_names;
   for (size_t k = 0; k < list.size(); ++k) {
     const YAML::Node& b = list[k];
@@ -189,69 +265,9 @@ BodyNodes read_bodies(const Reader& rd, const YAML::Node& list) {
     s.name = rd.string(rd.require(b, "name", f), f + ".name");
     const std::string fb = "body '" + s.name + "'";
     if (index.count(s.name) || s.name == "world") rd.fail(b["name"], fb + ".name", "duplicate body name '" + s.name + "'");
-
-    const std::string parent = b["parent"] ? rd.string(b["parent"], fb + ".parent") : "world";
-    if (parent == "world") {
-      s.parent = -1;
-    } else if (auto it = index.find(parent); it != index.end()) {
-      s.parent = it->second;
-    } else if (declared_parent.count(parent)) {
-      // follow the declared parents from `parent`: back to this body means a cycle
-      std::string chain = s.name + " -> " + parent, at = parent;
-      std::set<std::string> visited{s.name};
-      bool cycle = false;
-      while (declared_parent.count(at) && !visited.count(at)) {
-        visited.insert(at);
-        at = declared_parent[at];
-        chain += " -> " + at;
-        if (at == s.name) {
-          cycle = true;
-          break;
-        }
-      }
-      if (cycle || parent == s.name) rd.fail(b["parent"], fb + ".parent", "cycle in the tree: " + chain);
-      rd.fail(b["parent"], fb + ".parent",
-              "parent '" + parent + "' is listed after '" + s.name + "'; list every parent before its children");
-    } else {
-      std::vector<std::string> names{"world"};
-      for (auto& [n, i] : index) names.push_back(n);
-      rd.fail(b["parent"], fb + ".parent", "no body named '" + parent + "'" + did_you_mean(parent, names));
-    }
-
-    const YAML::Node j = rd.require(b, "joint", fb);
-    rd.keys(j, fb + ".joint", {"type", "name", "axis"});
-    s.joint = joint_type(rd, rd.require(j, "type", fb + ".joint"), fb + ".joint.type");
-    s.joint_name = j["name"] ? rd.string(j["name"], fb + ".joint.name") : s.name;
-    if (s.joint != JointType::Fixed && !joint_names.insert(s.joint_name).second)
-      rd.fail(j["name"] ? j["name"] : b["name"], fb + ".joint.name", "duplicate joint name '" + s.joint_name + "'");
-    if (s.joint == JointType::Revolute || s.joint == JointType::Prismatic) {
-      s.axis = rd.vec3(rd.require(j, "axis", fb + ".joint"), fb + ".joint.axis");
-      if (!(s.axis.norm() > 1e-12)) rd.fail(j["axis"], fb + ".joint.axis", "expected a non-zero axis, got [0, 0, 0]");
-    } else if (j["axis"]) {
-      rd.fail(j["axis"], fb + ".joint.axis", "a " + std::string(to_string(s.joint)) + " joint has no axis");
-    }
-
-    if (const YAML::Node o = b["origin"]) {
-      if (s.joint == JointType::Free)
-        rd.fail(o, fb + ".origin", "a free joint has no origin: its q is the body's pose in the world");
-      rd.keys(o, fb + ".origin", {"xyz", "rpy"});
-      if (o["xyz"]) s.placement.p = rd.vec3(o["xyz"], fb + ".origin.xyz");
-      if (o["rpy"]) s.placement.R = Reader::rpy(rd.vec3(o["rpy"], fb + ".origin.rpy"));
-    }
-    const YAML::Node mass = rd.require(b, "mass", fb);
-    s.mass = rd.number(mass, fb + ".mass");
-    const bool massless_weld = s.joint == JointType::Fixed && s.mass == 0.0;
-    if (!(s.mass > 0) && !massless_weld)
-      rd.fail(mass, fb + ".mass", "expected a positive mass, got " + Reader::show(mass));
-    if (b["com"]) s.com = rd.vec3(b["com"], fb + ".com");
-    if (!massless_weld) s.inertia = rd.inertia(rd.require(b, "inertia", fb), fb + ".inertia");
-    else if (b["inertia"]) s.inertia = rd.inertia(b["inertia"], fb + ".inertia");
-    if (b["inertia_rpy"]) {
-      // the inertia was given in axes turned by rpy from the body frame: I_body = R I Rᵀ
-      const Mat3 R = Reader::rpy(rd.vec3(b["inertia_rpy"], fb + ".inertia_rpy"));
-      s.inertia = R * s.inertia * R.transpose();
-    }
-
+    s.parent = read_parent(rd, b, s.name, fb, index, declared);
+    read_joint(rd, b, fb, joint_names, s);
+    read_mass_properties(rd, b, fb, s);
     index[s.name] = int(k);
     out.specs.push_back(s);
     out.nodes.push_back(b);
@@ -290,12 +306,12 @@ void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q
       const int size = is_q ? m.nq_i[i] : m.nv_i[i];
       VecX x = size == 1 && it->second.IsScalar() ? VecX::Constant(1, rd.number(it->second, fj))
                                                    : rd.numbers(it->second, fj, size);
-      if (is_q && m.joint_type[i] == JointType::Free) {
-        const double norm = x.segment<4>(3).norm();
+      if (const int k = joint_traits(m.joint_type[i]).quaternion; is_q && k >= 0) {
+        const double norm = x.segment<4>(k).norm();
         if (std::abs(norm - 1.0) > 1e-6)
-          rd.fail(it->second, fj, "expected a unit quaternion [w, x, y, z] after the position, got norm " +
-                                      std::to_string(norm));
-        x.segment<4>(3) /= norm;
+          rd.fail(it->second, fj, "expected a unit quaternion [w, x, y, z]" + std::string(k ? " after the position" : "") +
+                                      ", got norm " + std::to_string(norm));
+        x.segment<4>(k) /= norm;
       }
       (is_q ? q0.segment(m.idx_q[i], size) : v0.segment(m.idx_v[i], size)) = x;
     }
@@ -317,14 +333,16 @@ void read_simulation(const Reader& rd, const YAML::Node& n, SimulationSettings& 
   }
   if (n["method"]) {
     s.method = rd.string(n["method"], "simulation.method");
-    if (std::find(kMethods.begin(), kMethods.end(), s.method) == kMethods.end())
-      rd.fail(n["method"], "simulation.method", "unknown method '" + s.method + "'" + did_you_mean(s.method, kMethods));
+    if (!find_integrator(s.method))
+      rd.fail(n["method"], "simulation.method",
+              "unknown method '" + s.method + "'" + did_you_mean(s.method, integrator_names()));
   }
   if (n["dynamics"]) {
     s.dynamics = rd.string(n["dynamics"], "simulation.dynamics");
-    if (s.dynamics != "dense" && s.dynamics != "sparse" && s.dynamics != "on")
+    const std::vector<std::string> routes = fd_method_names();
+    if (std::find(routes.begin(), routes.end(), s.dynamics) == routes.end())
       rd.fail(n["dynamics"], "simulation.dynamics",
-              "unknown route '" + s.dynamics + "'" + did_you_mean(s.dynamics, {"dense", "sparse", "on"}));
+              "unknown route '" + s.dynamics + "'" + did_you_mean(s.dynamics, routes));
   }
 }
 
@@ -379,20 +397,6 @@ bool is_urdf_path(const std::string& path) {
 }
 
 }  // namespace
-
-void Inputs::evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const {
-  tau.setZero();
-  for (const auto& u : torques)
-    tau(u.dof) += u.constant + u.amplitude * std::sin(2 * std::numbers::pi * u.frequency * t + u.phase);
-  for (const auto& s : springs) tau(s.dof) -= s.stiffness * (q(s.coord) - s.rest);
-  for (const auto& d : dampers) tau(d.dof) -= d.damping * v(d.dof);
-}
-
-double Inputs::spring_energy(const VecX& q) const {
-  double V = 0.0;
-  for (const auto& s : springs) V += 0.5 * s.stiffness * (q(s.coord) - s.rest) * (q(s.coord) - s.rest);
-  return V;
-}
 
 std::string read_text_file(const std::string& path) {
   std::error_code ec;

@@ -28,7 +28,10 @@ Sample observe(System& sys, double t, const VecX& q, const VecX& v) {
   return s;
 }
 
-bool is_fixed_step(const std::string& method) { return method.rfind("cvode", 0) != 0; }
+bool is_fixed_step(const std::string& method) {
+  const IntegratorInfo* info = find_integrator(method);
+  return info && info->fixed_step;
+}
 
 void check_run(const Scenario& sc, const SimulationSettings& settings) {
   if (!(settings.t_end > 0) || !(settings.output_dt > 0) || !(settings.dt > 0) || !(settings.rtol > 0) ||

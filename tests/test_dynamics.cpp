@@ -40,7 +40,7 @@ TEST_P(Routes, ThreeForwardRoutesAgreeAndInvertInverseDynamics) {
     const MatX Mass = data.Mass;
     const VecX bias = data.bias;
     std::vector<VecX> qdd;
-    for (FdMethod m : {FdMethod::Dense, FdMethod::Sparse, FdMethod::ON}) {
+    for (FdMethod m : {FdMethod::Dense, FdMethod::Sparse, FdMethod::ArticulatedBody}) {
       forward_dynamics(model, data, tau, m);
       qdd.push_back(data.qdd);
       // the residual ‖𝓜 q̈ + bias − τ‖ measures agreement even where 𝓜 is ill-conditioned
@@ -156,7 +156,7 @@ double energy(const Model& model, const State& s) {
 VecX accel(const Model& model, Data& d, const State& s, const VecX& tau) {
   update_kinematics(model, d, s.q);
   update_velocities(model, d, s.v);
-  forward_dynamics(model, d, tau, FdMethod::ON);
+  forward_dynamics(model, d, tau, FdMethod::ArticulatedBody);
   return d.qdd;
 }
 
@@ -242,7 +242,7 @@ TEST(ClosedForm, PendulumOnCart) {
     Data d(model);
     update_kinematics(model, d, q);
     update_velocities(model, d, v);
-    forward_dynamics(model, d, tau, FdMethod::ON);
+    forward_dynamics(model, d, tau, FdMethod::ArticulatedBody);
     EXPECT_TRUE(near_rel(d.qdd, M.llt().solve(tau - bias), 1e-12));
   }
 }

@@ -197,7 +197,7 @@ TEST(Data, WrongSizesAreRefused) {
   EXPECT_THROW(update_velocities(m, d, VecX::Zero(2)), Error);
   update_velocities(m, d, VecX::Zero(m.nv));
   EXPECT_THROW(inverse_dynamics(m, d, VecX::Zero(3)), Error);
-  EXPECT_THROW(forward_dynamics(m, d, VecX::Zero(9), FdMethod::ON), Error);
+  EXPECT_THROW(forward_dynamics(m, d, VecX::Zero(9), FdMethod::ArticulatedBody), Error);
   EXPECT_THAT([&] {
     try { update_kinematics(m, d_other, VecX::Zero(m.nq)); } catch (const Error& e) { return std::string(e.what()); }
     return std::string();

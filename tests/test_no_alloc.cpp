@@ -42,7 +42,7 @@ TEST(NoAllocation, AlgorithmsAllocateNothingPerCall) {
     mass_matrix(model, data);
     bias_forces(model, data);
     inverse_dynamics(model, data, qdd);
-    for (FdMethod m : {FdMethod::Dense, FdMethod::Sparse, FdMethod::ON}) forward_dynamics(model, data, tau, m);
+    for (FdMethod m : {FdMethod::Dense, FdMethod::Sparse, FdMethod::ArticulatedBody}) forward_dynamics(model, data, tau, m);
     const double e = kinetic_energy(model, data) + potential_energy(model, data);
     const Momentum h = momentum(model, data);
     Eigen::internal::set_is_malloc_allowed(true);

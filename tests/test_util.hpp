@@ -49,6 +49,8 @@ struct TreeOptions {
   int n = 10;
   double branching = 0.5;        // 0: a chain; 1: parents drawn uniformly from all earlier bodies
   double prismatic = 0.0;        // fraction of prismatic joints
+  double ball = 0.0;             // fraction of ball joints
+  double planar = 0.0;           // fraction of planar joints
   bool free_root = false;
   int fixed = 0;                 // extra bodies attached by fixed joints
   Vec3 gravity = Vec3(0, 0, -9.81);
@@ -68,7 +70,13 @@ inline std::vector<BodySpec> random_specs(Rng& rng, const TreeOptions& o) {
     const bool is_fixed = i > 0 && std::find(fixed_slots.begin(), fixed_slots.end(), i) != fixed_slots.end();
     if (i == 0 && o.free_root) b.joint = JointType::Free;
     else if (is_fixed) b.joint = JointType::Fixed;
-    else b.joint = rng.uniform(0, 1) < o.prismatic ? JointType::Prismatic : JointType::Revolute;
+    else {
+      const double u = rng.uniform(0, 1);
+      b.joint = u < o.prismatic                        ? JointType::Prismatic
+                : u < o.prismatic + o.ball             ? JointType::Ball
+                : u < o.prismatic + o.ball + o.planar ? JointType::Planar
+                                                       : JointType::Revolute;
+    }
     b.axis = rng.vec3().normalized() * rng.uniform(0.5, 2.0);
     if (b.joint != JointType::Free) b.placement = {rng.rotation(), rng.vec3(-0.6, 0.6)};
     b.mass = rng.uniform(0.2, 3.0);

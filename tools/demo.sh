@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # The main job: install what is missing, build in Release, then for each of the note's four
-# examples print its mass matrix at the initial state, simulate it with CVODE (writing
+# examples and the two ball-joint scenes print its mass matrix at the initial state, simulate it with CVODE (writing
 # out/<scenario>.h5), print a table of the runs and plot them (out/<scenario>.png).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/setup.sh
-scenarios=(pendulum_on_cart double_pendulum satellite_two_arrays three_link_arm)
+scenarios=(pendulum_on_cart double_pendulum satellite_two_arrays three_link_arm spherical_pendulum heavy_top)
 
 for s in "${scenarios[@]}"; do
   echo

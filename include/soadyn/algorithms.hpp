@@ -7,7 +7,9 @@
 #include "soadyn/data.hpp"
 #include "soadyn/model.hpp"
 
+#include <string>
 #include <string_view>
+#include <vector>
 
 namespace soadyn {
 
@@ -20,7 +22,7 @@ void mass_matrix_literal(const Model& model, const Data& data, MatX& M_out);
 // fills data.Mass (both triangles).
 void mass_matrix(const Model& model, Data& data);
 
-// bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D a + b): Coriolis, centrifugal, gyroscopic and gravity.
+// bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D 𝔞 + 𝔟) with 𝔞 = Data::coriolis, 𝔟 = Data::gyroscopic: Coriolis, centrifugal, gyroscopic and gravity.
 // Needs [kin] and [vel]; fills data.bias.
 void bias_forces(const Model& model, Data& data);
 
@@ -28,12 +30,23 @@ void bias_forces(const Model& model, Data& data);
 void inverse_dynamics(const Model& model, Data& data, const VecX& qdd);
 
 enum class FdMethod {
-  Dense,   // composite 𝓜, then Cholesky
-  Sparse,  // composite 𝓜 factored in place as LᵀDL along the tree (no fill-in off ancestor chains)
-  ON       // articulated-body recursion (the factored inverse mass matrix); 𝓜 never formed
+  Dense,           // "dense": composite 𝓜, then Cholesky
+  Sparse,          // "sparse": composite 𝓜 factored in place as LᵀDL along the tree (no fill-in off
+                   //   ancestor chains)
+  ArticulatedBody  // "on": the O(N) articulated-body recursion (the factored inverse mass matrix);
+                   //   𝓜 never formed
 };
+
+// The one registry of forward-dynamics routes: the word users write for each, and a line about it.
+struct FdMethodInfo {
+  FdMethod method;
+  std::string_view name;
+  std::string_view description;
+};
+const std::vector<FdMethodInfo>& fd_methods();
+std::vector<std::string> fd_method_names();  // {"dense", "sparse", "on"}
 std::string_view to_string(FdMethod m);
-FdMethod parse_fd_method(std::string_view s);  // "dense", "sparse", "on"; throws soadyn::Error
+FdMethod parse_fd_method(std::string_view s);  // a name of fd_methods(); throws soadyn::Error
 
 // q̈ = 𝓜⁻¹ (τ − bias).  Needs [kin] and [vel]; fills data.qdd (Dense and Sparse also fill
 // data.Mass and data.bias).

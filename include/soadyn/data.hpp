@@ -33,8 +33,8 @@ struct Data {
   // [vel] velocities and velocity-product terms
   Mat6X V;                             // v_i = [ω_i; η̇_i]      (eq. 4: v = Ψ_D G q̇)
   Mat6X Vbar;                          // v̄_i = [ω_i; ṙ_i]      (eq. 5: v̄ = S v)
-  Mat6X a;                             // Ḋ_i v_p + Ġ_i q̇_i, and [0; −g] at roots
-  Mat6X b;                             // gyroscopic force pair about η_i
+  Mat6X coriolis;                      // 𝔞_i = Ḋ_i v_p + Ġ_i q̇_i, and [0; −g] at roots
+  Mat6X gyroscopic;                    // 𝔟_i, the gyroscopic force pair about η_i
 
   // [crb] system mass matrix
   std::vector<SpatialInertia> K;       // composite inertia of the subtree of i, about η_i

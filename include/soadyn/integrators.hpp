@@ -14,10 +14,13 @@
 #pragma once
 
 #include "soadyn/algorithms.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/inputs.hpp"
+#include "soadyn/settings.hpp"
 
 #include <memory>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace soadyn {
 
@@ -64,6 +67,20 @@ class Integrator {
   virtual std::string quaternion_handling() const = 0;
 };
 
+// The one registry of integration methods: the name users write, a line about it, whether it takes
+// steps of exactly `dt` (else CVODE's adaptive steps under rtol/atol), and how to make one.
+struct IntegratorInfo {
+  std::string_view name;
+  std::string_view description;
+  bool fixed_step;
+  std::unique_ptr<Integrator> (*make)(System& system, const SimulationSettings& settings, double t0,
+                                      const VecX& y0);
+};
+const std::vector<IntegratorInfo>& integrators();
+const IntegratorInfo* find_integrator(std::string_view name);  // nullptr for an unknown name
+std::vector<std::string> integrator_names();
+
+// Makes the named integrator; throws soadyn::Error naming the known methods for an unknown name.
 std::unique_ptr<Integrator> make_integrator(const std::string& method, System& system,
                                             const SimulationSettings& settings, double t0, const VecX& y0);
 

@@ -63,11 +63,17 @@ class Model {
   Vec3 world_first_moment = Vec3::Zero();  // kept for the potential energy only
   Vec3 gravity = Vec3::Zero();             // uniform gravity, m/s²
 
+  // one name per column of q and of v: the joint's name for a 1-DOF joint, else
+  // "joint.suffix" with the suffixes of joint_traits ("bus.x", …, "bus.qw", …; "bus.wx", …)
+  std::vector<std::string> q_names() const;
+  std::vector<std::string> v_names() const;
+
   int body_index(const std::string& name) const;   // -1 when absent
   int joint_index(const std::string& name) const;  // body index of the named joint, -1 when absent
   bool has_free_joint() const;
+  bool has_quaternions() const;              // a free or ball joint
   VecX neutral_configuration() const;
-  void normalize(Eigen::Ref<VecX> q) const;  // unit quaternions of free joints
+  void normalize(Eigen::Ref<VecX> q) const;  // unit quaternions of free and ball joints
   // q̇ from (q, v), and q ⊕ h v (see joint.hpp)
   void qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const;
   VecX velocity(const VecX& q, const VecX& qd) const;  // the reverse map: v from q̇

@@ -14,6 +14,9 @@ namespace soadyn::cli {
 // "--q -0.5,1" → "--q=-0.5,1" for the list options, so a leading minus is a value, not an option.
 std::vector<std::string> join_negative_values(int argc, char** argv);
 
+// {"a", "b"}, " | " → "a | b"
+std::string join(const std::vector<std::string>& items, const std::string& separator);
+
 // "a,b,c" → numbers; throws soadyn::Error naming the option and the bad item.
 std::vector<double> parse_list(const std::string& option, const std::string& text);
 

@@ -47,6 +47,12 @@ std::vector<double> parse_list(const std::string& option, const std::string& tex
   return out;
 }
 
+std::string join(const std::vector<std::string>& items, const std::string& separator) {
+  std::string out;
+  for (const auto& s : items) out += (out.empty() ? "" : separator) + s;
+  return out;
+}
+
 void add_inspect(CLI::App& app, InspectOptions& o) {
   CLI::App* c = app.add_subcommand(
       "inspect",
@@ -59,8 +65,8 @@ void add_inspect(CLI::App& app, InspectOptions& o) {
   c->add_option("--gravity", o.gravity, "gravity gx,gy,gz in m/s^2 (default: the scenario's; 0,0,-9.81 for a URDF)");
   c->add_flag("--free-root", o.free_root, "give a URDF's root link a free joint instead of welding it to the world");
   c->add_flag("--json", o.json, "print one JSON object on stdout");
-  c->add_option("--method", o.method, "forward-dynamics route for qdd: dense | sparse | on (default on)")
-      ->check(CLI::IsMember({"dense", "sparse", "on"}));
+  c->add_option("--method", o.method, "forward-dynamics route for qdd: " + join(fd_method_names(), " | ") + " (default on)")
+      ->check(CLI::IsMember(fd_method_names()));
 }
 
 namespace {
@@ -104,63 +110,62 @@ void print_vector(const std::string& title, const std::vector<std::string>& labe
   for (Eigen::Index k = 0; k < v.size(); ++k) std::printf("  %-24s % .10e\n", labels[k].c_str(), v(k));
 }
 
-}  // namespace
 
-int run_inspect(const InspectOptions& o) {
-  std::optional<Vec3> gravity;
-  if (!o.gravity.empty()) gravity = vector_option("--gravity", o.gravity, 3, Vec3::Zero());
-  const Scenario sc = load_scenario(o.model, o.free_root, gravity);
+// Everything inspect reports, computed once and printed as JSON or as tables.
+struct Inspection {
+  VecX q, v, tau, bias, qdd;
+  MatX M;
+  double T = 0.0, V = 0.0;
+  Momentum h;
+};
+
+// q (unit quaternions checked, then normalized), v and τ from the options, then 𝓜, bias and q̈.
+Inspection inspect(const Scenario& sc, const InspectOptions& o) {
   const Model& m = sc.model;
-  VecX q = vector_option("--q", o.q, m.nq, sc.q0);
+  Inspection r;
+  r.q = vector_option("--q", o.q, m.nq, sc.q0);
   for (int i = 0; i < m.nbodies; ++i)
-    if (m.joint_type[i] == JointType::Free) {
-      const double norm = q.segment<4>(m.idx_q[i] + 3).norm();
+    if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
+      const double norm = r.q.segment<4>(m.idx_q[i] + k).norm();
       if (std::abs(norm - 1.0) > 1e-6)
         throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + num(norm));
     }
-  m.normalize(q);
-  const VecX v = vector_option("--qd", o.qd, m.nv, sc.v0);
-  const VecX tau = vector_option("--tau", o.tau, m.nv, VecX::Zero(m.nv));
+  m.normalize(r.q);
+  r.v = vector_option("--qd", o.qd, m.nv, sc.v0);
+  r.tau = vector_option("--tau", o.tau, m.nv, VecX::Zero(m.nv));
 
   Data d(m);
-  update_kinematics(m, d, q);
+  update_kinematics(m, d, r.q);
   mass_matrix(m, d);
-  const MatX M = d.Mass;
-  update_velocities(m, d, v);
+  r.M = d.Mass;
+  update_velocities(m, d, r.v);
   bias_forces(m, d);
-  const VecX bias = d.bias;
-  forward_dynamics(m, d, tau, parse_fd_method(o.method));
-  const double T = kinetic_energy(m, d), V = potential_energy(m, d);
-  const Momentum h = momentum(m, d);
+  r.bias = d.bias;
+  forward_dynamics(m, d, r.tau, parse_fd_method(o.method));
+  r.qdd = d.qdd;
+  r.T = kinetic_energy(m, d);
+  r.V = potential_energy(m, d);
+  r.h = momentum(m, d);
+  return r;
+}
 
-  // labels of the q and v entries
-  std::vector<std::string> qlab, vlab;
-  for (int i = 0; i < m.nbodies; ++i) {
-    const std::string& j = m.joint_names[i];
-    if (m.joint_type[i] == JointType::Free) {
-      for (const char* c : {"x", "y", "z", "qw", "qx", "qy", "qz"}) qlab.push_back(j + "." + c);
-      for (const char* c : {"wx", "wy", "wz", "vx", "vy", "vz"}) vlab.push_back(j + "." + c);
-    } else {
-      qlab.push_back(j);
-      vlab.push_back(j);
-    }
-  }
+void print_json(const Model& m, const Inspection& r, const std::string& method) {
+  std::string out = "{\"joints\": [";
+  for (int i = 0; i < m.nbodies; ++i) out += (i ? ", " : "") + json_string(m.joint_names[i]);
+  out += "], \"nq\": " + std::to_string(m.nq) + ", \"nv\": " + std::to_string(m.nv);
+  out += ", \"q\": " + json_array(r.q) + ", \"qd\": " + json_array(r.v) + ", \"gravity\": " + json_array(m.gravity);
+  out += ", \"M\": [";
+  for (int k = 0; k < m.nv; ++k) out += (k ? ", " : "") + json_array(VecX(r.M.row(k).transpose()));
+  out += "], \"bias\": " + json_array(r.bias) + ", \"tau\": " + json_array(r.tau) + ", \"qdd\": " + json_array(r.qdd);
+  out += ", \"kinetic_energy\": " + num(r.T) + ", \"potential_energy\": " + num(r.V);
+  out += ", \"momentum\": {\"linear\": " + json_array(r.h.linear) + ", \"angular\": " + json_array(r.h.angular) + "}";
+  out += ", \"method\": " + json_string(method) + "}";
+  std::cout << out << std::endl;
+}
 
-  if (o.json) {
-    std::string out = "{\"joints\": [";
-    for (int i = 0; i < m.nbodies; ++i) out += (i ? ", " : "") + json_string(m.joint_names[i]);
-    out += "], \"nq\": " + std::to_string(m.nq) + ", \"nv\": " + std::to_string(m.nv);
-    out += ", \"q\": " + json_array(q) + ", \"qd\": " + json_array(v) + ", \"gravity\": " + json_array(m.gravity);
-    out += ", \"M\": [";
-    for (int r = 0; r < m.nv; ++r) out += (r ? ", " : "") + json_array(VecX(M.row(r).transpose()));
-    out += "], \"bias\": " + json_array(bias) + ", \"tau\": " + json_array(tau) + ", \"qdd\": " + json_array(d.qdd);
-    out += ", \"kinetic_energy\": " + num(T) + ", \"potential_energy\": " + num(V);
-    out += ", \"momentum\": {\"linear\": " + json_array(h.linear) + ", \"angular\": " + json_array(h.angular) + "}";
-    out += ", \"method\": " + json_string(o.method) + "}";
-    std::cout << out << std::endl;
-    return 0;
-  }
-
+void print_tables(const Scenario& sc, const Inspection& r, const std::string& method) {
+  const Model& m = sc.model;
+  const std::vector<std::string> qlab = m.q_names(), vlab = m.v_names();
   std::printf("model      %s (%d bodies, nq = %d, nv = %d)\n", sc.path.c_str(), m.nbodies, m.nq, m.nv);
   std::printf("gravity    [% g, % g, % g] m/s^2\n", m.gravity.x(), m.gravity.y(), m.gravity.z());
   std::printf("%-4s %-20s %-20s %-10s %s\n", "#", "body", "joint", "type", "parent");
@@ -168,21 +173,32 @@ int run_inspect(const InspectOptions& o) {
     std::printf("%-4d %-20s %-20s %-10s %s\n", i, m.body_names[i].c_str(), m.joint_names[i].c_str(),
                 std::string(to_string(m.joint_type[i])).c_str(),
                 m.parent[i] < 0 ? "world" : m.body_names[m.parent[i]].c_str());
-  print_vector("q", qlab, q);
-  print_vector("qd", vlab, v);
+  print_vector("q", qlab, r.q);
+  print_vector("qd", vlab, r.v);
   std::printf("mass matrix M(q) (%d x %d)\n", m.nv, m.nv);
-  for (int r = 0; r < m.nv; ++r) {
-    std::printf("  %-24s", vlab[r].c_str());
-    for (int c = 0; c < m.nv; ++c) std::printf(" % .6e", M(r, c));
+  for (int k = 0; k < m.nv; ++k) {
+    std::printf("  %-24s", vlab[k].c_str());
+    for (int c = 0; c < m.nv; ++c) std::printf(" % .6e", r.M(k, c));
     std::printf("\n");
   }
-  print_vector("bias(q, qd) (Coriolis, centrifugal, gyroscopic, gravity)", vlab, bias);
-  print_vector("tau", vlab, tau);
-  print_vector("qdd = M^-1 (tau - bias)  [" + o.method + "]", vlab, d.qdd);
-  std::printf("energy     kinetic % .10e   potential % .10e   total % .10e J\n", T, V, T + V);
-  std::printf("momentum   linear  [% .6e, % .6e, % .6e]\n", h.linear.x(), h.linear.y(), h.linear.z());
-  std::printf("           angular [% .6e, % .6e, % .6e] (about the inertial origin)\n", h.angular.x(), h.angular.y(),
-              h.angular.z());
+  print_vector("bias(q, qd) (Coriolis, centrifugal, gyroscopic, gravity)", vlab, r.bias);
+  print_vector("tau", vlab, r.tau);
+  print_vector("qdd = M^-1 (tau - bias)  [" + method + "]", vlab, r.qdd);
+  std::printf("energy     kinetic % .10e   potential % .10e   total % .10e J\n", r.T, r.V, r.T + r.V);
+  std::printf("momentum   linear  [% .6e, % .6e, % .6e]\n", r.h.linear.x(), r.h.linear.y(), r.h.linear.z());
+  std::printf("           angular [% .6e, % .6e, % .6e] (about the inertial origin)\n", r.h.angular.x(),
+              r.h.angular.y(), r.h.angular.z());
+}
+
+}  // namespace
+
+int run_inspect(const InspectOptions& o) {
+  std::optional<Vec3> gravity;
+  if (!o.gravity.empty()) gravity = vector_option("--gravity", o.gravity, 3, Vec3::Zero());
+  const Scenario sc = load_scenario(o.model, o.free_root, gravity);
+  const Inspection r = inspect(sc, o);
+  if (o.json) print_json(sc.model, r, o.method);
+  else print_tables(sc, r, o.method);
   return 0;
 }
 

@@ -1,6 +1,7 @@
 #include "cli.hpp"
 
 #include "soadyn/h5log.hpp"
+#include "soadyn/integrators.hpp"
 #include "soadyn/simulate.hpp"
 
 #include <unistd.h>
@@ -35,8 +36,7 @@ void add_run(CLI::App& app, RunOptions& o) {
       "Exit status: 0 completed, 2 bad input, 3 the run failed (the file keeps what was logged).");
   c->add_option("SCENARIO", o.scenario, "scenario file (.yaml)")->required();
   c->add_option("-o,--output", o.output, "HDF5 output file (default out/<scenario name>.h5)");
-  c->add_option("--method", o.method, "cvode-adams | cvode-bdf | rk4 | euler | symplectic-euler | implicit-midpoint")
-      ->check(CLI::IsMember({"cvode-adams", "cvode-bdf", "rk4", "euler", "symplectic-euler", "implicit-midpoint"}));
+  c->add_option("--method", o.method, join(integrator_names(), " | "))->check(CLI::IsMember(integrator_names()));
   c->add_option("--rtol", o.rtol, "CVODE relative tolerance")->check(kPositive);
   c->add_option("--atol", o.atol, "CVODE absolute tolerance")->check(kPositive);
   c->add_option("--dt", o.dt, "fixed-step methods' step, s")->check(kPositive);

@@ -95,7 +95,7 @@ template <bool B, FdMethod M> void Forward(benchmark::State& st) {
 void Step(benchmark::State& st, const char* method) {
   const Model model = bench::make_tree(int(st.range(0)), false);
   const Inputs none;
-  System sys(model, none, FdMethod::ON);
+  System sys(model, none, FdMethod::ArticulatedBody);
   SimulationSettings s;
   s.dt = 1e-3;
   VecX y(sys.size());
@@ -128,7 +128,7 @@ BENCHMARK(Bias<false>)->Name("chain/bias")->Apply(sizes);
 BENCHMARK(Inverse<false>)->Name("chain/inverse")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::Dense>)->Name("chain/rhs_dense")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::Sparse>)->Name("chain/rhs_sparse")->Apply(sizes);
-BENCHMARK(Forward<false, FdMethod::ON>)->Name("chain/rhs_on")->Apply(sizes);
+BENCHMARK(Forward<false, FdMethod::ArticulatedBody>)->Name("chain/rhs_on")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, euler, "euler")->Name("chain/step_euler")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, symplectic_euler, "symplectic-euler")->Name("chain/step_symplectic_euler")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, rk4, "rk4")->Name("chain/step_rk4")->Apply(sizes);
@@ -139,6 +139,6 @@ BENCHMARK(Bias<true>)->Name("tree/bias")->Apply(tree_sizes);
 BENCHMARK(Inverse<true>)->Name("tree/inverse")->Apply(tree_sizes);
 BENCHMARK(Forward<true, FdMethod::Dense>)->Name("tree/rhs_dense")->Apply(tree_sizes);
 BENCHMARK(Forward<true, FdMethod::Sparse>)->Name("tree/rhs_sparse")->Apply(tree_sizes);
-BENCHMARK(Forward<true, FdMethod::ON>)->Name("tree/rhs_on")->Apply(tree_sizes);
+BENCHMARK(Forward<true, FdMethod::ArticulatedBody>)->Name("tree/rhs_on")->Apply(tree_sizes);
 
 BENCHMARK_MAIN();

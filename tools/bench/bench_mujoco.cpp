@@ -126,7 +126,7 @@ void SdRhs(benchmark::State& st) {
   for (auto _ : st) {
     soadyn::update_kinematics(p.model, p.data, p.q);
     soadyn::update_velocities(p.model, p.data, p.v);
-    soadyn::forward_dynamics(p.model, p.data, p.tau, soadyn::FdMethod::ON);
+    soadyn::forward_dynamics(p.model, p.data, p.tau, soadyn::FdMethod::ArticulatedBody);
     benchmark::DoNotOptimize(p.data.qdd.data());
   }
 }

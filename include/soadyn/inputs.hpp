@@ -1,0 +1,45 @@
+// Joint inputs: the generalized forces a scene applies (torques, springs, dampers), evaluated on
+// every right-hand-side call.  Plain numerics: no file format is involved here.
+#pragma once
+
+#include "soadyn/types.hpp"
+
+#include <string>
+#include <vector>
+
+namespace soadyn {
+
+// Joint inputs a scene may need, and no more.  Each acts on one 1-DOF joint (index into v).
+struct TorqueInput {
+  std::string joint;
+  int dof = -1;
+  double constant = 0.0;   // N·m or N
+  double amplitude = 0.0;  // + amplitude · sin(2π frequency t + phase)
+  double frequency = 0.0;  // Hz
+  double phase = 0.0;      // rad
+};
+struct SpringInput {
+  std::string joint;
+  int dof = -1;
+  int coord = -1;          // index into q
+  double stiffness = 0.0;  // τ = −k (q − rest)
+  double rest = 0.0;
+};
+struct DamperInput {
+  std::string joint;
+  int dof = -1;
+  double damping = 0.0;    // τ = −c q̇
+};
+
+struct Inputs {
+  std::vector<TorqueInput> torques;
+  std::vector<SpringInput> springs;
+  std::vector<DamperInput> dampers;
+  bool empty() const { return torques.empty() && springs.empty() && dampers.empty(); }
+  // τ(t, q, v): the generalized force the inputs apply
+  void evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const;
+  // the inputs' potential energy (springs), so E = T + V_gravity + V_springs is conserved
+  double spring_energy(const VecX& q) const;
+};
+
+}  // namespace soadyn

@@ -1,0 +1,21 @@
+// How a run is integrated and logged: the `simulation` section of a scenario, overridable from the
+// command line.  Plain numerics: no file format is involved here.
+#pragma once
+
+#include <string>
+
+namespace soadyn {
+
+struct SimulationSettings {
+  double t_end = 10.0;                 // s
+  double output_dt = 0.01;             // s between logged samples
+  std::string method = "cvode-adams";  // cvode-adams | cvode-bdf | rk4 | euler | symplectic-euler | implicit-midpoint
+  double rtol = 1e-8;                  // CVODE relative tolerance
+  double atol = 1e-10;                 // CVODE absolute tolerance
+  double dt = 1e-3;                    // fixed-step methods' step, s
+  double max_step = 0.0;               // CVODE maximum step, s (0: none)
+  long max_steps = 100000000;          // CVODE steps allowed in the whole run
+  std::string dynamics = "on";         // forward-dynamics route: dense | sparse | on
+};
+
+}  // namespace soadyn

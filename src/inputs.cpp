@@ -1,0 +1,22 @@
+#include "soadyn/inputs.hpp"
+
+#include <cmath>
+#include <numbers>
+
+namespace soadyn {
+
+void Inputs::evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const {
+  tau.setZero();
+  for (const auto& u : torques)
+    tau(u.dof) += u.constant + u.amplitude * std::sin(2 * std::numbers::pi * u.frequency * t + u.phase);
+  for (const auto& s : springs) tau(s.dof) -= s.stiffness * (q(s.coord) - s.rest);
+  for (const auto& d : dampers) tau(d.dof) -= d.damping * v(d.dof);
+}
+
+double Inputs::spring_energy(const VecX& q) const {
+  double V = 0.0;
+  for (const auto& s : springs) V += 0.5 * s.stiffness * (q(s.coord) - s.rest) * (q(s.coord) - s.rest);
+  return V;
+}
+
+}  // namespace soadyn
