@@ -1,7 +1,10 @@
 // soadyn: the command-line front end.
 //   soadyn inspect MODEL ...   𝓜(q), bias, q̈, energy and momentum at one state
 //   soadyn run SCENARIO ...    simulate, log to HDF5
+//   soadyn help [COMMAND]      what a command takes
 #include "cli.hpp"
+
+#include "soadyn/version.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -9,9 +12,17 @@
 
 int main(int argc, char** argv) {
   std::vector<std::string> args = soadyn::cli::join_negative_values(argc, argv);
-  CLI::App app{"soadyn: dynamics of tree-structured rigid multibody systems (the note's O(N) operators)"};
+  CLI::App app{"soadyn: dynamics of tree-structured rigid multibody systems (the note's O(N) operators)", "soadyn"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", SOADYN_VERSION);
+  app.set_version_flag("--version", [] {
+    std::string text = "soadyn " + soadyn::version() + "\nbuilt with";
+    for (const auto& [name, v] : soadyn::dependency_versions()) text += " " + name + " " + v + ",";
+    text.back() = '\n';
+    return text + "CLI11 " CLI11_VERSION;
+  });
+  std::string help_topic;
+  CLI::App* help = app.add_subcommand("help", "what soadyn or one of its commands takes (soadyn help run)");
+  help->add_option("COMMAND", help_topic, "a command");
   soadyn::cli::InspectOptions inspect;
   soadyn::cli::add_inspect(app, inspect);
   soadyn::cli::RunOptions run;
@@ -30,6 +41,19 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
+    if (app.got_subcommand("help")) {
+      if (help_topic.empty()) {
+        std::cout << app.get_formatter()->make_help(&app, app.get_name(), CLI::AppFormatMode::Normal);
+        return 0;
+      }
+      for (CLI::App* sub : app.get_subcommands({}))
+        if (sub->get_name() == help_topic) {
+          std::cout << sub->help(app.get_name());
+          return 0;
+        }
+      std::cerr << "soadyn: error: help: no command '" << help_topic << "' (see soadyn --help)\n";
+      return 2;
+    }
     if (app.got_subcommand("inspect")) return soadyn::cli::run_inspect(inspect);
     if (app.got_subcommand("run")) return soadyn::cli::run_simulation(run);
   } catch (const soadyn::Error& e) {
