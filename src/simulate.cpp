@@ -2,6 +2,8 @@
 
 #include "soadyn/kinematics.hpp"
 
+#include <charconv>
+#include <csignal>
 #include <cmath>
 #include <ctime>
 
@@ -41,8 +43,26 @@ void check_run(const Scenario& sc, const SimulationSettings& settings) {
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
 }
 
+std::string interrupted_status(int stop, double t) {
+  std::string by;
+  switch (stop) {
+    case -1: break;
+    case SIGINT: by = " by SIGINT"; break;
+    case SIGTERM: by = " by SIGTERM"; break;
+    case SIGHUP: by = " by SIGHUP"; break;
+    case SIGQUIT: by = " by SIGQUIT"; break;
+    case SIGUSR1: by = " by SIGUSR1"; break;
+    case SIGUSR2: by = " by SIGUSR2"; break;
+    case SIGALRM: by = " by SIGALRM"; break;
+    default: by = " by signal " + std::to_string(stop);
+  }
+  char at[32];  // t in the shortest form that reads back exactly
+  const auto end = std::to_chars(at, at + sizeof at, t).ptr;
+  return "interrupted" + by + " at t = " + std::string(at, end);
+}
+
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer,
-                    std::vector<Sample>* samples) {
+                    std::vector<Sample>* samples, const std::atomic<int>* stop) {
   const Model& m = sc.model;
   check_run(sc, settings);
   System sys(m, sc.inputs, parse_fd_method(settings.dynamics));
@@ -81,15 +101,23 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   summary.output_dt = output_dt;
   const long outputs = std::max<long>(1, std::lround(std::ceil(settings.t_end / output_dt * (1 - 1e-12))));
   try {
+    bool interrupted = false;
     for (long k = 1; k <= outputs; ++k) {
+      if (stop && stop->load() != 0) {
+        summary.status = interrupted_status(stop->load(), t);
+        interrupted = true;
+        break;
+      }
       const double t_out = k == outputs ? settings.t_end : double(k) * output_dt;
       integrator->advance(t_out, t, y);
       record(observe(sys, t, y.head(m.nq), y.tail(m.nv)));  // not counted as the integrator's work
       update();
       if (observer) observer->on_progress(summary);
     }
-    summary.status = "completed";
-    summary.completed = true;
+    if (!interrupted) {
+      summary.status = "completed";
+      summary.completed = true;
+    }
   } catch (const SimulationError& e) {
     summary.status = e.what();
   }
