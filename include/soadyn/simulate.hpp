@@ -44,9 +44,21 @@ class RunObserver {
 // Evaluates the logged quantities at (t, q, v).
 Sample observe(System& system, double t, const VecX& q, const VecX& v);
 
-// Throws soadyn::Error if sc cannot be run with settings: a setting that is not positive, or a
-// model without degrees of freedom.  simulate() calls it; call it first to refuse before any output.
-void check_run(const Scenario& sc, const SimulationSettings& settings);
+// Throws soadyn::Error if sc cannot be run with settings: t_end, output_dt, dt or atol not positive
+// and finite, rtol outside (0, 1), more steps or rows than 2^53 (time would no longer count
+// exactly), a name that is not valid UTF-8, or a model without degrees of freedom.  Returns
+// warnings (a tolerance below what double precision can deliver).  simulate() calls it; call it
+// first to refuse before any output.
+std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings& settings);
+
+// The time between logged samples as used: fixed-step methods log every whole number of steps.
+double output_interval(const SimulationSettings& settings);
+
+// Rows a run logs: the initial state and one per output time.
+double output_rows(const SimulationSettings& settings);
+
+// True if `text` is well-formed UTF-8 (no overlong forms, surrogates or code points past U+10FFFF).
+bool is_valid_utf8(const std::string& text);
 
 // Fixed-step methods (rk4, euler, …) as opposed to CVODE's.
 bool is_fixed_step(const std::string& method);
