@@ -215,6 +215,16 @@ OutputLock::OutputLock(const std::string& path) : lock_path_(path + ".lock") {
       const std::string pid = std::to_string(getpid()) + "\n";
       if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) != ssize_t(pid.size())) {
       }  // the pid is only for messages
+      // "<path>.<pid>.tmp" files are runs' files under construction; with the lock held, any left
+      // are from runs that were killed before their first flush
+      const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+      const std::string prefix = p.filename().string() + ".";
+      for (const auto& e : fs::directory_iterator(dir, ec)) {
+        const std::string n = e.path().filename().string();
+        if (n.size() > prefix.size() + 4 && n.rfind(prefix, 0) == 0 && n.ends_with(".tmp") &&
+            n.find_first_not_of("0123456789", prefix.size()) == n.size() - 4)
+          fs::remove(e.path(), ec);
+      }
       return;
     }
     ::close(fd_);
@@ -479,8 +489,8 @@ void H5Log::on_progress(const RunSummary& summary) {
 
 void H5Log::on_finish(const RunSummary& summary) {
   Impl& im = *impl_;
-  if (!im.published && !summary.completed && im.rows == 0 && im.buffer.size() <= size_t(im.width)) {
-    // ended before its first step (interrupted, or failed): an existing file stays as it was
+  if (!im.published && summary.status.rfind("interrupted", 0) == 0 && im.buffer.size() <= size_t(im.width)) {
+    // interrupted before its first step: an existing file stays as it was
     im.abandon();
     std::remove(im.tmp_path.c_str());
     im.closed = true;

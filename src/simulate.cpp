@@ -93,8 +93,17 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   if (!is_fixed_step(s.method) && s.max_steps <= 0)
     throw Error("simulation settings: max_steps must be positive, got " + std::to_string(s.max_steps));
   for (size_t i = 0; i < sc.model.joint_names.size(); ++i)
-    if (!is_valid_utf8(sc.model.joint_names[i]) || !is_valid_utf8(sc.model.body_names[i]))
-      throw Error(sc.path + ": body " + std::to_string(i) + ": the body or joint name is not valid UTF-8");
+    for (const std::string* name : {&sc.model.body_names[i], &sc.model.joint_names[i]})
+      if (!is_valid_utf8(*name)) {
+        std::string shown;  // the bytes outside printable ASCII as \xHH
+        for (unsigned char c : *name) {
+          char hex[8];
+          std::snprintf(hex, sizeof hex, "\\x%02x", c);
+          shown += c >= 0x20 && c < 0x7f ? std::string(1, char(c)) : std::string(hex);
+        }
+        throw Error(sc.path + ": " + (name == &sc.model.body_names[i] ? "body" : "joint") + " '" + shown +
+                    "': the name is not valid UTF-8");
+      }
   if (sc.model.nv == 0)
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
   std::vector<std::string> warnings;

@@ -347,5 +347,61 @@ class Settings(Base):
         self.assertEqual(p.stderr, "", "no warning without a reason")
 
 
+class Messages(Base):
+    def write(self, name, data):
+        with open(self.path(name), "wb") as f:
+            f.write(data)
+        return self.path(name)
+
+    def refused(self, *args, expect):
+        p = run(*args)
+        self.assertEqual(p.returncode, 2, p.stdout + p.stderr)
+        self.assertEqual(p.stderr.strip().splitlines(), [f"soadyn: error: {expect}"])
+
+    def test_numbers_overflow_and_names(self):
+        body = "bodies:\n  - {name: a, joint: {type: revolute, axis: AXIS}, mass: 1, inertia: [1, 1, 1]}\n"
+        tiny = self.write("tiny.yaml", body.replace("AXIS", "[1.0e-320, 0, 0]").encode())
+        self.refused("run", tiny, expect=f"{tiny}:2:45: body 'a'.joint.axis: expected an axis of norm between 1e-12 "
+                                         "and 1e150, got [9.99989e-321, 0, 0]")
+        huge = self.write("huge.yaml", body.replace("AXIS", "[1.0e+200, 1.0e+200, 0]").encode())
+        self.refused("inspect", huge, expect=f"{huge}:2:45: body 'a'.joint.axis: expected an axis of norm between "
+                                             "1e-12 and 1e150, got [1e+200, 1e+200, 0]")
+        bad = self.write("names.yaml", body.replace("AXIS", "[1, 0, 0]").replace("name: a", "name: a\xff\xfeb")
+                         .encode("latin-1"))
+        self.refused("run", bad, expect=f"{bad}: body 'a\\xff\\xfeb': the name is not valid UTF-8")
+        quat = self.write("quat.yaml", b"bodies:\n  - {name: f, joint: {type: free}, mass: 1, inertia: [1, 1, 1]}\n"
+                                       b"initial:\n  q: {f: [0, 0, 0, 0, 0, 0, 0]}\n")
+        p = run("run", quat)
+        self.assertIn("expected a unit quaternion [w, x, y, z] after the position, got norm 0", p.stderr)
+        self.assertNotIn("0.000000", p.stderr)
+
+    def test_urdf_overflow_and_xml_bomb(self):
+        link = '<link name="{}"><inertial>{}<mass value="{}"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>' \
+               '</inertial></link>'
+        urdf = ('<robot name="r"><link name="a"/>\n' + link.format("b", "", "1") + "\n" +
+                link.format("c", '<origin xyz="0 0 -1"/>', "1e308") + "\n"
+                '<joint name="j" type="continuous"><parent link="a"/><child link="b"/><axis xyz="1 0 0"/></joint>\n'
+                '<joint name="w" type="fixed"><parent link="b"/><child link="c"/><origin xyz="0 0 -1"/></joint></robot>\n')
+        heavy = self.write("heavy.urdf", urdf.encode())
+        p = run("inspect", heavy)
+        self.assertEqual(p.returncode, 2)
+        self.assertIn("link 'b': mass: expected welded bodies whose combined inertia a double can hold, got an overflow",
+                      p.stderr)
+        self.assertNotIn("nan", p.stderr)
+        bomb = self.write("bomb.urdf", b'<?xml version="1.0"?>\n<!DOCTYPE r [\n <!ENTITY a "aaaaaaaaaa">\n'
+                                       b' <!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;&a;&a;">\n]>\n<robot name="&b;"/>\n')
+        self.refused("inspect", bomb, expect=f"{bomb}:3: XML: entity declarations (<!ENTITY ...>) are refused: a URDF "
+                                             "needs none, and nested ones expand without bound (an XML bomb)")
+
+    def test_stale_temporary_files_are_removed(self):
+        out = self.path("o.h5")
+        for name in ("o.h5.123.tmp", "o.h5.77.tmp"):
+            self.write(name, b"half-built")
+        self.write("o.h5.notes.tmp", b"someone else's")
+        p = run("run", PENDULUM, "--t-end", "0.1", "-q", "-o", out)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertEqual(sorted(os.listdir(self.dir)), ["o.h5", "o.h5.notes.tmp"])
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=2)

@@ -121,7 +121,7 @@ def main(argv=None):
         for k in range(args.trials):
             phase = PHASES[k % 4]
             delay = {"creation": lambda: rng.uniform(0.5 * created, published),
-                     "first flush": lambda: rng.uniform(published - 0.3 * (published - created), published + 0.02),
+                     "first flush": lambda: rng.uniform(published - 0.2 * (published - created), published + 0.05),
                      "mid-run": lambda: rng.uniform(published, 0.9 * duration),
                      "finish": lambda: rng.uniform(0.85, 1.1) * duration}[phase]()
             out = os.path.join(work, f"run{k}.h5")

@@ -47,8 +47,9 @@ std::uint64_t row_bytes(const Model& model);
 
 // An exclusive lock on an output path, held for a run's lifetime (flock on "<path>.lock", which
 // holds the owner's pid).  Throws soadyn::Error naming the path and the owner when another run
-// holds it.  Released (and the lock file removed) on destruction; the kernel releases it if the
-// process dies.
+// holds it.  Once held, removes the temporary files ("<path>.<pid>.tmp") of runs killed before
+// their first flush.  Released (and the lock file removed) on destruction; the kernel releases it
+// if the process dies.
 class OutputLock {
  public:
   explicit OutputLock(const std::string& path);
@@ -75,8 +76,8 @@ class H5Log : public RunObserver {
   void on_sample(const Sample& s) override;
   void on_progress(const RunSummary& summary) override;  // flushes at the first step, then every flush interval
   void set_flush_interval(double seconds);                // wall time between flushes, default 0.5 s
-  // flushes and closes the file; a run that ended before its first step (interrupted or failed,
-  // only the initial state logged) writes nothing and leaves an existing file untouched
+  // flushes and closes the file; a run interrupted before its first step (only the initial state
+  // logged) writes nothing and leaves an existing file untouched
   void on_finish(const RunSummary& summary) override;
   // Writes the buffered rows (and the summary), then has the library write everything out; the
   // first flush renames the file onto its path.  Throws IoError when a write fails: the file keeps

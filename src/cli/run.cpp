@@ -200,7 +200,11 @@ int run_simulation(const RunOptions& o) {
     std::printf("CPU time               %.4f s\n", r.cpu_seconds);
     std::printf("energy error (final)   %.3e (relative to max(|E0|, peak T); max over the run %.3e)\n",
                 r.final_relative_energy_error, r.max_relative_energy_error);
-    std::printf("output                 %s\n", out.c_str());
+    if (log->published())
+      std::printf("output                 %s (%ld flushes, %.3g ms each)\n", out.c_str(), log->flushes(),
+                  1e3 * log->flush_seconds() / double(std::max(1L, log->flushes())));
+    else
+      std::printf("output                 none (nothing written; an existing %s is unchanged)\n", out.c_str());
     std::fflush(stdout);
   }
   const std::string kept = log->published() ? "logged up to there in " + out
