@@ -218,7 +218,7 @@ Model parse_urdf(const std::string& xml, const std::string& path, bool free_root
       if (!(s.axis.norm() > 1e-12) || !std::isfinite(s.axis.squaredNorm())) {
         char got[96];
         std::snprintf(got, sizeof got, "[%g, %g, %g]", s.axis.x(), s.axis.y(), s.axis.z());
-        throw Error(at_joint(jn) + ": axis: expected an axis of norm between 1e-12 and 1e150, got " + got);
+        throw Error(at_joint(jn) + ": axis: expected a non-zero axis of norm between 1e-12 and 1e150, got " + got);
       }
       s.axis.normalize();
     }

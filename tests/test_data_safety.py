@@ -361,10 +361,10 @@ class Messages(Base):
     def test_numbers_overflow_and_names(self):
         body = "bodies:\n  - {name: a, joint: {type: revolute, axis: AXIS}, mass: 1, inertia: [1, 1, 1]}\n"
         tiny = self.write("tiny.yaml", body.replace("AXIS", "[1.0e-320, 0, 0]").encode())
-        self.refused("run", tiny, expect=f"{tiny}:2:45: body 'a'.joint.axis: expected an axis of norm between 1e-12 "
+        self.refused("run", tiny, expect=f"{tiny}:2:45: body 'a'.joint.axis: expected a non-zero axis of norm between 1e-12 "
                                          "and 1e150, got [9.99989e-321, 0, 0]")
         huge = self.write("huge.yaml", body.replace("AXIS", "[1.0e+200, 1.0e+200, 0]").encode())
-        self.refused("inspect", huge, expect=f"{huge}:2:45: body 'a'.joint.axis: expected an axis of norm between "
+        self.refused("inspect", huge, expect=f"{huge}:2:45: body 'a'.joint.axis: expected a non-zero axis of norm between "
                                              "1e-12 and 1e150, got [1e+200, 1e+200, 0]")
         bad = self.write("names.yaml", body.replace("AXIS", "[1, 0, 0]").replace("name: a", "name: a\xff\xfeb")
                          .encode("latin-1"))
