@@ -33,7 +33,7 @@ def open_run_file(path):
     """h5py.File for a soadyn run file: plainly, else in SWMR-read mode (a running or killed run)."""
     try:
         return h5py.File(path, "r")
-    except OSError:
+    except (OSError, RuntimeError):
         return h5py.File(path, "r", swmr=True)
 
 
@@ -41,8 +41,8 @@ def check_file(path, scenario_text, complete_rows=None):
     """Problems with a run file, as a list of strings (empty: the file is whole)."""
     try:
         f = open_run_file(path)
-    except OSError as e:
-        return [f"does not open: {e}"]
+    except Exception as e:  # OSError, or RuntimeError from a damaged header
+        return [f"does not open: {type(e).__name__}: {e}"]
     problems = []
     with f:
         try:
@@ -147,8 +147,8 @@ def main(argv=None):
                 try:
                     h5py.File(out, "r").close()
                     outcome = "closed (opens plainly)"
-                except OSError:
-                    outcome = "in progress (opens with swmr=True)"
+                except Exception:
+                    outcome = "in progress (opens with swmr=True)" if not problems else "unreadable"
             outcomes[outcome] = outcomes.get(outcome, 0) + 1
             if rc == 0 and not problems and check_file(out, text, rows) == [] and \
                     h5py.File(out, "r")["solver/status"][()] != b"completed":

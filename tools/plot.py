@@ -24,10 +24,10 @@ def main():
 
     try:
         f = h5py.File(args.run, "r")
-    except OSError as e:
+    except (OSError, RuntimeError) as e:
         try:  # a running or killed run's file: SWMR-read mode (README, "The HDF5 file")
             f = h5py.File(args.run, "r", swmr=True)
-        except OSError:
+        except (OSError, RuntimeError):
             sys.exit(f"plot.py: error: {args.run}: cannot open as HDF5 ({e})")
     with f:
         t = f["time"][:]
