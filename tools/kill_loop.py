@@ -123,7 +123,7 @@ def main(argv=None):
             delay = {"creation": lambda: rng.uniform(0.5 * created, published),
                      "first flush": lambda: rng.uniform(published - 0.2 * (published - created), published + 0.05),
                      "mid-run": lambda: rng.uniform(published, 0.9 * duration),
-                     "finish": lambda: rng.uniform(0.85, 1.1) * duration}[phase]()
+                     "finish": lambda: rng.uniform(0.8, 1.6) * duration}[phase]()
             out = os.path.join(work, f"run{k}.h5")
             had_old = rng.random() < 0.5
             if had_old:
