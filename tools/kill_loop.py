@@ -6,7 +6,7 @@ the finish.  Half of them start with an older run's file at the output path.  Af
 path must hold either that older file byte for byte (the run had not yet put its file in place),
 no file (there was none), or a file that opens (plainly, or with HDF5's SWMR-read flag as README
 says), reads whole, has series of one length, increasing time, the scenario's text and a status
-of "running" or "completed".
+of "running" or "completed", and rows equal bit for bit to the same run uninterrupted.
 
     tools/kill_loop.py [--trials 500] [--seed 1] [--soadyn build/soadyn]
 """
@@ -37,8 +37,9 @@ def open_run_file(path):
         return h5py.File(path, "r", swmr=True)
 
 
-def check_file(path, scenario_text, complete_rows=None):
-    """Problems with a run file, as a list of strings (empty: the file is whole)."""
+def check_file(path, scenario_text, complete_rows=None, reference=None):
+    """Problems with a run file, as a list of strings (empty: the file is whole).  `reference`: the
+    /samples of the same run uninterrupted, which the file's rows must equal bit for bit."""
     try:
         f = open_run_file(path)
     except Exception as e:  # OSError, or RuntimeError from a damaged header
@@ -58,6 +59,9 @@ def check_file(path, scenario_text, complete_rows=None):
                 problems.append("time does not increase")
             if not np.all(np.isfinite(data["samples"])):
                 problems.append("non-finite values")
+            n = len(data["samples"])
+            if reference is not None and (n > len(reference) or not np.array_equal(data["samples"], reference[:n])):
+                problems.append("rows differ from the same run's uninterrupted rows")
             if data["scenario"].decode() != scenario_text:
                 problems.append("/scenario differs from the scenario file")
             status = data["solver/status"].decode()
@@ -68,6 +72,11 @@ def check_file(path, scenario_text, complete_rows=None):
         except Exception as e:  # a read error is what this loop looks for
             problems.append(f"does not read whole: {type(e).__name__}: {e}")
     return problems
+
+
+def same_bytes(path, data):
+    with open(path, "rb") as f:
+        return f.read() == data
 
 
 def calibrate(cmd, work, runs=3):
@@ -103,7 +112,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
     rng = random.Random(args.seed)
     scenario = os.path.join(ROOT, "scenarios", "double_pendulum.yaml")
-    text = open(scenario).read()
+    with open(scenario) as f:
+        text = f.read()
     # rk4 at a small step: about a second of work; many rows and a flush every 10 ms, so that
     # kills land in flushes often
     cmd = [args.soadyn, "run", scenario, "--method", "rk4", "--dt", "2e-5", "--t-end", "1.5", "--output-dt", "0.001",
@@ -113,7 +123,10 @@ def main(argv=None):
     try:
         old = os.path.join(work, "old.h5")
         subprocess.run(cmd + ["-o", old], check=True)
-        old_bytes = open(old, "rb").read()
+        with open(old, "rb") as f:
+            old_bytes = f.read()
+        with h5py.File(old, "r") as f:
+            reference = f["samples"][()]
         created, published, duration = calibrate(cmd, work)
         print(f"calibration: temporary file after {created * 1e3:.0f} ms, in place after {published * 1e3:.0f} ms, "
               f"run over after {duration * 1e3:.0f} ms")
@@ -139,11 +152,11 @@ def main(argv=None):
             if not os.path.exists(out):
                 problems = ["an older file was lost"] if had_old else []
                 outcome = "not yet in place"
-            elif had_old and open(out, "rb").read() == old_bytes:
+            elif had_old and same_bytes(out, old_bytes):
                 problems = []
                 outcome = "not yet in place"
             else:
-                problems = check_file(out, text, rows)
+                problems = check_file(out, text, rows, reference)
                 try:
                     h5py.File(out, "r").close()
                     outcome = "closed (opens plainly)"
