@@ -1,12 +1,13 @@
 #!/usr/bin/python3
 """Kill `soadyn run` with SIGKILL at random moments and check every file it leaves.
 
-Trials cycle through four phases: file creation (the first ~30 ms), the first flush, mid-run and
-the finish.  Half of them start with an older run's file at the output path.  After each kill the
-path must hold either that older file byte for byte (the run had not yet put its file in place),
-no file (there was none), or a file that opens (plainly, or with HDF5's SWMR-read flag as README
-says), reads whole, has series of one length, increasing time, the scenario's text and a status
-of "running" or "completed", and rows equal bit for bit to the same run uninterrupted.
+Trials cycle through four phases, timed by calibration runs: file creation, the first flush (when
+the file is put in place), mid-run and the finish.  Half of them start with an older run's file at
+the output path.  After each kill the path must hold either that older file byte for byte (the run
+had not yet put its file in place), no file (there was none), or a file that opens (plainly, or
+with HDF5's SWMR-read flag as README says), reads whole, has series of one length, increasing time,
+the scenario's text, a status of "running" or "completed", and rows equal bit for bit to the same
+run's uninterrupted rows.
 
     tools/kill_loop.py [--trials 500] [--seed 1] [--soadyn build/soadyn]
 """
