@@ -58,7 +58,8 @@ void validate(const BodySpec& b, int i) {
   if ((R.transpose() * R - Mat3::Identity()).norm() > 1e-9 || R.determinant() < 0)
     refuse(b, i, "placement rotation", "a proper rotation matrix", fmt(R));
   const JointTraits& tr = joint_traits(b.joint);
-  if (tr.has_axis && !(b.axis.norm() > 1e-12)) refuse(b, i, "axis", "a non-zero vector", fmt(b.axis.transpose()));
+  if (tr.has_axis && (!(b.axis.norm() > 1e-12) || !std::isfinite(b.axis.squaredNorm())))
+    refuse(b, i, "axis", "a non-zero vector of norm between 1e-12 and 1e150", fmt(b.axis.transpose()));
   if (tr.root_only) {
     if (b.parent != -1) refuse(b, i, "joint", "a free joint only at a root (parent = ground)", "a parent");
     if (!b.placement.R.isIdentity(1e-12) || !b.placement.p.isZero(0.0))
@@ -75,6 +76,9 @@ void validate(const BodySpec& b, int i) {
     refuse(b, i, "inertia", "a symmetric matrix", fmt(I));
   const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (I + I.transpose()), Eigen::EigenvaluesOnly);
   const Vec3 l = es.eigenvalues();  // ascending
+  if (!l.allFinite())
+    refuse(b, i, "inertia", "principal moments a double can hold",
+           "an overflow computing them (mass " + fmt(Eigen::Matrix<double, 1, 1>::Constant(b.mass)) + ", inertia " + fmt(I) + ")");
   if (!(l(0) > 0.0))
     refuse(b, i, "inertia", "a positive definite matrix", "principal moments " + fmt(l.transpose()));
   // triangle inequality: each principal moment is at most the sum of the other two
@@ -161,6 +165,9 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
     merged.joint = JointType::Revolute;
     merged.mass = m.mass[k];
     merged.inertia = m.inertia[k];
+    if (!std::isfinite(merged.mass) || !merged.inertia.allFinite())
+      refuse(merged, spec_of[k], "mass", "welded bodies whose combined inertia a double can hold",
+             "an overflow (not finite) merging their masses and inertias about the joint frame");
     validate(merged, spec_of[k]);
   }
 

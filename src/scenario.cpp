@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -217,7 +218,11 @@ void read_joint(const Reader& rd, const YAML::Node& b, const std::string& fb, st
     rd.fail(j["name"] ? j["name"] : b["name"], fb + ".joint.name", "duplicate joint name '" + s.joint_name + "'");
   if (tr.has_axis) {
     s.axis = rd.vec3(rd.require(j, "axis", fb + ".joint"), fb + ".joint.axis");
-    if (!(s.axis.norm() > 1e-12)) rd.fail(j["axis"], fb + ".joint.axis", "expected a non-zero axis, got [0, 0, 0]");
+    if (!(s.axis.norm() > 1e-12) || !std::isfinite(s.axis.squaredNorm())) {
+      char got[96];
+      std::snprintf(got, sizeof got, "[%g, %g, %g]", s.axis.x(), s.axis.y(), s.axis.z());
+      rd.fail(j["axis"], fb + ".joint.axis", std::string("expected a non-zero axis of norm between 1e-12 and 1e150, got ") + got);
+    }
   } else if (j["axis"]) {
     rd.fail(j["axis"], fb + ".joint.axis", "a " + std::string(tr.name) + " joint has no axis");
   }
@@ -310,7 +315,11 @@ void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q
         const double norm = x.segment<4>(k).norm();
         if (std::abs(norm - 1.0) > 1e-6)
           rd.fail(it->second, fj, "expected a unit quaternion [w, x, y, z]" + std::string(k ? " after the position" : "") +
-                                      ", got norm " + std::to_string(norm));
+                                      ", got norm " + [&] {
+                                        char got[32];
+                                        std::snprintf(got, sizeof got, "%g", norm);
+                                        return std::string(got);
+                                      }());
         x.segment<4>(k) /= norm;
       }
       (is_q ? q0.segment(m.idx_q[i], size) : v0.segment(m.idx_v[i], size)) = x;

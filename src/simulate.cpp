@@ -2,8 +2,11 @@
 
 #include "soadyn/kinematics.hpp"
 
+#include <csignal>
 #include <cmath>
 #include <ctime>
+#include <cstdio>
+#include <limits>
 
 namespace soadyn {
 
@@ -33,16 +36,105 @@ bool is_fixed_step(const std::string& method) {
   return info && info->fixed_step;
 }
 
-void check_run(const Scenario& sc, const SimulationSettings& settings) {
-  if (!(settings.t_end > 0) || !(settings.output_dt > 0) || !(settings.dt > 0) || !(settings.rtol > 0) ||
-      !(settings.atol > 0))
-    throw Error("simulation settings: t_end, output_dt, dt, rtol and atol must be positive");
+double output_interval(const SimulationSettings& s) {
+  return is_fixed_step(s.method) ? s.dt * std::max(1.0, std::round(s.output_dt / s.dt)) : s.output_dt;
+}
+
+double output_rows(const SimulationSettings& s) { return 1 + std::ceil(s.t_end / output_interval(s) * (1 - 1e-12)); }
+
+bool is_valid_utf8(const std::string& text) {
+  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
+  const auto* end = p + text.size();
+  while (p < end) {
+    const unsigned c = *p;
+    int n = 0;
+    unsigned cp = 0, min = 0;
+    if (c < 0x80) n = 0, cp = c;
+    else if ((c & 0xE0) == 0xC0) n = 1, cp = c & 0x1F, min = 0x80;
+    else if ((c & 0xF0) == 0xE0) n = 2, cp = c & 0x0F, min = 0x800;
+    else if ((c & 0xF8) == 0xF0) n = 3, cp = c & 0x07, min = 0x10000;
+    else return false;
+    if (end - p < n + 1) return false;
+    for (int k = 1; k <= n; ++k) {
+      if ((p[k] & 0xC0) != 0x80) return false;
+      cp = (cp << 6) | (p[k] & 0x3F);
+    }
+    if (n > 0 && (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))) return false;
+    p += n + 1;
+  }
+  return true;
+}
+
+namespace {
+std::string g(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+}  // namespace
+
+std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings& s) {
+  // each setting: positive and finite, said with its value
+  const std::pair<const char*, double> positive[] = {
+      {"t_end", s.t_end}, {"output_dt", s.output_dt}, {"dt", s.dt}, {"atol", s.atol}};
+  for (const auto& [name, x] : positive)
+    if (!(x > 0) || !std::isfinite(x))
+      throw Error(std::string("simulation settings: ") + name + " must be a positive finite number, got " + g(x));
+  if (!(s.rtol > 0 && s.rtol < 1)) throw Error("simulation settings: rtol must lie in (0, 1), got " + g(s.rtol));
+  // counts: time advances by whole steps and rows, counted exactly only up to 2^53
+  const double limit = 9007199254740992.0;
+  const double rows = output_rows(s);
+  if (!(rows <= limit))
+    throw Error("simulation settings: t_end / output_dt = " + g(s.t_end) + " / " + g(s.output_dt) + " gives " + g(rows) +
+                " rows, more than 2^53: raise output_dt or lower t_end");
+  if (is_fixed_step(s.method) && !(s.t_end / s.dt <= limit))
+    throw Error("simulation settings: t_end / dt = " + g(s.t_end) + " / " + g(s.dt) + " gives " + g(s.t_end / s.dt) +
+                " steps, more than 2^53: raise dt or lower t_end");
+  if (!is_fixed_step(s.method) && s.max_steps <= 0)
+    throw Error("simulation settings: max_steps must be positive, got " + std::to_string(s.max_steps));
+  for (size_t i = 0; i < sc.model.joint_names.size(); ++i)
+    for (const std::string* name : {&sc.model.body_names[i], &sc.model.joint_names[i]})
+      if (!is_valid_utf8(*name)) {
+        std::string shown;  // the bytes outside printable ASCII as \xHH
+        for (unsigned char c : *name) {
+          char hex[8];
+          std::snprintf(hex, sizeof hex, "\\x%02x", c);
+          shown += c >= 0x20 && c < 0x7f ? std::string(1, char(c)) : std::string(hex);
+        }
+        throw Error(sc.path + ": " + (name == &sc.model.body_names[i] ? "body" : "joint") + " '" + shown +
+                    "': the name is not valid UTF-8");
+      }
   if (sc.model.nv == 0)
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
+  std::vector<std::string> warnings;
+  // CVODE's local error test compares against rtol·|y|: below ~100 ε it asks for more digits than a double holds
+  const double reach = 100 * std::numeric_limits<double>::epsilon();
+  if (!is_fixed_step(s.method) && s.rtol < reach)
+    warnings.push_back("rtol " + g(s.rtol) + " is below what double precision can deliver (about " + g(reach) +
+                       "): CVODE will take tiny steps or fail");
+  return warnings;
+}
+
+std::string interrupted_status(int stop, double t) {
+  std::string by;
+  switch (stop) {
+    case -1: break;
+    case SIGINT: by = " by SIGINT"; break;
+    case SIGTERM: by = " by SIGTERM"; break;
+    case SIGHUP: by = " by SIGHUP"; break;
+    case SIGQUIT: by = " by SIGQUIT"; break;
+    case SIGUSR1: by = " by SIGUSR1"; break;
+    case SIGUSR2: by = " by SIGUSR2"; break;
+    case SIGALRM: by = " by SIGALRM"; break;
+    default: by = " by signal " + std::to_string(stop);
+  }
+  char at[32];
+  std::snprintf(at, sizeof at, "%.9g", t);
+  return "interrupted" + by + " at t = " + at;
 }
 
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer,
-                    std::vector<Sample>* samples) {
+                    std::vector<Sample>* samples, const std::atomic<int>* stop) {
   const Model& m = sc.model;
   check_run(sc, settings);
   System sys(m, sc.inputs, parse_fd_method(settings.dynamics));
@@ -76,20 +168,27 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   E0 = first.total;
   record(first);
   // fixed-step methods take steps of exactly dt: outputs every whole number of steps
-  const double output_dt =
-      is_fixed_step(settings.method) ? settings.dt * std::max(1.0, std::round(settings.output_dt / settings.dt)) : settings.output_dt;
+  const double output_dt = output_interval(settings);
   summary.output_dt = output_dt;
   const long outputs = std::max<long>(1, std::lround(std::ceil(settings.t_end / output_dt * (1 - 1e-12))));
   try {
+    bool interrupted = false;
     for (long k = 1; k <= outputs; ++k) {
+      if (stop && stop->load() != 0) {
+        summary.status = interrupted_status(stop->load(), t);
+        interrupted = true;
+        break;
+      }
       const double t_out = k == outputs ? settings.t_end : double(k) * output_dt;
       integrator->advance(t_out, t, y);
       record(observe(sys, t, y.head(m.nq), y.tail(m.nv)));  // not counted as the integrator's work
       update();
       if (observer) observer->on_progress(summary);
     }
-    summary.status = "completed";
-    summary.completed = true;
+    if (!interrupted) {
+      summary.status = "completed";
+      summary.completed = true;
+    }
   } catch (const SimulationError& e) {
     summary.status = e.what();
   }

@@ -6,6 +6,9 @@
 #include <tinyxml2.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 
@@ -62,6 +65,11 @@ void check_tree(const tinyxml2::XMLElement* robot, const std::string& path) {
 
 XmlIndex index_xml(const std::string& xml, const std::string& path) {
   tinyxml2::XMLDocument doc;
+  // entity declarations: a URDF needs none, and nested ones expand without bound (an XML bomb)
+  if (const size_t at = xml.find("<!ENTITY"); at != std::string::npos)
+    throw Error(path + ":" + std::to_string(1 + std::count(xml.begin(), xml.begin() + long(at), '\n')) +
+                ": XML: entity declarations (<!ENTITY ...>) are refused: a URDF needs none, and nested ones expand "
+                "without bound (an XML bomb)");
   if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS)
     throw Error(path + ":" + std::to_string(doc.ErrorLineNum()) + ": XML: " + doc.ErrorStr());
   const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
@@ -207,7 +215,11 @@ Model parse_urdf(const std::string& xml, const std::string& path, bool free_root
                                    "planar joints are not supported");
     }
     if (s.joint == JointType::Revolute || s.joint == JointType::Prismatic) {
-      if (!(s.axis.norm() > 1e-12)) throw Error(at_joint(jn) + ": axis: expected a non-zero axis, got [0, 0, 0]");
+      if (!(s.axis.norm() > 1e-12) || !std::isfinite(s.axis.squaredNorm())) {
+        char got[96];
+        std::snprintf(got, sizeof got, "[%g, %g, %g]", s.axis.x(), s.axis.y(), s.axis.z());
+        throw Error(at_joint(jn) + ": axis: expected a non-zero axis of norm between 1e-12 and 1e150, got " + got);
+      }
       s.axis.normalize();
     }
     mass_properties(*link, s);

@@ -24,8 +24,11 @@ def main():
 
     try:
         f = h5py.File(args.run, "r")
-    except OSError as e:
-        sys.exit(f"plot.py: error: {args.run}: cannot open as HDF5 ({e})")
+    except (OSError, RuntimeError) as e:
+        try:  # a running or killed run's file: SWMR-read mode (README, "The HDF5 file")
+            f = h5py.File(args.run, "r", swmr=True)
+        except (OSError, RuntimeError):
+            sys.exit(f"plot.py: error: {args.run}: cannot open as HDF5 ({e})")
     with f:
         t = f["time"][:]
         q, qd = f["q"][:], f["qd"][:]
@@ -35,6 +38,8 @@ def main():
         T = f["energy/kinetic"][:]
         lin, ang = f["momentum/linear"][:], f["momentum/angular"][:]
         solver = dict(f["solver"].attrs)
+        if "status" in f["solver"]:  # a dataset since the file became SWMR; an attribute before
+            solver["status"] = f["solver/status"][()]
     if len(t) == 0:
         sys.exit(f"plot.py: error: {args.run}: no samples")
 

@@ -36,12 +36,12 @@ def run(scenario, method, t_end=None, rtol=None, dt=None, output_dt=None, timeou
         if p.returncode not in (0, 3):
             raise RuntimeError(f"{' '.join(cmd)}: {p.stderr}")
         with h5py.File(out, "r") as f:
-            s = f["solver"].attrs
-            r["status"] = s["status"].decode() if isinstance(s["status"], bytes) else str(s["status"])
-            r["cpu"] = float(s["cpu_seconds"])
-            r["rhs"] = int(s["rhs_evals"])
-            r["steps"] = int(s["steps"])
-            r["t_reached"] = float(s["t_reached"])
+            s = f["solver"]  # run-time values are scalar datasets (SWMR file)
+            r["status"] = s["status"][()].decode()
+            r["cpu"] = float(s["cpu_seconds"][()])
+            r["rhs"] = int(s["rhs_evals"][()])
+            r["steps"] = int(s["steps"][()])
+            r["t_reached"] = float(s["t_reached"][()])
             t, E, T = f["time"][:], f["energy/total"][:], f["energy/kinetic"][:]
             r["q"], r["qd"] = f["q"][-1], f["qd"][-1]
             r["t"] = t

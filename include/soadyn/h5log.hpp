@@ -1,36 +1,97 @@
 // HDF5 run files.  Layout (one file per run):
+//   /samples (T×W)   every logged number, one row per output time: t, q, q̇, q̈, T, V, E, p, h
 //   /time (T)  /q (T×nq)  /qd (T×nv)  /qdd (T×nv)
 //   /energy/kinetic, /energy/potential, /energy/total (T)
 //   /momentum/linear, /momentum/angular (T×3)
+//        — views (HDF5 virtual datasets) of /samples' columns, so every series has one length
+//   /scenario        the scenario's full text (a string dataset: any size)
 //   /model: datasets joint_names, parents; attributes nq, nv
-//   /solver: attributes method, rtol, atol, dt, steps, rhs_evals, jac_evals, error_test_failures,
-//            nonlinear_iterations, cpu_seconds, status, t_reached, quaternion_handling
-//   root attributes: scenario (the scenario's full text), soadyn_version
-// Datasets are chunked and extendable.  Rows are buffered and written, then the file flushed,
-// at least once per second of wall time: between flushes the file on disk is left untouched, so a
-// run killed at any moment leaves a valid file holding everything up to its last flush.
+//   /solver: attributes method, rtol, atol, dt, output_dt, t_end, dynamics (fixed at the start);
+//            scalar datasets status, t_reached, steps, rhs_evals, jac_evals, error_test_failures,
+//            nonlinear_iterations, cpu_seconds, quaternion_handling (rewritten at every flush)
+//   root attributes: scenario_path, soadyn_version, layout_version
+//
+// Consistency: the file uses HDF5's single-writer/multiple-reader mode (SWMR, latest format).
+// Everything is created before SWMR writing starts; afterwards the writer only appends rows to
+// /samples (one extent for all series) and overwrites the fixed-size /solver datasets, and the
+// library orders its writes so that the file on disk is valid at every instant.  The file is built
+// under a temporary name and renamed onto the output path at the first flush, so a run killed or
+// refused before then leaves an existing file untouched.  Readers of a running or killed run's
+// file open it in SWMR-read mode (h5py: File(path, "r", swmr=True)); a finished run's file opens
+// plainly.  New series are added as new columns of /samples and new views.
 #pragma once
 
 #include "soadyn/simulate.hpp"
 
 #include <chrono>
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace soadyn {
 
+// Writing the output file failed (a full disk, a quota, an I/O error).  The message is one line
+// naming the cause, the file, the time reached and what the file keeps.
+class IoError : public Error {
+ public:
+  using Error::Error;
+};
+
+// Refuses an output path before any file is touched: a directory, one of `inputs` (the same file
+// under any name), or an existing file that is not HDF5 (it would be lost).  Throws soadyn::Error.
+void check_output_path(const std::string& path, const std::vector<std::string>& inputs);
+
+// Bytes one logged row takes (W doubles), for the projected size of a run.
+std::uint64_t row_bytes(const Model& model);
+
+// An exclusive lock on an output path, held for a run's lifetime (flock on "<path>.lock", which
+// holds the owner's pid).  Throws soadyn::Error naming the path and the owner when another run
+// holds it.  Once held, removes the temporary files ("<path>.<pid>.tmp") of runs killed before
+// their first flush.  Released (and the lock file removed) on destruction; the kernel releases it
+// if the process dies.
+class OutputLock {
+ public:
+  explicit OutputLock(const std::string& path);
+  ~OutputLock();
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+  const std::string& lock_path() const { return lock_path_; }
+
+ private:
+  std::string lock_path_;
+  int fd_ = -1;
+};
+
 class H5Log : public RunObserver {
  public:
-  // Creates (truncates) the file; throws soadyn::Error if it cannot be written.
+  // Builds the whole file under a temporary name next to `path`; throws soadyn::Error (IoError for
+  // a write failure) and then leaves nothing behind.
   H5Log(const std::string& path, const Scenario& sc, const SimulationSettings& settings, const std::string& version);
+  // A log that never reached its first flush removes its temporary file.
   ~H5Log() override;
   H5Log(const H5Log&) = delete;
   H5Log& operator=(const H5Log&) = delete;
 
   void on_sample(const Sample& s) override;
-  void on_progress(const RunSummary& summary) override;
+  void on_progress(const RunSummary& summary) override;  // flushes at the first step, then every flush interval
+  void set_flush_interval(double seconds);                // wall time between flushes, default 0.5 s
+  // flushes and closes the file; a run interrupted before its first step (only the initial state
+  // logged) writes nothing and leaves an existing file untouched
   void on_finish(const RunSummary& summary) override;
+  // Writes the buffered rows (and the summary), then has the library write everything out; the
+  // first flush renames the file onto its path.  Throws IoError when a write fails: the file keeps
+  // its last flushed rows and is not touched again.
   void flush(const RunSummary* summary = nullptr);
+
+  // the name the file is built under: "<path>.<pid>.tmp"
+  static std::string temporary_path(const std::string& path);
+  // the file being written until the first flush (for a signal handler to remove), then the path
+  const std::string& current_path() const;
+  bool published() const;
+  // the flushes so far and the wall time they took, s
+  long flushes() const;
+  double flush_seconds() const;
 
  private:
   struct Impl;

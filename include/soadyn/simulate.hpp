@@ -4,6 +4,7 @@
 #include "soadyn/integrators.hpp"
 #include "soadyn/scenario.hpp"
 
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -24,7 +25,7 @@ struct RunSummary {
   double output_dt = 0.0;             // as used: a whole number of steps for fixed-step methods
   IntegratorStats stats;
   double cpu_seconds = 0.0;
-  std::string status = "running";     // "completed", or the error
+  std::string status = "running";     // "completed", "interrupted by SIGINT at t = …", or the error
   double t_reached = 0.0;
   bool completed = false;
   double max_relative_energy_error = 0.0;   // max |E(t) − E(0)| / max(|E(0)|, peak T)
@@ -43,9 +44,21 @@ class RunObserver {
 // Evaluates the logged quantities at (t, q, v).
 Sample observe(System& system, double t, const VecX& q, const VecX& v);
 
-// Throws soadyn::Error if sc cannot be run with settings: a setting that is not positive, or a
-// model without degrees of freedom.  simulate() calls it; call it first to refuse before any output.
-void check_run(const Scenario& sc, const SimulationSettings& settings);
+// Throws soadyn::Error if sc cannot be run with settings: t_end, output_dt, dt or atol not positive
+// and finite, rtol outside (0, 1), more steps or rows than 2^53 (time would no longer count
+// exactly), a name that is not valid UTF-8, or a model without degrees of freedom.  Returns
+// warnings (a tolerance below what double precision can deliver).  simulate() calls it; call it
+// first to refuse before any output.
+std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings& settings);
+
+// The time between logged samples as used: fixed-step methods log every whole number of steps.
+double output_interval(const SimulationSettings& settings);
+
+// Rows a run logs: the initial state and one per output time.
+double output_rows(const SimulationSettings& settings);
+
+// True if `text` is well-formed UTF-8 (no overlong forms, surrogates or code points past U+10FFFF).
+bool is_valid_utf8(const std::string& text);
 
 // Fixed-step methods (rk4, euler, …) as opposed to CVODE's.
 bool is_fixed_step(const std::string& method);
@@ -53,7 +66,13 @@ bool is_fixed_step(const std::string& method);
 // Simulates sc with settings (its own `simulation` section, possibly overridden).  Never throws
 // for a run that fails midway: the summary says how it ended (completed = false) and the
 // observer has everything logged up to then.  Throws soadyn::Error for bad settings.
+// `stop` (nullptr: none) ends the run at the next output step once it holds a non-zero value: a
+// signal number gives the status "interrupted by SIG<NAME> at t = <t>", −1 "interrupted at t = <t>".
+// It is only read, so a signal handler may set it.
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer = nullptr,
-                    std::vector<Sample>* samples = nullptr);
+                    std::vector<Sample>* samples = nullptr, const std::atomic<int>* stop = nullptr);
+
+// "interrupted by SIGINT at t = 1.25" (stop > 0: a signal number), "interrupted at t = 1.25" (stop = −1)
+std::string interrupted_status(int stop, double t);
 
 }  // namespace soadyn

@@ -35,6 +35,8 @@ struct RunOptions {
   std::string output;
   std::optional<std::string> method;
   std::optional<double> rtol, atol, dt, t_end, output_dt;
+  std::string max_output_size = "1G";  // refuse a run whose projected file is larger
+  double flush_interval = 0.5;         // s of wall time between flushes
   bool quiet = false;
 };
 void add_run(CLI::App& app, RunOptions& o);

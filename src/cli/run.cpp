@@ -4,14 +4,16 @@
 #include "soadyn/integrators.hpp"
 #include "soadyn/simulate.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
-#include <cmath>
-#include <cstdlib>
-
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
-#include <filesystem>
+#include <cstdlib>
+#include <cstring>
+#include <memory>
 
 namespace soadyn::cli {
 
@@ -26,6 +28,33 @@ const CLI::Validator kPositive(
       return std::string();
     },
     "POSITIVE");
+
+// "512", "800K", "2G", "1.5T" (powers of 1024) → bytes; negative when not a size
+double parse_size(const std::string& text) {
+  char* end = nullptr;
+  double x = std::strtod(text.c_str(), &end);
+  if (text.empty() || end == text.c_str() || !(x >= 0) || !std::isfinite(x)) return -1;
+  const std::string unit(end);
+  const char* units[] = {"", "K", "M", "G", "T", "P"};
+  for (int k = 0; k < 6; ++k, x *= 1024)
+    if (unit == units[k] || (k > 0 && (unit == std::string(units[k]) + "B" || unit == std::string(units[k]) + "iB"))) return x;
+  return -1;
+}
+
+const CLI::Validator kSize(
+    [](std::string& text) {
+      return parse_size(text) < 0 ? "expected a size such as 800M or 2G, got '" + text + "'" : std::string();
+    },
+    "SIZE");
+
+std::string human_size(double bytes) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
+  int k = 0;
+  while (bytes >= 1024 && k < 6) bytes /= 1024, ++k;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3g %s", bytes, units[k]);
+  return buf;
+}
 }  // namespace
 
 void add_run(CLI::App& app, RunOptions& o) {
@@ -33,19 +62,54 @@ void add_run(CLI::App& app, RunOptions& o) {
       "run",
       "Simulate a scenario and log states, energy and momentum to HDF5.\n"
       "Command-line values override the scenario's 'simulation' section.\n"
-      "Exit status: 0 completed, 2 bad input, 3 the run failed (the file keeps what was logged).");
+      "Exit status: 0 completed, 2 bad input or output refused (in use, an input, too large), 3 the run\n"
+      "failed (the file keeps what was logged), 4 writing the output failed (the file keeps its last\n"
+      "flushed rows), 128+N interrupted by signal N (130 SIGINT, 143 SIGTERM, 129 SIGHUP).");
   c->add_option("SCENARIO", o.scenario, "scenario file (.yaml)")->required();
   c->add_option("-o,--output", o.output, "HDF5 output file (default out/<scenario name>.h5)");
   c->add_option("--method", o.method, join(integrator_names(), " | "))->check(CLI::IsMember(integrator_names()));
-  c->add_option("--rtol", o.rtol, "CVODE relative tolerance")->check(kPositive);
+  c->add_option("--rtol", o.rtol, "CVODE relative tolerance, in (0, 1)")->check(kPositive);
   c->add_option("--atol", o.atol, "CVODE absolute tolerance")->check(kPositive);
   c->add_option("--dt", o.dt, "fixed-step methods' step, s")->check(kPositive);
   c->add_option("--t-end", o.t_end, "end time, s")->check(kPositive);
   c->add_option("--output-dt", o.output_dt, "time between logged samples, s")->check(kPositive);
+  c->add_option("--max-output-size", o.max_output_size, "refuse a run whose file would be larger (default 1G)")
+      ->check(kSize);
+  c->add_option("--flush-interval", o.flush_interval, "wall-clock seconds between writes to the file (default 0.5)")
+      ->check(kPositive);
   c->add_flag("-q,--quiet", o.quiet, "no summary on stdout");
 }
 
 namespace {
+
+// SIGINT, SIGTERM, SIGHUP: the first ends the run at the next output step (simulate's stop hook);
+// a second leaves at once, the file as of its last flush (valid: SWMR).  Only async-signal-safe
+// calls in the handler.
+std::atomic<int> g_stop{0};
+char g_tmp_path[4096];   // the file under construction, removed if we leave before it is published
+char g_lock_path[4096];  // the lock file
+
+void on_signal(int signo) {
+  if (g_stop.load() != 0) {
+    if (g_tmp_path[0]) unlink(g_tmp_path);
+    if (g_lock_path[0]) unlink(g_lock_path);
+    static const char msg[] = "soadyn: interrupted twice: exiting at once (the file keeps its last flush)\n";
+    if (write(2, msg, sizeof msg - 1) < 0) {
+    }
+    _exit(128 + signo);
+  }
+  g_stop.store(signo);
+}
+
+void install_signal_handlers(const std::string& tmp, const std::string& lock) {
+  std::snprintf(g_tmp_path, sizeof g_tmp_path, "%s", tmp.c_str());
+  std::snprintf(g_lock_path, sizeof g_lock_path, "%s", lock.c_str());
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaction(s, &sa, nullptr);
+}
 
 // a progress bar on stderr when it is a terminal and the run has taken over a second
 class Progress : public RunObserver {
@@ -60,7 +124,7 @@ class Progress : public RunObserver {
     if (!tty_ || now - start_ < std::chrono::seconds(1) || now - last_ < std::chrono::milliseconds(100)) return;
     last_ = now;
     const int width = 40, done = int(width * std::min(1.0, r.t_reached / t_end_));
-    std::fprintf(stderr, "\r[%.*s%*s] t = %.3f / %.3f s", done, "########################################", width - done, "",
+    std::fprintf(stderr, "\r[%.*s%*s] t = %.4g / %.4g s", done, "########################################", width - done, "",
                  r.t_reached, t_end_);
     shown_ = true;
   }
@@ -76,9 +140,12 @@ class Progress : public RunObserver {
   std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now(), last_{};
 };
 
+void warn(const std::string& what) { std::fprintf(stderr, "soadyn: warning: %s\n", what.c_str()); }
+
 }  // namespace
 
 int run_simulation(const RunOptions& o) {
+  // everything is checked before any file is touched
   const Scenario sc = load_scenario(o.scenario);
   SimulationSettings s = sc.simulation;
   if (o.method) s.method = *o.method;
@@ -89,16 +156,39 @@ int run_simulation(const RunOptions& o) {
   if (o.output_dt) s.output_dt = *o.output_dt;
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
 
-  check_run(sc, s);                        // refuses before any output file exists
-  H5Log log(out, sc, s, SOADYN_VERSION);  // refuses an unwritable path before the run starts
-  Progress progress(&log, s.t_end);
-  const RunSummary r = simulate(sc, s, &progress);
+  for (const auto& w : check_run(sc, s)) warn(w);
+  if (is_fixed_step(s.method) && (o.rtol || o.atol))
+    warn(std::string(o.rtol ? "--rtol" : "--atol") + " has no effect with " + s.method + " (a fixed-step method; see --dt)");
+  if (!is_fixed_step(s.method) && o.dt) warn("--dt has no effect with " + s.method + " (it chooses its own steps; see --rtol)");
+  const double rows = output_rows(s), bytes = rows * double(row_bytes(sc.model)), limit = parse_size(o.max_output_size);
+  if (bytes > limit) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "%.6g rows of %llu bytes", rows, static_cast<unsigned long long>(row_bytes(sc.model)));
+    throw Error(out + ": the output would take " + human_size(bytes) + " (" + buf + "), more than --max-output-size " +
+                o.max_output_size + ": raise --output-dt, lower --t-end, or allow it with --max-output-size");
+  }
+  check_output_path(out, {o.scenario, sc.path});
+  OutputLock lock(out);
+  install_signal_handlers(H5Log::temporary_path(out), lock.lock_path());
+
+  std::unique_ptr<H5Log> log;
+  RunSummary r;
+  try {
+    log = std::make_unique<H5Log>(out, sc, s, SOADYN_VERSION);
+    log->set_flush_interval(o.flush_interval);
+    Progress progress(log.get(), s.t_end);
+    r = simulate(sc, s, &progress, nullptr, &g_stop);
+  } catch (const IoError& e) {
+    std::fprintf(stderr, "soadyn: error: %s\n", e.what());
+    return 4;
+  }
 
   if (!o.quiet) {
     std::printf("scenario               %s\n", sc.path.c_str());
-    std::printf("method                 %s%s\n", s.method.c_str(),
-                !is_fixed_step(s.method) ? (" (rtol " + std::to_string(s.rtol) + ", atol " + std::to_string(s.atol) + ")").c_str()
-                                                : (" (dt " + std::to_string(s.dt) + " s)").c_str());
+    if (is_fixed_step(s.method))
+      std::printf("method                 %s (dt %g s)\n", s.method.c_str(), s.dt);
+    else
+      std::printf("method                 %s (rtol %g, atol %g)\n", s.method.c_str(), s.rtol, s.atol);
     std::printf("quaternion             %s\n", r.quaternion_handling.c_str());
     std::printf("status                 %s\n", r.status.c_str());
     std::printf("t reached              %.6g s\n", r.t_reached);
@@ -110,11 +200,21 @@ int run_simulation(const RunOptions& o) {
     std::printf("CPU time               %.4f s\n", r.cpu_seconds);
     std::printf("energy error (final)   %.3e (relative to max(|E0|, peak T); max over the run %.3e)\n",
                 r.final_relative_energy_error, r.max_relative_energy_error);
-    std::printf("output                 %s\n", out.c_str());
+    if (log->published())
+      std::printf("output                 %s (%ld flushes, %.3g ms each)\n", out.c_str(), log->flushes(),
+                  1e3 * log->flush_seconds() / double(std::max(1L, log->flushes())));
+    else
+      std::printf("output                 none (nothing written; an existing %s is unchanged)\n", out.c_str());
+    std::fflush(stdout);
+  }
+  const std::string kept = log->published() ? "logged up to there in " + out
+                                             : "nothing written; an existing " + out + " is unchanged";
+  if (const int signo = g_stop.load(); signo > 0 && !r.completed) {
+    std::fprintf(stderr, "soadyn: %s (%s)\n", r.status.c_str(), kept.c_str());
+    return 128 + signo;
   }
   if (!r.completed) {
-    std::fprintf(stderr, "soadyn: error: %s: %s (logged up to t = %g s in %s)\n", sc.path.c_str(), r.status.c_str(),
-                 r.t_reached, out.c_str());
+    std::fprintf(stderr, "soadyn: error: %s: %s (%s)\n", sc.path.c_str(), r.status.c_str(), kept.c_str());
     return 3;
   }
   return 0;
