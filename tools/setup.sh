@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev googletest libgtest-dev libgmock-dev libbenchmark-dev
   libsundials-dev libhdf5-dev libyaml-cpp-dev liburdfdom-dev libtinyxml2-dev libcli11-dev
   python3-numpy python3-h5py python3-matplotlib
+  libjs-three chromium python3-pil   # soadyn view: three.js inlined in the page; its browser tests
   clang libclang-rt-14-dev   # the libFuzzer targets (tools/fuzz.sh)
 )
 missing=()

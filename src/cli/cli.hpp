@@ -42,4 +42,14 @@ struct RunOptions {
 void add_run(CLI::App& app, RunOptions& o);
 int run_simulation(const RunOptions& o);
 
+struct ViewOptions {
+  std::string run;
+  std::string output;
+  double fps = 60.0;         // at most this many frames per simulated second
+  long max_frames = 20000;   // and at most this many in all
+  bool quiet = false;
+};
+void add_view(CLI::App& app, ViewOptions& o);
+int run_view(const ViewOptions& o);
+
 }  // namespace soadyn::cli

@@ -1,6 +1,7 @@
 // soadyn: the command-line front end.
 //   soadyn inspect MODEL ...   𝓜(q), bias, q̈, energy and momentum at one state
 //   soadyn run SCENARIO ...    simulate, log to HDF5
+//   soadyn view RUN.h5 ...     one self-contained web page that plays the run in 3D
 //   soadyn help [COMMAND]      what a command takes
 #include "cli.hpp"
 
@@ -27,6 +28,8 @@ int main(int argc, char** argv) {
   soadyn::cli::add_inspect(app, inspect);
   soadyn::cli::RunOptions run;
   soadyn::cli::add_run(app, run);
+  soadyn::cli::ViewOptions view;
+  soadyn::cli::add_view(app, view);
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend() - 1);
     app.parse(reversed);
@@ -56,6 +59,7 @@ int main(int argc, char** argv) {
     }
     if (app.got_subcommand("inspect")) return soadyn::cli::run_inspect(inspect);
     if (app.got_subcommand("run")) return soadyn::cli::run_simulation(run);
+    if (app.got_subcommand("view")) return soadyn::cli::run_view(view);
   } catch (const soadyn::Error& e) {
     std::cerr << "soadyn: error: " << e.what() << "\n";
     return 2;

@@ -1,0 +1,294 @@
+// soadyn view RUN.h5: one self-contained web page that plays a run in 3D.
+//
+// The model is rebuilt from the scenario stored in the run, body poses are recomputed from the
+// logged q by the library's kinematics, and the page gets them, decimated to the display rate, as
+// base64 float32 arrays inside a JSON block.  The page's HTML, CSS and script (tools/view/) and
+// three.js (Debian libjs-three) are compiled into the executable and inlined in every page, so
+// the page fetches nothing when it is opened (its Content-Security-Policy forbids it).
+#include "cli.hpp"
+#include "view.hpp"
+
+#include "soadyn/kinematics.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string_view>
+
+namespace soadyn::cli {
+
+namespace assets {
+extern const std::string_view page_html, page_css, page_js, three_js, orbit_js;
+}
+
+namespace {
+
+using view::Shape;
+
+// --- a small JSON writer ----------------------------------------------------------------------
+
+std::string quote(std::string_view s) {
+  std::string out = "\"";
+  for (const unsigned char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\r': out += "\\r"; break;
+      case '\t': out += "\\t"; break;
+      case '<': out += "\\u003c"; break;  // never "</script>" inside the page's JSON block
+      case '>': out += "\\u003e"; break;
+      case '&': out += "\\u0026"; break;
+      default:
+        if (c < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", c);
+          out += buf;
+        } else {
+          out += char(c);
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string num(double x) {
+  if (!std::isfinite(x)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", x);
+  return buf;
+}
+
+std::string vec(const Vec3& v) { return "[" + num(v.x()) + "," + num(v.y()) + "," + num(v.z()) + "]"; }
+
+std::string quat(const Eigen::Quaterniond& q) {  // three.js order: x, y, z, w
+  return "[" + num(q.x()) + "," + num(q.y()) + "," + num(q.z()) + "," + num(q.w()) + "]";
+}
+
+std::string shape(const Shape& s) {
+  return "{\"kind\":" + quote(s.kind) + ",\"size\":" + vec(s.size) + ",\"p\":" + vec(s.p) + ",\"q\":" + quat(s.R) +
+         ",\"color\":" + (s.color.empty() ? std::string("null") : quote(s.color)) + "}";
+}
+
+std::string shapes(const std::vector<Shape>& v) {
+  std::string out = "[";
+  for (size_t k = 0; k < v.size(); ++k) out += (k ? "," : "") + shape(v[k]);
+  return out + "]";
+}
+
+std::string base64(const void* data, size_t bytes) {
+  static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const auto* p = static_cast<const unsigned char*>(data);
+  std::string out;
+  out.reserve((bytes + 2) / 3 * 4);
+  for (size_t i = 0; i < bytes; i += 3) {
+    const unsigned n = unsigned(p[i]) << 16 | (i + 1 < bytes ? unsigned(p[i + 1]) << 8 : 0u) | (i + 2 < bytes ? p[i + 2] : 0u);
+    out += table[n >> 18 & 63];
+    out += table[n >> 12 & 63];
+    out += i + 1 < bytes ? table[n >> 6 & 63] : '=';
+    out += i + 2 < bytes ? table[n & 63] : '=';
+  }
+  return out;
+}
+
+template <class T>
+std::string base64(const std::vector<T>& v) {
+  return quote(base64(v.data(), v.size() * sizeof(T)));
+}
+
+std::string html_escape(std::string_view s) {
+  std::string out;
+  for (const char c : s) {
+    if (c == '<') out += "&lt;";
+    else if (c == '>') out += "&gt;";
+    else if (c == '&') out += "&amp;";
+    else if (c == '"') out += "&quot;";
+    else out += c;
+  }
+  return out;
+}
+
+// --- frames -------------------------------------------------------------------------------------
+
+// The samples shown: the first, then each one at least h after the last kept, and the last, with
+// h = max(1/fps, duration/max_frames): ≤ fps frames per simulated second (real time at ×1), and a
+// bounded page however long the run.
+std::vector<Eigen::Index> decimate(const VecX& t, double fps, long max_frames, double& h) {
+  const Eigen::Index n = t.size();
+  h = std::max(1.0 / fps, (t(n - 1) - t(0)) / double(std::max(1L, max_frames - 1)));
+  std::vector<Eigen::Index> keep{0};
+  for (Eigen::Index k = 1; k < n; ++k)
+    if (t(k) - t(keep.back()) >= h * (1 - 1e-6) || k == n - 1) keep.push_back(k);
+  return keep;
+}
+
+// names of the q coordinates, for the joint plot
+std::vector<std::string> coordinate_names(const Model& m) {
+  std::vector<std::string> names;
+  static const char* free_names[] = {"x", "y", "z", "qw", "qx", "qy", "qz"};
+  for (int i = 0; i < m.nbodies; ++i)
+    for (int k = 0; k < m.nq_i[i]; ++k) {
+      if (m.nq_i[i] == 1) names.push_back(m.joint_names[i]);
+      else if (m.joint_type[i] == JointType::Free) names.push_back(m.joint_names[i] + "." + free_names[k]);
+      else names.push_back(m.joint_names[i] + "[" + std::to_string(k) + "]");
+    }
+  return names;
+}
+
+std::string fill_template(std::string_view tpl, const std::vector<std::pair<std::string, std::string_view>>& values) {
+  std::string out;
+  out.reserve(tpl.size() + [&] {
+    size_t n = 0;
+    for (const auto& v : values) n += v.second.size();
+    return n;
+  }());
+  size_t at = 0;
+  while (true) {
+    const size_t open = tpl.find('@', at);
+    if (open == std::string_view::npos) break;
+    bool matched = false;
+    for (const auto& [key, value] : values)
+      if (tpl.compare(open, key.size() + 2, "@" + key + "@") == 0) {
+        out.append(tpl.substr(at, open - at));
+        out.append(value);
+        at = open + key.size() + 2;
+        matched = true;
+        break;
+      }
+    if (!matched) {
+      out.append(tpl.substr(at, open + 1 - at));
+      at = open + 1;
+    }
+  }
+  out.append(tpl.substr(at));
+  return out;
+}
+
+}  // namespace
+
+void add_view(CLI::App& app, ViewOptions& o) {
+  CLI::App* c = app.add_subcommand(
+      "view",
+      "Write one self-contained web page (three.js inlined, nothing fetched) that plays a run in 3D,\n"
+      "with linked plots of the energy error and a joint.  Open RUN.html#t=1.5 to start paused at t = 1.5 s.\n"
+      "Exit status: 0 written, 2 bad input.");
+  c->add_option("RUN", o.run, "HDF5 run file from soadyn run")->required();
+  c->add_option("-o,--output", o.output, "HTML file to write (default: RUN with the extension .html)");
+  c->add_option("--fps", o.fps, "at most this many frames per simulated second (default 60)")
+      ->check(CLI::Range(1.0, 1000.0));
+  c->add_option("--max-frames", o.max_frames, "and at most this many frames in all (default 20000)")
+      ->check(CLI::Range(2L, 1000000L));
+  c->add_flag("-q,--quiet", o.quiet, "no summary on stdout");
+}
+
+int run_view(const ViewOptions& o) {
+  const view::RunFile run = view::read_run(o.run);
+  const view::RunModel rm = view::rebuild_model(run);
+  const Model& m = rm.model;
+  const view::Look look = view::make_look(m, rm.urdf_text, rm.urdf_path);
+
+  double h = 0.0;
+  const std::vector<Eigen::Index> keep = decimate(run.time, o.fps, o.max_frames, h);
+  const size_t K = keep.size(), N = size_t(m.nbodies);
+
+  // poses from q by the library's kinematics: R_i, η_i of every body (the note's [kin] stage)
+  Data d(m);
+  std::vector<double> times(K);
+  std::vector<float> pose(K * N * 7), qs(K * size_t(m.nq));
+  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
+  auto extend = [&](const Vec3& x) {
+    lo = lo.cwiseMin(x);
+    hi = hi.cwiseMax(x);
+  };
+  for (size_t f = 0; f < K; ++f) {
+    const Eigen::Index k = keep[f];
+    VecX q = run.q.row(k).transpose();
+    if (!q.allFinite()) throw Error(o.run + ": /q row " + std::to_string(k) + " is not finite");
+    m.normalize(q);
+    update_kinematics(m, d, q);
+    times[f] = run.time(k);
+    for (size_t i = 0; i < N; ++i) {
+      const Eigen::Quaterniond r(d.R[i]);
+      const Vec3 p = d.eta.col(i);
+      float* out = &pose[(f * N + i) * 7];
+      for (int c = 0; c < 3; ++c) out[c] = float(p(c));
+      out[3] = float(r.x()), out[4] = float(r.y()), out[5] = float(r.z()), out[6] = float(r.w());
+      extend(p);
+      extend(d.r.col(i));
+      for (const Vec3& s : look.bodies[i].segments) extend(p + d.R[i] * s);
+    }
+    for (int c = 0; c < m.nq; ++c) qs[f * size_t(m.nq) + c] = float(run.q(k, c));
+  }
+
+  // energy error relative to max(|E0|, peak T), as soadyn run reports it
+  std::string energy = "null";
+  if (run.total.size()) {
+    const double E0 = run.total(0);
+    const double scale = std::max({std::abs(E0), run.kinetic.size() ? run.kinetic.maxCoeff() : 0.0, 1e-300});
+    std::vector<float> err(K);
+    for (size_t f = 0; f < K; ++f) err[f] = float((run.total(keep[f]) - E0) / scale);
+    energy = "{\"error\":" + base64(err) + ",\"E0\":" + num(E0) + ",\"scale\":" + num(scale) +
+             ",\"work_inputs\":" + (rm.has_work_inputs ? "true" : "false") + "}";
+  }
+
+  // the scene: bodies as the model knows them
+  std::string bodies = "[";
+  for (size_t i = 0; i < N; ++i) {
+    const view::BodyLook& b = look.bodies[i];
+    std::string segs = "[";
+    for (size_t s = 0; s < b.segments.size(); ++s) segs += (s ? "," : "") + vec(b.segments[s]);
+    segs += "]";
+    bodies += std::string(i ? "," : "") + "{\"name\":" + quote(m.body_names[i]) + ",\"joint\":" + quote(m.joint_names[i]) +
+              ",\"type\":" + quote(std::string(to_string(m.joint_type[i]))) + ",\"parent\":" + std::to_string(m.parent[i]) + ",\"iq\":" + std::to_string(m.idx_q[i]) +
+              ",\"mass\":" + num(m.mass[i]) + ",\"com\":" + vec(m.com[i]) + ",\"axis\":" + vec(m.axis[i]) +
+              ",\"segments\":" + segs + ",\"box\":" + shape(b.inertia_box) + ",\"visuals\":" + shapes(b.visuals) +
+              ",\"meshes\":" + std::to_string(b.meshes) + "}";
+  }
+  bodies += "]";
+  std::string coords = "[";
+  const auto names = coordinate_names(m);
+  for (size_t c = 0; c < names.size(); ++c) coords += (c ? "," : "") + quote(names[c]);
+  coords += "]";
+
+  char rule[160];
+  std::snprintf(rule, sizeof rule, "%zu of %ld logged samples, at least %.4g s apart (at most %.4g per simulated second)", K,
+                long(run.time.size()), h, 1.0 / h);
+  const std::string data =
+      "{\"name\":" + quote(rm.name) + ",\"description\":" + quote(rm.description) + ",\"run\":" +
+      quote(std::filesystem::path(o.run).filename().string()) + ",\"scenario_path\":" + quote(run.scenario_path) +
+      ",\"version\":" + quote(run.version) + ",\"method\":" + quote(run.method) + ",\"status\":" + quote(run.status) +
+      ",\"gravity\":" + vec(m.gravity) + ",\"bodies\":" + bodies + ",\"world_visuals\":" + shapes(look.world_visuals) + ",\"world_meshes\":" + std::to_string(look.world_meshes) +
+      ",\"bounds\":{\"min\":" + vec(lo) + ",\"max\":" + vec(hi) + "},\"frames\":{\"n\":" + std::to_string(K) +
+      ",\"nb\":" + std::to_string(N) + ",\"t\":" + base64(times) + ",\"pose\":" + base64(pose) + ",\"rule\":" +
+      quote(rule) + "},\"coords\":" + coords + ",\"nq\":" + std::to_string(m.nq) + ",\"q\":" + base64(qs) +
+      ",\"energy\":" + energy + "}";
+
+  const std::string title = html_escape(rm.name);
+  const std::string page = fill_template(assets::page_html, {{"TITLE", title},
+                                                             {"CSS", assets::page_css},
+                                                             {"DATA", data},
+                                                             {"THREE", assets::three_js},
+                                                             {"ORBIT", assets::orbit_js},
+                                                             {"VIEWER", assets::page_js}});
+
+  const std::string out = o.output.empty() ? std::filesystem::path(o.run).replace_extension(".html").string() : o.output;
+  std::error_code ec;
+  if (std::filesystem::is_directory(out, ec)) throw Error(out + ": is a directory, expected an output file");
+  {
+    std::ofstream f(out, std::ios::binary);
+    if (!f) throw Error(out + ": cannot create the page (is the directory writable?)");
+    f.write(page.data(), std::streamsize(page.size()));
+    if (!f.flush()) throw Error(out + ": write error");
+  }
+  if (!o.quiet) {
+    std::printf("run                    %s (%s)\n", o.run.c_str(), run.status.empty() ? "status unknown" : run.status.c_str());
+    std::printf("bodies                 %zu\n", N);
+    std::printf("frames                 %s\n", rule);
+    std::printf("page                   %s (%.2f MB)\n", out.c_str(), double(page.size()) / 1e6);
+  }
+  return 0;
+}
+
+}  // namespace soadyn::cli

@@ -1,0 +1,64 @@
+// soadyn view: the pieces behind the page (see view.cpp for the page itself).
+//   view_run.cpp    a run file read back, the model rebuilt from the scenario stored in it
+//   view_scene.cpp  what each body looks like: skeleton, centre of mass, inertia box, URDF visuals
+#pragma once
+
+#include "soadyn/model.hpp"
+
+#include <Eigen/Geometry>
+
+#include <string>
+#include <vector>
+
+namespace soadyn::cli::view {
+
+// The parts of a run file the page shows.
+struct RunFile {
+  std::string path;
+  std::string scenario_text, scenario_path, version;
+  std::string method, status;
+  std::vector<std::string> joint_names;  // as logged (empty if the file has none)
+  VecX time;                             // T
+  MatX q;                                // T × nq
+  VecX kinetic, total;                   // T (empty if absent)
+};
+
+// Reads `path`; throws soadyn::Error naming the file and what is missing or malformed.
+RunFile read_run(const std::string& path);
+
+// The model the run was made with, rebuilt from the scenario text stored in the file; throws
+// soadyn::Error if it cannot be (a URDF that moved) or does not match the logged q.
+struct RunModel {
+  Model model;
+  std::string name, description;
+  std::string urdf_text, urdf_path;  // the URDF the model came from, if any
+  bool has_work_inputs = false;      // torques or dampers: E is not expected to stay constant
+};
+RunModel rebuild_model(const RunFile& run);
+
+// One drawn shape, in its body's frame (or the world's).
+struct Shape {
+  std::string kind;  // box | cylinder | sphere
+  Vec3 size = Vec3::Zero();  // box: edge lengths; cylinder: radius, length (along z), 0; sphere: radius
+  Vec3 p = Vec3::Zero();
+  Eigen::Quaterniond R = Eigen::Quaterniond::Identity();
+  std::string color;  // "#rrggbb" from the URDF material, or empty
+};
+
+struct BodyLook {
+  std::vector<Vec3> segments;  // skeleton: body-frame end points of capsules from the joint (origin)
+  Shape inertia_box;           // the uniform box with the body's mass and principal moments
+  std::vector<Shape> visuals;  // URDF <visual> primitives
+  int meshes = 0;              // URDF <visual> meshes (drawn as the default shape)
+};
+
+struct Look {
+  std::vector<BodyLook> bodies;
+  std::vector<Shape> world_visuals;  // visuals of links welded to the world
+  int world_meshes = 0;
+};
+
+// Skeleton and inertia box from the model; visuals from the URDF text when there is one.
+Look make_look(const Model& model, const std::string& urdf_text, const std::string& urdf_path);
+
+}  // namespace soadyn::cli::view

@@ -1,0 +1,199 @@
+// soadyn view: a run file read back, and the model rebuilt from the scenario stored in it.
+#include "view.hpp"
+
+#include "soadyn/scenario.hpp"
+
+#include <hdf5.h>
+#include <yaml-cpp/yaml.h>
+
+#include <filesystem>
+#include <memory>
+
+namespace soadyn::cli::view {
+
+namespace {
+
+// A move-only owner of one HDF5 id, closed with the function for its kind.
+class Id {
+ public:
+  Id(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
+  Id(Id&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
+  Id& operator=(Id&&) = delete;
+  Id(const Id&) = delete;
+  Id& operator=(const Id&) = delete;
+  ~Id() {
+    if (id_ >= 0) close_(id_);
+  }
+  operator hid_t() const { return id_; }
+  bool ok() const { return id_ >= 0; }
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+};
+
+bool exists(hid_t file, const std::string& name) {
+  // each link of the path must exist before the next is asked about
+  std::string at;
+  size_t from = 1;
+  while (true) {
+    const size_t slash = name.find('/', from);
+    at = name.substr(0, slash);
+    if (H5Lexists(file, at.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (slash == std::string::npos) return true;
+    from = slash + 1;
+  }
+}
+
+// a string held by an attribute or a dataset, fixed-length or variable-length
+std::string read_string(hid_t obj, bool attribute, const std::string& where) {
+  Id type(attribute ? H5Aget_type(obj) : H5Dget_type(obj), H5Tclose);
+  if (!type.ok() || H5Tget_class(type) != H5T_STRING) throw Error(where + ": expected a string");
+  Id space(attribute ? H5Aget_space(obj) : H5Dget_space(obj), H5Sclose);
+  if (H5Sget_simple_extent_npoints(space) != 1) throw Error(where + ": expected one string");
+  auto read = [&](hid_t mem, void* buf) {
+    return attribute ? H5Aread(obj, mem, buf) : H5Dread(obj, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf);
+  };
+  if (H5Tis_variable_str(type) > 0) {
+    Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(mem, H5T_VARIABLE);
+    char* text = nullptr;
+    if (read(mem, &text) < 0) throw Error(where + ": cannot be read");
+    std::unique_ptr<char, herr_t (*)(void*)> owner(text, H5free_memory);
+    return text ? std::string(text) : std::string();
+  }
+  const size_t n = H5Tget_size(type);
+  std::string text(n, '\0');
+  if (read(type, text.data()) < 0) throw Error(where + ": cannot be read");
+  return text.substr(0, text.find('\0'));
+}
+
+std::string string_attribute(hid_t obj, const char* name, const std::string& where) {
+  if (H5Aexists(obj, name) <= 0) return {};
+  Id a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
+  return read_string(a, true, where + ": attribute '" + name + "'");
+}
+
+// a T or T×cols dataset of numbers, as a row-major T×cols matrix
+MatX read_matrix(hid_t file, const std::string& name, const std::string& path) {
+  const std::string where = path + ": dataset " + name;
+  Id d(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!d.ok()) throw Error(where + ": cannot be opened");
+  Id space(H5Dget_space(d), H5Sclose);
+  hsize_t dims[2] = {0, 1};
+  const int rank = H5Sget_simple_extent_ndims(space);
+  if (rank < 1 || rank > 2) throw Error(where + ": expected 1 or 2 dimensions, got " + std::to_string(rank));
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m(dims[0], rank == 2 ? dims[1] : 1);
+  if (m.size() > 0 && H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, m.data()) < 0)
+    throw Error(where + ": cannot be read");
+  return m;
+}
+
+}  // namespace
+
+RunFile read_run(const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such run file");
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected a run file from soadyn run)");
+  Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!file.ok()) throw Error(path + ": cannot open the HDF5 file");
+
+  RunFile r;
+  r.path = path;
+  // the scenario's text: a root attribute, or a dataset /scenario
+  if (H5Aexists(file, "scenario") > 0) {
+    r.scenario_text = string_attribute(file, "scenario", path);
+  } else if (exists(file, "/scenario")) {
+    Id d(H5Dopen2(file, "/scenario", H5P_DEFAULT), H5Dclose);
+    r.scenario_text = read_string(d, false, path + ": dataset /scenario");
+  }
+  if (r.scenario_text.empty()) throw Error(path + ": no scenario stored in the file (not a run file from soadyn run?)");
+  r.scenario_path = string_attribute(file, "scenario_path", path);
+  r.version = string_attribute(file, "soadyn_version", path);
+  if (exists(file, "/solver")) {
+    Id g(H5Gopen2(file, "/solver", H5P_DEFAULT), H5Gclose);
+    r.method = string_attribute(g, "method", path + ": /solver");
+    r.status = string_attribute(g, "status", path + ": /solver");
+  }
+  for (const char* name : {"/time", "/q"})
+    if (!exists(file, name)) throw Error(path + ": dataset " + name + " is missing (not a run file from soadyn run?)");
+  r.time = read_matrix(file, "/time", path).col(0);
+  r.q = read_matrix(file, "/q", path);
+  if (exists(file, "/energy/kinetic")) r.kinetic = read_matrix(file, "/energy/kinetic", path).col(0);
+  if (exists(file, "/energy/total")) r.total = read_matrix(file, "/energy/total", path).col(0);
+
+  // rows: as many as every series has (a run stopped mid-write keeps whole rows only)
+  Eigen::Index rows = std::min(r.time.size(), r.q.rows());
+  if (r.kinetic.size()) rows = std::min(rows, r.kinetic.size());
+  if (r.total.size()) rows = std::min(rows, r.total.size());
+  if (rows == 0) throw Error(path + ": the run logged no samples");
+  r.time.conservativeResize(rows);
+  r.q.conservativeResize(rows, Eigen::NoChange);
+  if (r.kinetic.size()) r.kinetic.conservativeResize(rows);
+  if (r.total.size()) r.total.conservativeResize(rows);
+  for (Eigen::Index k = 1; k < rows; ++k)
+    if (!(r.time(k) >= r.time(k - 1))) throw Error(path + ": /time decreases at row " + std::to_string(k));
+
+  if (exists(file, "/model/joint_names")) {
+    Id d(H5Dopen2(file, "/model/joint_names", H5P_DEFAULT), H5Dclose);
+    Id type(H5Dget_type(d), H5Tclose);
+    Id space(H5Dget_space(d), H5Sclose);
+    const hssize_t n = H5Sget_simple_extent_npoints(space);
+    if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) <= 0 && n > 0) {
+      const size_t width = H5Tget_size(type);
+      std::vector<char> buf(width * size_t(n));
+      if (H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) >= 0)
+        for (hssize_t i = 0; i < n; ++i) {
+          std::string s(buf.data() + i * width, width);
+          r.joint_names.push_back(s.substr(0, s.find('\0')));
+        }
+    }
+  }
+  return r;
+}
+
+RunModel rebuild_model(const RunFile& run) {
+  const std::string label = run.scenario_path.empty() ? run.path + ":scenario" : run.scenario_path;
+  RunModel out;
+  try {
+    const std::string ext = std::filesystem::path(label).extension().string();
+    if (ext == ".urdf" || ext == ".URDF" || ext == ".xml") {
+      // `soadyn run robot.urdf`: the stored text is the URDF, run with the default gravity
+      out.model = parse_urdf(run.scenario_text, label, false, Vec3(0, 0, -9.81));
+      out.name = std::filesystem::path(label).stem().string();
+      out.urdf_text = run.scenario_text;
+      out.urdf_path = label;
+    } else {
+      const Scenario sc = parse_scenario(run.scenario_text, label);
+      out.model = sc.model;
+      out.name = sc.name;
+      out.description = sc.description;
+      out.has_work_inputs = !sc.inputs.torques.empty() || !sc.inputs.dampers.empty();
+      // the URDF a scenario names, relative to the scenario file (parse_scenario has just read it)
+      const YAML::Node root = YAML::Load(sc.text);
+      if (root["urdf"]) {
+        const std::filesystem::path p = std::filesystem::path(label).parent_path() / root["urdf"].as<std::string>();
+        std::error_code ec;
+        if (std::filesystem::is_regular_file(p, ec)) {
+          out.urdf_text = read_text_file(p.string());
+          out.urdf_path = p.string();
+        }
+      }
+    }
+  } catch (const Error& e) {
+    throw Error(run.path + ": cannot rebuild the run's model from the scenario stored in it (" + e.what() +
+                "); run soadyn view from the directory the run was made in, with the scenario's files in place");
+  }
+  const Model& m = out.model;
+  if (run.q.cols() != m.nq)
+    throw Error(run.path + ": /q has " + std::to_string(run.q.cols()) + " columns but the scenario's model has nq = " +
+                std::to_string(m.nq) + " (did " + label + " or its URDF change since the run?)");
+  if (!run.joint_names.empty() && run.joint_names != m.joint_names)
+    throw Error(run.path + ": the joints logged in /model/joint_names differ from the rebuilt model's (did " + label +
+                " or its URDF change since the run?)");
+  return out;
+}
+
+}  // namespace soadyn::cli::view

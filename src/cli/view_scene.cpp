@@ -1,0 +1,144 @@
+// soadyn view: what each body looks like.  From the model: a skeleton (capsules from the joint to
+// the children's joints), the centre of mass, and the uniform box with the body's mass and
+// principal moments.  From a URDF: its <visual> boxes, cylinders and spheres, moved into the frame
+// of the body they were welded into.
+#include "view.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+namespace soadyn::cli::view {
+
+namespace {
+
+// the uniform box of mass m with the principal moments of I: I_x = m (b² + c²)/12 etc., so
+// a² = 6 (I_y + I_z − I_x)/m, and likewise (clamped at zero against round-off)
+Shape inertia_box(double mass, const Vec3& com, const Mat3& I) {
+  Shape s;
+  s.kind = "box";
+  s.p = com;
+  if (!(mass > 0)) return s;
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(0.5 * (I + I.transpose()));
+  const Vec3 l = eig.eigenvalues();
+  Mat3 V = eig.eigenvectors();
+  if (V.determinant() < 0) V.col(2) = -V.col(2);
+  for (int k = 0; k < 3; ++k) {
+    const double sq = 6.0 * (l.sum() - 2.0 * l(k)) / mass;
+    s.size(k) = std::sqrt(std::max(0.0, sq));
+  }
+  s.R = Eigen::Quaterniond(V).normalized();
+  return s;
+}
+
+Placement to_placement(const urdf::Pose& p) {
+  Placement X;
+  X.p = Vec3(p.position.x, p.position.y, p.position.z);
+  X.R = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
+  return X;
+}
+
+Placement compose(const Placement& a, const Placement& b) { return {a.R * b.R, a.p + a.R * b.p}; }
+
+// urdfdom's console messages are dropped: the model was already read from this URDF
+class QuietConsole : public console_bridge::OutputHandler {
+ public:
+  QuietConsole() { console_bridge::useOutputHandler(this); }
+  ~QuietConsole() override { console_bridge::restorePreviousOutputHandler(); }
+  QuietConsole(const QuietConsole&) = delete;
+  QuietConsole& operator=(const QuietConsole&) = delete;
+  void log(const std::string&, console_bridge::LogLevel, const char*, int) override {}
+};
+
+std::string hex_color(const urdf::Color& c) {
+  char buf[8];
+  auto byte = [](float x) { return int(std::lround(std::clamp(double(x), 0.0, 1.0) * 255)); };
+  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", byte(c.r), byte(c.g), byte(c.b));
+  return buf;
+}
+
+// the URDF's visuals, each in the frame of the model body its link was welded into (-1: world)
+void add_urdf_visuals(const Model& model, const std::string& urdf_text, const std::string& urdf_path, Look& look) {
+  urdf::ModelInterfaceSharedPtr robot;
+  {
+    QuietConsole quiet;
+    robot = urdf::parseURDF(urdf_text);
+  }
+  if (!robot) throw Error(urdf_path + ": URDF: cannot be read for its visuals");
+  for (const auto& [name, link] : robot->links_) {
+    if (link->visual_array.empty()) continue;
+    // climb fixed joints up to the moving body the link belongs to: X = frame of link in that body
+    Placement X;
+    int body = model.body_index(name);
+    for (urdf::LinkConstSharedPtr at = link; body < 0;) {
+      const urdf::JointConstSharedPtr j = at->parent_joint;
+      if (!j) break;  // the root, welded to the world
+      if (j->type != urdf::Joint::FIXED) {
+        X = Placement{};  // a moving link missing from the model: not drawn
+        body = -2;
+        break;
+      }
+      X = compose(to_placement(j->parent_to_joint_origin_transform), X);
+      at = robot->getLink(j->parent_link_name);
+      if (!at) break;
+      body = model.body_index(at->name);
+    }
+    if (body == -2) continue;
+    for (const auto& v : link->visual_array) {
+      if (!v || !v->geometry) continue;
+      const Placement Xv = compose(X, to_placement(v->origin));
+      Shape s;
+      s.p = Xv.p;
+      s.R = Eigen::Quaterniond(Xv.R).normalized();
+      if (v->material) s.color = hex_color(v->material->color);
+      switch (v->geometry->type) {
+        case urdf::Geometry::BOX: {
+          const auto& b = static_cast<const urdf::Box&>(*v->geometry);
+          s.kind = "box";
+          s.size = Vec3(b.dim.x, b.dim.y, b.dim.z);
+          break;
+        }
+        case urdf::Geometry::CYLINDER: {
+          const auto& c = static_cast<const urdf::Cylinder&>(*v->geometry);
+          s.kind = "cylinder";
+          s.size = Vec3(c.radius, c.length, 0);
+          break;
+        }
+        case urdf::Geometry::SPHERE: {
+          s.kind = "sphere";
+          s.size = Vec3(static_cast<const urdf::Sphere&>(*v->geometry).radius, 0, 0);
+          break;
+        }
+        default:  // meshes: the body keeps its default shape
+          (body >= 0 ? look.bodies[body].meshes : look.world_meshes) += 1;
+          continue;
+      }
+      (body >= 0 ? look.bodies[body].visuals : look.world_visuals).push_back(s);
+    }
+  }
+}
+
+}  // namespace
+
+Look make_look(const Model& model, const std::string& urdf_text, const std::string& urdf_path) {
+  Look look;
+  look.bodies.resize(model.nbodies);
+  for (int i = 0; i < model.nbodies; ++i) {
+    BodyLook& b = look.bodies[i];
+    // a capsule from the joint to each child's joint; a leaf's runs through its cm to 2 s_i
+    for (int c = i + 1; c < model.nbodies; ++c)
+      if (model.parent[c] == i && model.placement[c].p.norm() > 1e-9) b.segments.push_back(model.placement[c].p);
+    bool has_child = false;
+    for (int c = i + 1; c < model.nbodies; ++c) has_child = has_child || model.parent[c] == i;
+    if (!has_child && model.com[i].norm() > 1e-9) b.segments.push_back(2.0 * model.com[i]);
+    b.inertia_box = inertia_box(model.mass[i], model.com[i], model.inertia[i]);
+  }
+  if (!urdf_text.empty()) add_urdf_visuals(model, urdf_text, urdf_path, look);
+  return look;
+}
+
+}  // namespace soadyn::cli::view

@@ -1,0 +1,496 @@
+// soadyn view: plays a run in 3D (three.js) with linked plots.  The run is the JSON block
+// #soadyn-run written by `soadyn view`: the bodies as the model knows them, and per frame the
+// pose of every body frame (position of the joint point, orientation body -> world), computed
+// by soadyn's kinematics from the logged q.  Nothing here fetches anything.
+(function () {
+  'use strict';
+  const RUN = JSON.parse(document.getElementById('soadyn-run').textContent);
+
+  function decode(text, Type) {
+    const bin = atob(text);
+    const bytes = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; ++i) bytes[i] = bin.charCodeAt(i);
+    return new Type(bytes.buffer);
+  }
+  const K = RUN.frames.n, NB = RUN.frames.nb, NQ = RUN.nq;
+  const T = decode(RUN.frames.t, Float64Array);   // K
+  const P = decode(RUN.frames.pose, Float32Array); // K x NB x [px py pz qx qy qz qw]
+  const Q = decode(RUN.q, Float32Array);           // K x NQ
+  const t0 = T[0], t1 = T[K - 1];
+
+  // --- scene ------------------------------------------------------------------------------------
+  const pane = document.getElementById('scene-pane');
+  const renderer = new THREE.WebGLRenderer({ antialias: true });
+  renderer.setPixelRatio(window.devicePixelRatio || 1);
+  pane.insertBefore(renderer.domElement, pane.firstChild);
+  const scene = new THREE.Scene();
+  scene.background = new THREE.Color(0xeef1f5);
+  scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8f99, 0.75));
+  const sun = new THREE.DirectionalLight(0xffffff, 0.55);
+  scene.add(sun);
+
+  const V = (a) => new THREE.Vector3(a[0], a[1], a[2]);
+  const g = V(RUN.gravity);
+  const up = g.length() > 0 ? g.clone().negate().normalize() : new THREE.Vector3(0, 0, 1);
+  const lo = V(RUN.bounds.min), hi = V(RUN.bounds.max);
+  const center = lo.clone().add(hi).multiplyScalar(0.5);
+  const extent = hi.clone().sub(lo);
+  // L: the scene's size, from the whole motion (at least the largest body)
+  let L = extent.length();
+  RUN.bodies.forEach((b) => { L = Math.max(L, V(b.box.size).length()); });
+  if (!(L > 1e-6)) L = 1;
+  const rSkel = 0.012 * L, rCmMax = 0.035 * L, arrowLen = 0.09 * L;
+  const massMax = Math.max.apply(null, RUN.bodies.map((b) => b.mass).concat([1e-300]));
+
+  const palette = ['#4e79a7', '#f28e2b', '#e15759', '#76b7b2', '#59a14f', '#edc948', '#b07aa1', '#ff9da7', '#9c755f', '#8cd17d'];
+  const layers = { skeleton: [], boxes: [], visuals: [], axes: [] };
+  const unitSphere = new THREE.SphereBufferGeometry(1, 18, 12);
+  const unitCylinder = new THREE.CylinderBufferGeometry(1, 1, 1, 14, 1);
+  const unitBox = new THREE.BoxBufferGeometry(1, 1, 1);
+  const Y = new THREE.Vector3(0, 1, 0);
+
+  function shapeMesh(s, material) {
+    let m;
+    if (s.kind === 'box') {
+      m = new THREE.Mesh(unitBox, material);
+      m.scale.set(Math.max(s.size[0], 1e-4 * L), Math.max(s.size[1], 1e-4 * L), Math.max(s.size[2], 1e-4 * L));
+    } else if (s.kind === 'cylinder') {  // URDF: radius, length along z; three.js: along y
+      const c = new THREE.Mesh(unitCylinder, material);
+      c.scale.set(s.size[0], s.size[1], s.size[0]);
+      c.rotation.x = Math.PI / 2;
+      m = new THREE.Group();
+      m.add(c);
+    } else {
+      m = new THREE.Mesh(unitSphere, material);
+      m.scale.setScalar(s.size[0]);
+    }
+    m.position.fromArray(s.p);
+    m.quaternion.fromArray(s.q);
+    return m;
+  }
+
+  function capsule(a, b, r, material, group) {
+    const d = b.clone().sub(a), len = d.length();
+    const c = new THREE.Mesh(unitCylinder, material);
+    c.scale.set(r, len, r);
+    c.position.copy(a).addScaledVector(d, 0.5);
+    c.quaternion.setFromUnitVectors(Y, d.normalize());
+    group.add(c);
+    const e = new THREE.Mesh(unitSphere, material);
+    e.scale.setScalar(r);
+    e.position.copy(b);
+    group.add(e);
+  }
+
+  const bodyGroups = RUN.bodies.map((b, i) => {
+    const color = new THREE.Color(palette[i % palette.length]);
+    const group = new THREE.Group();
+    group.matrixAutoUpdate = true;
+    const solid = new THREE.MeshPhongMaterial({ color: color, shininess: 40 });
+    const dark = new THREE.MeshPhongMaterial({ color: color.clone().multiplyScalar(0.55), shininess: 60 });
+    // skeleton: capsules from the joint to the children's joints, a ball at the joint
+    const skel = new THREE.Group();
+    const O = new THREE.Vector3();
+    b.segments.forEach((s) => capsule(O, V(s), rSkel, solid, skel));
+    const j = new THREE.Mesh(unitSphere, solid);
+    j.scale.setScalar(1.4 * rSkel);
+    skel.add(j);
+    group.add(skel);
+    layers.skeleton.push(skel);
+    // centre of mass: a sphere whose volume is proportional to the mass
+    const cm = new THREE.Mesh(unitSphere, dark);
+    cm.scale.setScalar(rCmMax * Math.cbrt(b.mass / massMax));
+    cm.position.fromArray(b.com);
+    group.add(cm);
+    // the uniform box with the body's mass and principal moments of inertia
+    const hasVisuals = b.visuals.length > 0;
+    if (V(b.box.size).length() > 1e-9) {
+      const boxMat = new THREE.MeshPhongMaterial({ color: color, transparent: true, opacity: hasVisuals ? 0.12 : 0.3, depthWrite: false });
+      const box = shapeMesh(b.box, boxMat);
+      group.add(box);
+      layers.boxes.push(box);
+    }
+    // URDF visual primitives
+    b.visuals.forEach((s) => {
+      const m = shapeMesh(s, new THREE.MeshPhongMaterial({ color: s.color ? new THREE.Color(s.color) : color, shininess: 30 }));
+      group.add(m);
+      layers.visuals.push(m);
+    });
+    // joint axis: an arrow along it (revolute: orange, prismatic: purple); a free joint: a triad
+    let marker = null;
+    if (b.type === 'revolute' || b.type === 'prismatic') {
+      const dir = V(b.axis).normalize();
+      marker = new THREE.ArrowHelper(dir, dir.clone().multiplyScalar(-0.5 * arrowLen), arrowLen * 1.5,
+        b.type === 'revolute' ? 0xd9480f : 0x7048e8, 0.25 * arrowLen, 0.14 * arrowLen);
+    } else if (b.type === 'free') {
+      marker = new THREE.AxesHelper(arrowLen * 1.2);
+    } else {  // ball and other multi-axis joints: a ring around the joint
+      marker = new THREE.Mesh(new THREE.TorusBufferGeometry(2.4 * rSkel, 0.35 * rSkel, 8, 24), dark);
+    }
+    group.add(marker);
+    layers.axes.push(marker);
+    scene.add(group);
+    return group;
+  });
+  RUN.world_visuals.forEach((s) => {
+    const m = shapeMesh(s, new THREE.MeshPhongMaterial({ color: s.color ? new THREE.Color(s.color) : 0x9aa3ad }));
+    scene.add(m);
+    layers.visuals.push(m);
+  });
+
+  // world frame, and a ground grid normal to gravity just below the motion
+  scene.add(new THREE.AxesHelper(0.25 * L));
+  let low = Infinity;
+  for (let c = 0; c < 8; ++c) {
+    const corner = new THREE.Vector3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z);
+    low = Math.min(low, corner.dot(up));
+  }
+  const gridSize = Math.pow(10, Math.ceil(Math.log10(2 * L)));
+  const grid = new THREE.GridHelper(gridSize, 20, 0x9aa3ad, 0xc9d0da);
+  grid.quaternion.setFromUnitVectors(Y, up);
+  grid.position.copy(center).addScaledVector(up, low - 0.05 * L - center.dot(up));
+  scene.add(grid);
+
+  // trail behind a body's centre of mass
+  const trailPos = new Float32Array(3 * K);
+  const trailGeom = new THREE.BufferGeometry();
+  trailGeom.setAttribute('position', new THREE.BufferAttribute(trailPos, 3));
+  const trail = new THREE.Line(trailGeom, new THREE.LineBasicMaterial({ color: 0x1d2430 }));
+  trail.frustumCulled = false;
+  scene.add(trail);
+  let trailBody = -1, trailSeconds = 4;
+  function setTrailBody(i) {
+    trailBody = i;
+    const com = i >= 0 ? V(RUN.bodies[i].com) : null;
+    const q = new THREE.Quaternion(), p = new THREE.Vector3();
+    for (let k = 0; k < K && com; ++k) {
+      const o = (k * NB + i) * 7;
+      q.set(P[o + 3], P[o + 4], P[o + 5], P[o + 6]);
+      p.copy(com).applyQuaternion(q);
+      trailPos[3 * k] = P[o] + p.x;
+      trailPos[3 * k + 1] = P[o + 1] + p.y;
+      trailPos[3 * k + 2] = P[o + 2] + p.z;
+    }
+    trailGeom.attributes.position.needsUpdate = true;
+    trail.visible = i >= 0;
+    dirty = true;
+  }
+
+  // camera: framing the whole motion, looking along the direction in which it is thinnest
+  const camera = new THREE.PerspectiveCamera(40, 1, L * 1e-3, L * 100);
+  camera.up.copy(up);
+  const axes = [new THREE.Vector3(1, 0, 0), new THREE.Vector3(0, 1, 0), new THREE.Vector3(0, 0, 1)];
+  const ext = [extent.x, extent.y, extent.z];
+  const thin = ext.indexOf(Math.min.apply(null, ext));
+  let view;
+  if (ext[thin] < 0.3 * Math.max.apply(null, ext) && Math.abs(axes[thin].dot(up)) < 0.9) {
+    const a = axes[thin], side = new THREE.Vector3().crossVectors(up, a);
+    view = a.clone().addScaledVector(up, 0.3).addScaledVector(side, 0.25);
+  } else {
+    const e1 = Math.abs(up.x) < 0.9 ? axes[0].clone() : axes[1].clone();
+    e1.addScaledVector(up, -e1.dot(up)).normalize();
+    const e2 = new THREE.Vector3().crossVectors(up, e1);
+    view = e1.multiplyScalar(1.0).addScaledVector(e2, -0.75).addScaledVector(up, 0.55);
+  }
+  view.normalize();
+  const controls = new THREE.OrbitControls(camera, renderer.domElement);
+  controls.enableKeys = false;  // the arrow keys step time
+  controls.target.copy(center);
+  function frameCamera() {
+    const radius = Math.max(0.5 * extent.length(), 0.25 * L);
+    const aspect = camera.aspect, half = THREE.Math.degToRad(camera.fov / 2);
+    const fit = Math.min(Math.tan(half), Math.tan(half) * aspect);
+    camera.position.copy(center).addScaledVector(view, 1.05 * radius / Math.sin(Math.atan(fit)));
+    controls.target.copy(center);
+    controls.update();
+  }
+  sun.position.copy(view).multiplyScalar(L).add(up.clone().multiplyScalar(L));
+  let dirty = true;
+  controls.addEventListener('change', () => { dirty = true; });
+
+  function resize() {
+    const w = Math.max(1, pane.clientWidth), h = Math.max(1, pane.clientHeight);
+    renderer.setSize(w, h);
+    camera.aspect = w / h;
+    camera.updateProjectionMatrix();
+    plots.forEach((p) => p.resize());
+    dirty = true;
+  }
+
+  // --- time -------------------------------------------------------------------------------------
+  let t = t0, playing = false, speed = 1;
+  const qa = new Float32Array(4);
+  // the frame k with T[k] <= t < T[k+1]
+  function frameAt(time) {
+    let a = 0, b = K - 1;
+    if (time <= T[0]) return 0;
+    if (time >= T[b]) return b;
+    while (b - a > 1) {
+      const m = (a + b) >> 1;
+      if (T[m] <= time) a = m; else b = m;
+    }
+    return a;
+  }
+  // poses at t: positions interpolated linearly, orientations by slerp, between logged frames
+  function applyPoses() {
+    const k = frameAt(t), k2 = Math.min(k + 1, K - 1);
+    const s = k2 > k ? (t - T[k]) / (T[k2] - T[k]) : 0;
+    for (let i = 0; i < NB; ++i) {
+      const o = (k * NB + i) * 7, o2 = (k2 * NB + i) * 7, gi = bodyGroups[i];
+      gi.position.set(P[o] + s * (P[o2] - P[o]), P[o + 1] + s * (P[o2 + 1] - P[o + 1]), P[o + 2] + s * (P[o2 + 2] - P[o + 2]));
+      THREE.Quaternion.slerpFlat(qa, 0, P, o + 3, P, o2 + 3, s);
+      gi.quaternion.set(qa[0], qa[1], qa[2], qa[3]);
+    }
+    if (trailBody >= 0) {
+      const first = trailSeconds === Infinity ? 0 : frameAt(t - trailSeconds);
+      trailGeom.setDrawRange(first, k - first + 1);
+    }
+    return k;
+  }
+
+  const playBtn = document.getElementById('play');
+  const slider = document.getElementById('time');
+  const tlabel = document.getElementById('tlabel');
+  const speedSel = document.getElementById('speed');
+  const digits = Math.max(2, Math.min(4, 1 - Math.floor(Math.log10(Math.max(1e-9, (t1 - t0) / Math.max(1, K - 1))))));
+  function setPlaying(p) {
+    playing = p;
+    if (p && t >= t1) t = t0;  // play at the end starts over
+    playBtn.innerHTML = p ? '&#10074;&#10074;' : '&#9654;';
+    dirty = true;
+  }
+  function seek(time) {
+    t = Math.min(t1, Math.max(t0, time));
+    dirty = true;
+  }
+  function stepFrame(n) {
+    setPlaying(false);
+    const k = frameAt(t + 1e-9 * (t1 - t0));
+    seek(T[Math.min(K - 1, Math.max(0, (n < 0 && T[k] < t - 1e-12 ? k + 1 : k) + n))]);
+  }
+  function setSpeed(s) {
+    speed = s;
+    speedSel.value = String(s);
+  }
+  const speeds = Array.from(speedSel.options).map((o) => Number(o.value));
+
+  playBtn.addEventListener('click', () => setPlaying(!playing));
+  slider.addEventListener('input', () => { setPlaying(false); seek(t0 + (t1 - t0) * slider.value / 1e6); });
+  speedSel.addEventListener('change', () => setSpeed(Number(speedSel.value)));
+  window.addEventListener('keydown', (e) => {
+    if (e.target && e.target.tagName === 'SELECT') return;
+    const idx = speeds.indexOf(speed);
+    if (e.key === ' ') setPlaying(!playing);
+    else if (e.key === 'ArrowRight') { if (e.shiftKey) { setPlaying(false); seek(t + 1); } else stepFrame(1); }
+    else if (e.key === 'ArrowLeft') { if (e.shiftKey) { setPlaying(false); seek(t - 1); } else stepFrame(-1); }
+    else if (e.key === 'ArrowUp') setSpeed(speeds[Math.min(speeds.length - 1, idx + 1)]);
+    else if (e.key === 'ArrowDown') setSpeed(speeds[Math.max(0, idx - 1)]);
+    else if (e.key === 'Home') { setPlaying(false); seek(t0); }
+    else if (e.key === 'End') { setPlaying(false); seek(t1); }
+    else return;
+    e.preventDefault();
+  });
+
+  // --- plots ------------------------------------------------------------------------------------
+  function niceTicks(a, b, n) {
+    if (!(b > a)) { const d = Math.abs(a) > 0 ? Math.abs(a) * 0.1 : 1; a -= d; b += d; }
+    const raw = (b - a) / n, mag = Math.pow(10, Math.floor(Math.log10(raw)));
+    const step = [1, 2, 5, 10].map((m) => m * mag).find((s) => s >= raw);
+    const lo = Math.floor(a / step) * step, hi = Math.ceil(b / step) * step;
+    const ticks = [];
+    for (let v = lo; v <= hi + 1e-9 * step; v += step) ticks.push(Math.abs(v) < 1e-9 * step ? 0 : v);
+    const big = Math.max.apply(null, ticks.map(Math.abs));
+    const exp = big >= 1e4 || big < 1e-3;
+    const digits = exp ? Math.max(0, Math.floor(Math.log10(big)) - Math.floor(Math.log10(step)))
+                       : Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
+    const label = (v) => (v === 0 ? '0' : exp ? v.toExponential(digits) : v.toFixed(digits));
+    return { lo: lo, hi: hi, ticks: ticks, label: label };
+  }
+  function Plot(canvas) {
+    this.canvas = canvas;
+    this.ctx = canvas.getContext('2d');
+    this.back = document.createElement('canvas');
+    this.y = null;
+    const self = this;
+    let dragging = false;
+    const seekTo = (e) => {
+      const r = canvas.getBoundingClientRect(), x = e.clientX - r.left;
+      setPlaying(false);
+      seek(self.x0 + (x - self.left) / self.w * (self.x1 - self.x0));
+    };
+    canvas.addEventListener('mousedown', (e) => { dragging = true; seekTo(e); });
+    window.addEventListener('mousemove', (e) => { if (dragging) seekTo(e); });
+    window.addEventListener('mouseup', () => { dragging = false; });
+  }
+  Plot.prototype.set = function (y) { this.y = y; this.draw(); };
+  Plot.prototype.resize = function () {
+    const dpr = window.devicePixelRatio || 1;
+    this.cw = this.canvas.clientWidth;
+    this.ch = this.canvas.clientHeight;
+    this.canvas.width = this.back.width = Math.max(1, Math.round(this.cw * dpr));
+    this.canvas.height = this.back.height = Math.max(1, Math.round(this.ch * dpr));
+    this.draw();
+  };
+  // axes, ticks and the curve, once, to the back canvas; the cursor is drawn over a copy of it
+  Plot.prototype.draw = function () {
+    if (!this.y || !this.cw) return;
+    const dpr = window.devicePixelRatio || 1, c = this.back.getContext('2d');
+    c.setTransform(dpr, 0, 0, dpr, 0, 0);
+    c.clearRect(0, 0, this.cw, this.ch);
+    c.font = '10px system-ui, sans-serif';
+    let ymin = Infinity, ymax = -Infinity;
+    for (let k = 0; k < K; ++k) { const v = this.y[k]; if (isFinite(v)) { ymin = Math.min(ymin, v); ymax = Math.max(ymax, v); } }
+    if (!isFinite(ymin)) { ymin = -1; ymax = 1; }
+    const yt = niceTicks(ymin, ymax, 4), xt = niceTicks(t0, t1, 5);
+    xt.lo = t0; xt.ticks = xt.ticks.filter((v) => v >= t0 - 1e-9 && v <= t1 + 1e-9);
+    this.left = 58; this.top = 8; this.w = this.cw - this.left - 10; this.h = this.ch - this.top - 22;
+    this.x0 = t0; this.x1 = t1 > t0 ? t1 : t0 + 1; this.y0 = yt.lo; this.y1 = yt.hi;
+    c.strokeStyle = '#e3e7ed'; c.fillStyle = '#5b6574'; c.lineWidth = 1;
+    c.textAlign = 'right'; c.textBaseline = 'middle';
+    yt.ticks.forEach((v) => {
+      const py = this.py(v);
+      c.beginPath(); c.moveTo(this.left, py); c.lineTo(this.left + this.w, py); c.stroke();
+      c.fillText(yt.label(v), this.left - 4, py);
+    });
+    c.textAlign = 'center'; c.textBaseline = 'top';
+    xt.ticks.forEach((v) => {
+      const px = this.px(v);
+      c.beginPath(); c.moveTo(px, this.top); c.lineTo(px, this.top + this.h); c.stroke();
+      c.fillText(xt.label(v) + (v === xt.ticks[xt.ticks.length - 1] ? ' s' : ''), px, this.top + this.h + 4);
+    });
+    c.strokeStyle = '#9aa3ad'; c.strokeRect(this.left, this.top, this.w, this.h);
+    c.strokeStyle = '#2f6fb0'; c.lineWidth = 1.3; c.beginPath();
+    for (let k = 0; k < K; ++k) {
+      const px = this.px(T[k]), py = this.py(this.y[k]);
+      if (k === 0) c.moveTo(px, py); else c.lineTo(px, py);
+    }
+    c.stroke();
+    this.cursor(null);
+  };
+  Plot.prototype.px = function (x) { return this.left + (x - this.x0) / (this.x1 - this.x0) * this.w; };
+  Plot.prototype.py = function (y) { return this.top + (1 - (y - this.y0) / (this.y1 - this.y0)) * this.h; };
+  Plot.prototype.cursor = function (k) {
+    if (!this.y || !this.cw) return;
+    const dpr = window.devicePixelRatio || 1, c = this.ctx;
+    c.setTransform(1, 0, 0, 1, 0, 0);
+    c.clearRect(0, 0, this.canvas.width, this.canvas.height);
+    c.drawImage(this.back, 0, 0);
+    if (k === null) return;
+    c.setTransform(dpr, 0, 0, dpr, 0, 0);
+    const px = this.px(t);
+    c.strokeStyle = '#d9480f'; c.lineWidth = 1.2;
+    c.beginPath(); c.moveTo(px, this.top); c.lineTo(px, this.top + this.h); c.stroke();
+    c.fillStyle = '#d9480f'; c.beginPath(); c.arc(px, this.py(this.y[k]), 3, 0, 2 * Math.PI); c.fill();
+  };
+
+  const plotEnergy = new Plot(document.getElementById('plot-energy'));
+  const plotJoint = new Plot(document.getElementById('plot-joint'));
+  const plots = [plotEnergy, plotJoint];
+  if (RUN.energy) {
+    plotEnergy.y = decode(RUN.energy.error, Float32Array);
+    document.getElementById('energy-title').textContent =
+      'energy error (E \u2212 E\u2080) / max(|E\u2080|, peak T)' + (RUN.energy.work_inputs ? ': inputs do work, E is not conserved' : '');
+  } else {
+    document.getElementById('energy-title').textContent = 'energy: not in this run file';
+  }
+  const coordSel = document.getElementById('coord');
+  RUN.coords.forEach((name, c) => { const o = document.createElement('option'); o.value = c; o.textContent = name; coordSel.appendChild(o); });
+  function setCoord(c) {
+    const y = new Float32Array(K);
+    for (let k = 0; k < K; ++k) y[k] = Q[k * NQ + c];
+    coordSel.value = String(c);
+    plotJoint.set(y);
+    dirty = true;
+  }
+
+  // --- options ----------------------------------------------------------------------------------
+  [['show-skeleton', 'skeleton'], ['show-boxes', 'boxes'], ['show-visuals', 'visuals'], ['show-axes', 'axes']].forEach(([id, layer]) => {
+    const box = document.getElementById(id);
+    if (layer === 'visuals' && layers.visuals.length === 0) box.parentNode.style.display = 'none';
+    box.addEventListener('change', () => { layers[layer].forEach((o) => { o.visible = box.checked; }); dirty = true; });
+  });
+  const trailSel = document.getElementById('trail-body');
+  RUN.bodies.forEach((b, i) => { const o = document.createElement('option'); o.value = i; o.textContent = b.name; trailSel.appendChild(o); });
+  trailSel.addEventListener('change', () => setTrailBody(Number(trailSel.value)));
+  const trailLen = document.getElementById('trail-length');
+  trailLen.addEventListener('change', () => { trailSeconds = Number(trailLen.value); trail.visible = trailSeconds > 0; dirty = true; });
+
+  document.getElementById('name').textContent = RUN.name;
+  document.getElementById('desc').textContent = RUN.description;
+  document.getElementById('meta').textContent = RUN.run + ' \u00b7 ' + NB + ' bodies \u00b7 ' + (RUN.method || '?') +
+    (RUN.status && RUN.status !== 'completed' ? ' \u00b7 ' + RUN.status : '') + ' \u00b7 soadyn ' + RUN.version;
+  const meshes = RUN.bodies.map((b) => b.meshes).reduce((a, b) => a + b, RUN.world_meshes);
+  document.getElementById('frames-note').textContent = 'frames: ' + RUN.frames.rule + '; poses in between are interpolated.' +
+    (meshes > 0 ? '  ' + meshes + ' URDF mesh visual(s) drawn as their body\'s default shape.' : '');
+
+  // picking: a click (not a drag) on a body puts the trail behind it
+  const raycaster = new THREE.Raycaster(), pointer = new THREE.Vector2();
+  let downAt = null;
+  renderer.domElement.addEventListener('pointerdown', (e) => { downAt = [e.clientX, e.clientY]; });
+  renderer.domElement.addEventListener('pointerup', (e) => {
+    if (!downAt || Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]) > 4) return;
+    const r = renderer.domElement.getBoundingClientRect();
+    pointer.set((e.clientX - r.left) / r.width * 2 - 1, -(e.clientY - r.top) / r.height * 2 + 1);
+    raycaster.setFromCamera(pointer, camera);
+    const hit = raycaster.intersectObjects(bodyGroups, true).find((h) => h.object.isMesh && h.object.visible);
+    if (!hit) return;
+    let o = hit.object;
+    while (o.parent && bodyGroups.indexOf(o) < 0) o = o.parent;
+    const i = bodyGroups.indexOf(o);
+    if (i >= 0) { trailSel.value = String(i); setTrailBody(i); }
+  });
+
+  // --- URL fragment: #t=1.5 opens paused at t = 1.5 s ------------------------------------------
+  function fromHash() {
+    const m = /(?:^#|&)t=([-+0-9.eE]+)/.exec(window.location.hash);
+    if (m && isFinite(Number(m[1]))) { setPlaying(false); seek(Number(m[1])); return true; }
+    return false;
+  }
+  window.addEventListener('hashchange', fromHash);
+
+  // --- the loop ---------------------------------------------------------------------------------
+  let last = null;
+  const api = { ready: false, renders: 0, renderedT: null, renderedFrame: -1 };
+  function loop(now) {
+    requestAnimationFrame(loop);
+    const dt = last === null ? 0 : Math.min(0.25, (now - last) / 1000);
+    last = now;
+    if (playing) {
+      t += dt * speed;
+      if (t >= t1) { t = t1; setPlaying(false); }
+      dirty = true;
+    }
+    if (!dirty) return;
+    dirty = false;
+    const k = applyPoses();
+    renderer.render(scene, camera);
+    slider.value = String(Math.round(1e6 * (t - t0) / Math.max(1e-300, t1 - t0)));
+    tlabel.textContent = 't = ' + t.toFixed(digits) + ' s / ' + t1.toFixed(digits) + ' s';
+    plots.forEach((p) => p.cursor(k));
+    api.renders += 1;
+    api.renderedT = t;
+    api.renderedFrame = k;
+  }
+
+  window.addEventListener('resize', resize);
+  resize();
+  frameCamera();
+  const freeRoot = RUN.bodies.findIndex((b) => b.type === 'free' && b.parent < 0);
+  const defaultTrail = freeRoot >= 0 ? freeRoot : NB - 1;
+  trailSel.value = String(defaultTrail);
+  setTrailBody(defaultTrail);
+  const firstCoord = RUN.bodies.findIndex((b) => b.type === 'revolute' || b.type === 'prismatic');
+  setCoord(firstCoord >= 0 ? RUN.bodies[firstCoord].iq : 0);
+  coordSel.addEventListener('change', () => setCoord(Number(coordSel.value)));
+  plotEnergy.draw();
+  if (!fromHash()) setPlaying(true);
+  // for tests and scripts: playback state and control
+  api.seek = (time) => { setPlaying(false); seek(time); };
+  api.play = () => setPlaying(true);
+  api.pause = () => setPlaying(false);
+  api.setSpeed = setSpeed;
+  api.state = () => ({ t: t, playing: playing, speed: speed, frames: K, bodies: NB, t0: t0, t1: t1 });
+  window.soadynView = api;
+  requestAnimationFrame(loop);
+  api.ready = true;
+})();
