@@ -20,7 +20,7 @@
 
   // --- scene ------------------------------------------------------------------------------------
   const pane = document.getElementById('scene-pane');
-  const renderer = new THREE.WebGLRenderer({ antialias: true });
+  const renderer = new THREE.WebGLRenderer({ antialias: false });
   renderer.setPixelRatio(window.devicePixelRatio || 1);
   pane.insertBefore(renderer.domElement, pane.firstChild);
   const scene = new THREE.Scene();
@@ -39,104 +39,148 @@
   let L = extent.length();
   RUN.bodies.forEach((b) => { L = Math.max(L, V(b.box.size).length()); });
   if (!(L > 1e-6)) L = 1;
-  const rSkel = 0.012 * L, rCmMax = 0.035 * L, arrowLen = 0.09 * L;
+  // sizes of the drawing: from the scene, and no larger than the links allow
+  const lengths = [];
+  RUN.bodies.forEach((b) => b.segments.forEach((sg) => lengths.push(V(sg).length())));
+  lengths.sort((a, b) => a - b);
+  const link = lengths.length ? lengths[lengths.length >> 1] : L;
+  const rSkel = Math.min(0.012 * L, 0.06 * link), rCmMax = Math.min(0.035 * L, 0.25 * link), arrowLen = Math.min(0.09 * L, 0.5 * link);
   const massMax = Math.max.apply(null, RUN.bodies.map((b) => b.mass).concat([1e-300]));
 
+  // Every body's parts are merged into a few meshes for the whole scene, one per layer, skinned
+  // rigidly (weight 1) to one bone per body: a handful of draw calls however many bodies, and a
+  // frame only moves the bones.
   const palette = ['#4e79a7', '#f28e2b', '#e15759', '#76b7b2', '#59a14f', '#edc948', '#b07aa1', '#ff9da7', '#9c755f', '#8cd17d'];
-  const layers = { skeleton: [], boxes: [], visuals: [], axes: [] };
-  const unitSphere = new THREE.SphereBufferGeometry(1, 18, 12);
-  const unitCylinder = new THREE.CylinderBufferGeometry(1, 1, 1, 14, 1);
+  const unitSphere = new THREE.SphereBufferGeometry(1, 14, 9);
+  const unitCylinder = new THREE.CylinderBufferGeometry(1, 1, 1, 10, 1, true);  // open: balls or cones end it
+  const closedCylinder = new THREE.CylinderBufferGeometry(1, 1, 1, 16, 1);  // URDF cylinders
+  const unitCone = new THREE.ConeBufferGeometry(1, 1, 10, 1, true);
   const unitBox = new THREE.BoxBufferGeometry(1, 1, 1);
   const Y = new THREE.Vector3(0, 1, 0);
 
-  function shapeMesh(s, material) {
-    let m;
-    if (s.kind === 'box') {
-      m = new THREE.Mesh(unitBox, material);
-      m.scale.set(Math.max(s.size[0], 1e-4 * L), Math.max(s.size[1], 1e-4 * L), Math.max(s.size[2], 1e-4 * L));
-    } else if (s.kind === 'cylinder') {  // URDF: radius, length along z; three.js: along y
-      const c = new THREE.Mesh(unitCylinder, material);
-      c.scale.set(s.size[0], s.size[1], s.size[0]);
-      c.rotation.x = Math.PI / 2;
-      m = new THREE.Group();
-      m.add(c);
-    } else {
-      m = new THREE.Mesh(unitSphere, material);
-      m.scale.setScalar(s.size[0]);
+  // rigid skinning: every vertex follows exactly one bone (skinIndex.x, weight 1), so the shaders
+  // fetch one bone matrix per vertex instead of four
+  THREE.ShaderChunk.skinbase_vertex = '#ifdef USE_SKINNING\n\tmat4 boneMatX = getBoneMatrix( skinIndex.x );\n#endif';
+  THREE.ShaderChunk.skinning_vertex = '#ifdef USE_SKINNING\n\ttransformed = ( bindMatrixInverse * ( boneMatX * ( bindMatrix * vec4( transformed, 1.0 ) ) ) ).xyz;\n#endif';
+  THREE.ShaderChunk.skinnormal_vertex = '#ifdef USE_SKINNING\n\tmat4 skinMatrix = bindMatrixInverse * boneMatX * bindMatrix;\n' +
+    '\tobjectNormal = vec4( skinMatrix * vec4( objectNormal, 0.0 ) ).xyz;\n\t#ifdef USE_TANGENT\n' +
+    '\t\tobjectTangent = vec4( skinMatrix * vec4( objectTangent, 0.0 ) ).xyz;\n\t#endif\n#endif';
+  const smallSphere = new THREE.SphereBufferGeometry(1, 10, 6);  // the skeleton's joints and ends
+
+  function Batch() { this.pos = []; this.nor = []; this.col = []; this.bone = []; this.index = []; }
+  // append geometry g, placed by matrix M (body frame), coloured, bound to bone b
+  Batch.prototype.add = function (g, M, color, b) {
+    const P = g.attributes.position.array, N = g.attributes.normal.array, base = this.bone.length;
+    const nm = new THREE.Matrix3().getNormalMatrix(M), v = new THREE.Vector3();
+    for (let j = 0; j < P.length / 3; ++j) {
+      v.set(P[3 * j], P[3 * j + 1], P[3 * j + 2]).applyMatrix4(M);
+      this.pos.push(v.x, v.y, v.z);
+      v.set(N[3 * j], N[3 * j + 1], N[3 * j + 2]).applyMatrix3(nm).normalize();
+      this.nor.push(v.x, v.y, v.z);
+      this.col.push(color.r, color.g, color.b);
+      this.bone.push(b);
     }
-    m.position.fromArray(s.p);
-    m.quaternion.fromArray(s.q);
+    if (g.index) g.index.array.forEach((j) => this.index.push(base + j));
+    else for (let j = 0; j < P.length / 3; ++j) this.index.push(base + j);
+  };
+  Batch.prototype.mesh = function (skeleton, material) {
+    const geom = new THREE.BufferGeometry(), n = this.bone.length;
+    const index = new Float32Array(4 * n), weight = new Float32Array(4 * n);
+    for (let k = 0; k < n; ++k) { index[4 * k] = this.bone[k]; weight[4 * k] = 1; }
+    geom.setAttribute('position', new THREE.Float32BufferAttribute(this.pos, 3));
+    geom.setAttribute('normal', new THREE.Float32BufferAttribute(this.nor, 3));
+    geom.setAttribute('color', new THREE.Float32BufferAttribute(this.col, 3));
+    geom.setAttribute('skinIndex', new THREE.BufferAttribute(index, 4));
+    geom.setAttribute('skinWeight', new THREE.BufferAttribute(weight, 4));
+    geom.setIndex(n > 65535 ? new THREE.Uint32BufferAttribute(this.index, 1) : new THREE.Uint16BufferAttribute(this.index, 1));
+    material.skinning = true;
+    material.vertexColors = THREE.VertexColors;
+    const m = new THREE.SkinnedMesh(geom, material);
+    m.bind(skeleton, new THREE.Matrix4());
+    m.frustumCulled = false;  // its bounds are those of the bind pose
     return m;
+  };
+  const compose = (p, q, s) => new THREE.Matrix4().compose(p, q, s);
+  const S1 = new THREE.Vector3(1, 1, 1), Q1 = new THREE.Quaternion();
+  // a primitive of the scene file (box / cylinder along z / sphere) in its frame
+  function addShape(batch, sh, color, b) {
+    const M = compose(V(sh.p), new THREE.Quaternion().fromArray(sh.q), S1);
+    if (sh.kind === 'box') {
+      const e = sh.size.map((x) => Math.max(x, 1e-3 * L));
+      batch.add(unitBox, M.multiply(compose(new THREE.Vector3(), Q1, V(e))), color, b);
+    } else if (sh.kind === 'cylinder') {  // URDF: radius, length along z; three.js: along y
+      const r = new THREE.Quaternion().setFromAxisAngle(new THREE.Vector3(1, 0, 0), Math.PI / 2);
+      batch.add(closedCylinder, M.multiply(compose(new THREE.Vector3(), r, new THREE.Vector3(sh.size[0], sh.size[1], sh.size[0]))), color, b);
+    } else {
+      batch.add(unitSphere, M.multiply(compose(new THREE.Vector3(), Q1, new THREE.Vector3(1, 1, 1).multiplyScalar(sh.size[0]))), color, b);
+    }
   }
-
-  function capsule(a, b, r, material, group) {
-    const d = b.clone().sub(a), len = d.length();
-    const c = new THREE.Mesh(unitCylinder, material);
-    c.scale.set(r, len, r);
-    c.position.copy(a).addScaledVector(d, 0.5);
-    c.quaternion.setFromUnitVectors(Y, d.normalize());
-    group.add(c);
-    const e = new THREE.Mesh(unitSphere, material);
-    e.scale.setScalar(r);
-    e.position.copy(b);
-    group.add(e);
+  // a cylinder of radius r from a to b (and a cone on it when cone = [radius, length])
+  function addRod(batch, a, c, r, color, b, cone) {
+    const d = c.clone().sub(a), len = d.length(), u = d.clone().normalize();
+    const q = new THREE.Quaternion().setFromUnitVectors(Y, u);
+    const shaft = cone ? len - cone[1] : len;
+    batch.add(unitCylinder, compose(a.clone().addScaledVector(u, 0.5 * shaft), q, new THREE.Vector3(r, shaft, r)), color, b);
+    if (cone) batch.add(unitCone, compose(a.clone().addScaledVector(u, shaft + 0.5 * cone[1]), q, new THREE.Vector3(cone[0], cone[1], cone[0])), color, b);
   }
+  const ball = (batch, p, r, color, b, geom) => batch.add(geom || unitSphere, compose(p, Q1, new THREE.Vector3(r, r, r)), color, b);
 
-  const bodyGroups = RUN.bodies.map((b, i) => {
-    const color = new THREE.Color(palette[i % palette.length]);
-    const group = new THREE.Group();
-    group.matrixAutoUpdate = true;
-    const solid = new THREE.MeshPhongMaterial({ color: color, shininess: 40 });
-    const dark = new THREE.MeshPhongMaterial({ color: color.clone().multiplyScalar(0.55), shininess: 60 });
+  const bones = RUN.bodies.map(() => new THREE.Bone());
+  const boneRoot = new THREE.Group();
+  bones.forEach((b) => boneRoot.add(b));
+  scene.add(boneRoot);
+  const skeleton = new THREE.Skeleton(bones, bones.map(() => new THREE.Matrix4()));
+  const batches = { skeleton: new Batch(), cm: new Batch(), boxes: new Batch(), visuals: new Batch(), axes: new Batch() };
+  const O = new THREE.Vector3();
+  RUN.bodies.forEach((b, i) => {
+    const color = new THREE.Color(palette[i % palette.length]), dark = color.clone().multiplyScalar(0.55);
     // skeleton: capsules from the joint to the children's joints, a ball at the joint
-    const skel = new THREE.Group();
-    const O = new THREE.Vector3();
-    b.segments.forEach((s) => capsule(O, V(s), rSkel, solid, skel));
-    const j = new THREE.Mesh(unitSphere, solid);
-    j.scale.setScalar(1.4 * rSkel);
-    skel.add(j);
-    group.add(skel);
-    layers.skeleton.push(skel);
-    // centre of mass: a sphere whose volume is proportional to the mass
-    const cm = new THREE.Mesh(unitSphere, dark);
-    cm.scale.setScalar(rCmMax * Math.cbrt(b.mass / massMax));
-    cm.position.fromArray(b.com);
-    group.add(cm);
-    // the uniform box with the body's mass and principal moments of inertia
-    const hasVisuals = b.visuals.length > 0;
-    if (V(b.box.size).length() > 1e-9) {
-      const boxMat = new THREE.MeshPhongMaterial({ color: color, transparent: true, opacity: hasVisuals ? 0.12 : 0.3, depthWrite: false });
-      const box = shapeMesh(b.box, boxMat);
-      group.add(box);
-      layers.boxes.push(box);
-    }
-    // URDF visual primitives
-    b.visuals.forEach((s) => {
-      const m = shapeMesh(s, new THREE.MeshPhongMaterial({ color: s.color ? new THREE.Color(s.color) : color, shininess: 30 }));
-      group.add(m);
-      layers.visuals.push(m);
+    // (a segment to a child ends in the child's joint ball; only a leaf's needs a ball of its own)
+    const leaf = !RUN.bodies.some((c) => c.parent === i);
+    b.segments.forEach((sg) => {
+      addRod(batches.skeleton, O, V(sg), rSkel, color, i);
+      if (leaf) ball(batches.skeleton, V(sg), rSkel, color, i, smallSphere);
     });
-    // joint axis: an arrow along it (revolute: orange, prismatic: purple); a free joint: a triad
-    let marker = null;
+    ball(batches.skeleton, O, 1.4 * rSkel, color, i, smallSphere);
+    // centre of mass: a sphere whose volume is proportional to the mass
+    ball(batches.cm, V(b.com), rCmMax * Math.cbrt(b.mass / massMax), dark, i, NB > 16 ? smallSphere : unitSphere);
+    // the uniform box with the body's mass and principal moments of inertia
+    if (V(b.box.size).length() > 1e-9) addShape(batches.boxes, b.box, color, i);
+    // URDF visual primitives
+    b.visuals.forEach((sh) => addShape(batches.visuals, sh, sh.color ? new THREE.Color(sh.color) : color, i));
+    // joint axis: an arrow through the joint (revolute: orange, prismatic: purple); free: a triad
+    const rA = 0.22 * rSkel, head = [0.1 * arrowLen, 0.25 * arrowLen];
     if (b.type === 'revolute' || b.type === 'prismatic') {
-      const dir = V(b.axis).normalize();
-      marker = new THREE.ArrowHelper(dir, dir.clone().multiplyScalar(-0.5 * arrowLen), arrowLen * 1.5,
-        b.type === 'revolute' ? 0xd9480f : 0x7048e8, 0.25 * arrowLen, 0.14 * arrowLen);
+      const u = V(b.axis).normalize();
+      addRod(batches.axes, u.clone().multiplyScalar(-0.5 * arrowLen), u.clone().multiplyScalar(arrowLen), rA,
+        new THREE.Color(b.type === 'revolute' ? 0xd9480f : 0x7048e8), i, head);
     } else if (b.type === 'free') {
-      marker = new THREE.AxesHelper(arrowLen * 1.2);
+      [[1, 0, 0, 0xd62828], [0, 1, 0, 0x2b9348], [0, 0, 1, 0x1d4ed8]].forEach((a) =>
+        addRod(batches.axes, O, new THREE.Vector3(a[0], a[1], a[2]).multiplyScalar(1.2 * arrowLen), rA, new THREE.Color(a[3]), i, head));
     } else {  // ball and other multi-axis joints: a ring around the joint
-      marker = new THREE.Mesh(new THREE.TorusBufferGeometry(2.4 * rSkel, 0.35 * rSkel, 8, 24), dark);
+      batches.axes.add(new THREE.TorusBufferGeometry(2.4, 0.35, 8, 24), compose(O, Q1, new THREE.Vector3(rSkel, rSkel, rSkel)), dark, i);
     }
-    group.add(marker);
-    layers.axes.push(marker);
-    scene.add(group);
-    return group;
   });
-  RUN.world_visuals.forEach((s) => {
-    const m = shapeMesh(s, new THREE.MeshPhongMaterial({ color: s.color ? new THREE.Color(s.color) : 0x9aa3ad }));
-    scene.add(m);
-    layers.visuals.push(m);
-  });
+  const layers = {
+    skeleton: [batches.skeleton.mesh(skeleton, new THREE.MeshLambertMaterial())],
+    cm: [batches.cm.mesh(skeleton, new THREE.MeshLambertMaterial())],
+    boxes: [batches.boxes.mesh(skeleton, new THREE.MeshLambertMaterial({ transparent: true, opacity: 0.28, depthWrite: false }))],
+    visuals: [batches.visuals.mesh(skeleton, new THREE.MeshLambertMaterial())],
+    axes: [batches.axes.mesh(skeleton, new THREE.MeshLambertMaterial())],
+  };
+  const bodyMeshes = [].concat(layers.skeleton, layers.cm, layers.boxes, layers.visuals, layers.axes);
+  bodyMeshes.forEach((m) => scene.add(m));
+  layers.boxes[0].renderOrder = 1;  // translucent, after the rest
+  const visualCount = RUN.bodies.reduce((a, b) => a + b.visuals.length, 0) + RUN.world_visuals.length;
+  if (RUN.world_visuals.length) {
+    const wb = new Batch();
+    const world = new THREE.Bone();
+    scene.add(world);
+    RUN.world_visuals.forEach((sh) => addShape(wb, sh, new THREE.Color(sh.color || '#9aa3ad'), 0));
+    const wm = wb.mesh(new THREE.Skeleton([world], [new THREE.Matrix4()]), new THREE.MeshLambertMaterial());
+    scene.add(wm);
+    layers.visuals.push(wm);
+  }
 
   // world frame, and a ground grid normal to gravity just below the motion
   scene.add(new THREE.AxesHelper(0.25 * L));
@@ -185,7 +229,7 @@
   let view;
   if (ext[thin] < 0.3 * Math.max.apply(null, ext) && Math.abs(axes[thin].dot(up)) < 0.9) {
     const a = axes[thin], side = new THREE.Vector3().crossVectors(up, a);
-    view = a.clone().addScaledVector(up, 0.3).addScaledVector(side, 0.25);
+    view = a.clone().addScaledVector(up, 0.45).addScaledVector(side, 0.3);
   } else {
     const e1 = Math.abs(up.x) < 0.9 ? axes[0].clone() : axes[1].clone();
     e1.addScaledVector(up, -e1.dot(up)).normalize();
@@ -236,7 +280,7 @@
     const k = frameAt(t), k2 = Math.min(k + 1, K - 1);
     const s = k2 > k ? (t - T[k]) / (T[k2] - T[k]) : 0;
     for (let i = 0; i < NB; ++i) {
-      const o = (k * NB + i) * 7, o2 = (k2 * NB + i) * 7, gi = bodyGroups[i];
+      const o = (k * NB + i) * 7, o2 = (k2 * NB + i) * 7, gi = bones[i];
       gi.position.set(P[o] + s * (P[o2] - P[o]), P[o + 1] + s * (P[o2 + 1] - P[o + 1]), P[o + 2] + s * (P[o2 + 2] - P[o + 2]));
       THREE.Quaternion.slerpFlat(qa, 0, P, o + 3, P, o2 + 3, s);
       gi.quaternion.set(qa[0], qa[1], qa[2], qa[3]);
@@ -309,8 +353,18 @@
   function Plot(canvas) {
     this.canvas = canvas;
     this.ctx = canvas.getContext('2d');
-    this.back = document.createElement('canvas');
     this.y = null;
+    // the cursor: a line and a dot over the canvas, moved without redrawing the plot
+    const wrap = document.createElement('div');
+    wrap.className = 'plot-wrap';
+    canvas.parentNode.insertBefore(wrap, canvas);
+    wrap.appendChild(canvas);
+    this.line = document.createElement('div');
+    this.line.className = 'plot-cursor';
+    this.dot = document.createElement('div');
+    this.dot.className = 'plot-dot';
+    wrap.appendChild(this.line);
+    wrap.appendChild(this.dot);
     const self = this;
     let dragging = false;
     const seekTo = (e) => {
@@ -327,14 +381,14 @@
     const dpr = window.devicePixelRatio || 1;
     this.cw = this.canvas.clientWidth;
     this.ch = this.canvas.clientHeight;
-    this.canvas.width = this.back.width = Math.max(1, Math.round(this.cw * dpr));
-    this.canvas.height = this.back.height = Math.max(1, Math.round(this.ch * dpr));
+    this.canvas.width = Math.max(1, Math.round(this.cw * dpr));
+    this.canvas.height = Math.max(1, Math.round(this.ch * dpr));
     this.draw();
   };
-  // axes, ticks and the curve, once, to the back canvas; the cursor is drawn over a copy of it
+  // axes, ticks and the curve, drawn once (and on resize)
   Plot.prototype.draw = function () {
     if (!this.y || !this.cw) return;
-    const dpr = window.devicePixelRatio || 1, c = this.back.getContext('2d');
+    const dpr = window.devicePixelRatio || 1, c = this.ctx;
     c.setTransform(dpr, 0, 0, dpr, 0, 0);
     c.clearRect(0, 0, this.cw, this.ch);
     c.font = '10px system-ui, sans-serif';
@@ -365,22 +419,15 @@
       if (k === 0) c.moveTo(px, py); else c.lineTo(px, py);
     }
     c.stroke();
-    this.cursor(null);
+    this.line.style.top = this.top + 'px';
+    this.line.style.height = this.h + 'px';
   };
   Plot.prototype.px = function (x) { return this.left + (x - this.x0) / (this.x1 - this.x0) * this.w; };
   Plot.prototype.py = function (y) { return this.top + (1 - (y - this.y0) / (this.y1 - this.y0)) * this.h; };
   Plot.prototype.cursor = function (k) {
     if (!this.y || !this.cw) return;
-    const dpr = window.devicePixelRatio || 1, c = this.ctx;
-    c.setTransform(1, 0, 0, 1, 0, 0);
-    c.clearRect(0, 0, this.canvas.width, this.canvas.height);
-    c.drawImage(this.back, 0, 0);
-    if (k === null) return;
-    c.setTransform(dpr, 0, 0, dpr, 0, 0);
-    const px = this.px(t);
-    c.strokeStyle = '#d9480f'; c.lineWidth = 1.2;
-    c.beginPath(); c.moveTo(px, this.top); c.lineTo(px, this.top + this.h); c.stroke();
-    c.fillStyle = '#d9480f'; c.beginPath(); c.arc(px, this.py(this.y[k]), 3, 0, 2 * Math.PI); c.fill();
+    this.line.style.transform = 'translateX(' + this.px(t).toFixed(1) + 'px)';
+    this.dot.style.transform = 'translate(' + this.px(t).toFixed(1) + 'px,' + this.py(this.y[k]).toFixed(1) + 'px)';
   };
 
   const plotEnergy = new Plot(document.getElementById('plot-energy'));
@@ -406,7 +453,7 @@
   // --- options ----------------------------------------------------------------------------------
   [['show-skeleton', 'skeleton'], ['show-boxes', 'boxes'], ['show-visuals', 'visuals'], ['show-axes', 'axes']].forEach(([id, layer]) => {
     const box = document.getElementById(id);
-    if (layer === 'visuals' && layers.visuals.length === 0) box.parentNode.style.display = 'none';
+    if (layer === 'visuals' && visualCount === 0) box.parentNode.style.display = 'none';
     box.addEventListener('change', () => { layers[layer].forEach((o) => { o.visible = box.checked; }); dirty = true; });
   });
   const trailSel = document.getElementById('trail-body');
@@ -424,19 +471,21 @@
     (meshes > 0 ? '  ' + meshes + ' URDF mesh visual(s) drawn as their body\'s default shape.' : '');
 
   // picking: a click (not a drag) on a body puts the trail behind it
-  const raycaster = new THREE.Raycaster(), pointer = new THREE.Vector2();
+  const pointer = new THREE.Vector2();
   let downAt = null;
   renderer.domElement.addEventListener('pointerdown', (e) => { downAt = [e.clientX, e.clientY]; });
   renderer.domElement.addEventListener('pointerup', (e) => {
     if (!downAt || Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]) > 4) return;
     const r = renderer.domElement.getBoundingClientRect();
     pointer.set((e.clientX - r.left) / r.width * 2 - 1, -(e.clientY - r.top) / r.height * 2 + 1);
-    raycaster.setFromCamera(pointer, camera);
-    const hit = raycaster.intersectObjects(bodyGroups, true).find((h) => h.object.isMesh && h.object.visible);
-    if (!hit) return;
-    let o = hit.object;
-    while (o.parent && bodyGroups.indexOf(o) < 0) o = o.parent;
-    const i = bodyGroups.indexOf(o);
+    // the body whose centre of mass is drawn nearest the click, within 30 px
+    let i = -1, best = 30 * 30;
+    const c = new THREE.Vector3();
+    bones.forEach((bone, j) => {
+      c.fromArray(RUN.bodies[j].com).applyMatrix4(bone.matrixWorld).project(camera);
+      const dx = (c.x - pointer.x) * r.width / 2, dy = (c.y - pointer.y) * r.height / 2;
+      if (c.z < 1 && dx * dx + dy * dy < best) { best = dx * dx + dy * dy; i = j; }
+    });
     if (i >= 0) { trailSel.value = String(i); setTrailBody(i); }
   });
 
@@ -450,7 +499,8 @@
 
   // --- the loop ---------------------------------------------------------------------------------
   let last = null;
-  const api = { ready: false, renders: 0, renderedT: null, renderedFrame: -1 };
+  // renders: frames drawn; cost: milliseconds spent in each part of drawing them (summed)
+  const api = { ready: false, renders: 0, renderedT: null, renderedFrame: -1, cost: { poses: 0, render: 0, plots: 0 } };
   function loop(now) {
     requestAnimationFrame(loop);
     const dt = last === null ? 0 : Math.min(0.25, (now - last) / 1000);
@@ -462,11 +512,16 @@
     }
     if (!dirty) return;
     dirty = false;
+    const c0 = performance.now();
     const k = applyPoses();
+    const c1 = performance.now();
     renderer.render(scene, camera);
+    const c2 = performance.now();
     slider.value = String(Math.round(1e6 * (t - t0) / Math.max(1e-300, t1 - t0)));
     tlabel.textContent = 't = ' + t.toFixed(digits) + ' s / ' + t1.toFixed(digits) + ' s';
     plots.forEach((p) => p.cursor(k));
+    const c3 = performance.now();
+    api.cost.poses += c1 - c0; api.cost.render += c2 - c1; api.cost.plots += c3 - c2;
     api.renders += 1;
     api.renderedT = t;
     api.renderedFrame = k;
@@ -489,6 +544,13 @@
   api.play = () => setPlaying(true);
   api.pause = () => setPlaying(false);
   api.setSpeed = setSpeed;
+  api.showBodies = (on) => { bodyMeshes.forEach((m) => { m.visible = on; }); dirty = true; };
+  api.setTrailSeconds = (s) => { trailSeconds = s; trail.visible = s > 0 && trailBody >= 0; dirty = true; };
+  api.plotArea = (which) => {
+    const p = which === 'joint' ? plotJoint : plotEnergy, r = p.canvas.getBoundingClientRect();
+    return { left: r.left + p.left, top: r.top + p.top, w: p.w, h: p.h };
+  };
+  api.counts = () => ({ bodies: NB, frames: K, visuals: visualCount, trailBody: trailBody });
   api.state = () => ({ t: t, playing: playing, speed: speed, frames: K, bodies: NB, t0: t0, t1: t1 });
   window.soadynView = api;
   requestAnimationFrame(loop);

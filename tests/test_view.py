@@ -1,0 +1,249 @@
+#!/usr/bin/python3
+"""Browser tests of `soadyn view`, in headless chromium driven over the DevTools protocol.
+
+For every scenario in scenarios/ (and a URDF arm with visual primitives): run it, write its page
+(checked < 5 MB), open the page at #t=a (it must open paused at a), screenshot the scene with the
+bodies shown and hidden (the bodies must cover part of it), move to #t=b and screenshot again (the
+bodies must have moved), and check that the console logged no error and that the page requested
+nothing.  Then: keyboard and plot clicks drive playback; a missing URDF and bad files are refused
+with one clear line; and the checks themselves catch an error and a network request injected into
+a copy of a page.
+
+Environment: SOADYN (the executable), SOADYN_SOURCE_DIR; optional argument --save DIR writes one
+small screenshot per scene there (the README's pictures).  Exit 77 (skipped) without chromium.
+"""
+import io
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+SOURCE = os.environ.get("SOADYN_SOURCE_DIR", os.path.join(os.path.dirname(__file__), ".."))
+sys.path.insert(0, os.path.join(SOURCE, "tools", "view"))
+from cdp import Browser, find_chromium  # noqa: E402
+
+import numpy as np  # noqa: E402
+from PIL import Image  # noqa: E402
+
+SOADYN = os.environ.get("SOADYN", os.path.join(SOURCE, "build", "soadyn"))
+MAX_PAGE_BYTES = 5_000_000
+failures = []
+
+
+def check(ok, what):
+    print(("ok    " if ok else "FAIL  ") + what, flush=True)
+    if not ok:
+        failures.append(what)
+    return ok
+
+
+def run(*args, expect=0):
+    p = subprocess.run([SOADYN, *args], capture_output=True, text=True, timeout=600)
+    if p.returncode != expect:
+        raise RuntimeError(f"soadyn {' '.join(args)}: exit {p.returncode}, expected {expect}\n{p.stdout}{p.stderr}")
+    return p
+
+
+def pixels(png):
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(np.int32)
+
+
+def changed(a, b, rect):
+    """Fraction of the pixels in rect (x, y, w, h) whose colour differs by more than 40 (sum over RGB)."""
+    x, y, w, h = rect
+    d = np.abs(a[y:y + h, x:x + w] - b[y:y + h, x:x + w]).sum(axis=2)
+    return float((d > 40).mean())
+
+
+def wait_render(b, t):
+    b.wait_for(f"soadynView.renderedT !== null && Math.abs(soadynView.renderedT - ({t})) < 1e-9", timeout=30)
+
+
+def act(b, expression):
+    """Evaluate expression in the page, then wait until the page has drawn a new frame."""
+    n = b.evaluate(f"(() => {{ const n = soadynView.renders; {expression}; return n; }})()")
+    b.wait_for(f"soadynView.renders > {n}", timeout=30)
+
+
+def canvas_rect(b):
+    r = b.evaluate("(() => { const r = document.querySelector('#scene-pane canvas').getBoundingClientRect();"
+                   " return [r.left, r.top, r.width, r.height]; })()")
+    return tuple(int(round(v)) for v in r)
+
+
+def check_scene(b, page, name, save_dir):
+    """Load page, screenshots at two times; True if every check passed."""
+    url = "file://" + os.path.abspath(page)
+    ok = True
+    b.navigate(url + "#t=0")
+    b.wait_for("window.soadynView && soadynView.ready", timeout=60)
+    st = b.evaluate("soadynView.state()")
+    t0, t1 = st["t0"], st["t1"]
+    ta = t0 + 0.15 * (t1 - t0)
+    # a fresh load at #t=ta opens paused there
+    b.navigate(url + f"#t={ta!r}")
+    b.wait_for("window.soadynView && soadynView.ready", timeout=60)
+    wait_render(b, ta)
+    st = b.evaluate("soadynView.state()")
+    ok &= check(not st["playing"] and abs(st["t"] - ta) < 1e-9 and st["speed"] == 1,
+                f"{name}: #t={ta:.4g} opens paused at that time, speed x1 (got {st})")
+    rect = canvas_rect(b)
+    act(b, "soadynView.setTrailSeconds(0)")
+    shot_a = pixels(b.screenshot())
+    act(b, "soadynView.showBodies(false)")
+    shot_hidden = pixels(b.screenshot())
+    act(b, "soadynView.showBodies(true)")
+    covered = changed(shot_a, shot_hidden, rect)
+    # a later time, through the fragment of the open page; a periodic motion may come back to the
+    # same pose, so up to three times are tried
+    for tb in (t0 + f * (t1 - t0) for f in (0.55, 0.71, 0.87)):
+        b.evaluate(f"location.hash = '#t={tb!r}'")
+        wait_render(b, tb)
+        shot_b = pixels(b.screenshot())
+        moved = changed(shot_a, shot_b, rect)
+        if moved > 0.002:
+            break
+    ok &= check(covered > 0.002, f"{name}: the bodies cover {100 * covered:.2f}% of the scene at t = {ta:.4g} s (> 0.2%)")
+    ok &= check(moved > 0.002, f"{name}: {100 * moved:.2f}% of the scene changed between t = {ta:.4g} s and "
+                               f"{tb:.4g} s (> 0.2%: the bodies moved)")
+    b.pump(0.3)
+    errors = b.console_errors()
+    ok &= check(not errors, f"{name}: no console error" + (f" (got {errors})" if errors else ""))
+    requests = b.requests(url)
+    ok &= check(not requests, f"{name}: no network request" + (f" (got {requests})" if requests else ""))
+    if save_dir:
+        act(b, "soadynView.setTrailSeconds(4)")
+        img = Image.open(io.BytesIO(b.screenshot())).convert("RGB").resize((960, 540), Image.LANCZOS)
+        img.quantize(colors=128, method=Image.MEDIANCUT, dither=Image.NONE).save(
+            os.path.join(save_dir, f"view_{name}.png"), optimize=True)
+    return ok
+
+
+def check_controls(b, page):
+    """Keyboard and plot clicks on an open page."""
+    url = "file://" + os.path.abspath(page)
+    b.navigate(url + "#t=1")
+    b.wait_for("window.soadynView && soadynView.ready", timeout=60)
+    wait_render(b, 1)
+
+    def key(k, code, vk, shift=False):
+        for kind in ("keyDown", "keyUp"):
+            b.send("Input.dispatchKeyEvent", {"type": kind, "key": k, "code": code, "windowsVirtualKeyCode": vk,
+                                              "modifiers": 8 if shift else 0})
+
+    key(" ", "Space", 32)
+    check(b.evaluate("soadynView.state().playing") is True, "space starts playback")
+    key(" ", "Space", 32)
+    check(b.evaluate("soadynView.state().playing") is False, "space pauses it")
+    b.evaluate("soadynView.seek(1)")
+    key("ArrowRight", "ArrowRight", 39)
+    frames = b.evaluate("soadynView.state()")
+    t_next = b.evaluate("soadynView.state().t")
+    check(t_next > 1 and t_next - 1 < 2 * (frames["t1"] - frames["t0"]) / (frames["frames"] - 1),
+          f"right arrow steps one frame (t 1 -> {t_next:.4g})")
+    key("ArrowLeft", "ArrowLeft", 37)
+    check(abs(b.evaluate("soadynView.state().t") - 1) < 1e-9, "left arrow steps back")
+    key("ArrowRight", "ArrowRight", 39, shift=True)
+    check(abs(b.evaluate("soadynView.state().t") - 2) < 1e-9, "shift + right arrow: +1 s")
+    key("ArrowUp", "ArrowUp", 38)
+    check(b.evaluate("soadynView.state().speed") == 2, "up arrow: speed x2")
+    key("ArrowDown", "ArrowDown", 40)
+    key("ArrowDown", "ArrowDown", 40)
+    check(b.evaluate("soadynView.state().speed") == 0.5, "down arrow twice: speed x0.5")
+    for plot in ("energy", "joint"):
+        a = b.evaluate(f"soadynView.plotArea('{plot}')")
+        x, y = a["left"] + 0.75 * a["w"], a["top"] + 0.5 * a["h"]
+        for kind in ("mousePressed", "mouseReleased"):
+            b.send("Input.dispatchMouseEvent", {"type": kind, "x": x, "y": y, "button": "left", "clickCount": 1})
+        st = b.evaluate("soadynView.state()")
+        expect = st["t0"] + 0.75 * (st["t1"] - st["t0"])
+        check(abs(st["t"] - expect) < 0.01 * (st["t1"] - st["t0"]) and not st["playing"],
+              f"a click at 3/4 of the {plot} plot seeks to t = {st['t']:.4g} s (expected {expect:.4g})")
+    b.pump(0.2)
+    check(not b.console_errors(), "no console error while driving the page")
+
+
+def check_detectors(b, page, tmp):
+    """The console and network checks catch what they are meant to catch."""
+    html = open(page, encoding="utf-8").read()
+    inject = '<img src="http://127.0.0.1:9/probe.png"><script>console.error("probe error")</script>'
+    with_csp = os.path.join(tmp, "probe_csp.html")
+    open(with_csp, "w", encoding="utf-8").write(html.replace("<body>", "<body>" + inject, 1))
+    b.navigate("file://" + with_csp)
+    b.pump(0.5)
+    errors = b.console_errors()
+    check(any("probe error" in e for e in errors), "detector: a console.error in the page is caught")
+    check(any("Content Security Policy" in e for e in errors), "detector: the page's CSP refuses an outside image")
+    start = html.index('<meta http-equiv="Content-Security-Policy"')
+    no_csp = os.path.join(tmp, "probe_nocsp.html")
+    stripped = html[:start] + html[html.index(">", start) + 1:]
+    open(no_csp, "w", encoding="utf-8").write(stripped.replace("<body>", "<body>" + inject, 1))
+    b.navigate("file://" + no_csp)
+    b.pump(0.5)
+    check(any("127.0.0.1:9" in u for u in b.requests("file://" + no_csp)),
+          "detector: without the CSP, the outside request is caught on the network")
+
+
+def check_cli_errors(tmp):
+    p = run("view", os.path.join(tmp, "missing.h5"), expect=2)
+    check("missing.h5: no such run file" in p.stderr and p.stderr.count("\n") == 1, f"missing run file: {p.stderr.strip()}")
+    p = run("view", os.path.join(SOURCE, "scenarios", "double_pendulum.yaml"), "-o", os.path.join(tmp, "x.html"), expect=2)
+    check("not an HDF5 file" in p.stderr, f"not a run file: {p.stderr.strip()}")
+    # a run whose URDF has gone: one line naming the URDF
+    d = os.path.join(tmp, "moved")
+    os.makedirs(d)
+    for f in ("view_visuals.yaml", "view_visuals.urdf"):
+        shutil.copy(os.path.join(SOURCE, "tests", "data", f), d)
+    run("run", os.path.join(d, "view_visuals.yaml"), "-q", "--t-end", "0.1", "-o", os.path.join(d, "run.h5"))
+    os.remove(os.path.join(d, "view_visuals.urdf"))
+    p = run("view", os.path.join(d, "run.h5"), expect=2)
+    check("view_visuals.urdf" in p.stderr and "cannot rebuild the run's model" in p.stderr and p.stderr.count("\n") == 1,
+          f"missing URDF: {p.stderr.strip()}")
+    check(not os.path.exists(os.path.join(d, "run.html")), "missing URDF: no page written")
+
+
+def main():
+    save_dir = None
+    if "--save" in sys.argv:
+        save_dir = sys.argv[sys.argv.index("--save") + 1]
+        os.makedirs(save_dir, exist_ok=True)
+    if not find_chromium():
+        print("chromium not found: skipped (tools/setup.sh installs it)")
+        return 77
+    tmp = tempfile.mkdtemp(prefix="soadyn-view-test-")
+    try:
+        scenes = sorted(os.path.join(SOURCE, "scenarios", f) for f in os.listdir(os.path.join(SOURCE, "scenarios"))
+                        if f.endswith(".yaml"))
+        scenes.append(os.path.join(SOURCE, "tests", "data", "view_visuals.yaml"))
+        pages = {}
+        for sc in scenes:
+            name = os.path.splitext(os.path.basename(sc))[0]
+            h5, page = os.path.join(tmp, name + ".h5"), os.path.join(tmp, name + ".html")
+            run("run", sc, "-q", "-o", h5)
+            out = run("view", h5, "-o", page).stdout
+            size = os.path.getsize(page)
+            check(size < MAX_PAGE_BYTES, f"{name}: page {size / 1e6:.2f} MB (< 5 MB); {out.splitlines()[2].split(None, 1)[1]}")
+            pages[name] = page
+        with Browser() as b:
+            b.open_page()
+            for name, page in pages.items():
+                check_scene(b, page, name, save_dir)
+            counts = None
+            b.navigate("file://" + os.path.abspath(pages["view_visuals"]))
+            b.wait_for("window.soadynView && soadynView.ready", timeout=60)
+            counts = b.evaluate("soadynView.counts()")
+            # box on the world-welded base, cylinder on link1, sphere on the welded tool; the mesh is not a primitive
+            check(counts["visuals"] == 3, f"view_visuals: 3 URDF primitives drawn (got {counts['visuals']})")
+            check_controls(b, pages["double_pendulum"])
+            check_detectors(b, pages["double_pendulum"], tmp)
+        check_cli_errors(tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    print(f"\n{len(failures)} failure(s)" if failures else "\nall checks passed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
