@@ -116,7 +116,7 @@ def check_scene(b, page, name, save_dir):
     if save_dir:
         act(b, "soadynView.setTrailSeconds(4)")
         img = Image.open(io.BytesIO(b.screenshot())).convert("RGB").resize((960, 540), Image.LANCZOS)
-        img.quantize(colors=128, method=Image.MEDIANCUT, dither=Image.NONE).save(
+        img.quantize(colors=256, method=Image.MEDIANCUT, dither=Image.NONE).save(
             os.path.join(save_dir, f"view_{name}.png"), optimize=True)
     return ok
 

@@ -30,3 +30,7 @@ if [[ -x tools/plot.py ]]; then
   echo "== plots"
   for s in "${scenarios[@]}"; do tools/plot.py "out/$s.h5" -o "out/$s.png"; done
 fi
+
+echo
+echo "== 3D pages (open in a browser)"
+for s in "${scenarios[@]}"; do build/soadyn view "out/$s.h5" -q -o "out/$s.html" && echo "out/$s.html"; done
