@@ -498,7 +498,7 @@
   window.addEventListener('hashchange', fromHash);
 
   // --- the loop ---------------------------------------------------------------------------------
-  let last = null;
+  let last = null, lastLabel = -1e9;
   // renders: frames drawn; cost: milliseconds spent in each part of drawing them (summed)
   const api = { ready: false, renders: 0, renderedT: null, renderedFrame: -1, cost: { poses: 0, render: 0, plots: 0 } };
   function loop(now) {
@@ -517,8 +517,12 @@
     const c1 = performance.now();
     renderer.render(scene, camera);
     const c2 = performance.now();
-    slider.value = String(Math.round(1e6 * (t - t0) / Math.max(1e-300, t1 - t0)));
-    tlabel.textContent = 't = ' + t.toFixed(digits) + ' s / ' + t1.toFixed(digits) + ' s';
+    // the slider and the label repaint their part of the page: at most 15 times a second in play
+    if (!playing || now - lastLabel > 66) {
+      lastLabel = now;
+      slider.value = String(Math.round(1e6 * (t - t0) / Math.max(1e-300, t1 - t0)));
+      tlabel.textContent = 't = ' + t.toFixed(digits) + ' s / ' + t1.toFixed(digits) + ' s';
+    }
     plots.forEach((p) => p.cursor(k));
     const c3 = performance.now();
     api.cost.poses += c1 - c0; api.cost.render += c2 - c1; api.cost.plots += c3 - c2;
