@@ -202,6 +202,27 @@ def check_cli_errors(tmp):
     check("view_visuals.urdf" in p.stderr and "cannot rebuild the run's model" in p.stderr and p.stderr.count("\n") == 1,
           f"missing URDF: {p.stderr.strip()}")
     check(not os.path.exists(os.path.join(d, "run.html")), "missing URDF: no page written")
+    # a run that went unstable: shown up to its last finite row, with a note
+    import h5py
+    src = os.path.join(tmp, "double_pendulum.h5")
+    bad = os.path.join(tmp, "unstable.h5")
+    shutil.copy(src, bad)
+    with h5py.File(bad, "r+") as f:
+        n = f["q"].shape[0]
+        f["q"][n // 2:, 0] = np.nan
+        t_bad = float(f["time"][n // 2])
+    p = run("view", bad, "-q")
+    check(f"not finite from t = {t_bad:g} s on" in p.stderr and os.path.exists(bad[:-3] + ".html"),
+          f"non-finite rows at the end: page up to them ({p.stderr.strip()})")
+    # the scenario's text in a dataset /scenario (variable-length UTF-8) instead of the root attribute
+    moved = os.path.join(tmp, "scenario_dataset.h5")
+    shutil.copy(src, moved)
+    with h5py.File(moved, "r+") as f:
+        text = f.attrs["scenario"]
+        del f.attrs["scenario"]
+        f["scenario"] = text.decode() if isinstance(text, bytes) else text
+    p = subprocess.run([SOADYN, "view", moved, "-q"], capture_output=True, text=True)
+    check(p.returncode == 0 and os.path.getsize(moved[:-3] + ".html") > 0, "scenario stored as a dataset: read as well")
 
 
 def main():

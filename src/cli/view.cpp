@@ -184,7 +184,19 @@ void add_view(CLI::App& app, ViewOptions& o) {
 }
 
 int run_view(const ViewOptions& o) {
-  const view::RunFile run = view::read_run(o.run);
+  view::RunFile run = view::read_run(o.run);
+  // a run that went unstable may end in non-finite rows: shown up to the last finite one
+  Eigen::Index finite = 0;
+  while (finite < run.q.rows() && run.q.row(finite).allFinite()) ++finite;
+  if (finite == 0) throw Error(o.run + ": /q is not finite from its first row on: nothing to show");
+  if (finite < run.q.rows()) {
+    std::fprintf(stderr, "soadyn: note: %s: /q is not finite from t = %g s on; the page ends at t = %g s\n", o.run.c_str(),
+                 run.time(finite), run.time(finite - 1));
+    run.time.conservativeResize(finite);
+    run.q.conservativeResize(finite, Eigen::NoChange);
+    if (run.kinetic.size()) run.kinetic.conservativeResize(finite);
+    if (run.total.size()) run.total.conservativeResize(finite);
+  }
   const view::RunModel rm = view::rebuild_model(run);
   const Model& m = rm.model;
   const view::Look look = view::make_look(m, rm.urdf_text, rm.urdf_path);
@@ -205,7 +217,6 @@ int run_view(const ViewOptions& o) {
   for (size_t f = 0; f < K; ++f) {
     const Eigen::Index k = keep[f];
     VecX q = run.q.row(k).transpose();
-    if (!q.allFinite()) throw Error(o.run + ": /q row " + std::to_string(k) + " is not finite");
     m.normalize(q);
     update_kinematics(m, d, q);
     times[f] = run.time(k);

@@ -57,6 +57,7 @@ std::string read_string(hid_t obj, bool attribute, const std::string& where) {
   if (H5Tis_variable_str(type) > 0) {
     Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Tset_size(mem, H5T_VARIABLE);
+    H5Tset_cset(mem, H5Tget_cset(type));  // HDF5 converts no string between character sets
     char* text = nullptr;
     if (read(mem, &text) < 0) throw Error(where + ": cannot be read");
     std::unique_ptr<char, herr_t (*)(void*)> owner(text, H5free_memory);

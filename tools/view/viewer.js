@@ -278,7 +278,7 @@
   // poses at t: positions interpolated linearly, orientations by slerp, between logged frames
   function applyPoses() {
     const k = frameAt(t), k2 = Math.min(k + 1, K - 1);
-    const s = k2 > k ? (t - T[k]) / (T[k2] - T[k]) : 0;
+    const s = T[k2] > T[k] ? Math.min(1, Math.max(0, (t - T[k]) / (T[k2] - T[k]))) : 0;
     for (let i = 0; i < NB; ++i) {
       const o = (k * NB + i) * 7, o2 = (k2 * NB + i) * 7, gi = bones[i];
       gi.position.set(P[o] + s * (P[o2] - P[o]), P[o + 1] + s * (P[o2 + 1] - P[o + 1]), P[o + 2] + s * (P[o2 + 2] - P[o + 2]));
