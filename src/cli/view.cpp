@@ -20,7 +20,7 @@
 namespace soadyn::cli {
 
 namespace assets {
-extern const std::string_view page_html, page_css, page_js, three_js, orbit_js;
+extern const std::string_view page_html, page_css, page_js, plot_js, three_js, orbit_js;
 }
 
 namespace {
@@ -282,6 +282,7 @@ int run_view(const ViewOptions& o) {
                                                              {"DATA", data},
                                                              {"THREE", assets::three_js},
                                                              {"ORBIT", assets::orbit_js},
+                                                             {"PLOT", assets::plot_js},
                                                              {"VIEWER", assets::page_js}});
 
   const std::string out = o.output.empty() ? std::filesystem::path(o.run).replace_extension(".html").string() : o.output;

@@ -148,12 +148,14 @@
     if (V(b.box.size).length() > 1e-9) addShape(batches.boxes, b.box, color, i);
     // URDF visual primitives
     b.visuals.forEach((sh) => addShape(batches.visuals, sh, sh.color ? new THREE.Color(sh.color) : color, i));
-    // joint axis: an arrow through the joint (revolute: orange, prismatic: purple); free: a triad
+    // joint axis: an arrow through the joint (revolute: orange, prismatic: purple, planar: teal,
+    // along the plane's normal); free: a triad; ball: a ring
     const rA = 0.22 * rSkel, head = [0.1 * arrowLen, 0.25 * arrowLen];
-    if (b.type === 'revolute' || b.type === 'prismatic') {
+    const axisColor = { revolute: 0xd9480f, prismatic: 0x7048e8, planar: 0x0c8599 }[b.type];
+    if (axisColor !== undefined && V(b.axis).length() > 0) {  // planar: the plane's normal
       const u = V(b.axis).normalize();
       addRod(batches.axes, u.clone().multiplyScalar(-0.5 * arrowLen), u.clone().multiplyScalar(arrowLen), rA,
-        new THREE.Color(b.type === 'revolute' ? 0xd9480f : 0x7048e8), i, head);
+        new THREE.Color(axisColor), i, head);
     } else if (b.type === 'free') {
       [[1, 0, 0, 0xd62828], [0, 1, 0, 0x2b9348], [0, 0, 1, 0x1d4ed8]].forEach((a) =>
         addRod(batches.axes, O, new THREE.Vector3(a[0], a[1], a[2]).multiplyScalar(1.2 * arrowLen), rA, new THREE.Color(a[3]), i, head));
@@ -335,103 +337,10 @@
     e.preventDefault();
   });
 
-  // --- plots ------------------------------------------------------------------------------------
-  function niceTicks(a, b, n) {
-    if (!(b > a)) { const d = Math.abs(a) > 0 ? Math.abs(a) * 0.1 : 1; a -= d; b += d; }
-    const raw = (b - a) / n, mag = Math.pow(10, Math.floor(Math.log10(raw)));
-    const step = [1, 2, 5, 10].map((m) => m * mag).find((s) => s >= raw);
-    const lo = Math.floor(a / step) * step, hi = Math.ceil(b / step) * step;
-    const ticks = [];
-    for (let v = lo; v <= hi + 1e-9 * step; v += step) ticks.push(Math.abs(v) < 1e-9 * step ? 0 : v);
-    const big = Math.max.apply(null, ticks.map(Math.abs));
-    const exp = big >= 1e4 || big < 1e-3;
-    const digits = exp ? Math.max(0, Math.floor(Math.log10(big)) - Math.floor(Math.log10(step)))
-                       : Math.max(0, -Math.floor(Math.log10(step) + 1e-9));
-    const label = (v) => (v === 0 ? '0' : exp ? v.toExponential(digits) : v.toFixed(digits));
-    return { lo: lo, hi: hi, ticks: ticks, label: label };
-  }
-  function Plot(canvas) {
-    this.canvas = canvas;
-    this.ctx = canvas.getContext('2d');
-    this.y = null;
-    // the cursor: a line and a dot over the canvas, moved without redrawing the plot
-    const wrap = document.createElement('div');
-    wrap.className = 'plot-wrap';
-    canvas.parentNode.insertBefore(wrap, canvas);
-    wrap.appendChild(canvas);
-    this.line = document.createElement('div');
-    this.line.className = 'plot-cursor';
-    this.dot = document.createElement('div');
-    this.dot.className = 'plot-dot';
-    wrap.appendChild(this.line);
-    wrap.appendChild(this.dot);
-    const self = this;
-    let dragging = false;
-    const seekTo = (e) => {
-      const r = canvas.getBoundingClientRect(), x = e.clientX - r.left;
-      setPlaying(false);
-      seek(self.x0 + (x - self.left) / self.w * (self.x1 - self.x0));
-    };
-    canvas.addEventListener('mousedown', (e) => { dragging = true; seekTo(e); });
-    window.addEventListener('mousemove', (e) => { if (dragging) seekTo(e); });
-    window.addEventListener('mouseup', () => { dragging = false; });
-  }
-  Plot.prototype.set = function (y) { this.y = y; this.draw(); };
-  Plot.prototype.resize = function () {
-    const dpr = window.devicePixelRatio || 1;
-    this.cw = this.canvas.clientWidth;
-    this.ch = this.canvas.clientHeight;
-    this.canvas.width = Math.max(1, Math.round(this.cw * dpr));
-    this.canvas.height = Math.max(1, Math.round(this.ch * dpr));
-    this.draw();
-  };
-  // axes, ticks and the curve, drawn once (and on resize)
-  Plot.prototype.draw = function () {
-    if (!this.y || !this.cw) return;
-    const dpr = window.devicePixelRatio || 1, c = this.ctx;
-    c.setTransform(dpr, 0, 0, dpr, 0, 0);
-    c.clearRect(0, 0, this.cw, this.ch);
-    c.font = '10px system-ui, sans-serif';
-    let ymin = Infinity, ymax = -Infinity;
-    for (let k = 0; k < K; ++k) { const v = this.y[k]; if (isFinite(v)) { ymin = Math.min(ymin, v); ymax = Math.max(ymax, v); } }
-    if (!isFinite(ymin)) { ymin = -1; ymax = 1; }
-    const yt = niceTicks(ymin, ymax, 4), xt = niceTicks(t0, t1, 5);
-    xt.lo = t0; xt.ticks = xt.ticks.filter((v) => v >= t0 - 1e-9 && v <= t1 + 1e-9);
-    this.left = 58; this.top = 8; this.w = this.cw - this.left - 10; this.h = this.ch - this.top - 22;
-    this.x0 = t0; this.x1 = t1 > t0 ? t1 : t0 + 1; this.y0 = yt.lo; this.y1 = yt.hi;
-    c.strokeStyle = '#e3e7ed'; c.fillStyle = '#5b6574'; c.lineWidth = 1;
-    c.textAlign = 'right'; c.textBaseline = 'middle';
-    yt.ticks.forEach((v) => {
-      const py = this.py(v);
-      c.beginPath(); c.moveTo(this.left, py); c.lineTo(this.left + this.w, py); c.stroke();
-      c.fillText(yt.label(v), this.left - 4, py);
-    });
-    c.textAlign = 'center'; c.textBaseline = 'top';
-    xt.ticks.forEach((v) => {
-      const px = this.px(v);
-      c.beginPath(); c.moveTo(px, this.top); c.lineTo(px, this.top + this.h); c.stroke();
-      c.fillText(xt.label(v) + (v === xt.ticks[xt.ticks.length - 1] ? ' s' : ''), px, this.top + this.h + 4);
-    });
-    c.strokeStyle = '#9aa3ad'; c.strokeRect(this.left, this.top, this.w, this.h);
-    c.strokeStyle = '#2f6fb0'; c.lineWidth = 1.3; c.beginPath();
-    for (let k = 0; k < K; ++k) {
-      const px = this.px(T[k]), py = this.py(this.y[k]);
-      if (k === 0) c.moveTo(px, py); else c.lineTo(px, py);
-    }
-    c.stroke();
-    this.line.style.top = this.top + 'px';
-    this.line.style.height = this.h + 'px';
-  };
-  Plot.prototype.px = function (x) { return this.left + (x - this.x0) / (this.x1 - this.x0) * this.w; };
-  Plot.prototype.py = function (y) { return this.top + (1 - (y - this.y0) / (this.y1 - this.y0)) * this.h; };
-  Plot.prototype.cursor = function (k) {
-    if (!this.y || !this.cw) return;
-    this.line.style.transform = 'translateX(' + this.px(t).toFixed(1) + 'px)';
-    this.dot.style.transform = 'translate(' + this.px(t).toFixed(1) + 'px,' + this.py(this.y[k]).toFixed(1) + 'px)';
-  };
-
-  const plotEnergy = new Plot(document.getElementById('plot-energy'));
-  const plotJoint = new Plot(document.getElementById('plot-joint'));
+  // --- plots (plot.js) ---------------------------------------------------------------------------
+  const onSeek = (time) => { setPlaying(false); seek(time); };
+  const plotEnergy = new SoadynPlot(document.getElementById('plot-energy'), T, onSeek);
+  const plotJoint = new SoadynPlot(document.getElementById('plot-joint'), T, onSeek);
   const plots = [plotEnergy, plotJoint];
   if (RUN.energy) {
     plotEnergy.y = decode(RUN.energy.error, Float32Array);
@@ -523,7 +432,7 @@
       slider.value = String(Math.round(1e6 * (t - t0) / Math.max(1e-300, t1 - t0)));
       tlabel.textContent = 't = ' + t.toFixed(digits) + ' s / ' + t1.toFixed(digits) + ' s';
     }
-    plots.forEach((p) => p.cursor(k));
+    plots.forEach((p) => p.cursor(t, k));
     const c3 = performance.now();
     api.cost.poses += c1 - c0; api.cost.render += c2 - c1; api.cost.plots += c3 - c2;
     api.renders += 1;
