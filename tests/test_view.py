@@ -161,6 +161,28 @@ def check_controls(b, page):
         expect = st["t0"] + 0.75 * (st["t1"] - st["t0"])
         check(abs(st["t"] - expect) < 0.01 * (st["t1"] - st["t0"]) and not st["playing"],
               f"a click at 3/4 of the {plot} plot seeks to t = {st['t']:.4g} s (expected {expect:.4g})")
+    # picking: a click on body 0 puts the trail behind it
+    b.evaluate("soadynView.seek(2)")
+    wait_render(b, 2)
+    at = b.evaluate("soadynView.screenOf(0)")
+    for kind in ("mousePressed", "mouseReleased"):
+        b.send("Input.dispatchMouseEvent", {"type": kind, "x": at["x"], "y": at["y"], "button": "left", "clickCount": 1})
+    check(b.evaluate("soadynView.counts().trailBody") == 0, "a click on body 0 puts the trail behind it")
+    # the camera: a drag orbits, the wheel zooms
+    c0 = b.evaluate("soadynView.camera()")
+    x, y = at["x"] + 60, at["y"] + 40
+    b.send("Input.dispatchMouseEvent", {"type": "mousePressed", "x": x, "y": y, "button": "left", "clickCount": 1})
+    for k in range(1, 6):
+        b.send("Input.dispatchMouseEvent", {"type": "mouseMoved", "x": x + 20 * k, "y": y, "button": "left", "buttons": 1})
+    b.send("Input.dispatchMouseEvent", {"type": "mouseReleased", "x": x + 100, "y": y, "button": "left", "clickCount": 1})
+    c1 = b.evaluate("soadynView.camera()")
+    dist = lambda c: float(np.linalg.norm(np.subtract(c["position"], c["target"])))
+    check(np.linalg.norm(np.subtract(c0["position"], c1["position"])) > 1e-3 * dist(c0) and abs(dist(c1) - dist(c0)) < 1e-6 * dist(c0),
+          "a drag orbits the camera (same distance to the target, new position)")
+    b.send("Input.dispatchMouseEvent", {"type": "mouseWheel", "x": x, "y": y, "deltaX": 0, "deltaY": -300})
+    b.pump(0.2)
+    c2 = b.evaluate("soadynView.camera()")
+    check(dist(c2) < 0.99 * dist(c1), f"the wheel zooms in (distance {dist(c1):.3g} -> {dist(c2):.3g})")
     b.pump(0.2)
     check(not b.console_errors(), "no console error while driving the page")
 

@@ -464,6 +464,13 @@
     return { left: r.left + p.left, top: r.top + p.top, w: p.w, h: p.h };
   };
   api.counts = () => ({ bodies: NB, frames: K, visuals: visualCount, trailBody: trailBody });
+  // where body i's centre of mass is drawn, in page pixels; the camera's position and target
+  api.screenOf = (i) => {
+    const c = new THREE.Vector3().fromArray(RUN.bodies[i].com).applyMatrix4(bones[i].matrixWorld).project(camera);
+    const r = renderer.domElement.getBoundingClientRect();
+    return { x: r.left + (c.x + 1) / 2 * r.width, y: r.top + (1 - c.y) / 2 * r.height };
+  };
+  api.camera = () => ({ position: camera.position.toArray(), target: controls.target.toArray() });
   api.state = () => ({ t: t, playing: playing, speed: speed, frames: K, bodies: NB, t0: t0, t1: t1 });
   window.soadynView = api;
   requestAnimationFrame(loop);
