@@ -124,15 +124,22 @@ std::vector<Eigen::Index> decimate(const VecX& t, double fps, long max_frames, d
   return keep;
 }
 
-// names of the q coordinates, for the joint plot
+// names of the q coordinates, for the joint plot: the joint's name, with a suffix per coordinate
+// when it has several
 std::vector<std::string> coordinate_names(const Model& m) {
+  static const std::vector<std::pair<std::string_view, std::vector<const char*>>> suffixes = {
+      {"free", {"x", "y", "z", "qw", "qx", "qy", "qz"}}, {"ball", {"qw", "qx", "qy", "qz"}}, {"planar", {"x", "y", "theta"}}};
   std::vector<std::string> names;
-  static const char* free_names[] = {"x", "y", "z", "qw", "qx", "qy", "qz"};
   for (int i = 0; i < m.nbodies; ++i)
     for (int k = 0; k < m.nq_i[i]; ++k) {
-      if (m.nq_i[i] == 1) names.push_back(m.joint_names[i]);
-      else if (m.joint_type[i] == JointType::Free) names.push_back(m.joint_names[i] + "." + free_names[k]);
-      else names.push_back(m.joint_names[i] + "[" + std::to_string(k) + "]");
+      std::string name = m.joint_names[i];
+      if (m.nq_i[i] > 1) {
+        std::string suffix = "[" + std::to_string(k) + "]";
+        for (const auto& [type, s] : suffixes)
+          if (to_string(m.joint_type[i]) == type && k < int(s.size())) suffix = std::string(".") + s[k];
+        name += suffix;
+      }
+      names.push_back(name);
     }
   return names;
 }

@@ -350,10 +350,16 @@
     document.getElementById('energy-title').textContent = 'energy: not in this run file';
   }
   const coordSel = document.getElementById('coord');
-  RUN.coords.forEach((name, c) => { const o = document.createElement('option'); o.value = c; o.textContent = name; coordSel.appendChild(o); });
+  // every q coordinate, and for a joint with a unit quaternion its rotation angle 2 acos|q_w|
+  const series = RUN.coords.map((name, c) => ({ name: name, at: (k) => Q[k * NQ + c] }));
+  RUN.bodies.forEach((b) => {
+    const w = b.type === 'ball' ? b.iq : b.type === 'free' ? b.iq + 3 : -1;
+    if (w >= 0) series.push({ name: b.joint + ' rotation angle (rad)', at: (k) => 2 * Math.acos(Math.min(1, Math.abs(Q[k * NQ + w]))) });
+  });
+  series.forEach((sr, c) => { const o = document.createElement('option'); o.value = c; o.textContent = sr.name; coordSel.appendChild(o); });
   function setCoord(c) {
     const y = new Float32Array(K);
-    for (let k = 0; k < K; ++k) y[k] = Q[k * NQ + c];
+    for (let k = 0; k < K; ++k) y[k] = series[c].at(k);
     coordSel.value = String(c);
     plotJoint.set(y);
     dirty = true;
@@ -448,7 +454,8 @@
   trailSel.value = String(defaultTrail);
   setTrailBody(defaultTrail);
   const firstCoord = RUN.bodies.findIndex((b) => b.type === 'revolute' || b.type === 'prismatic');
-  setCoord(firstCoord >= 0 ? RUN.bodies[firstCoord].iq : 0);
+  const angle = series.findIndex((sr) => sr.name.endsWith(' rotation angle (rad)'));
+  setCoord(firstCoord >= 0 ? RUN.bodies[firstCoord].iq : Math.max(0, angle));
   coordSel.addEventListener('change', () => setCoord(Number(coordSel.value)));
   plotEnergy.draw();
   if (!fromHash()) setPlaying(true);
