@@ -124,23 +124,15 @@ std::vector<Eigen::Index> decimate(const VecX& t, double fps, long max_frames, d
   return keep;
 }
 
-// names of the q coordinates, for the joint plot: the joint's name, with a suffix per coordinate
-// when it has several
+// names of the q coordinates, for the joint plot: the joint's name, and the joint type's label of
+// each coordinate when it has several (pivot.qw, bus.x, ...)
 std::vector<std::string> coordinate_names(const Model& m) {
-  static const std::vector<std::pair<std::string_view, std::vector<const char*>>> suffixes = {
-      {"free", {"x", "y", "z", "qw", "qx", "qy", "qz"}}, {"ball", {"qw", "qx", "qy", "qz"}}, {"planar", {"x", "y", "theta"}}};
   std::vector<std::string> names;
-  for (int i = 0; i < m.nbodies; ++i)
-    for (int k = 0; k < m.nq_i[i]; ++k) {
-      std::string name = m.joint_names[i];
-      if (m.nq_i[i] > 1) {
-        std::string suffix = "[" + std::to_string(k) + "]";
-        for (const auto& [type, s] : suffixes)
-          if (to_string(m.joint_type[i]) == type && k < int(s.size())) suffix = std::string(".") + s[k];
-        name += suffix;
-      }
-      names.push_back(name);
-    }
+  for (int i = 0; i < m.nbodies; ++i) {
+    const JointTraits& tr = joint_traits(m.joint_type[i]);
+    for (int k = 0; k < m.nq_i[i]; ++k)
+      names.push_back(m.joint_names[i] + (m.nq_i[i] > 1 ? "." + std::string(tr.q_labels.at(k)) : std::string()));
+  }
   return names;
 }
 
@@ -236,6 +228,11 @@ int run_view(const ViewOptions& o) {
       extend(p);
       extend(d.r.col(i));
       for (const Vec3& s : look.bodies[i].segments) extend(p + d.R[i] * s);
+      const Shape& box = look.bodies[i].inertia_box;  // its corners
+      for (int c = 0; c < 8; ++c) {
+        const Vec3 corner(c & 1 ? 0.5 : -0.5, c & 2 ? 0.5 : -0.5, c & 4 ? 0.5 : -0.5);
+        extend(p + d.R[i] * (box.p + box.R * corner.cwiseProduct(box.size)));
+      }
     }
     for (int c = 0; c < m.nq; ++c) qs[f * size_t(m.nq) + c] = float(run.q(k, c));
   }
@@ -260,6 +257,7 @@ int run_view(const ViewOptions& o) {
     segs += "]";
     bodies += std::string(i ? "," : "") + "{\"name\":" + quote(m.body_names[i]) + ",\"joint\":" + quote(m.joint_names[i]) +
               ",\"type\":" + quote(std::string(to_string(m.joint_type[i]))) + ",\"parent\":" + std::to_string(m.parent[i]) + ",\"iq\":" + std::to_string(m.idx_q[i]) +
+              ",\"quaternion\":" + std::to_string(joint_traits(m.joint_type[i]).quaternion) +
               ",\"mass\":" + num(m.mass[i]) + ",\"com\":" + vec(m.com[i]) + ",\"axis\":" + vec(m.axis[i]) +
               ",\"segments\":" + segs + ",\"box\":" + shape(b.inertia_box) + ",\"visuals\":" + shapes(b.visuals) +
               ",\"meshes\":" + std::to_string(b.meshes) + "}";

@@ -129,13 +129,20 @@ Look make_look(const Model& model, const std::string& urdf_text, const std::stri
   look.bodies.resize(model.nbodies);
   for (int i = 0; i < model.nbodies; ++i) {
     BodyLook& b = look.bodies[i];
-    // a capsule from the joint to each child's joint; a leaf's runs through its cm to 2 s_i
+    b.inertia_box = inertia_box(model.mass[i], model.com[i], model.inertia[i]);
+    // a capsule from the joint to each child's joint; a leaf's runs through its centre of mass to
+    // the far face of its inertia box (a uniform rod: its far end; a bob on a light rod: the bob)
     for (int c = i + 1; c < model.nbodies; ++c)
       if (model.parent[c] == i && model.placement[c].p.norm() > 1e-9) b.segments.push_back(model.placement[c].p);
     bool has_child = false;
     for (int c = i + 1; c < model.nbodies; ++c) has_child = has_child || model.parent[c] == i;
-    if (!has_child && model.com[i].norm() > 1e-9) b.segments.push_back(2.0 * model.com[i]);
-    b.inertia_box = inertia_box(model.mass[i], model.com[i], model.inertia[i]);
+    const Vec3& s = model.com[i];
+    if (!has_child && s.norm() > 1e-9) {
+      const Mat3 V = b.inertia_box.R.toRotationMatrix();
+      const Vec3 u = s.normalized();
+      const double reach = 0.5 * (V.transpose() * u).cwiseAbs().dot(b.inertia_box.size);  // support of the box along u
+      b.segments.push_back(s + reach * u);
+    }
   }
   if (!urdf_text.empty()) add_urdf_visuals(model, urdf_text, urdf_path, look);
   return look;

@@ -191,8 +191,21 @@
     const corner = new THREE.Vector3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z);
     low = Math.min(low, corner.dot(up));
   }
-  const gridSize = Math.pow(10, Math.ceil(Math.log10(2 * L)));
-  const grid = new THREE.GridHelper(gridSize, 20, 0x9aa3ad, 0xc9d0da);
+  const cell = Math.pow(10, Math.floor(Math.log10(L / 2)));  // a power of ten, L/20 to L/2
+  // a 40 x 40 grid of cells, each edge its own segment: a software rasterizer may drop a whole line
+  // that passes behind the camera, so no line is longer than a cell
+  const gridPos = [], gridCol = [], c1 = new THREE.Color(0x9aa3ad), c2 = new THREE.Color(0xc9d0da);
+  for (let i = -20; i <= 20; ++i) {
+    const col = i === 0 ? c1 : c2;
+    for (let j = -20; j < 20; ++j) {
+      gridPos.push(i * cell, 0, j * cell, i * cell, 0, (j + 1) * cell, j * cell, 0, i * cell, (j + 1) * cell, 0, i * cell);
+      for (let n = 0; n < 4; ++n) gridCol.push(col.r, col.g, col.b);
+    }
+  }
+  const gridGeom = new THREE.BufferGeometry();
+  gridGeom.setAttribute('position', new THREE.Float32BufferAttribute(gridPos, 3));
+  gridGeom.setAttribute('color', new THREE.Float32BufferAttribute(gridCol, 3));
+  const grid = new THREE.LineSegments(gridGeom, new THREE.LineBasicMaterial({ vertexColors: THREE.VertexColors }));
   grid.quaternion.setFromUnitVectors(Y, up);
   grid.position.copy(center).addScaledVector(up, low - 0.05 * L - center.dot(up));
   scene.add(grid);
@@ -353,7 +366,7 @@
   // every q coordinate, and for a joint with a unit quaternion its rotation angle 2 acos|q_w|
   const series = RUN.coords.map((name, c) => ({ name: name, at: (k) => Q[k * NQ + c] }));
   RUN.bodies.forEach((b) => {
-    const w = b.type === 'ball' ? b.iq : b.type === 'free' ? b.iq + 3 : -1;
+    const w = b.quaternion >= 0 ? b.iq + b.quaternion : -1;  // q_w of the joint's unit quaternion
     if (w >= 0) series.push({ name: b.joint + ' rotation angle (rad)', at: (k) => 2 * Math.acos(Math.min(1, Math.abs(Q[k * NQ + w]))) });
   });
   series.forEach((sr, c) => { const o = document.createElement('option'); o.value = c; o.textContent = sr.name; coordSel.appendChild(o); });
