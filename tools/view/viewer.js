@@ -192,13 +192,13 @@
     low = Math.min(low, corner.dot(up));
   }
   const cell = Math.pow(10, Math.floor(Math.log10(L / 2)));  // a power of ten, L/20 to L/2
-  // a 40 x 40 grid of cells, each edge its own segment: a software rasterizer may drop a whole line
-  // that passes behind the camera, so no line is longer than a cell
+  // a 40 x 40 grid of cells, its lines cut in pieces of 5 cells: a software rasterizer may drop a
+  // whole line that passes behind the camera (one piece per cell costs a quarter of the frame rate)
   const gridPos = [], gridCol = [], c1 = new THREE.Color(0x9aa3ad), c2 = new THREE.Color(0xc9d0da);
   for (let i = -20; i <= 20; ++i) {
     const col = i === 0 ? c1 : c2;
-    for (let j = -20; j < 20; ++j) {
-      gridPos.push(i * cell, 0, j * cell, i * cell, 0, (j + 1) * cell, j * cell, 0, i * cell, (j + 1) * cell, 0, i * cell);
+    for (let j = -20; j < 20; j += 5) {
+      gridPos.push(i * cell, 0, j * cell, i * cell, 0, (j + 5) * cell, j * cell, 0, i * cell, (j + 5) * cell, 0, i * cell);
       for (let n = 0; n < 4; ++n) gridCol.push(col.r, col.g, col.b);
     }
   }
