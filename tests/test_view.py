@@ -231,20 +231,35 @@ def check_cli_errors(tmp):
     shutil.copy(src, bad)
     with h5py.File(bad, "r+") as f:
         n = f["q"].shape[0]
-        f["q"][n // 2:, 0] = np.nan
+        if "samples" in f:  # /q is a view of /samples' columns 1 ... nq
+            f["samples"][n // 2:, 1] = np.nan
+        else:
+            f["q"][n // 2:, 0] = np.nan
         t_bad = float(f["time"][n // 2])
     p = run("view", bad, "-q")
     check(f"not finite from t = {t_bad:g} s on" in p.stderr and os.path.exists(bad[:-3] + ".html"),
           f"non-finite rows at the end: page up to them ({p.stderr.strip()})")
-    # the scenario's text in a dataset /scenario (variable-length UTF-8) instead of the root attribute
-    moved = os.path.join(tmp, "scenario_dataset.h5")
-    shutil.copy(src, moved)
-    with h5py.File(moved, "r+") as f:
-        text = f.attrs["scenario"]
-        del f.attrs["scenario"]
-        f["scenario"] = text.decode() if isinstance(text, bytes) else text
-    p = subprocess.run([SOADYN, "view", moved, "-q"], capture_output=True, text=True)
-    check(p.returncode == 0 and os.path.getsize(moved[:-3] + ".html") > 0, "scenario stored as a dataset: read as well")
+    # the scenario's text as a variable-length UTF-8 dataset, and (older files) as a root attribute
+    with h5py.File(src, "r") as f:
+        text = f["scenario"][()] if "scenario" in f else f.attrs["scenario"]
+    text = text.decode() if isinstance(text, bytes) else text
+    for where in ("dataset", "attribute"):
+        moved = os.path.join(tmp, f"scenario_{where}.h5")
+        shutil.copy(src, moved)
+        with h5py.File(moved, "r+") as f:
+            if "scenario" in f:
+                del f["scenario"]
+            if "scenario" in f.attrs:
+                del f.attrs["scenario"]
+            if where == "dataset":
+                f["scenario"] = text
+            else:
+                f.attrs["scenario"] = text
+        p = subprocess.run([SOADYN, "view", moved, "-q"], capture_output=True, text=True)
+        check(p.returncode == 0 and os.path.getsize(moved[:-3] + ".html") > 0,
+              f"scenario stored as a variable-length {where}: read as well ({p.stderr.strip()})")
+    with open(os.path.join(tmp, "double_pendulum.html"), encoding="utf-8") as f:
+        check('"status":"completed"' in f.read(), "the run's status reaches the page")
 
 
 def main():

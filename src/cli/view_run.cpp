@@ -98,12 +98,15 @@ RunFile read_run(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such run file");
   if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected a run file from soadyn run)");
-  Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  // a finished run opens plainly; a running or killed one in single-writer/multiple-reader mode
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
+  Id file(f, H5Fclose);
   if (!file.ok()) throw Error(path + ": cannot open the HDF5 file");
 
   RunFile r;
   r.path = path;
-  // the scenario's text: a root attribute, or a dataset /scenario
+  // the scenario's text: a dataset /scenario, or (files written before it) a root attribute
   if (H5Aexists(file, "scenario") > 0) {
     r.scenario_text = string_attribute(file, "scenario", path);
   } else if (exists(file, "/scenario")) {
@@ -117,6 +120,10 @@ RunFile read_run(const std::string& path) {
     Id g(H5Gopen2(file, "/solver", H5P_DEFAULT), H5Gclose);
     r.method = string_attribute(g, "method", path + ": /solver");
     r.status = string_attribute(g, "status", path + ": /solver");
+  }
+  if (r.status.empty() && exists(file, "/solver/status")) {  // a dataset, rewritten at every flush
+    Id d(H5Dopen2(file, "/solver/status", H5P_DEFAULT), H5Dclose);
+    r.status = read_string(d, false, path + ": /solver/status");
   }
   for (const char* name : {"/time", "/q"})
     if (!exists(file, name)) throw Error(path + ": dataset " + name + " is missing (not a run file from soadyn run?)");
