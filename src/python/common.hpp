@@ -1,0 +1,58 @@
+// Shared pieces of the Python module: reading numpy arguments, read-only views of Data, owning
+// arrays built without a copy, and the Data wrapper that the views keep alive.
+#pragma once
+
+#include "soadyn/algorithms.hpp"
+#include "soadyn/data.hpp"
+#include "soadyn/kinematics.hpp"
+#include "soadyn/model.hpp"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace soadyn::python {
+
+namespace py = pybind11;
+using namespace pybind11::literals;
+
+// A float64 array of any layout passes through untouched; lists, ints, float32 … are converted
+// once by numpy.
+using ArrayIn = py::array_t<double, py::array::forcecast>;
+
+// Copies the 1-D array `a` into `out` (sized once, no allocation) after the library's own size
+// check, so the message is the C++ one: "mass_matrix: q: expected 7 entries, got 3".
+void read_vector(const Model& model, const Data& data, const char* where, const char* what, const ArrayIn& a,
+                 int expected, VecX& out);
+// The same for a function without a Data (the model's own methods): out is resized as needed.
+VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expected);
+
+// An array that owns `values` (moved, not copied), shaped `shape` (row-major).
+py::array owned(std::vector<double>&& values, std::vector<py::ssize_t> shape);
+py::array owned(VecX&& v);
+py::array owned(MatX&& m);  // column-major, shape (rows, cols)
+
+// The Python-side Data: the library's Data (shared with every view's base, so a view outlives
+// the Data object safely), scratch vectors for the arguments, and the cached read-only views.
+struct PyData {
+  explicit PyData(const Model& model);
+
+  std::shared_ptr<Data> data;
+  int nq, nv, nbodies;
+  VecX q, v, x;  // arguments copied here: the library takes VecX, this copy does not allocate
+  py::array M, bias, tau, qdd;          // the results the algorithms fill
+  py::array R, eta, d, s, r, G, V, Vbar;  // kinematics
+
+  // throws soadyn::Error when this Data was built for another model
+  void check(const Model& model, const char* where) const { data->check(model, where, "data", 0, 0); }
+};
+
+void bind_model(py::module_& m);
+void bind_algorithms(py::module_& m);
+void bind_simulate(py::module_& m);
+
+}  // namespace soadyn::python

@@ -1,0 +1,254 @@
+// Model, Data, Scenario and their settings and inputs, as Python classes.
+#include "common.hpp"
+
+#include "soadyn/scenario.hpp"
+
+#include <optional>
+
+namespace soadyn::python {
+
+namespace {
+
+// labels of the q and v entries: the joint's name, with a suffix for multi-coordinate joints
+std::vector<std::string> coordinate_names(const Model& m, bool velocity) {
+  static const char* free_q[] = {"x", "y", "z", "qw", "qx", "qy", "qz"};
+  static const char* free_v[] = {"wx", "wy", "wz", "vx", "vy", "vz"};
+  std::vector<std::string> out;
+  for (int i = 0; i < m.nbodies; ++i) {
+    const int n = velocity ? m.nv_i[i] : m.nq_i[i];
+    for (int k = 0; k < n; ++k) {
+      if (n == 1) out.push_back(m.joint_names[i]);
+      else if (m.joint_type[i] == JointType::Free) out.push_back(m.joint_names[i] + "." + (velocity ? free_v : free_q)[k]);
+      else out.push_back(m.joint_names[i] + "." + std::to_string(k));
+    }
+  }
+  return out;
+}
+
+template <class V>
+py::array rows3(const std::vector<V>& vs) {  // N 3-vectors as an N×3 array
+  std::vector<double> out;
+  for (const auto& v : vs) out.insert(out.end(), v.data(), v.data() + 3);
+  return owned(std::move(out), {py::ssize_t(vs.size()), 3});
+}
+
+py::array mats3(const std::vector<Mat3>& ms) {  // N 3×3 matrices as an N×3×3 array (row-major)
+  std::vector<double> out;
+  for (const auto& a : ms)
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) out.push_back(a(r, c));
+  return owned(std::move(out), {py::ssize_t(ms.size()), 3, 3});
+}
+
+std::optional<Vec3> gravity_arg(const std::optional<ArrayIn>& g) {
+  if (!g) return std::nullopt;
+  return Vec3(read_vector("load", "gravity", *g, 3));
+}
+
+}  // namespace
+
+void bind_model(py::module_& m) {
+  py::class_<Model> model(m, "Model", R"(The constant tree: parents in parent-first order, joints, placements and mass properties.
+
+Built once (soadyn.load, soadyn.load_scenario, Model.build) and never changed by an algorithm;
+every per-state array lives in a Data (model.create_data()).  One Model may serve any number of
+Data, e.g. one per thread.
+
+Coordinates: q has nq entries, v (the note's q̇: rates, with ω instead of the quaternion's rate
+for a free joint) has nv.  Free joint: q = [x, y, z, qw, qx, qy, qz] (body frame position, unit
+quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coordinates.)");
+  model
+      .def_readonly("nq", &Model::nq, "configuration size")
+      .def_readonly("nv", &Model::nv, "velocity size (degrees of freedom)")
+      .def_readonly("nbodies", &Model::nbodies, "N, the moving bodies (fixed joints merged)")
+      .def_readonly("body_names", &Model::body_names, "name of each body, parent-first order (N)")
+      .def_readonly("joint_names", &Model::joint_names, "name of the joint moving each body (N)")
+      .def_readonly("parents", &Model::parent, "parent(i) < i of each body, -1 for the ground (N)")
+      .def_readonly("idx_q", &Model::idx_q, "first q index of each body's joint (N)")
+      .def_readonly("idx_v", &Model::idx_v, "first v index of each body's joint (N)")
+      .def_readonly("depth", &Model::depth, "longest chain from the ground (nilpotency of Φ_D)")
+      .def_property_readonly("joint_types", [](const Model& self) {
+            std::vector<std::string> out;
+            for (auto t : self.joint_type) out.emplace_back(to_string(t));
+            return out;
+          }, "type of each body's joint: 'revolute', 'prismatic', 'free', … (N)")
+      .def_property_readonly("q_names", [](const Model& self) { return coordinate_names(self, false); },
+                             "label of each q entry: the joint's name, 'root.qw' etc. for multi-coordinate joints (nq)")
+      .def_property_readonly("v_names", [](const Model& self) { return coordinate_names(self, true); },
+                             "label of each v entry (nv)")
+      .def_property_readonly("gravity", [](const Model& self) { return owned(VecX(self.gravity)); },
+                             "uniform gravity, m/s², shape (3,)")
+      .def_property_readonly("masses", [](const Model& self) { return owned(VecX(Eigen::Map<const VecX>(self.mass.data(), self.nbodies))); },
+                             "mass of each body, kg, shape (N,) (welded bodies merged in)")
+      .def_property_readonly("coms", [](const Model& self) { return rows3(self.com); },
+                             "centre of mass of each body in its body frame, shape (N, 3)")
+      .def_property_readonly("inertias", [](const Model& self) { return mats3(self.inertia); },
+                             "inertia about each body's centre of mass, body frame, shape (N, 3, 3)")
+      .def_property_readonly("axes", [](const Model& self) { return rows3(self.axis); },
+                             "unit joint axis of each body in its joint frame, shape (N, 3)")
+      .def("create_data", [](const Model& self) { return PyData(self); },
+           "A Data sized for this model: the per-state arrays every algorithm fills (allocated once).")
+      .def("neutral", [](const Model& self) { return owned(self.neutral_configuration()); },
+           "The neutral configuration: zero angles and displacements, identity quaternions; shape (nq,).")
+      .def("normalize", [](const Model& self, const ArrayIn& q) {
+            VecX out = read_vector("Model.normalize", "q", q, self.nq);
+            self.normalize(out);
+            return owned(std::move(out));
+          }, "q"_a, "q with each free joint's quaternion scaled to unit norm (a new array, shape (nq,)).")
+      .def("integrate", [](const Model& self, const ArrayIn& q, const ArrayIn& v, double h) {
+            return owned(self.integrate(read_vector("Model.integrate", "q", q, self.nq),
+                                        read_vector("Model.integrate", "v", v, self.nv), h));
+          }, "q"_a, "v"_a, "h"_a,
+          "q ⊕ h v: exact for revolute and prismatic joints; a free joint moves its position by h η̇ and\n"
+          "turns its attitude by exp(h ω) about inertial axes.  Returns a new array, shape (nq,).")
+      .def("qdot", [](const Model& self, const ArrayIn& q, const ArrayIn& v) {
+            VecX qd(self.nq);
+            self.qdot(read_vector("Model.qdot", "q", q, self.nq), read_vector("Model.qdot", "v", v, self.nv), qd);
+            return owned(std::move(qd));
+          }, "q"_a, "v"_a, "q̇ from (q, v): differs from v only for a free joint's quaternion rate; shape (nq,).")
+      .def("velocity", [](const Model& self, const ArrayIn& q, const ArrayIn& qd) {
+            return owned(self.velocity(read_vector("Model.velocity", "q", q, self.nq),
+                                       read_vector("Model.velocity", "qd", qd, self.nq)));
+          }, "q"_a, "qd"_a, "The reverse map: v from q̇ (ω = 2 quaṫ ⊗ quat* for a free joint); shape (nv,).")
+      .def("body_index", &Model::body_index, "name"_a, "index of the named body, -1 when absent")
+      .def("joint_index", &Model::joint_index, "name"_a, "index of the body the named joint moves, -1 when absent")
+      .def("__repr__", [](const Model& self) {
+        return "<soadyn.Model: " + std::to_string(self.nbodies) + " bodies, nq = " + std::to_string(self.nq) +
+               ", nv = " + std::to_string(self.nv) + ">";
+      });
+
+  py::class_<PyData>(m, "Data", R"(The per-state arrays of one Model, allocated once (model.create_data()).
+
+The algorithms fill it and return read-only views of it (no copy): mass_matrix → data.M,
+bias → data.bias, inverse_dynamics → data.tau, forward_dynamics → data.qdd.  A view is
+overwritten by the next call on the same Data (copy it to keep it) and keeps the memory alive
+after the Data object is gone.  Kinematics (filled by every algorithm that takes q), one row per
+body, inertial coordinates: R (N, 3, 3) body → inertial, eta (N, 3) joint points η_i,
+d (N, 3) d_i = η_i − η_parent(i), s (N, 3) s_i = r_i − η_i, r (N, 3) centres of mass,
+G (6, nv) the columns of the joint maps G_i; V (N, 6) v_i = [ω_i; η̇_i] and Vbar (N, 6)
+v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared between threads.)")
+      .def(py::init<const Model&>(), "model"_a)
+      .def_readonly("M", &PyData::M, "𝓜(q), shape (nv, nv): filled by mass_matrix (and forward_dynamics 'dense'/'sparse')")
+      .def_readonly("bias", &PyData::bias, "bias(q, q̇), shape (nv,)")
+      .def_readonly("tau", &PyData::tau, "inverse-dynamics result τ, shape (nv,)")
+      .def_readonly("qdd", &PyData::qdd, "forward-dynamics result q̈, shape (nv,)")
+      .def_readonly("R", &PyData::R, "C_i^in, body i frame → inertial, shape (N, 3, 3)")
+      .def_readonly("eta", &PyData::eta, "η_i, joint point (body frame origin), shape (N, 3)")
+      .def_readonly("d", &PyData::d, "d_i = η_i − η_parent(i) (η_i at a root), shape (N, 3)")
+      .def_readonly("s", &PyData::s, "s_i = r_i − η_i, joint point to centre of mass, shape (N, 3)")
+      .def_readonly("r", &PyData::r, "r_i, centre of mass, shape (N, 3)")
+      .def_readonly("G", &PyData::G, "column k: the motion vector of DOF k, [g; 0] or [0; g], shape (6, nv)")
+      .def_readonly("V", &PyData::V, "v_i = [ω_i; η̇_i] (eq. 4), shape (N, 6)")
+      .def_readonly("Vbar", &PyData::Vbar, "v̄_i = [ω_i; ṙ_i] (eq. 5), shape (N, 6)")
+      .def("__repr__", [](const PyData& self) {
+        return "<soadyn.Data: " + std::to_string(self.nbodies) + " bodies, nq = " + std::to_string(self.nq) +
+               ", nv = " + std::to_string(self.nv) + ">";
+      });
+
+  py::class_<SimulationSettings>(m, "SimulationSettings", "A scenario's 'simulation' section (README, \"Scenario files\").")
+      .def(py::init<>())
+      .def_readwrite("t_end", &SimulationSettings::t_end, "end time, s")
+      .def_readwrite("output_dt", &SimulationSettings::output_dt, "time between logged samples, s")
+      .def_readwrite("method", &SimulationSettings::method,
+                     "cvode-adams | cvode-bdf | rk4 | euler | symplectic-euler | implicit-midpoint")
+      .def_readwrite("rtol", &SimulationSettings::rtol, "CVODE relative tolerance")
+      .def_readwrite("atol", &SimulationSettings::atol, "CVODE absolute tolerance")
+      .def_readwrite("dt", &SimulationSettings::dt, "fixed-step methods' step, s")
+      .def_readwrite("max_step", &SimulationSettings::max_step, "CVODE's largest step, s (0: none)")
+      .def_readwrite("max_steps", &SimulationSettings::max_steps, "CVODE steps allowed in the whole run")
+      .def_readwrite("dynamics", &SimulationSettings::dynamics, "forward-dynamics route: dense | sparse | on")
+      .def("__repr__", [](const SimulationSettings& s) {
+        return "SimulationSettings(method='" + s.method + "', t_end=" + py::repr(py::float_(s.t_end)).cast<std::string>() +
+               ", output_dt=" + py::repr(py::float_(s.output_dt)).cast<std::string>() +
+               ", rtol=" + py::repr(py::float_(s.rtol)).cast<std::string>() + ", atol=" +
+               py::repr(py::float_(s.atol)).cast<std::string>() + ", dt=" + py::repr(py::float_(s.dt)).cast<std::string>() +
+               ", dynamics='" + s.dynamics + "')";
+      });
+
+  py::class_<Inputs>(m, "Inputs", "A scenario's joint inputs: torques, springs and dampers.")
+      .def_property_readonly("torques", [](const Inputs& in) {
+            py::list out;
+            for (const auto& t : in.torques)
+              out.append(py::dict("joint"_a = t.joint, "dof"_a = t.dof, "constant"_a = t.constant,
+                                  "amplitude"_a = t.amplitude, "frequency"_a = t.frequency, "phase"_a = t.phase));
+            return out;
+          }, "τ = constant + amplitude·sin(2π frequency t + phase) on one DOF, as dicts")
+      .def_property_readonly("springs", [](const Inputs& in) {
+            py::list out;
+            for (const auto& s : in.springs)
+              out.append(py::dict("joint"_a = s.joint, "dof"_a = s.dof, "coord"_a = s.coord, "stiffness"_a = s.stiffness,
+                                  "rest"_a = s.rest));
+            return out;
+          }, "τ = −stiffness (q − rest) on one DOF, as dicts")
+      .def_property_readonly("dampers", [](const Inputs& in) {
+            py::list out;
+            for (const auto& d : in.dampers) out.append(py::dict("joint"_a = d.joint, "dof"_a = d.dof, "damping"_a = d.damping));
+            return out;
+          }, "τ = −damping q̇ on one DOF, as dicts")
+      .def("evaluate", [](const Inputs& in, double t, const ArrayIn& q, const ArrayIn& v) {
+            const VecX qv = read_vector("Inputs.evaluate", "q", q, int(q.size())), vv = read_vector("Inputs.evaluate", "v", v, int(v.size()));
+            for (const auto& s : in.springs)
+              if (s.coord >= qv.size()) throw Error("Inputs.evaluate: q: too short for the spring on '" + s.joint + "'");
+            for (const auto& t : in.torques)
+              if (t.dof >= vv.size()) throw Error("Inputs.evaluate: v: too short for the torque on '" + t.joint + "'");
+            for (const auto& d : in.dampers)
+              if (d.dof >= vv.size()) throw Error("Inputs.evaluate: v: too short for the damper on '" + d.joint + "'");
+            VecX tau = VecX::Zero(vv.size());
+            in.evaluate(t, qv, vv, tau);
+            return owned(std::move(tau));
+          }, "t"_a, "q"_a, "v"_a, "τ(t, q, v), the generalized force the inputs apply, shape (nv,)")
+      .def("spring_energy", [](const Inputs& in, const ArrayIn& q) {
+            const VecX qv = read_vector("Inputs.spring_energy", "q", q, int(q.size()));
+            for (const auto& s : in.springs)
+              if (s.coord >= qv.size()) throw Error("Inputs.spring_energy: q: too short for the spring on '" + s.joint + "'");
+            return in.spring_energy(qv);
+          }, "q"_a, "the springs' potential energy ½ k (q − rest)², J")
+      .def("__len__", [](const Inputs& in) { return in.torques.size() + in.springs.size() + in.dampers.size(); });
+
+  py::class_<Scenario>(m, "Scenario", R"(A scenario file: the model, the initial state, the inputs and the simulation settings.
+
+Fields: model, q0 (nq,), v0 (nv,), inputs, settings, name, description, path, text (the file's
+full text).  q0 and v0 may be assigned (size-checked); settings is changed in place.)")
+      .def_property_readonly("model", [](const Scenario& s) -> const Model& { return s.model; },
+                             py::return_value_policy::reference_internal, "the scene's Model")
+      .def_property("q0", [](const Scenario& s) { return owned(VecX(s.q0)); },
+                    [](Scenario& s, const ArrayIn& q) {
+                      VecX v = read_vector("Scenario.q0", "q0", q, s.model.nq);
+                      s.model.normalize(v);
+                      s.q0 = v;
+                    }, "initial configuration, shape (nq,) (quaternions normalized when set)")
+      .def_property("v0", [](const Scenario& s) { return owned(VecX(s.v0)); },
+                    [](Scenario& s, const ArrayIn& v) { s.v0 = read_vector("Scenario.v0", "v0", v, s.model.nv); },
+                    "initial velocity, shape (nv,)")
+      .def_property_readonly("inputs", [](const Scenario& s) -> const Inputs& { return s.inputs; },
+                             py::return_value_policy::reference_internal, "the joint inputs")
+      .def_property("settings", [](Scenario& s) -> SimulationSettings& { return s.simulation; },
+                    [](Scenario& s, const SimulationSettings& v) { s.simulation = v; },
+                    py::return_value_policy::reference_internal, "the simulation settings (a live reference)")
+      .def_readonly("name", &Scenario::name)
+      .def_readonly("description", &Scenario::description)
+      .def_readonly("path", &Scenario::path)
+      .def_readonly("text", &Scenario::text)
+      .def("__repr__", [](const Scenario& s) {
+        return "<soadyn.Scenario '" + s.name + "' from " + s.path + ": " + std::to_string(s.model.nbodies) +
+               " bodies, nq = " + std::to_string(s.model.nq) + ", nv = " + std::to_string(s.model.nv) + ">";
+      });
+
+  m.def("load", [](const std::string& path, bool free_root, const std::optional<ArrayIn>& gravity) {
+        return load_scenario(path, free_root, gravity_arg(gravity)).model;
+      }, "path"_a, "free_root"_a = false, "gravity"_a = py::none(),
+      R"(Load a Model from a URDF (.urdf) or a scenario (.yaml).
+
+free_root: give a URDF's root link a free joint instead of welding it to the world.
+gravity: (3,) m/s², overrides the file's (a URDF's default is (0, 0, −9.81)).
+Raises soadyn.Error naming the file, line and field of any mistake.)");
+  m.def("load_scenario", [](const std::string& path, bool free_root, const std::optional<ArrayIn>& gravity) {
+        return load_scenario(path, free_root, gravity_arg(gravity));
+      }, "path"_a, "free_root"_a = false, "gravity"_a = py::none(),
+      "Load a Scenario (.yaml; a .urdf gives zero initial state, default settings and no inputs).");
+  m.def("parse_scenario", [](const std::string& text, const std::string& path) { return parse_scenario(text, path); },
+        "text"_a, "path"_a = "<string>",
+        "A Scenario from YAML text; path names it in messages and anchors a relative 'urdf:'.");
+}
+
+}  // namespace soadyn::python

@@ -1,0 +1,118 @@
+// soadyn._soadyn: the compiled part of the Python package (soadyn/__init__.py re-exports it).
+#include "common.hpp"
+
+#include "soadyn/integrators.hpp"
+
+namespace soadyn::python {
+
+void read_vector(const Model& model, const Data& data, const char* where, const char* what, const ArrayIn& a,
+                 int expected, VecX& out) {
+  if (a.ndim() != 1) {
+    std::string shape;
+    for (py::ssize_t k = 0; k < a.ndim(); ++k) shape += (k ? ", " : "") + std::to_string(a.shape(k));
+    throw Error(std::string(where) + ": " + what + ": expected a 1-D array of " + std::to_string(expected) +
+                " entries, got shape (" + shape + ")");
+  }
+  data.check(model, where, what, a.shape(0), expected);
+  // element by element: any stride, no temporary
+  const auto u = a.unchecked<1>();
+  for (int k = 0; k < expected; ++k) out(k) = u(k);
+}
+
+VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expected) {
+  if (a.ndim() != 1 || a.shape(0) != expected)
+    throw Error(std::string(where) + ": " + what + ": expected a 1-D array of " + std::to_string(expected) +
+                " entries, got " + (a.ndim() == 1 ? std::to_string(a.shape(0)) + " entries" : std::to_string(a.ndim()) + " dimensions"));
+  VecX out(expected);
+  const auto u = a.unchecked<1>();
+  for (int k = 0; k < expected; ++k) out(k) = u(k);
+  return out;
+}
+
+py::array owned(std::vector<double>&& values, std::vector<py::ssize_t> shape) {
+  auto* keep = new std::vector<double>(std::move(values));
+  py::capsule base(keep, [](void* p) { delete static_cast<std::vector<double>*>(p); });
+  return py::array(py::dtype::of<double>(), std::move(shape), {}, keep->data(), base);
+}
+
+py::array owned(VecX&& v) {
+  auto* keep = new VecX(std::move(v));
+  py::capsule base(keep, [](void* p) { delete static_cast<VecX*>(p); });
+  return py::array(py::dtype::of<double>(), {keep->size()}, {}, keep->data(), base);
+}
+
+py::array owned(MatX&& m) {
+  auto* keep = new MatX(std::move(m));
+  py::capsule base(keep, [](void* p) { delete static_cast<MatX*>(p); });
+  const py::ssize_t s = sizeof(double);
+  return py::array(py::dtype::of<double>(), {keep->rows(), keep->cols()}, {s, s * keep->rows()}, keep->data(), base);
+}
+
+namespace {
+
+// a read-only view of memory inside `base`'s Data
+py::array view(const py::capsule& base, double* ptr, std::vector<py::ssize_t> shape, std::vector<py::ssize_t> strides) {
+  for (auto& st : strides) st *= py::ssize_t(sizeof(double));
+  py::array a(py::dtype::of<double>(), std::move(shape), std::move(strides), ptr, base);
+  a.attr("setflags")("write"_a = false);
+  return a;
+}
+
+}  // namespace
+
+PyData::PyData(const Model& model)
+    : data(std::make_shared<Data>(model)), nq(model.nq), nv(model.nv), nbodies(model.nbodies), q(nq), v(nv), x(nv) {
+  auto* keep = new std::shared_ptr<Data>(data);
+  py::capsule base(keep, [](void* p) { delete static_cast<std::shared_ptr<Data>*>(p); });
+  Data& D = *data;
+  const py::ssize_t n = nbodies;
+  M = view(base, D.Mass.data(), {nv, nv}, {1, nv});  // column-major; symmetric anyway
+  bias = view(base, D.bias.data(), {nv}, {1});
+  tau = view(base, D.tau.data(), {nv}, {1});
+  qdd = view(base, D.qdd.data(), {nv}, {1});
+  // std::vector<Mat3>: N column-major 3×3 blocks back to back
+  static_assert(sizeof(Mat3) == 9 * sizeof(double));
+  R = view(base, n ? D.R[0].data() : nullptr, {n, 3, 3}, {9, 1, 3});
+  // 3×N and 6×N column-major stacks read as N×3 and N×6 rows (row i = body i)
+  eta = view(base, D.eta.data(), {n, 3}, {3, 1});
+  d = view(base, D.d.data(), {n, 3}, {3, 1});
+  s = view(base, D.s.data(), {n, 3}, {3, 1});
+  r = view(base, D.r.data(), {n, 3}, {3, 1});
+  V = view(base, D.V.data(), {n, 6}, {6, 1});
+  Vbar = view(base, D.Vbar.data(), {n, 6}, {6, 1});
+  G = view(base, D.G.data(), {6, nv}, {1, 6});
+}
+
+}  // namespace soadyn::python
+
+PYBIND11_MODULE(_soadyn, m) {
+  namespace sp = soadyn::python;
+  m.doc() = "The compiled part of soadyn; import soadyn instead.";
+  m.attr("__version__") = SOADYN_VERSION;
+  // soadyn.Error is a ValueError: bad input, with the command line's message
+  static sp::py::exception<soadyn::Error> error(m, "Error", PyExc_ValueError);
+  error.doc() = "Bad input (a file, a field, a vector's size, a setting), with the command line's message: "
+                "file:line:column: field: expected …, got ….";
+  static sp::py::exception<soadyn::ModelError> model_error(m, "ModelError", error.ptr());
+  model_error.doc() = "A model refused by Model.build; .spec is the index of the offending body.";
+  static sp::py::exception<soadyn::SimulationError> sim_error(m, "SimulationError", error.ptr());
+  sim_error.doc() = "A run that could not continue (only raised outside simulate(), which reports it in the summary).";
+  sp::py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const soadyn::ModelError& e) {
+      sp::py::object value = sp::py::handle(model_error.ptr())(e.what());
+      value.attr("spec") = e.spec;
+      PyErr_SetObject(model_error.ptr(), value.ptr());
+    } catch (const soadyn::SimulationError& e) {
+      sp::py::object value = sp::py::handle(sim_error.ptr())(e.what());
+      value.attr("t") = e.t;
+      PyErr_SetObject(sim_error.ptr(), value.ptr());
+    } catch (const soadyn::Error& e) {
+      error(e.what());
+    }
+  });
+  sp::bind_model(m);
+  sp::bind_algorithms(m);
+  sp::bind_simulate(m);
+}

@@ -1,0 +1,133 @@
+// soadyn._simulate: a run on a worker thread without the GIL, while the calling thread waits and
+// lets Python's signal handlers run every 10 ms; one that raises (Ctrl-C: KeyboardInterrupt) sets
+// the library's stop flag, the run ends at its next output step, and the log is finished.
+#include "common.hpp"
+
+#include "soadyn/h5log.hpp"
+#include "soadyn/simulate.hpp"
+
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <exception>
+#include <mutex>
+#include <thread>
+
+namespace soadyn::python {
+
+namespace {
+
+// Every sample into contiguous rows (handed to numpy without a copy), then on to the log if any.
+class Recorder : public RunObserver {
+ public:
+  explicit Recorder(RunObserver* next) : next_(next) {}
+  void on_sample(const Sample& s) override {
+    t.push_back(s.t);
+    q.insert(q.end(), s.q.data(), s.q.data() + s.q.size());
+    v.insert(v.end(), s.qd.data(), s.qd.data() + s.qd.size());
+    qdd.insert(qdd.end(), s.qdd.data(), s.qdd.data() + s.qdd.size());
+    kinetic.push_back(s.kinetic);
+    potential.push_back(s.potential);
+    total.push_back(s.total);
+    linear.insert(linear.end(), s.linear.data(), s.linear.data() + 3);
+    angular.insert(angular.end(), s.angular.data(), s.angular.data() + 3);
+    if (next_) next_->on_sample(s);
+  }
+  void on_progress(const RunSummary& r) override {
+    if (next_) next_->on_progress(r);
+  }
+  void on_finish(const RunSummary& r) override {
+    if (next_) next_->on_finish(r);
+  }
+  std::vector<double> t, q, v, qdd, kinetic, potential, total, linear, angular;
+
+ private:
+  RunObserver* next_;
+};
+
+py::dict summary_dict(const RunSummary& r) {
+  return py::dict("method"_a = r.method, "status"_a = r.status, "completed"_a = r.completed, "t_reached"_a = r.t_reached,
+                  "steps"_a = r.stats.steps, "rhs_evals"_a = r.stats.rhs_evals, "jac_evals"_a = r.stats.jac_evals,
+                  "error_test_failures"_a = r.stats.error_test_failures,
+                  "nonlinear_iterations"_a = r.stats.nonlinear_iterations, "cpu_seconds"_a = r.cpu_seconds,
+                  "quaternion_handling"_a = r.quaternion_handling, "output_dt"_a = r.output_dt,
+                  "max_relative_energy_error"_a = r.max_relative_energy_error,
+                  "final_relative_energy_error"_a = r.final_relative_energy_error);
+}
+
+// (arrays, summary, exception raised by a signal handler or None)
+py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output) {
+  check_run(sc, settings);  // refuses before any output file exists, as does a bad method or route
+  {
+    System probe(sc.model, sc.inputs, parse_fd_method(settings.dynamics));
+    VecX y0(probe.size());
+    y0 << sc.q0, sc.v0;
+    make_integrator(settings.method, probe, settings, 0.0, y0);
+  }
+  std::unique_ptr<H5Log> log;
+  if (output) log = std::make_unique<H5Log>(*output, sc, settings, SOADYN_VERSION);
+  Recorder rec(log.get());
+  std::atomic<int> stop{0};
+  RunSummary summary;
+  std::exception_ptr failure;
+  py::object pending = py::none();
+  {
+    py::gil_scoped_release nogil;
+    std::mutex mu;
+    std::condition_variable cv;
+    bool done = false;
+    std::thread worker([&] {
+      try {
+        summary = simulate(sc, settings, &rec, nullptr, &stop);
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      std::lock_guard<std::mutex> lock(mu);
+      done = true;
+      cv.notify_all();
+    });
+    std::unique_lock<std::mutex> lock(mu);
+    while (!cv.wait_for(lock, std::chrono::milliseconds(10), [&] { return done; })) {
+      if (stop.load() != 0) continue;  // already stopping: wait for the run to end
+      lock.unlock();
+      {
+        py::gil_scoped_acquire gil;
+        if (PyErr_CheckSignals() != 0) {  // a handler raised: keep its exception, stop the run
+          PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
+          PyErr_Fetch(&type, &value, &trace);
+          PyErr_NormalizeException(&type, &value, &trace);
+          if (trace) PyException_SetTraceback(value, trace);
+          pending = py::reinterpret_steal<py::object>(value);
+          Py_XDECREF(type);
+          Py_XDECREF(trace);
+          stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
+        }
+      }
+      lock.lock();
+    }
+    lock.unlock();
+    worker.join();
+  }
+  if (failure) std::rethrow_exception(failure);
+  log.reset();  // closes the file before Python may read it
+
+  const py::ssize_t T = py::ssize_t(rec.t.size()), nq = sc.model.nq, nv = sc.model.nv;
+  py::dict arrays("t"_a = owned(std::move(rec.t), {T}), "q"_a = owned(std::move(rec.q), {T, nq}),
+                  "v"_a = owned(std::move(rec.v), {T, nv}), "qdd"_a = owned(std::move(rec.qdd), {T, nv}),
+                  "kinetic_energy"_a = owned(std::move(rec.kinetic), {T}),
+                  "potential_energy"_a = owned(std::move(rec.potential), {T}),
+                  "total_energy"_a = owned(std::move(rec.total), {T}),
+                  "linear_momentum"_a = owned(std::move(rec.linear), {T, 3}),
+                  "angular_momentum"_a = owned(std::move(rec.angular), {T, 3}));
+  return py::make_tuple(arrays, summary_dict(summary), pending);
+}
+
+}  // namespace
+
+void bind_simulate(py::module_& m) {
+  m.def("_simulate", &run, "scene"_a, "settings"_a, "output"_a = py::none(),
+        "The run behind soadyn.simulate: (arrays, summary, exception from a signal handler or None).");
+  m.def("_interrupted_status", &interrupted_status, "stop"_a, "t"_a);
+}
+
+}  // namespace soadyn::python

@@ -1,0 +1,147 @@
+"""Trajectory and RunSummary: what soadyn.simulate returns and soadyn.read_log reads back."""
+from dataclasses import dataclass, field, fields
+from typing import List, Optional
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class RunSummary:
+    """How a run went: its method, solver statistics, status and energy drift.
+
+    status is "completed", "interrupted by SIGINT at t = …", or the error that ended the run
+    (completed is then False and t_reached the time of the last sample).  The energy errors are
+    max |E(t) − E(0)| / max(|E(0)|, peak T) over the samples, and that ratio at the last one.
+    """
+    method: str
+    status: str
+    completed: bool
+    t_reached: float
+    steps: int
+    rhs_evals: int
+    jac_evals: int
+    error_test_failures: int
+    nonlinear_iterations: int
+    cpu_seconds: float
+    quaternion_handling: str
+    output_dt: float
+    max_relative_energy_error: float
+    final_relative_energy_error: float
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """A run's samples as numpy arrays, T samples at the output times.
+
+    t (T,), q (T, nq), v (T, nv) (the note's q̇), qdd (T, nv), kinetic_energy, potential_energy
+    (joint springs included) and total_energy (T,), linear_momentum and angular_momentum (T, 3)
+    (about the inertial origin); joint_names and parents of the model, the scenario's text, and
+    the run's summary (a RunSummary).
+    """
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    qdd: np.ndarray
+    kinetic_energy: np.ndarray
+    potential_energy: np.ndarray
+    total_energy: np.ndarray
+    linear_momentum: np.ndarray
+    angular_momentum: np.ndarray
+    summary: RunSummary
+    joint_names: List[str] = field(default_factory=list)
+    parents: List[int] = field(default_factory=list)
+    scenario: str = ""
+
+    ARRAYS = ("t", "q", "v", "qdd", "kinetic_energy", "potential_energy", "total_energy", "linear_momentum",
+              "angular_momentum")
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    @property
+    def energy_error(self) -> np.ndarray:
+        """(E(t) − E(0)) / max(|E(0)|, peak T so far), shape (T,): the drift the summary's figures
+        are taken from."""
+        E, T = self.total_energy, self.kinetic_energy
+        if len(E) == 0:
+            return E.copy()
+        scale = np.maximum(np.maximum(abs(E[0]), np.maximum.accumulate(T)), 1e-300)
+        return (E - E[0]) / scale
+
+    def __repr__(self) -> str:
+        s = self.summary
+        span = f"t = {self.t[0]:g} … {self.t[-1]:g} s" if len(self.t) else "no samples"
+        return (f"<soadyn.Trajectory: {len(self)} samples, {span}, nq = {self.q.shape[1]}, nv = {self.v.shape[1]}, "
+                f"{s.method}: {s.status}>")
+
+
+def summary_from_dict(d: dict) -> RunSummary:
+    return RunSummary(**{f.name: d[f.name] for f in fields(RunSummary)})
+
+
+def energy_errors(total: np.ndarray, kinetic: np.ndarray):
+    """(max, final) relative energy error, as simulate() accumulates them sample by sample"""
+    if len(total) == 0:
+        return 0.0, 0.0
+    E0, peak, worst, last = total[0], 0.0, 0.0, 0.0
+    for E, T in zip(total.tolist(), kinetic.tolist()):
+        peak = max(peak, T)
+        last = abs(E - E0) / max(abs(E0), peak, 1e-300)
+        worst = max(worst, last)
+    return worst, last
+
+
+def read_log(path: str) -> Trajectory:
+    """The Trajectory of a soadyn HDF5 run file (soadyn.simulate(output=…) or `soadyn run`).
+
+    The same arrays as the run returned (float64 round-trips exactly); a run still being written
+    or cut short gives what was flushed.  The energy errors, not stored in the file, are
+    recomputed from the logged energies the way simulate() computes them.  Needs h5py.
+    Raises soadyn.Error when the file is missing or is not a soadyn run.
+    """
+    import h5py  # only here: the rest of soadyn does not need it
+
+    from . import Error
+
+    try:
+        f = h5py.File(path, "r")
+    except (OSError, ValueError) as e:
+        raise Error(f"{path}: cannot read the run file: {e}") from None
+    with f:
+        missing = [k for k in ("time", "q", "qd", "solver") if k not in f]
+        if missing:
+            raise Error(f"{path}: not a soadyn run file (no {', '.join(missing)})")
+
+        def series(name, cols=None):
+            if name in f:
+                return np.asarray(f[name][...], dtype=np.float64)
+            n = f["time"].shape[0]
+            return np.full((n, cols) if cols else (n,), np.nan)
+
+        def text(v):
+            return v.decode() if isinstance(v, bytes) else str(v)
+
+        a = f["solver"].attrs
+        get = lambda k, default: a[k] if k in a else default  # noqa: E731
+        t, q, v = series("time"), series("q"), series("qd")
+        T = min(len(t), len(q), len(v))  # a file cut between two datasets' writes
+        arrays = dict(t=t, q=q, v=v, qdd=series("qdd", v.shape[1]),
+                      kinetic_energy=series("energy/kinetic"), potential_energy=series("energy/potential"),
+                      total_energy=series("energy/total"), linear_momentum=series("momentum/linear", 3),
+                      angular_momentum=series("momentum/angular", 3))
+        arrays = {k: x[:T] for k, x in arrays.items()}
+        status = text(get("status", "unknown"))
+        worst, last = energy_errors(arrays["total_energy"], arrays["kinetic_energy"])
+        summary = RunSummary(
+            method=text(get("method", "")), status=status, completed=status == "completed",
+            t_reached=float(get("t_reached", t[T - 1] if T else 0.0)), steps=int(get("steps", 0)),
+            rhs_evals=int(get("rhs_evals", 0)), jac_evals=int(get("jac_evals", 0)),
+            error_test_failures=int(get("error_test_failures", 0)),
+            nonlinear_iterations=int(get("nonlinear_iterations", 0)), cpu_seconds=float(get("cpu_seconds", 0.0)),
+            quaternion_handling=text(get("quaternion_handling", "")), output_dt=float(get("output_dt", 0.0)),
+            max_relative_energy_error=worst, final_relative_energy_error=last)
+        model = f["model"] if "model" in f else {}
+        names = [text(n) for n in model["joint_names"][...]] if "joint_names" in model else []
+        parents = [int(p) for p in model["parents"][...]] if "parents" in model else []
+        scenario = text(f.attrs["scenario"]) if "scenario" in f.attrs else ""
+        return Trajectory(**arrays, summary=summary, joint_names=names, parents=parents, scenario=scenario)
