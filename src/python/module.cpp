@@ -1,8 +1,6 @@
 // soadyn._soadyn: the compiled part of the Python package (soadyn/__init__.py re-exports it).
 #include "common.hpp"
 
-#include "soadyn/integrators.hpp"
-
 namespace soadyn::python {
 
 void read_vector(const Model& model, const Data& data, const char* where, const char* what, const ArrayIn& a,
@@ -89,25 +87,14 @@ PYBIND11_MODULE(_soadyn, m) {
   namespace sp = soadyn::python;
   m.doc() = "The compiled part of soadyn; import soadyn instead.";
   m.attr("__version__") = SOADYN_VERSION;
-  // soadyn.Error is a ValueError: bad input, with the command line's message
+  // soadyn.Error is a ValueError: bad input, with the command line's message (soadyn::Error and
+  // every error derived from it)
   static sp::py::exception<soadyn::Error> error(m, "Error", PyExc_ValueError);
   error.doc() = "Bad input (a file, a field, a vector's size, a setting), with the command line's message: "
                 "file:line:column: field: expected …, got ….";
-  static sp::py::exception<soadyn::ModelError> model_error(m, "ModelError", error.ptr());
-  model_error.doc() = "A model refused by Model.build; .spec is the index of the offending body.";
-  static sp::py::exception<soadyn::SimulationError> sim_error(m, "SimulationError", error.ptr());
-  sim_error.doc() = "A run that could not continue (only raised outside simulate(), which reports it in the summary).";
   sp::py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
-    } catch (const soadyn::ModelError& e) {
-      sp::py::object value = sp::py::handle(model_error.ptr())(e.what());
-      value.attr("spec") = e.spec;
-      PyErr_SetObject(model_error.ptr(), value.ptr());
-    } catch (const soadyn::SimulationError& e) {
-      sp::py::object value = sp::py::handle(sim_error.ptr())(e.what());
-      value.attr("t") = e.t;
-      PyErr_SetObject(sim_error.ptr(), value.ptr());
     } catch (const soadyn::Error& e) {
       error(e.what());
     }

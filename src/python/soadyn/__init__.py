@@ -39,23 +39,26 @@ Data (no copy; the next call on the same Data overwrites them; each keeps the me
 the Data is gone); everything else is a new array.
 
 Errors: soadyn.Error (a ValueError) with the command line's message: file:line:column: field:
-expected …, got …; soadyn.ModelError (a soadyn.Error) for a model refused by its builder.
+expected …, got ….
 """
 from typing import Optional, Union
 
-from ._soadyn import (Data, Error, Inputs, Model, ModelError, Scenario, SimulationError, SimulationSettings,
-                      __version__, bias, forward_dynamics, inverse_dynamics, jacobian, kinetic_energy, load,
+from ._soadyn import (Data, Error, Inputs, Model, Scenario, SimulationSettings, __version__, bias, forward_dynamics, inverse_dynamics, jacobian, kinetic_energy, load,
                       load_scenario, mass_matrix, mass_matrix_literal, momentum, parse_scenario, potential_energy,
                       update_kinematics, update_velocities)
 from . import _soadyn
 from ._trajectory import RunSummary, Trajectory, read_log, summary_from_dict
 
 __all__ = [
-    "Data", "Error", "Inputs", "Model", "ModelError", "RunSummary", "Scenario", "SimulationError",
-    "SimulationSettings", "Trajectory", "__version__", "bias", "forward_dynamics", "inverse_dynamics", "jacobian",
+    "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
+    "bias", "forward_dynamics", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
     "potential_energy", "read_log", "simulate", "update_kinematics", "update_velocities",
 ]
+
+for _cls in (Data, Error, Inputs, Model, Scenario, SimulationSettings, RunSummary, Trajectory):
+    _cls.__module__ = __name__  # soadyn.Model, not soadyn._soadyn.Model, in messages and help
+
 
 def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol: Optional[float] = None,
              atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
@@ -98,4 +101,4 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     return traj
 
 
-del Optional, Union
+del Optional, Union, _cls

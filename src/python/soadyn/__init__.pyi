@@ -1,1 +1,155 @@
+# Type stubs of the soadyn package (the compiled soadyn._soadyn and the pure-Python parts).
+# tests/python/test_api.py checks that they name every public object with the runtime's parameters.
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike  # any float64 array is read in place; anything else is converted once
+Vector = npt.NDArray[np.float64]
+
+__version__: str
+
+class Error(ValueError): ...
+
+class Model:
+    nq: int
+    nv: int
+    nbodies: int
+    body_names: List[str]
+    joint_names: List[str]
+    parents: List[int]
+    idx_q: List[int]
+    idx_v: List[int]
+    depth: int
+    @property
+    def joint_types(self) -> List[str]: ...
+    @property
+    def q_names(self) -> List[str]: ...
+    @property
+    def v_names(self) -> List[str]: ...
+    @property
+    def gravity(self) -> Vector: ...
+    @property
+    def masses(self) -> Vector: ...
+    @property
+    def coms(self) -> Vector: ...
+    @property
+    def inertias(self) -> Vector: ...
+    @property
+    def axes(self) -> Vector: ...
+    def create_data(self) -> Data: ...
+    def neutral(self) -> Vector: ...
+    def normalize(self, q: ArrayLike) -> Vector: ...
+    def integrate(self, q: ArrayLike, v: ArrayLike, h: float) -> Vector: ...
+    def qdot(self, q: ArrayLike, v: ArrayLike) -> Vector: ...
+    def velocity(self, q: ArrayLike, qd: ArrayLike) -> Vector: ...
+    def body_index(self, name: str) -> int: ...
+    def joint_index(self, name: str) -> int: ...
+
+class Data:
+    def __init__(self, model: Model) -> None: ...
+    M: Vector
+    bias: Vector
+    tau: Vector
+    qdd: Vector
+    R: Vector
+    eta: Vector
+    d: Vector
+    s: Vector
+    r: Vector
+    G: Vector
+    V: Vector
+    Vbar: Vector
+
+class SimulationSettings:
+    def __init__(self) -> None: ...
+    t_end: float
+    output_dt: float
+    method: str
+    rtol: float
+    atol: float
+    dt: float
+    max_step: float
+    max_steps: int
+    dynamics: str
+
+class Inputs:
+    @property
+    def torques(self) -> List[Dict[str, Union[str, int, float]]]: ...
+    @property
+    def springs(self) -> List[Dict[str, Union[str, int, float]]]: ...
+    @property
+    def dampers(self) -> List[Dict[str, Union[str, int, float]]]: ...
+    def evaluate(self, t: float, q: ArrayLike, v: ArrayLike) -> Vector: ...
+    def spring_energy(self, q: ArrayLike) -> float: ...
+    def __len__(self) -> int: ...
+
+class Scenario:
+    @property
+    def model(self) -> Model: ...
+    q0: Vector
+    v0: Vector
+    @property
+    def inputs(self) -> Inputs: ...
+    settings: SimulationSettings
+    name: str
+    description: str
+    path: str
+    text: str
+
+class RunSummary:
+    method: str
+    status: str
+    completed: bool
+    t_reached: float
+    steps: int
+    rhs_evals: int
+    jac_evals: int
+    error_test_failures: int
+    nonlinear_iterations: int
+    cpu_seconds: float
+    quaternion_handling: str
+    output_dt: float
+    max_relative_energy_error: float
+    final_relative_energy_error: float
+
+class Trajectory:
+    t: Vector
+    q: Vector
+    v: Vector
+    qdd: Vector
+    kinetic_energy: Vector
+    potential_energy: Vector
+    total_energy: Vector
+    linear_momentum: Vector
+    angular_momentum: Vector
+    summary: RunSummary
+    joint_names: List[str]
+    parents: List[int]
+    scenario: str
+    ARRAYS: Tuple[str, ...]
+    def __len__(self) -> int: ...
+    @property
+    def energy_error(self) -> Vector: ...
+
+def load(path: str, free_root: bool = False, gravity: Optional[ArrayLike] = None) -> Model: ...
+def load_scenario(path: str, free_root: bool = False, gravity: Optional[ArrayLike] = None) -> Scenario: ...
+def parse_scenario(text: str, path: str = "<string>") -> Scenario: ...
+def update_kinematics(model: Model, data: Data, q: ArrayLike) -> None: ...
+def update_velocities(model: Model, data: Data, q: ArrayLike, v: ArrayLike) -> None: ...
+def mass_matrix(model: Model, data: Data, q: ArrayLike) -> Vector: ...
+def mass_matrix_literal(model: Model, data: Data, q: ArrayLike) -> Vector: ...
+def bias(model: Model, data: Data, q: ArrayLike, v: ArrayLike) -> Vector: ...
+def inverse_dynamics(model: Model, data: Data, q: ArrayLike, v: ArrayLike, qdd: ArrayLike) -> Vector: ...
+def forward_dynamics(model: Model, data: Data, q: ArrayLike, v: ArrayLike, tau: ArrayLike,
+                     method: str = "on") -> Vector: ...
+def jacobian(model: Model, data: Data, q: ArrayLike) -> Vector: ...
+def kinetic_energy(model: Model, data: Data, q: ArrayLike, v: ArrayLike) -> float: ...
+def potential_energy(model: Model, data: Data, q: ArrayLike) -> float: ...
+def momentum(model: Model, data: Data, q: ArrayLike, v: ArrayLike) -> Tuple[Vector, Vector]: ...
+def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol: Optional[float] = None,
+             atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
+             output_dt: Optional[float] = None, dynamics: Optional[str] = None,
+             output: Optional[str] = None) -> Trajectory: ...
+def read_log(path: str) -> Trajectory: ...

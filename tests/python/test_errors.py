@@ -1,0 +1,121 @@
+"""Every kind of bad input raises soadyn.Error (a ValueError) with the command line's message."""
+import os
+
+import numpy as np
+import pytest
+
+import soadyn
+from conftest import SCENARIOS, cli_error
+
+
+def raised(fn, *args, **kwargs):
+    with pytest.raises(soadyn.Error) as e:
+        fn(*args, **kwargs)
+    assert isinstance(e.value, ValueError)
+    return str(e.value)
+
+
+def test_error_is_a_value_error():
+    assert issubclass(soadyn.Error, ValueError)
+
+
+BAD_BODY = "bodies:\n  - name: a\n    joint: {type: revolute, axis: [0, 0, 1]}\n    mass: -1\n"
+BAD_URDF = """<?xml version="1.0"?>
+<robot name="pend">
+  <link name="world"/>
+  <link name="bob">
+    <inertial><origin xyz="0 0 -1"/><mass value="2"/>
+      <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="hinge" type="continuous">
+    <parent link="world"/><child link="bob"/><axis xyz="1 0 0"/>
+  </joint>
+</robot>"""
+
+
+def test_files_give_the_command_lines_messages(tmp_path):
+    empty = tmp_path / "empty.yaml"
+    empty.write_text("")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(BAD_BODY)
+    binary = tmp_path / "binary.yaml"
+    binary.write_bytes(b"\x00\x01binary")
+    unknown = tmp_path / "unknown.yaml"
+    unknown.write_text("bodies:\n  - name: a\n    joint: {type: helical, axis: [0, 0, 1]}\n    mass: 1\n")
+    urdf = tmp_path / "pend.urdf"
+    urdf.write_text(BAD_URDF)
+    cases = [("/nonexistent.yaml", {}, "cannot open the file"), (str(empty), {}, "the file is empty"),
+             (str(bad), {}, "bad.yaml:4:11: body 'a'.mass: expected a positive mass"),
+             (str(tmp_path), {}, "is a directory"), (str(binary), {}, "a binary file, expected text"),
+             (str(unknown), {}, "unknown.yaml:3"),
+             (str(urdf), {"free_root": True}, "pend.urdf:3: link 'world': inertial: expected mass properties"),
+             (f"{SCENARIOS}/double_pendulum.yaml", {"free_root": True}, "--free-root applies to URDF models")]
+    for path, kw, expect in cases:
+        args = ["inspect", path] + (["--free-root"] if kw.get("free_root") else [])
+        message = cli_error(*args)
+        for fn in (soadyn.load, soadyn.load_scenario):
+            got = raised(fn, path, **kw)
+            assert got == message, (got, message)
+            assert expect in got, got
+
+
+def test_parse_scenario_names_the_given_path():
+    msg = raised(soadyn.parse_scenario, BAD_BODY, "inline.yaml")
+    assert msg.startswith("inline.yaml:4:11: body 'a'.mass: expected a positive mass"), msg
+
+
+def test_vector_sizes_shapes_and_models():
+    model = soadyn.load(f"{SCENARIOS}/double_pendulum.yaml")
+    other = soadyn.load(f"{SCENARIOS}/three_link_arm.yaml")
+    data = model.create_data()
+    assert raised(soadyn.mass_matrix, model, data, [1.0, 2.0, 3.0]) == "mass_matrix: q: expected 2 entries, got 3"
+    assert raised(soadyn.bias, model, data, [0, 0], [1.0]) == "bias: v: expected 2 entries, got 1"
+    assert raised(soadyn.inverse_dynamics, model, data, [0, 0], [0, 0], [1]) == \
+        "inverse_dynamics: qdd: expected 2 entries, got 1"
+    assert raised(soadyn.forward_dynamics, model, data, [0, 0], [0, 0], np.zeros(5)) == \
+        "forward_dynamics: tau: expected 2 entries, got 5"
+    assert raised(soadyn.mass_matrix, model, data, np.zeros((2, 1))) == \
+        "mass_matrix: q: expected a 1-D array of 2 entries, got shape (2, 1)"
+    assert "this Data was built for another model" in raised(soadyn.mass_matrix, other, data, [0, 0, 0])
+    assert raised(model.integrate, [0, 0], [0, 0, 0], 0.1) == \
+        "Model.integrate: v: expected a 1-D array of 2 entries, got 3 entries"
+    with pytest.raises(TypeError):  # not numbers at all: numpy's conversion refuses
+        soadyn.mass_matrix(model, data, ["a", "b"])
+
+
+def test_methods_and_settings():
+    model = soadyn.load(f"{SCENARIOS}/double_pendulum.yaml")
+    data = model.create_data()
+    msg = raised(soadyn.forward_dynamics, model, data, [0, 0], [0, 0], [0, 0], method="fast")
+    assert "fast" in msg and "dense" in msg, msg
+    scene = soadyn.load_scenario(f"{SCENARIOS}/double_pendulum.yaml")
+    assert raised(soadyn.simulate, scene, rtol=-1.0) == \
+        "simulation settings: t_end, output_dt, dt, rtol and atol must be positive"
+    msg = raised(soadyn.simulate, scene, method="rk5")
+    assert msg == "method: expected one of cvode-adams, cvode-bdf, rk4, euler, symplectic-euler, implicit-midpoint; " \
+                  "got 'rk5'", msg
+
+
+def test_nothing_written_for_a_refused_run(tmp_path):
+    scene = soadyn.load_scenario(f"{SCENARIOS}/double_pendulum.yaml")
+    out = tmp_path / "never.h5"
+    for kw in ({"t_end": -1.0}, {"method": "rk5"}, {"dynamics": "fast"}):
+        with pytest.raises(soadyn.Error):
+            soadyn.simulate(scene, output=str(out), **kw)
+        assert not out.exists(), kw
+    welded = soadyn.parse_scenario("bodies:\n  - name: a\n    joint: {type: fixed}\n    mass: 1\n    inertia: [1, 1, 1]\n", "welded.yaml")
+    assert "no degrees of freedom" in raised(soadyn.simulate, welded, output=str(out))
+    assert not out.exists()
+    msg = raised(soadyn.simulate, scene, t_end=0.1, output=str(tmp_path))
+    assert "is a directory, expected an output file" in msg
+
+
+def test_read_log_refuses_what_is_not_a_run(tmp_path):
+    assert "cannot read the run file" in raised(soadyn.read_log, str(tmp_path / "missing.h5"))
+    text = tmp_path / "text.h5"
+    text.write_text("hello")
+    assert "cannot read the run file" in raised(soadyn.read_log, str(text))
+    import h5py
+    with h5py.File(tmp_path / "other.h5", "w") as f:
+        f["x"] = np.zeros(3)
+    assert "not a soadyn run file" in raised(soadyn.read_log, str(tmp_path / "other.h5"))

@@ -1,0 +1,130 @@
+"""simulate() and read_log(): the same trajectory both ways, the summary, the GIL released while
+integrating, and Ctrl-C (a real SIGINT to a real process) ending a run cleanly with a readable file."""
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import soadyn
+from conftest import ROOT, SCENARIOS, assert_close, cli
+
+
+@pytest.mark.parametrize("scene,method", [("satellite_two_arrays", "cvode-adams"), ("double_pendulum", "rk4"),
+                                          ("stiff_arm", "cvode-bdf")])
+def test_simulate_and_read_log_give_identical_trajectories(tmp_path, scene, method):
+    out = tmp_path / "run.h5"
+    traj = soadyn.simulate(f"{SCENARIOS}/{scene}.yaml", method, t_end=1.0, output=str(out))
+    back = soadyn.read_log(str(out))
+    assert traj.summary.completed and traj.summary.status == "completed"
+    for name in traj.ARRAYS:
+        a, b = getattr(traj, name), getattr(back, name)
+        assert a.dtype == np.float64 and a.shape == b.shape and a.shape[0] == len(traj), name
+        assert np.array_equal(a, b), name
+    assert traj.summary == back.summary
+    assert (traj.joint_names, traj.parents, traj.scenario) == (back.joint_names, back.parents, back.scenario)
+    model = soadyn.load(f"{SCENARIOS}/{scene}.yaml")
+    assert traj.q.shape == (len(traj), model.nq) and traj.v.shape == (len(traj), model.nv)
+    assert traj.linear_momentum.shape == (len(traj), 3)
+    assert traj.t[0] == 0.0 and traj.t[-1] == 1.0 == traj.summary.t_reached
+
+
+def test_simulate_equals_the_command_line_run(tmp_path):
+    """the module's run and `soadyn run` log the same numbers"""
+    path = f"{SCENARIOS}/three_link_arm.yaml"
+    traj = soadyn.simulate(path, "rk4", dt=1e-3, t_end=0.5)
+    p = cli("run", path, "--method", "rk4", "--dt", "1e-3", "--t-end", "0.5", "-q", "-o", tmp_path / "cli.h5")
+    assert p.returncode == 0, p.stderr
+    ref = soadyn.read_log(str(tmp_path / "cli.h5"))
+    for name in traj.ARRAYS:
+        assert np.array_equal(getattr(traj, name), getattr(ref, name)), name
+    assert traj.summary.steps == ref.summary.steps == 500
+
+
+def test_trajectory_is_physical():
+    """the satellite conserves energy and momentum; the trajectory's own arrays say so"""
+    traj = soadyn.simulate(f"{SCENARIOS}/satellite_two_arrays.yaml", t_end=5.0, rtol=1e-10)
+    assert np.abs(traj.energy_error).max() == pytest.approx(traj.summary.max_relative_energy_error, rel=1e-12)
+    assert np.abs(traj.energy_error).max() < 1e-7
+    assert_close(traj.linear_momentum, np.broadcast_to(traj.linear_momentum[0], traj.linear_momentum.shape), 1e-8)
+    assert_close(traj.angular_momentum, np.broadcast_to(traj.angular_momentum[0], traj.angular_momentum.shape), 1e-8)
+    assert_close(np.linalg.norm(traj.q[:, 3:7], axis=1), np.ones(len(traj)), 1e-9)
+
+
+def test_a_failed_run_returns_what_it_has(tmp_path):
+    """explicit Euler far past its stability limit: no exception, the summary says why"""
+    traj = soadyn.simulate(f"{SCENARIOS}/stiff_arm.yaml", "euler", dt=0.05, t_end=20.0, output=str(tmp_path / "x.h5"))
+    assert not traj.summary.completed and "unstable" in traj.summary.status
+    assert traj.t[-1] <= traj.summary.t_reached < 20.0  # t_reached: where it failed
+    back = soadyn.read_log(str(tmp_path / "x.h5"))
+    assert back.summary.status == traj.summary.status and np.array_equal(back.q, traj.q)
+
+
+def test_the_gil_is_released_while_integrating():
+    """another Python thread keeps running while simulate() integrates"""
+    scene = soadyn.load_scenario(f"{SCENARIOS}/double_pendulum.yaml")
+    ticks, done = [], threading.Event()
+
+    def run():
+        soadyn.simulate(scene, "rk4", dt=2e-5, t_end=20.0, output_dt=10.0)
+        done.set()
+
+    worker = threading.Thread(target=run)
+    start = time.monotonic()
+    worker.start()
+    while not done.is_set():
+        ticks.append(time.monotonic())
+        sum(range(2000))  # pure-Python work that needs the GIL
+    worker.join()
+    took = time.monotonic() - start
+    gaps = np.diff([start] + ticks)
+    assert took > 0.2, "the run should take a while"
+    # holding the GIL, simulate() would freeze this loop for the whole run
+    assert gaps.max() < 0.5 * took, (gaps.max(), took)
+
+
+CHILD = textwrap.dedent("""
+    import sys, time, soadyn
+    scene = soadyn.load_scenario(sys.argv[1])
+    print("running", flush=True)
+    try:
+        soadyn.simulate(scene, "rk4", dt=1e-4, t_end=1e6, output=sys.argv[2])
+    except KeyboardInterrupt as e:
+        t = e.trajectory
+        print("interrupted", len(t), repr(t.t[-1]), t.summary.status, flush=True)
+        sys.exit(0)
+    print("completed", flush=True)
+    sys.exit(1)
+""")
+
+
+def test_ctrl_c_stops_a_long_run_within_a_tenth_of_a_second(tmp_path):
+    out = tmp_path / "long.h5"
+    child = subprocess.Popen([sys.executable, "-c", CHILD, f"{SCENARIOS}/double_pendulum.yaml", str(out)],
+                             stdout=subprocess.PIPE, text=True, env=dict(os.environ))
+    try:
+        assert child.stdout.readline().strip() == "running"
+        time.sleep(1.0)  # well inside the run (1e6 s of simulated time would take hours)
+        sent = time.monotonic()
+        child.send_signal(signal.SIGINT)
+        line = child.stdout.readline().split()
+        latency = time.monotonic() - sent
+        assert child.wait(timeout=30) == 0
+    finally:
+        child.kill()
+    print(f"Ctrl-C to KeyboardInterrupt handled: {latency * 1e3:.1f} ms")
+    assert line[0] == "interrupted", line
+    samples, t_last, status = int(line[1]), float(line[2]), " ".join(line[3:])
+    assert latency < 0.1, latency
+    assert status == f"interrupted by SIGINT at t = {t_last!r}", status
+    assert 0.0 < t_last < 1e6
+    # the file is complete and readable, and holds exactly what the run returned
+    back = soadyn.read_log(str(out))
+    assert back.summary.status == status and not back.summary.completed
+    assert len(back) == samples and back.t[-1] == t_last == back.summary.t_reached
+    assert np.all(np.isfinite(back.q)) and np.all(np.diff(back.t) > 0)
