@@ -10,6 +10,7 @@ packages=(
   libsundials-dev libhdf5-dev libyaml-cpp-dev liburdfdom-dev libtinyxml2-dev libcli11-dev
   python3-numpy python3-h5py python3-matplotlib
   libjs-three chromium python3-pil   # soadyn view: three.js inlined in the page; its browser tests
+  pybind11-dev python3-pybind11 python3-pytest   # the Python module and its tests
   clang libclang-rt-14-dev   # the libFuzzer targets (tools/fuzz.sh)
 )
 missing=()
