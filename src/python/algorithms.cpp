@@ -1,112 +1,317 @@
 // The algorithms: f(model, data, q, …), each one update of the pipeline plus the algorithm, and a
 // read-only view of the Data it filled (or a new array for results Data does not hold).
+//
+// These are the calls made in loops, so they are plain CPython functions with the vectorcall
+// convention (positional or keyword arguments, no pybind11 dispatcher): a call adds a few hundred
+// nanoseconds to the C++ time (tools/bench/python_overhead.py).
 #include "common.hpp"
+
+#include <array>
+#include <chrono>
 
 namespace soadyn::python {
 
 namespace {
 
 // [kin] at q
-void kin(const Model& model, PyData& d, const char* where, const ArrayIn& q) {
+void kin(const Model& model, PyData& d, const char* where, PyObject* q) {
   read_vector(model, *d.data, where, "q", q, model.nq, d.q);
   update_kinematics(model, *d.data, d.q);
 }
 
 // [kin] at q, then [vel] at v
-void kin_vel(const Model& model, PyData& d, const char* where, const ArrayIn& q, const ArrayIn& v) {
+void kin_vel(const Model& model, PyData& d, const char* where, PyObject* q, PyObject* v) {
   read_vector(model, *d.data, where, "v", v, model.nv, d.v);  // both sizes checked before any work
   kin(model, d, where, q);
   update_velocities(model, *d.data, d.v);
 }
 
-}  // namespace
+py::object none() { return py::none(); }
 
-void bind_algorithms(py::module_& m) {
-  m.def("update_kinematics", [](const Model& model, PyData& d, const ArrayIn& q) { kin(model, d, "update_kinematics", q); },
-        "model"_a, "data"_a, "q"_a,
-        R"(Fill data's kinematics at q (nq,): R_i, η_i, d_i, s_i, r_i, G_i, M_i (see soadyn.Data).
+// Each algorithm: its name, parameters after (model, data), and the signature and docstring
+// CPython shows (the first line is its __text_signature__).
+struct UpdateKinematics {
+  static constexpr const char* name = "update_kinematics";
+  static constexpr std::array<const char*, 1> params{"q"};
+  static constexpr const char* doc = R"(update_kinematics(model, data, q)
+--
 
-Every algorithm that takes q calls it first; call it directly to read body poses.)");
-  m.def("update_velocities", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v) {
-        kin_vel(model, d, "update_velocities", q, v);
-      }, "model"_a, "data"_a, "q"_a, "v"_a,
-      "Kinematics at q, then v = Ψ_D G q̇ (eq. 4) and v̄ = S v (eq. 5) into data.V, data.Vbar; q (nq,), v (nv,).");
+Fill data's kinematics at q (nq,): R_i, η_i, d_i, s_i, r_i, G_i, M_i (see soadyn.Data).
 
-  m.def("mass_matrix", [](const Model& model, PyData& d, const ArrayIn& q) {
-        kin(model, d, "mass_matrix", q);
-        mass_matrix(model, *d.data);
-        return d.M;
-      }, "model"_a, "data"_a, "q"_a,
-      R"(The system mass matrix 𝓜(q) = Gᵀ Ψ_Dᵀ M Ψ_D G (eq. 14), by composite inertias.
+Every algorithm that takes q does it first; call it directly to read body poses.)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin(m, d, name, a[0]);
+    return none();
+  }
+};
+
+struct UpdateVelocities {
+  static constexpr const char* name = "update_velocities";
+  static constexpr std::array<const char*, 2> params{"q", "v"};
+  static constexpr const char* doc = R"(update_velocities(model, data, q, v)
+--
+
+Kinematics at q, then v = Ψ_D G q̇ (eq. 4) and v̄ = S v (eq. 5) into data.V and data.Vbar.
+q: (nq,), v: (nv,).)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin_vel(m, d, name, a[0], a[1]);
+    return none();
+  }
+};
+
+struct MassMatrix {
+  static constexpr const char* name = "mass_matrix";
+  static constexpr std::array<const char*, 1> params{"q"};
+  static constexpr const char* doc = R"(mass_matrix(model, data, q)
+--
+
+The system mass matrix 𝓜(q) = Gᵀ Ψ_Dᵀ M Ψ_D G (eq. 14), by composite inertias.
 
 q: (nq,).  Returns data.M, shape (nv, nv), symmetric positive definite: a read-only view, not a
-copy (the next call on this Data overwrites it; .copy() to keep it).)");
-  m.def("mass_matrix_literal", [](const Model& model, PyData& d, const ArrayIn& q) {
-        kin(model, d, "mass_matrix_literal", q);
-        MatX M(model.nv, model.nv);
-        mass_matrix_literal(model, *d.data, M);
-        return owned(std::move(M));
-      }, "model"_a, "data"_a, "q"_a,
-      R"(𝓜(q) by the note's three-step procedure: J = Ψ_D G column by column, Q = M J, 𝓜 = Jᵀ Q.
+copy (the next call on this Data overwrites it; .copy() to keep it).)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin(m, d, name, a[0]);
+    mass_matrix(m, *d.data);
+    return d.M;
+  }
+};
 
-O(N²), the readable reference for mass_matrix.  q: (nq,).  Returns a new array (nv, nv).)");
-  m.def("bias", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v) {
-        kin_vel(model, d, "bias", q, v);
-        bias_forces(model, *d.data);
-        return d.bias;
-      }, "model"_a, "data"_a, "q"_a, "v"_a,
-      R"(bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D a + b): Coriolis, centrifugal, gyroscopic and gravity forces.
+struct MassMatrixLiteral {
+  static constexpr const char* name = "mass_matrix_literal";
+  static constexpr std::array<const char*, 1> params{"q"};
+  static constexpr const char* doc = R"(mass_matrix_literal(model, data, q)
+--
 
-𝓜(q) q̈ + bias(q, q̇) = τ.  q: (nq,), v: (nv,).  Returns data.bias, shape (nv,), a read-only view.)");
-  m.def("inverse_dynamics", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v, const ArrayIn& qdd) {
-        read_vector(model, *d.data, "inverse_dynamics", "qdd", qdd, model.nv, d.x);
-        kin_vel(model, d, "inverse_dynamics", q, v);
-        inverse_dynamics(model, *d.data, d.x);
-        return d.tau;
-      }, "model"_a, "data"_a, "q"_a, "v"_a, "qdd"_a,
-      R"(τ = 𝓜(q) q̈ + bias(q, q̇), by the same two sweeps (no 𝓜 formed).
+𝓜(q) by the note's three-step procedure: J = Ψ_D G column by column, Q = M J, 𝓜 = Jᵀ Q.
 
-q: (nq,), v: (nv,), qdd: (nv,).  Returns data.tau, shape (nv,), a read-only view.)");
-  m.def("forward_dynamics", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v, const ArrayIn& tau,
-                               const std::string& method) {
-        const FdMethod fd = parse_fd_method(method);
-        read_vector(model, *d.data, "forward_dynamics", "tau", tau, model.nv, d.x);
-        kin_vel(model, d, "forward_dynamics", q, v);
-        forward_dynamics(model, *d.data, d.x, fd);
-        return d.qdd;
-      }, "model"_a, "data"_a, "q"_a, "v"_a, "tau"_a, "method"_a = "on",
-      R"(q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)).
+O(N²), the readable reference for mass_matrix.  q: (nq,).  Returns a new array (nv, nv).)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin(m, d, name, a[0]);
+    MatX M(m.nv, m.nv);
+    mass_matrix_literal(m, *d.data, M);
+    return owned(std::move(M));
+  }
+};
+
+struct Bias {
+  static constexpr const char* name = "bias";
+  static constexpr std::array<const char*, 2> params{"q", "v"};
+  static constexpr const char* doc = R"(bias(model, data, q, v)
+--
+
+bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D a + b): Coriolis, centrifugal, gyroscopic and gravity forces.
+
+𝓜(q) q̈ + bias(q, q̇) = τ.  q: (nq,), v: (nv,).  Returns data.bias, shape (nv,), a read-only view.)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin_vel(m, d, name, a[0], a[1]);
+    bias_forces(m, *d.data);
+    return d.bias;
+  }
+};
+
+struct InverseDynamics {
+  static constexpr const char* name = "inverse_dynamics";
+  static constexpr std::array<const char*, 3> params{"q", "v", "qdd"};
+  static constexpr const char* doc = R"(inverse_dynamics(model, data, q, v, qdd)
+--
+
+τ = 𝓜(q) q̈ + bias(q, q̇), by the same two sweeps (no 𝓜 formed).
+
+q: (nq,), v: (nv,), qdd: (nv,).  Returns data.tau, shape (nv,), a read-only view.)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    read_vector(m, *d.data, name, "qdd", a[2], m.nv, d.x);
+    kin_vel(m, d, name, a[0], a[1]);
+    inverse_dynamics(m, *d.data, d.x);
+    return d.tau;
+  }
+};
+
+struct ForwardDynamics {
+  static constexpr const char* name = "forward_dynamics";
+  static constexpr std::array<const char*, 4> params{"q", "v", "tau", "method"};
+  static constexpr const char* doc = R"(forward_dynamics(model, data, q, v, tau, method='on')
+--
+
+q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)).
 
 method: 'on' (articulated-body recursion, O(N), 𝓜 never formed), 'dense' (composite 𝓜 and
 Cholesky; also fills data.M and data.bias) or 'sparse' (𝓜 factored as LᵀDL along the tree).
-q: (nq,), v: (nv,), tau: (nv,).  Returns data.qdd, shape (nv,), a read-only view.)");
-  m.def("jacobian", [](const Model& model, PyData& d, const ArrayIn& q) {
-        kin(model, d, "jacobian", q);
-        MatX J;
-        jacobian(model, *d.data, J);
-        return owned(std::move(J));
-      }, "model"_a, "data"_a, "q"_a,
-      R"(J = S Ψ_D G (eq. 7): rows 6i…6i+5 map q̇ to v̄_i = [ω_i; ṙ_i] (centre-of-mass velocity).
+q: (nq,), v: (nv,), tau: (nv,).  Returns data.qdd, shape (nv,), a read-only view.)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    FdMethod fd = parse_fd_method("on");
+    if (a[3]) {
+      Py_ssize_t n = 0;
+      const char* s = PyUnicode_Check(a[3]) ? PyUnicode_AsUTF8AndSize(a[3], &n) : nullptr;
+      if (!s) throw py::type_error("forward_dynamics: method: expected a string");
+      fd = parse_fd_method(std::string_view(s, size_t(n)));
+    }
+    read_vector(m, *d.data, name, "tau", a[2], m.nv, d.x);
+    kin_vel(m, d, name, a[0], a[1]);
+    forward_dynamics(m, *d.data, d.x, fd);
+    return d.qdd;
+  }
+};
 
-q: (nq,).  Returns a new array, shape (6N, nv).  𝓜 = Jᵀ diag(M̄_i) J.)");
-  m.def("kinetic_energy", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v) {
-        kin_vel(model, d, "kinetic_energy", q, v);
-        return kinetic_energy(model, *d.data);
-      }, "model"_a, "data"_a, "q"_a, "v"_a,
-      "T = ½ Σ (ω_iᵀ I_i ω_i + m_i ṙ_iᵀ ṙ_i) = ½ q̇ᵀ 𝓜 q̇ (eq. 9), J.  q: (nq,), v: (nv,).");
-  m.def("potential_energy", [](const Model& model, PyData& d, const ArrayIn& q) {
-        kin(model, d, "potential_energy", q);
-        return potential_energy(model, *d.data);
-      }, "model"_a, "data"_a, "q"_a,
-      "V = −Σ m_i g·r_i over every body with mass (world-welded ones included), J; zero at the origin.  q: (nq,).");
-  m.def("momentum", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v) {
-        kin_vel(model, d, "momentum", q, v);
-        const Momentum h = momentum(model, *d.data);
-        return py::make_tuple(owned(VecX(h.linear)), owned(VecX(h.angular)));
-      }, "model"_a, "data"_a, "q"_a, "v"_a,
-      R"((linear, angular): p = Σ m_i ṙ_i and L = Σ I_i ω_i + r_i × m_i ṙ_i about the inertial origin.
+struct Jacobian {
+  static constexpr const char* name = "jacobian";
+  static constexpr std::array<const char*, 1> params{"q"};
+  static constexpr const char* doc = R"(jacobian(model, data, q)
+--
 
-q: (nq,), v: (nv,).  Returns two new arrays of shape (3,).)");
+J = S Ψ_D G (eq. 7): rows 6i…6i+5 map q̇ to v̄_i = [ω_i; ṙ_i] (centre-of-mass velocity).
+
+q: (nq,).  Returns a new array, shape (6N, nv).  𝓜 = Jᵀ diag(M̄_i) J.)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin(m, d, name, a[0]);
+    MatX J;
+    jacobian(m, *d.data, J);
+    return owned(std::move(J));
+  }
+};
+
+struct KineticEnergy {
+  static constexpr const char* name = "kinetic_energy";
+  static constexpr std::array<const char*, 2> params{"q", "v"};
+  static constexpr const char* doc = R"(kinetic_energy(model, data, q, v)
+--
+
+T = ½ Σ (ω_iᵀ I_i ω_i + m_i ṙ_iᵀ ṙ_i) = ½ q̇ᵀ 𝓜 q̇ (eq. 9), J.  q: (nq,), v: (nv,).)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin_vel(m, d, name, a[0], a[1]);
+    return py::float_(kinetic_energy(m, *d.data));
+  }
+};
+
+struct PotentialEnergy {
+  static constexpr const char* name = "potential_energy";
+  static constexpr std::array<const char*, 1> params{"q"};
+  static constexpr const char* doc = R"(potential_energy(model, data, q)
+--
+
+V = −Σ m_i g·r_i over every body with mass (world-welded ones included), J; zero at the origin.
+q: (nq,).)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin(m, d, name, a[0]);
+    return py::float_(potential_energy(m, *d.data));
+  }
+};
+
+struct MomentumFn {
+  static constexpr const char* name = "momentum";
+  static constexpr std::array<const char*, 2> params{"q", "v"};
+  static constexpr const char* doc = R"(momentum(model, data, q, v)
+--
+
+(linear, angular): p = Σ m_i ṙ_i and L = Σ I_i ω_i + r_i × m_i ṙ_i about the inertial origin.
+
+q: (nq,), v: (nv,).  Returns two new arrays of shape (3,).)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin_vel(m, d, name, a[0], a[1]);
+    const Momentum h = momentum(m, *d.data);
+    return py::make_tuple(owned(VecX(h.linear)), owned(VecX(h.angular)));
+  }
+};
+
+// Arguments by position or by name into slots (model, data, params…); false with a TypeError set.
+template <class Fn>
+bool parse(PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames, PyObject** slots) {
+  constexpr int n = int(Fn::params.size()) + 2;
+  constexpr int required = std::string_view(Fn::params.back()) == "method" ? n - 1 : n;
+  auto param = [](int i) { return i == 0 ? "model" : i == 1 ? "data" : Fn::params[size_t(i - 2)]; };
+  if (nargs > n) {
+    PyErr_Format(PyExc_TypeError, "%s() takes %d arguments (%zd given)", Fn::name, n, nargs);
+    return false;
+  }
+  for (int i = 0; i < n; ++i) slots[i] = i < nargs ? args[i] : nullptr;
+  const Py_ssize_t nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
+  for (Py_ssize_t k = 0; k < nkw; ++k) {
+    PyObject* key = PyTuple_GET_ITEM(kwnames, k);
+    int i = 0;
+    while (i < n && PyUnicode_CompareWithASCIIString(key, param(i)) != 0) ++i;
+    if (i == n) {
+      PyErr_Format(PyExc_TypeError, "%s() got an unexpected keyword argument '%U'", Fn::name, key);
+      return false;
+    }
+    if (slots[i]) {
+      PyErr_Format(PyExc_TypeError, "%s() got multiple values for argument '%s'", Fn::name, param(i));
+      return false;
+    }
+    slots[i] = args[nargs + k];
+  }
+  for (int i = 0; i < required; ++i)
+    if (!slots[i]) {
+      PyErr_Format(PyExc_TypeError, "%s() missing required argument '%s'", Fn::name, param(i));
+      return false;
+    }
+  return true;
+}
+
+template <class T>
+T& instance(PyObject* obj, const char* fn, const char* what, const char* type) {
+  py::detail::make_caster<T> caster;
+  if (!caster.load(obj, false))
+    throw py::type_error(std::string(fn) + ": " + what + ": expected a " + type + ", got " +
+                         std::string(py::str(py::type::handle_of(obj).attr("__name__"))));
+  return py::detail::cast_op<T&>(caster);
+}
+
+template <class Fn>
+PyObject* vectorcall(PyObject*, PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames) {
+  PyObject* slots[Fn::params.size() + 2];
+  if (!parse<Fn>(args, PyVectorcall_NARGS(nargs), kwnames, slots)) return nullptr;
+  try {
+    const Model& model = instance<Model>(slots[0], Fn::name, "model", "soadyn.Model");
+    PyData& data = instance<PyData>(slots[1], Fn::name, "data", "soadyn.Data");
+    return Fn::run(model, data, slots + 2).release().ptr();
+  } catch (...) {
+    set_python_error();
+    return nullptr;
+  }
+}
+
+template <class Fn>
+PyMethodDef method() {
+  return {Fn::name, reinterpret_cast<PyCFunction>(reinterpret_cast<void (*)()>(&vectorcall<Fn>)),
+          METH_FASTCALL | METH_KEYWORDS, Fn::doc};
+}
+
+}  // namespace
+
+void bind_algorithms(py::module_& m) {
+  // CPython keeps pointers to these definitions for the life of the functions
+  static PyMethodDef defs[] = {method<UpdateKinematics>(), method<UpdateVelocities>(), method<MassMatrix>(),
+                               method<MassMatrixLiteral>(), method<Bias>(), method<InverseDynamics>(),
+                               method<ForwardDynamics>(), method<Jacobian>(), method<KineticEnergy>(),
+                               method<PotentialEnergy>(), method<MomentumFn>()};
+  py::object module_name = m.attr("__name__");
+  // for tools/bench/python_overhead.py: the same library calls in a C++ loop in this process, so
+  // the two sides are timed in adjacent windows on the same machine state
+  m.def("_time_cpp", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v, const ArrayIn& tau,
+                        const std::string& which, long calls) {
+        VecX qv(model.nq), vv(model.nv), tv(model.nv);
+        read_vector(model, *d.data, "_time_cpp", "q", q, model.nq, qv);
+        read_vector(model, *d.data, "_time_cpp", "v", v, model.nv, vv);
+        read_vector(model, *d.data, "_time_cpp", "tau", tau, model.nv, tv);
+        Data& data = *d.data;
+        const auto t0 = std::chrono::steady_clock::now();
+        if (which == "mass_matrix") {
+          for (long k = 0; k < calls; ++k) update_kinematics(model, data, qv), mass_matrix(model, data);
+        } else if (which == "forward_dynamics") {
+          for (long k = 0; k < calls; ++k) {
+            update_kinematics(model, data, qv);
+            update_velocities(model, data, vv);
+            forward_dynamics(model, data, tv, parse_fd_method("on"));
+          }
+        } else {
+          throw Error("_time_cpp: which: expected mass_matrix or forward_dynamics, got '" + which + "'");
+        }
+        return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / double(calls);
+      }, "model"_a, "data"_a, "q"_a, "v"_a, "tau"_a, "which"_a, "calls"_a);
+  for (PyMethodDef& def : defs) {
+    PyObject* f = PyCFunction_NewEx(&def, nullptr, module_name.ptr());
+    if (!f) throw py::error_already_set();
+    m.add_object(def.ml_name, py::reinterpret_steal<py::object>(f));
+  }
 }
 
 }  // namespace soadyn::python

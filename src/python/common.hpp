@@ -25,8 +25,9 @@ using namespace pybind11::literals;
 using ArrayIn = py::array_t<double, py::array::forcecast>;
 
 // Copies the 1-D array `a` into `out` (sized once, no allocation) after the library's own size
-// check, so the message is the C++ one: "mass_matrix: q: expected 7 entries, got 3".
-void read_vector(const Model& model, const Data& data, const char* where, const char* what, const ArrayIn& a,
+// check, so the message is the C++ one: "mass_matrix: q: expected 7 entries, got 3".  A native
+// float64 ndarray is read in place through its strides; anything else goes through numpy.
+void read_vector(const Model& model, const Data& data, const char* where, const char* what, py::handle a,
                  int expected, VecX& out);
 // The same for a function without a Data (the model's own methods): out is resized as needed.
 VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expected);
@@ -50,6 +51,11 @@ struct PyData {
   // throws soadyn::Error when this Data was built for another model
   void check(const Model& model, const char* where) const { data->check(model, where, "data", 0, 0); }
 };
+
+// The Python exception for the C++ exception being handled (soadyn::Error → soadyn.Error, …);
+// for the entry points that bypass pybind11's dispatcher.
+void set_python_error();
+extern PyObject* error_type;  // soadyn.Error
 
 void bind_model(py::module_& m);
 void bind_algorithms(py::module_& m);

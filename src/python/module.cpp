@@ -1,10 +1,30 @@
 // soadyn._soadyn: the compiled part of the Python package (soadyn/__init__.py re-exports it).
 #include "common.hpp"
 
+#include <cstring>
+
 namespace soadyn::python {
 
-void read_vector(const Model& model, const Data& data, const char* where, const char* what, const ArrayIn& a,
+PyObject* error_type = nullptr;
+
+void read_vector(const Model& model, const Data& data, const char* where, const char* what, py::handle h,
                  int expected, VecX& out) {
+  // fast path: a 1-D float64 ndarray in native byte order, read where it lies
+  const auto& api = py::detail::npy_api::get();
+  if (api.PyArray_Check_(h.ptr())) {
+    const auto* p = py::detail::array_proxy(h.ptr());
+    const auto* descr = py::detail::array_descriptor_proxy(p->descr);
+    if (p->nd == 1 && descr->type_num == py::detail::npy_api::NPY_DOUBLE_ && descr->byteorder != '>') {
+      data.check(model, where, what, p->dimensions[0], expected);
+      const char* src = p->data;
+      for (int k = 0; k < expected; ++k, src += p->strides[0]) std::memcpy(&out(k), src, sizeof(double));
+      return;
+    }
+  }
+  const ArrayIn a = ArrayIn::ensure(h);  // numpy's conversion: lists, other dtypes, byte orders
+  if (!a)
+    throw py::type_error(std::string(where) + ": " + what + ": expected numbers, got " +
+                         std::string(py::str(py::type::handle_of(h).attr("__name__"))));
   if (a.ndim() != 1) {
     std::string shape;
     for (py::ssize_t k = 0; k < a.ndim(); ++k) shape += (k ? ", " : "") + std::to_string(a.shape(k));
@@ -44,6 +64,22 @@ py::array owned(MatX&& m) {
   py::capsule base(keep, [](void* p) { delete static_cast<MatX*>(p); });
   const py::ssize_t s = sizeof(double);
   return py::array(py::dtype::of<double>(), {keep->rows(), keep->cols()}, {s, s * keep->rows()}, keep->data(), base);
+}
+
+void set_python_error() {
+  try {
+    throw;
+  } catch (py::error_already_set& e) {
+    e.restore();
+  } catch (const Error& e) {
+    PyErr_SetString(error_type, e.what());
+  } catch (const py::builtin_exception& e) {
+    e.set_error();
+  } catch (const std::bad_alloc&) {
+    PyErr_NoMemory();
+  } catch (const std::exception& e) {
+    PyErr_SetString(PyExc_RuntimeError, e.what());
+  }
 }
 
 namespace {
@@ -90,6 +126,7 @@ PYBIND11_MODULE(_soadyn, m) {
   // soadyn.Error is a ValueError: bad input, with the command line's message (soadyn::Error and
   // every error derived from it)
   static sp::py::exception<soadyn::Error> error(m, "Error", PyExc_ValueError);
+  sp::error_type = error.ptr();
   error.doc() = "Bad input (a file, a field, a vector's size, a setting), with the command line's message: "
                 "file:line:column: field: expected …, got ….";
   sp::py::register_exception_translator([](std::exception_ptr p) {

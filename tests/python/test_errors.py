@@ -119,3 +119,25 @@ def test_read_log_refuses_what_is_not_a_run(tmp_path):
     with h5py.File(tmp_path / "other.h5", "w") as f:
         f["x"] = np.zeros(3)
     assert "not a soadyn run file" in raised(soadyn.read_log, str(tmp_path / "other.h5"))
+
+
+def test_arguments_by_position_and_name():
+    """the algorithms parse their own arguments: the usual Python rules and TypeErrors"""
+    model = soadyn.load(f"{SCENARIOS}/double_pendulum.yaml")
+    data = model.create_data()
+    ref = soadyn.forward_dynamics(model, data, [0.1, 0.2], [0.3, 0.4], [1, 2], "dense").copy()
+    got = soadyn.forward_dynamics(tau=[1, 2], method="dense", v=[0.3, 0.4], q=[0.1, 0.2], data=data, model=model)
+    assert np.array_equal(got, ref)
+    for call, message in [
+            (lambda: soadyn.mass_matrix(model), "mass_matrix() missing required argument 'data'"),
+            (lambda: soadyn.mass_matrix(model, data, [0, 0], [0, 0]), "mass_matrix() takes 3 arguments (4 given)"),
+            (lambda: soadyn.mass_matrix(model, data, q=[0, 0], x=1), "unexpected keyword argument 'x'"),
+            (lambda: soadyn.mass_matrix(model, data, [0, 0], q=[1, 1]), "multiple values for argument 'q'"),
+            (lambda: soadyn.mass_matrix(data, model, [0, 0]), "mass_matrix: model: expected a soadyn.Model, got Data"),
+            (lambda: soadyn.bias(model, None, [0, 0], [0, 0]), "bias: data: expected a soadyn.Data, got NoneType"),
+            (lambda: soadyn.forward_dynamics(model, data, [0, 0], [0, 0], [0, 0], 3), "method: expected a string")]:
+        with pytest.raises(TypeError) as e:
+            call()
+        assert message in str(e.value), str(e.value)
+    import inspect
+    assert str(inspect.signature(soadyn.forward_dynamics)) == "(model, data, q, v, tau, method='on')"

@@ -83,7 +83,7 @@ def energy_errors(total: np.ndarray, kinetic: np.ndarray):
     """(max, final) relative energy error, as simulate() accumulates them sample by sample"""
     if len(total) == 0:
         return 0.0, 0.0
-    E0, peak, worst, last = total[0], 0.0, 0.0, 0.0
+    E0, peak, worst, last = float(total[0]), 0.0, 0.0, 0.0
     for E, T in zip(total.tolist(), kinetic.tolist()):
         peak = max(peak, T)
         last = abs(E - E0) / max(abs(E0), peak, 1e-300)
