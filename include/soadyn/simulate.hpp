@@ -24,7 +24,7 @@ struct RunSummary {
   std::string quaternion_handling;
   double output_dt = 0.0;             // as used: a whole number of steps for fixed-step methods
   IntegratorStats stats;
-  double cpu_seconds = 0.0;
+  double cpu_seconds = 0.0;           // CPU time of the thread that ran it
   std::string status = "running";     // "completed", "interrupted by SIGINT at t = …", or the error
   double t_reached = 0.0;
   bool completed = false;
