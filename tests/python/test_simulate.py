@@ -1,6 +1,7 @@
 """simulate() and read_log(): the same trajectory both ways, the summary, the GIL released while
 integrating, and Ctrl-C (a real SIGINT to a real process) ending a run cleanly with a readable file."""
 import os
+import select
 import signal
 import subprocess
 import sys
@@ -112,6 +113,8 @@ def test_ctrl_c_stops_a_long_run_within_a_tenth_of_a_second(tmp_path):
         time.sleep(1.0)  # well inside the run (1e6 s of simulated time would take hours)
         sent = time.monotonic()
         child.send_signal(signal.SIGINT)
+        ready, _, _ = select.select([child.stdout], [], [], 10.0)
+        assert ready, "still running 10 s after SIGINT"
         line = child.stdout.readline().split()
         latency = time.monotonic() - sent
         assert child.wait(timeout=30) == 0

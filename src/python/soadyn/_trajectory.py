@@ -104,7 +104,10 @@ def read_log(path: str) -> Trajectory:
     from . import Error
 
     try:
-        f = h5py.File(path, "r")
+        try:
+            f = h5py.File(path, "r", swmr=True)  # a run still being written (SWMR files)
+        except (OSError, ValueError):
+            f = h5py.File(path, "r")
     except (OSError, ValueError) as e:
         raise Error(f"{path}: cannot read the run file: {e}") from None
     with f:
@@ -121,8 +124,14 @@ def read_log(path: str) -> Trajectory:
         def text(v):
             return v.decode() if isinstance(v, bytes) else str(v)
 
-        a = f["solver"].attrs
-        get = lambda k, default: a[k] if k in a else default  # noqa: E731
+        solver = f["solver"]
+
+        def get(k, default):
+            # run-time values: scalar datasets (SWMR layout) or attributes (earlier files)
+            if k in solver:
+                return solver[k][()]
+            return solver.attrs[k] if k in solver.attrs else default
+
         t, q, v = series("time"), series("q"), series("qd")
         T = min(len(t), len(q), len(v))  # a file cut between two datasets' writes
         arrays = dict(t=t, q=q, v=v, qdd=series("qdd", v.shape[1]),
@@ -143,5 +152,5 @@ def read_log(path: str) -> Trajectory:
         model = f["model"] if "model" in f else {}
         names = [text(n) for n in model["joint_names"][...]] if "joint_names" in model else []
         parents = [int(p) for p in model["parents"][...]] if "parents" in model else []
-        scenario = text(f.attrs["scenario"]) if "scenario" in f.attrs else ""
+        scenario = text(f["scenario"][()]) if "scenario" in f else text(f.attrs.get("scenario", ""))
         return Trajectory(**arrays, summary=summary, joint_names=names, parents=parents, scenario=scenario)
