@@ -1,6 +1,9 @@
-"""Shared by tools/work_precision.py and tools/stability.py: run `soadyn run` and read its file."""
+"""Shared by tools/work_precision.py and tools/stability.py: one run, in this process through the
+soadyn Python module when it is built (beside the executable: build/python), else by `soadyn run`
+and its file.  SOADYN_RUNS_CLI=1 forces the executable."""
 import os
 import subprocess
+import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 
@@ -13,9 +16,43 @@ SCENARIOS = os.path.join(ROOT, "scenarios")
 FIXED = ["euler", "symplectic-euler", "rk4", "implicit-midpoint"]
 CVODE = ["cvode-adams", "cvode-bdf"]
 
+try:
+    if os.environ.get("SOADYN_RUNS_CLI"):
+        raise ImportError("SOADYN_RUNS_CLI is set")
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(SOADYN)), "python"))
+    import soadyn
+except ImportError:
+    soadyn = None
+_scenes = {}
+
+
+def energy_summary(r, t, E, T):
+    r["t"] = t
+    scale = max(abs(E[0]), T.max(), 1e-300)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r["E_rel"] = (E - E[0]) / scale
+    r["energy_error"] = float(np.abs(r["E_rel"]).max())
+    r["energy_final"] = float(r["E_rel"][-1])
+    return r
+
+
+def run_in_process(scenario, method, t_end=None, rtol=None, dt=None, output_dt=None):
+    """the same run as `soadyn run`, by soadyn.simulate (the GIL is released while it integrates)"""
+    if scenario not in _scenes:
+        _scenes[scenario] = soadyn.load_scenario(os.path.join(SCENARIOS, scenario + ".yaml"))
+    tr = soadyn.simulate(_scenes[scenario], method, rtol=rtol, atol=None if rtol is None else rtol * 1e-2, dt=dt,
+                         t_end=t_end, output_dt=output_dt)
+    s = tr.summary
+    r = {"scenario": scenario, "method": method, "rtol": rtol, "dt": dt, "ok": s.completed, "status": s.status,
+         "cpu": s.cpu_seconds, "rhs": s.rhs_evals, "steps": s.steps, "t_reached": s.t_reached,
+         "q": tr.q[-1], "qd": tr.v[-1]}
+    return energy_summary(r, tr.t, tr.total_energy, tr.kinetic_energy)
+
 
 def run(scenario, method, t_end=None, rtol=None, dt=None, output_dt=None, timeout=900):
     """One run; returns a dict with the final state, energy errors, CPU time, status."""
+    if soadyn is not None:
+        return run_in_process(scenario, method, t_end, rtol, dt, output_dt)
     with tempfile.TemporaryDirectory() as d:
         out = os.path.join(d, "run.h5")
         cmd = [SOADYN, "run", os.path.join(SCENARIOS, scenario + ".yaml"), "--method", method, "-q", "-o", out]
@@ -44,13 +81,7 @@ def run(scenario, method, t_end=None, rtol=None, dt=None, output_dt=None, timeou
             r["t_reached"] = float(s["t_reached"][()])
             t, E, T = f["time"][:], f["energy/total"][:], f["energy/kinetic"][:]
             r["q"], r["qd"] = f["q"][-1], f["qd"][-1]
-            r["t"] = t
-            scale = max(abs(E[0]), T.max(), 1e-300)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                r["E_rel"] = (E - E[0]) / scale
-            r["energy_error"] = float(np.abs(r["E_rel"]).max())
-            r["energy_final"] = float(r["E_rel"][-1])
-        return r
+        return energy_summary(r, t, E, T)
 
 
 def run_many(jobs, workers=2):
