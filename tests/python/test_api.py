@@ -267,6 +267,9 @@ def test_inputs_of_any_layout(rng):
     ref32 = soadyn.forward_dynamics(model, data, q, v, tau32.astype(np.float64)).copy()
     assert_close(soadyn.forward_dynamics(model, data, list(q), tuple(v), tau32), ref32, 0)
     assert_close(soadyn.forward_dynamics(model, data, q[::-1][::-1], v, tau), ref, 0)
+    assert_close(soadyn.forward_dynamics(model, data, q.astype(">f8"), v, tau), ref, 0)  # big-endian: converted
+    backwards = q[::-1].copy()
+    assert_close(soadyn.forward_dynamics(model, data, backwards[::-1], v, tau), ref, 0)  # negative stride
     ints = soadyn.mass_matrix(model, data, [0, 1, 0]).copy()  # ints converted
     assert_close(ints, soadyn.mass_matrix(model, data, np.array([0.0, 1.0, 0.0])), 0)
 
