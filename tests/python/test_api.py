@@ -318,3 +318,20 @@ def test_docstrings_give_equations_and_shapes():
     text = pydoc.render_doc(soadyn, renderer=pydoc.plaintext)
     for needle in ("eq. 14", "Model/Data", "read-only views", "simulate(", "read_log(", "soadyn.Error"):
         assert needle in text, needle
+
+
+def test_inputs_of_a_scenario():
+    """the stiff arm's springs and damper: τ = −k (q − rest) − c q̇, V = ½ k (q − rest)²"""
+    text = open(f"{SCENARIOS}/stiff_arm.yaml").read().replace("inputs:\n", """inputs:
+  torques:
+    - {joint: theta1, constant: 0.5, amplitude: 2.0, frequency: 3.0, phase: 0.25}
+""")
+    scene = soadyn.parse_scenario(text, f"{SCENARIOS}/stiff_arm_driven.yaml")
+    inputs = scene.inputs
+    assert len(inputs) == 4
+    assert [s["joint"] for s in inputs.springs] == ["theta2", "theta3"] and inputs.dampers[0]["damping"] == 2.0e3
+    assert inputs.torques[0]["dof"] == 0
+    q, v, t = np.array([0.1, -0.2, 0.3]), np.array([1.0, 2.0, -3.0]), 0.7
+    tau = [0.5 + 2.0 * np.sin(2 * np.pi * 3.0 * t + 0.25), -20.0 * -0.2, -2.0e4 * 0.3 - 2.0e3 * -3.0]
+    assert_close(inputs.evaluate(t, q, v), tau, 1e-15)
+    assert_close(inputs.spring_energy(q), 0.5 * 20.0 * 0.04 + 0.5 * 2.0e4 * 0.09, 1e-15)
