@@ -284,6 +284,36 @@ void bind_algorithms(py::module_& m) {
                                method<ForwardDynamics>(), method<Jacobian>(), method<KineticEnergy>(),
                                method<PotentialEnergy>(), method<MomentumFn>()};
   py::object module_name = m.attr("__name__");
+  m.def("body_poses", [](const Model& model, const ArrayIn& qs) {
+        const bool one = qs.ndim() == 1;
+        if (!(one || qs.ndim() == 2) || qs.shape(qs.ndim() - 1) != model.nq)
+          throw Error("body_poses: q: expected shape (" + std::to_string(model.nq) + ",) or (T, " +
+                      std::to_string(model.nq) + "), got " + std::string(py::str(qs.attr("shape"))));
+        const py::ssize_t T = one ? 1 : qs.shape(0), N = model.nbodies;
+        std::vector<double> pos(size_t(T * N * 3)), rot(size_t(T * N * 9));
+        {
+          py::gil_scoped_release nogil;
+          Data data(model);
+          VecX q(model.nq);
+          for (py::ssize_t t = 0; t < T; ++t) {
+            for (int k = 0; k < model.nq; ++k) q(k) = one ? qs.at(k) : qs.at(t, k);
+            update_kinematics(model, data, q);
+            for (py::ssize_t i = 0; i < N; ++i) {
+              for (int r = 0; r < 3; ++r) {
+                pos[size_t((t * N + i) * 3 + r)] = data.eta(r, i);
+                for (int c = 0; c < 3; ++c) rot[size_t((t * N + i) * 9 + 3 * r + c)] = data.R[size_t(i)](r, c);
+              }
+            }
+          }
+        }
+        if (one) return py::make_tuple(owned(std::move(pos), {N, 3}), owned(std::move(rot), {N, 3, 3}));
+        return py::make_tuple(owned(std::move(pos), {T, N, 3}), owned(std::move(rot), {T, N, 3, 3}));
+      }, "model"_a, "q"_a,
+      R"((positions, rotations) of every body frame at each configuration: η_i and C_i^in.
+
+q: (nq,) or (T, nq), e.g. a Trajectory's q.  Returns new arrays of shape (N, 3) and (N, 3, 3), or
+(T, N, 3) and (T, N, 3, 3): the body frame's origin (its joint point) and its rotation body →
+inertial.  Runs without the GIL.)");
   // for tools/bench/python_overhead.py: the same library calls in a C++ loop in this process, so
   // the two sides are timed in adjacent windows on the same machine state
   m.def("_time_cpp", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v, const ArrayIn& tau,

@@ -118,6 +118,7 @@ def test_three_link_arm(rng):
     com = [np.array([0, 0, 0.1]), np.array([0, 0, 0.4]), np.array([0, 0, 0.35])]
     d2, d3 = np.array([0, 0, 0.2]), np.array([0, 0, 0.8])
     S = skew
+    qs, etas, Rs = [], [], []
     for _ in range(20):
         q = rng.uniform(-3, 3, 3)
         R1 = rot(ez, q[0]); R2 = R1 @ rot(ex, q[1]); R3 = R2 @ rot(ex, q[2])
@@ -138,6 +139,15 @@ def test_three_link_arm(rng):
         assert_close(soadyn.mass_matrix(model, data, q), M, 1e-12)
         assert_close(data.R, np.array(R), 1e-14)
         assert_close(data.eta, np.array(eta), 1e-14)
+        qs.append(q), etas.append(eta), Rs.append(R)
+    positions, rotations = soadyn.body_poses(model, np.array(qs))
+    assert positions.shape == (20, 3, 3) and rotations.shape == (20, 3, 3, 3)
+    assert_close(positions, np.array(etas), 1e-14)
+    assert_close(rotations, np.array(Rs), 1e-14)
+    one = soadyn.body_poses(model, qs[3])
+    assert np.array_equal(one[0], positions[3]) and np.array_equal(one[1], rotations[3])
+    with pytest.raises(soadyn.Error, match=r"body_poses: q: expected shape \(3,\) or \(T, 3\), got \(2, 2\)"):
+        soadyn.body_poses(model, np.zeros((2, 2)))
 
 
 def test_satellite_two_arrays(rng):

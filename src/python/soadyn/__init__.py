@@ -43,7 +43,7 @@ expected …, got ….
 """
 from typing import Optional, Union
 
-from ._soadyn import (Data, Error, Inputs, Model, Scenario, SimulationSettings, __version__, bias, forward_dynamics, inverse_dynamics, jacobian, kinetic_energy, load,
+from ._soadyn import (Data, Error, Inputs, Model, Scenario, SimulationSettings, __version__, bias, body_poses, forward_dynamics, inverse_dynamics, jacobian, kinetic_energy, load,
                       load_scenario, mass_matrix, mass_matrix_literal, momentum, parse_scenario, potential_energy,
                       update_kinematics, update_velocities)
 from . import _soadyn
@@ -51,7 +51,7 @@ from ._trajectory import RunSummary, Trajectory, read_log, summary_from_dict
 
 __all__ = [
     "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
-    "bias", "forward_dynamics", "inverse_dynamics", "jacobian",
+    "bias", "body_poses", "forward_dynamics", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
     "potential_energy", "read_log", "simulate", "update_kinematics", "update_velocities",
 ]
