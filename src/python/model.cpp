@@ -1,6 +1,7 @@
 // Model, Data, Scenario and their settings and inputs, as Python classes.
 #include "common.hpp"
 
+#include "soadyn/integrators.hpp"
 #include "soadyn/scenario.hpp"
 
 #include <optional>
@@ -8,22 +9,6 @@
 namespace soadyn::python {
 
 namespace {
-
-// labels of the q and v entries: the joint's name, with a suffix for multi-coordinate joints
-std::vector<std::string> coordinate_names(const Model& m, bool velocity) {
-  static const char* free_q[] = {"x", "y", "z", "qw", "qx", "qy", "qz"};
-  static const char* free_v[] = {"wx", "wy", "wz", "vx", "vy", "vz"};
-  std::vector<std::string> out;
-  for (int i = 0; i < m.nbodies; ++i) {
-    const int n = velocity ? m.nv_i[i] : m.nq_i[i];
-    for (int k = 0; k < n; ++k) {
-      if (n == 1) out.push_back(m.joint_names[i]);
-      else if (m.joint_type[i] == JointType::Free) out.push_back(m.joint_names[i] + "." + (velocity ? free_v : free_q)[k]);
-      else out.push_back(m.joint_names[i] + "." + std::to_string(k));
-    }
-  }
-  return out;
-}
 
 template <class V>
 py::array rows3(const std::vector<V>& vs) {  // N 3-vectors as an N×3 array
@@ -48,6 +33,14 @@ std::optional<Vec3> gravity_arg(const std::optional<ArrayIn>& g) {
 }  // namespace
 
 void bind_model(py::module_& m) {
+  // the library's registries, as tuples of the names users write
+  py::list joints, methods, routes;
+  for (const auto& t : joint_traits_table()) joints.append(std::string(t.name));
+  for (const auto& n : integrator_names()) methods.append(n);
+  for (const auto& n : fd_method_names()) routes.append(n);
+  m.attr("JOINT_TYPES") = py::tuple(joints);
+  m.attr("METHODS") = py::tuple(methods);
+  m.attr("DYNAMICS") = py::tuple(routes);
   py::class_<Model> model(m, "Model", R"(The constant tree: parents in parent-first order, joints, placements and mass properties.
 
 Built once (soadyn.load, soadyn.load_scenario, Model.build) and never changed by an algorithm;
@@ -71,11 +64,10 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
             std::vector<std::string> out;
             for (auto t : self.joint_type) out.emplace_back(to_string(t));
             return out;
-          }, "type of each body's joint: 'revolute', 'prismatic', 'free', … (N)")
-      .def_property_readonly("q_names", [](const Model& self) { return coordinate_names(self, false); },
+          }, "type of each body's joint, one of soadyn.JOINT_TYPES (N)")
+      .def_property_readonly("q_names", &Model::q_names,
                              "label of each q entry: the joint's name, 'root.qw' etc. for multi-coordinate joints (nq)")
-      .def_property_readonly("v_names", [](const Model& self) { return coordinate_names(self, true); },
-                             "label of each v entry (nv)")
+      .def_property_readonly("v_names", &Model::v_names, "label of each v entry (nv)")
       .def_property_readonly("gravity", [](const Model& self) { return owned(VecX(self.gravity)); },
                              "uniform gravity, m/s², shape (3,)")
       .def_property_readonly("masses", [](const Model& self) { return owned(VecX(Eigen::Map<const VecX>(self.mass.data(), self.nbodies))); },

@@ -45,8 +45,9 @@ def assert_close(got, expected, tol):
     assert err <= tol * scale, f"max error {err:.3e} > {tol:g} * {scale:g}\n{got}\nvs\n{expected}"
 
 
-def random_tree_yaml(rng, n, free_root=False, prismatic=0.3, fixed=1):
-    """A scenario with n moving bodies on random parents (plus `fixed` welded ones), random axes,
+def random_tree_yaml(rng, n, free_root=False, prismatic=0.2, ball=0.15, planar=0.1, fixed=1):
+    """A scenario with n moving bodies on random parents (plus `fixed` welded ones), joints of every
+    kind (revolute, prismatic, ball, planar; a free root if asked), random axes,
     placements (xyz, rpy), masses, centres of mass and full inertia tensors, and random gravity."""
     def vec(lo=-1.0, hi=1.0, k=3):
         return "[" + ", ".join(repr(float(x)) for x in rng.uniform(lo, hi, k)) + "]"
@@ -74,8 +75,10 @@ def random_tree_yaml(rng, n, free_root=False, prismatic=0.3, fixed=1):
         elif i in welded:
             joint = f"{{type: fixed, name: j{i}}}"
         else:
-            kind = "prismatic" if rng.uniform() < prismatic else "revolute"
-            joint = f"{{type: {kind}, name: j{i}, axis: {vec()}}}"
+            u = rng.uniform()
+            kind = "prismatic" if u < prismatic else "ball" if u < prismatic + ball else \
+                "planar" if u < prismatic + ball + planar else "revolute"
+            joint = f"{{type: ball, name: j{i}}}" if kind == "ball" else f"{{type: {kind}, name: j{i}, axis: {vec()}}}"
         lines += [f"  - name: b{i}", f"    parent: {parent}", f"    joint: {joint}"]
         if not (i == 0 and free_root):
             lines.append(f"    origin: {{xyz: {vec(-0.6, 0.6)}, rpy: {vec(-3, 3)}}}")

@@ -301,7 +301,9 @@ def test_stub_names_every_public_object_with_its_parameters():
     stub = ast.parse(open(os.path.join(os.path.dirname(soadyn.__file__), "__init__.pyi")).read())
     functions = {n.name: n for n in stub.body if isinstance(n, ast.FunctionDef)}
     classes = {n.name: n for n in stub.body if isinstance(n, ast.ClassDef)}
-    public = set(soadyn.__all__) - {"__version__"}
+    constants = {n.target.id for n in stub.body if isinstance(n, ast.AnnAssign)}
+    assert {"JOINT_TYPES", "METHODS", "DYNAMICS", "__version__"} <= constants
+    public = set(soadyn.__all__) - constants
     assert public == set(functions) | set(classes)
     for name, node in functions.items():
         stub_params = [a.arg for a in node.args.args + node.args.kwonlyargs]
@@ -345,3 +347,23 @@ def test_inputs_of_a_scenario():
     tau = [0.5 + 2.0 * np.sin(2 * np.pi * 3.0 * t + 0.25), -20.0 * -0.2, -2.0e4 * 0.3 - 2.0e3 * -3.0]
     assert_close(inputs.evaluate(t, q, v), tau, 1e-15)
     assert_close(inputs.spring_energy(q), 0.5 * 20.0 * 0.04 + 0.5 * 2.0e4 * 0.09, 1e-15)
+
+
+def test_joint_types_and_a_ball_joint(rng):
+    """the library's registries by name; the spherical pendulum's 𝓜 = I_pivot in the bob's frame"""
+    assert soadyn.JOINT_TYPES == ("revolute", "prismatic", "ball", "planar", "free", "fixed")
+    assert {"cvode-adams", "cvode-bdf", "rk4", "euler", "symplectic-euler", "implicit-midpoint"} <= set(soadyn.METHODS)
+    assert soadyn.DYNAMICS == ("dense", "sparse", "on")
+    model = soadyn.load(f"{SCENARIOS}/spherical_pendulum.yaml")
+    assert model.joint_types == ["ball"] and (model.nq, model.nv) == (4, 3)
+    assert model.q_names == ["pivot.qw", "pivot.qx", "pivot.qy", "pivot.qz"]
+    assert model.v_names == ["pivot.wx", "pivot.wy", "pivot.wz"]
+    data = model.create_data()
+    for _ in range(5):
+        q = model.normalize(rng.normal(size=4))
+        # ω in the child's frame: 𝓜 is the inertia about the pivot in body axes, whatever q
+        assert_close(soadyn.mass_matrix(model, data, q), np.diag([1.001, 1.001, 0.001]), 1e-14)
+    traj = soadyn.simulate(f"{SCENARIOS}/spherical_pendulum.yaml", t_end=2.0)
+    assert traj.summary.completed and np.abs(traj.energy_error).max() < 1e-7
+    assert_close(np.linalg.norm(traj.q, axis=1), np.ones(len(traj)), 1e-9)
+    assert_close(traj.angular_momentum[:, 2], np.full(len(traj), traj.angular_momentum[0, 2]), 1e-8)

@@ -12,6 +12,9 @@ Notation (the note's): spatial vectors are [ω; v], angular first, in inertial c
 q (nq,) is the configuration and v (nv,) its rates (the note's q̇; ω for a free joint's attitude).
 𝓜(q) q̈ + bias(q, q̇) = τ.
 
+Names
+    JOINT_TYPES (revolute, prismatic, ball, planar, free, fixed), METHODS (the integrators),
+    DYNAMICS (the forward-dynamics routes: dense, sparse, on)
 Loading
     load(path, free_root=False, gravity=None) -> Model        a URDF or a scenario's model
     load_scenario(path) -> Scenario                           .model .q0 .v0 .inputs .settings
@@ -43,14 +46,15 @@ expected …, got ….
 """
 from typing import Optional, Union
 
-from ._soadyn import (Data, Error, Inputs, Model, Scenario, SimulationSettings, __version__, bias, body_poses, forward_dynamics, inverse_dynamics, jacobian, kinetic_energy, load,
+from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model, Scenario, SimulationSettings,
+                      __version__, bias, body_poses, forward_dynamics, inverse_dynamics, jacobian, kinetic_energy, load,
                       load_scenario, mass_matrix, mass_matrix_literal, momentum, parse_scenario, potential_energy,
                       update_kinematics, update_velocities)
 from . import _soadyn
 from ._trajectory import RunSummary, Trajectory, read_log, summary_from_dict
 
 __all__ = [
-    "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
+    "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "forward_dynamics", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
     "potential_energy", "read_log", "simulate", "update_kinematics", "update_velocities",

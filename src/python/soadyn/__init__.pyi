@@ -9,6 +9,9 @@ ArrayLike = npt.ArrayLike  # any float64 array is read in place; anything else i
 Vector = npt.NDArray[np.float64]
 
 __version__: str
+JOINT_TYPES: Tuple[str, ...]
+METHODS: Tuple[str, ...]
+DYNAMICS: Tuple[str, ...]
 
 class Error(ValueError): ...
 
