@@ -1,6 +1,8 @@
 // soadyn._soadyn: the compiled part of the Python package (soadyn/__init__.py re-exports it).
 #include "common.hpp"
 
+#include "soadyn/version.hpp"
+
 #include <cstring>
 
 namespace soadyn::python {
@@ -122,7 +124,7 @@ PyData::PyData(const Model& model)
 PYBIND11_MODULE(_soadyn, m) {
   namespace sp = soadyn::python;
   m.doc() = "The compiled part of soadyn; import soadyn instead.";
-  m.attr("__version__") = SOADYN_VERSION;
+  m.attr("__version__") = soadyn::version();
   // soadyn.Error is a ValueError: bad input, with the command line's message (soadyn::Error and
   // every error derived from it)
   static sp::py::exception<soadyn::Error> error(m, "Error", PyExc_ValueError);

@@ -5,6 +5,7 @@
 
 #include "soadyn/h5log.hpp"
 #include "soadyn/simulate.hpp"
+#include "soadyn/version.hpp"
 
 #include <chrono>
 #include <condition_variable>
@@ -65,7 +66,7 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
     make_integrator(settings.method, probe, settings, 0.0, y0);
   }
   std::unique_ptr<H5Log> log;
-  if (output) log = std::make_unique<H5Log>(*output, sc, settings, SOADYN_VERSION);
+  if (output) log = std::make_unique<H5Log>(*output, sc, settings, version());
   Recorder rec(log.get());
   std::atomic<int> stop{0};
   RunSummary summary;

@@ -367,3 +367,9 @@ def test_joint_types_and_a_ball_joint(rng):
     assert traj.summary.completed and np.abs(traj.energy_error).max() < 1e-7
     assert_close(np.linalg.norm(traj.q, axis=1), np.ones(len(traj)), 1e-9)
     assert_close(traj.angular_momentum[:, 2], np.full(len(traj), traj.angular_momentum[0, 2]), 1e-8)
+
+
+def test_version_is_the_libraries():
+    from conftest import cli
+    assert re.fullmatch(r"\d+\.\d+\.\d+", soadyn.__version__)
+    assert soadyn.__version__ in cli("--version").stdout
