@@ -56,17 +56,23 @@ py::dict summary_dict(const RunSummary& r) {
                   "final_relative_energy_error"_a = r.final_relative_energy_error);
 }
 
-// (arrays, summary, exception raised by a signal handler or None)
+// (arrays, summary, exception raised by a signal handler or None, warnings)
 py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output) {
-  check_run(sc, settings);  // refuses before any output file exists, as does a bad method or route
+  // everything is checked before any file is touched, as `soadyn run` does
+  const std::vector<std::string> warnings = check_run(sc, settings);
   {
     System probe(sc.model, sc.inputs, parse_fd_method(settings.dynamics));
     VecX y0(probe.size());
     y0 << sc.q0, sc.v0;
     make_integrator(settings.method, probe, settings, 0.0, y0);
   }
+  std::unique_ptr<OutputLock> lock;  // declared first: held until the log is closed
   std::unique_ptr<H5Log> log;
-  if (output) log = std::make_unique<H5Log>(*output, sc, settings, version());
+  if (output) {
+    check_output_path(*output, {sc.path});
+    lock = std::make_unique<OutputLock>(*output);
+    log = std::make_unique<H5Log>(*output, sc, settings, version());
+  }
   Recorder rec(log.get());
   std::atomic<int> stop{0};
   RunSummary summary;
@@ -111,6 +117,7 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   }
   if (failure) std::rethrow_exception(failure);
   log.reset();  // closes the file before Python may read it
+  lock.reset();
 
   const py::ssize_t T = py::ssize_t(rec.t.size()), nq = sc.model.nq, nv = sc.model.nv;
   py::dict arrays("t"_a = owned(std::move(rec.t), {T}), "q"_a = owned(std::move(rec.q), {T, nq}),
@@ -120,15 +127,14 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
                   "total_energy"_a = owned(std::move(rec.total), {T}),
                   "linear_momentum"_a = owned(std::move(rec.linear), {T, 3}),
                   "angular_momentum"_a = owned(std::move(rec.angular), {T, 3}));
-  return py::make_tuple(arrays, summary_dict(summary), pending);
+  return py::make_tuple(arrays, summary_dict(summary), pending, warnings);
 }
 
 }  // namespace
 
 void bind_simulate(py::module_& m) {
   m.def("_simulate", &run, "scene"_a, "settings"_a, "output"_a = py::none(),
-        "The run behind soadyn.simulate: (arrays, summary, exception from a signal handler or None).");
-  m.def("_interrupted_status", &interrupted_status, "stop"_a, "t"_a);
+        "The run behind soadyn.simulate: (arrays, summary, exception from a signal handler or None, warnings).");
 }
 
 }  // namespace soadyn::python

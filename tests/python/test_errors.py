@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import soadyn
-from conftest import SCENARIOS, cli_error
+from conftest import SCENARIOS, cli, cli_error
 
 
 def raised(fn, *args, **kwargs):
@@ -83,14 +83,22 @@ def test_vector_sizes_shapes_and_models():
         soadyn.mass_matrix(model, data, ["a", "b"])
 
 
-def test_methods_and_settings():
+def test_methods_and_settings(tmp_path):
     model = soadyn.load(f"{SCENARIOS}/double_pendulum.yaml")
     data = model.create_data()
     msg = raised(soadyn.forward_dynamics, model, data, [0, 0], [0, 0], [0, 0], method="fast")
     assert "fast" in msg and "dense" in msg, msg
     scene = soadyn.load_scenario(f"{SCENARIOS}/double_pendulum.yaml")
-    assert raised(soadyn.simulate, scene, rtol=-1.0) == \
-        "simulation settings: t_end, output_dt, dt, rtol and atol must be positive"
+    assert raised(soadyn.simulate, scene, rtol=-1.0) == "simulation settings: rtol must lie in (0, 1), got -1"
+    # the library's warnings, as the command line prints them, become RuntimeWarnings
+    p = cli("run", f"{SCENARIOS}/double_pendulum.yaml", "--rtol", "1e-17", "--t-end", "0.01", "-q", "-o",
+            tmp_path / "tiny_rtol.h5")
+    assert p.returncode == 0, p.stderr
+    cli_warning = p.stderr.strip().removeprefix("soadyn: warning: ")
+    assert "rtol 1e-17 is below what double precision can deliver" in cli_warning, p.stderr
+    with pytest.warns(RuntimeWarning) as w:
+        soadyn.simulate(scene, rtol=1e-17, t_end=0.01)
+    assert [str(x.message) for x in w] == [cli_warning]
     msg = raised(soadyn.simulate, scene, method="rk5")
     assert msg == f"method: expected one of {', '.join(soadyn.METHODS)}; got 'rk5'", msg
 
@@ -106,7 +114,12 @@ def test_nothing_written_for_a_refused_run(tmp_path):
     assert "no degrees of freedom" in raised(soadyn.simulate, welded, output=str(out))
     assert not out.exists()
     msg = raised(soadyn.simulate, scene, t_end=0.1, output=str(tmp_path))
-    assert "is a directory, expected an output file" in msg
+    assert msg == cli_error("run", f"{SCENARIOS}/double_pendulum.yaml", "-o", tmp_path), msg
+    notes = tmp_path / "notes.txt"  # not an HDF5 file: refused, left as it was
+    notes.write_text("keep me")
+    msg = raised(soadyn.simulate, scene, t_end=0.1, output=str(notes))
+    assert msg == cli_error("run", f"{SCENARIOS}/double_pendulum.yaml", "-o", notes), msg
+    assert "not an HDF5 file" in msg and notes.read_text() == "keep me"
 
 
 def test_read_log_refuses_what_is_not_a_run(tmp_path):

@@ -44,6 +44,7 @@ the Data is gone); everything else is a new array.
 Errors: soadyn.Error (a ValueError) with the command line's message: file:line:column: field:
 expected …, got ….
 """
+import warnings as _warnings
 from typing import Optional, Union
 
 from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model, Scenario, SimulationSettings,
@@ -81,7 +82,7 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     signal handler that raises) ends the run at its next output sample, finishes the file
     (status "interrupted by SIGINT at t = …") and re-raises: the KeyboardInterrupt carries the
     partial Trajectory as .trajectory.  Raises soadyn.Error for bad settings before any file is
-    written.
+    written; the library's warnings about the settings become RuntimeWarnings.
     """
     if isinstance(scene, str):
         scene = load_scenario(scene)
@@ -92,7 +93,9 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
                          dynamics=dynamics).items():
         if value is not None:
             setattr(s, k, value)
-    arrays, summary, interrupt = _soadyn._simulate(scene, s, None if output is None else str(output))
+    arrays, summary, interrupt, warns = _soadyn._simulate(scene, s, None if output is None else str(output))
+    for w in warns:  # e.g. an rtol below what double precision can deliver
+        _warnings.warn(w, RuntimeWarning, stacklevel=2)
     model = scene.model
     traj = Trajectory(**arrays, summary=summary_from_dict(summary), joint_names=list(model.joint_names),
                       parents=list(model.parents), scenario=scene.text)
