@@ -51,5 +51,8 @@ struct ViewOptions {
 };
 void add_view(CLI::App& app, ViewOptions& o);
 int run_view(const ViewOptions& o);
+// soadyn sweep …: replaces this process with python3 -m soadyn sweep … (returns only on failure)
+void add_sweep(CLI::App& app);
+int exec_sweep(int argc, char** argv);
 
 }  // namespace soadyn::cli

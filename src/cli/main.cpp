@@ -3,6 +3,7 @@
 //   soadyn run SCENARIO ...    simulate, log to HDF5
 //   soadyn view RUN.h5 ...     one self-contained web page that plays the run in 3D
 //   soadyn help [COMMAND]      what a command takes
+//   soadyn sweep SWEEP ...     an ensemble of runs on Dask (python3 -m soadyn sweep)
 #include "cli.hpp"
 
 #include "soadyn/version.hpp"
@@ -10,8 +11,10 @@
 #include <CLI/CLI.hpp>
 
 #include <iostream>
+#include <string>
 
 int main(int argc, char** argv) {
+  if (argc >= 2 && std::string(argv[1]) == "sweep") return soadyn::cli::exec_sweep(argc, argv);
   std::vector<std::string> args = soadyn::cli::join_negative_values(argc, argv);
   CLI::App app{"soadyn: dynamics of tree-structured rigid multibody systems (the note's O(N) operators)", "soadyn"};
   app.require_subcommand(1);
@@ -30,6 +33,7 @@ int main(int argc, char** argv) {
   soadyn::cli::add_run(app, run);
   soadyn::cli::ViewOptions view;
   soadyn::cli::add_view(app, view);
+  soadyn::cli::add_sweep(app);
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend() - 1);
     app.parse(reversed);

@@ -35,6 +35,9 @@ Algorithms (model, data, …), each first updating the kinematics at q (and velo
 Simulation
     simulate(scene, method=…, rtol=…, t_end=…, output=None) -> Trajectory
     read_log(path) -> Trajectory
+Ensembles (soadyn.ensemble: the sweep file's format)
+    sweep(path, out=None, scheduler=None, workers=None, …) -> SweepResult   on Dask, resumable
+    load_sweep(path) -> Sweep;  read_results(path) -> {column: array}
 
 Arrays in: any float64 array is read in place whatever its strides; lists and other dtypes are
 converted once.  Arrays out: data.M, data.bias, data.tau and data.qdd are read-only views into the
@@ -53,12 +56,14 @@ from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model
                       update_kinematics, update_velocities)
 from . import _soadyn
 from ._trajectory import RunSummary, Trajectory, read_log, summary_from_dict
+from ._sweep import SweepResult, read_results, sweep
+from .ensemble import Sweep, load_sweep
 
 __all__ = [
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "forward_dynamics", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
-    "potential_energy", "read_log", "simulate", "update_kinematics", "update_velocities",
+    "potential_energy", "read_log", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
 
 for _cls in (Data, Error, Inputs, Model, Scenario, SimulationSettings, RunSummary, Trajectory):

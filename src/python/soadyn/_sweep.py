@@ -1,0 +1,293 @@
+"""soadyn.sweep: run a sweep file's cases on Dask distributed (or in this process), resumably.
+
+Also the `soadyn sweep` command: python3 -m soadyn sweep SWEEP.yaml [-o DIR] [--scheduler ADDRESS]
+[--workers N] [--batch-size N] [--keep-logs] [-q].
+
+Output directory:
+    DIR/sweep.json       the sweep's fingerprint (sweep file, base scenario, soadyn version) and size
+    DIR/parts/*.json     one file per finished batch, its rows (written atomically by this process)
+    DIR/results.h5       the table, a row per case in case order (rebuilt at the end of each run)
+    DIR/logs/case-N.h5   each case's run log, with --keep-logs (written by the worker)
+"""
+from __future__ import annotations
+
+import argparse
+import glob
+import json
+import math
+import os
+import sys
+import time
+from typing import Any, Dict, List, Optional
+
+import numpy as np
+
+from ._soadyn import Error, __version__
+from .ensemble import RESULT_COLUMNS, Sweep, run_batch
+
+
+class SweepResult:
+    """What soadyn.sweep returns: .table (column name -> numpy array, a row per case in case
+    order), .path (results.h5), .ran (cases run now), .skipped (cases already done before),
+    .failed (cases whose run did not complete), .wall_seconds."""
+
+    def __init__(self, table, path, ran, skipped, failed, wall):
+        self.table, self.path, self.ran, self.skipped, self.failed, self.wall_seconds = table, path, ran, skipped, failed, wall
+
+    def __repr__(self):
+        n = len(self.table["case"])
+        return f"SweepResult({n} cases, {self.failed} failed, ran {self.ran}, skipped {self.skipped}, {self.path!r})"
+
+
+# ---------------------------------------------------------------- the store
+
+def _open_store(sw: Sweep, out: str) -> Dict[int, dict]:
+    """Create DIR or check it holds this sweep; return the rows already done."""
+    os.makedirs(os.path.join(out, "parts"), exist_ok=True)
+    manifest = os.path.join(out, "sweep.json")
+    info = {"fingerprint": sw.fingerprint(), "cases": len(sw.cases), "sweep": os.path.abspath(sw.path),
+            "soadyn": __version__}
+    if os.path.exists(manifest):
+        with open(manifest, encoding="utf-8") as f:
+            old = json.load(f)
+        if old.get("fingerprint") != info["fingerprint"]:
+            raise Error(f"{out}: holds the results of another sweep ({old.get('sweep')}, fingerprint "
+                        f"{old.get('fingerprint')}; this one is {info['fingerprint']}): give another -o or remove it")
+    else:
+        _write_atomic(manifest, json.dumps(info, indent=1))
+    done: Dict[int, dict] = {}
+    for part in sorted(glob.glob(os.path.join(out, "parts", "*.json"))):
+        try:
+            with open(part, encoding="utf-8") as f:
+                for row in json.load(f):
+                    done[int(row["case"])] = row
+        except (OSError, ValueError, KeyError):
+            os.remove(part)  # a file cut short: its cases run again
+    return done
+
+
+def _write_atomic(path: str, text: str):
+    tmp = path + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(text)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def _save_part(out: str, rows: List[dict]):
+    ids = [r["case"] for r in rows]
+    _write_atomic(os.path.join(out, "parts", f"cases-{min(ids):07d}-{max(ids):07d}-{len(ids)}.json"), json.dumps(rows))
+
+
+def _table(sw: Sweep, rows: Dict[int, dict]) -> Dict[str, np.ndarray]:
+    ids = sorted(rows)
+    table: Dict[str, np.ndarray] = {"case": np.array(ids, dtype=np.int64)}
+    for p in sw.paths:
+        col = [sw.cases[i][p] for i in ids]
+        table[p] = np.array(col, dtype=object if any(isinstance(v, str) for v in col) else np.float64)
+    for c in RESULT_COLUMNS:
+        col = [rows[i][c] for i in ids]
+        dtype = {"status": object, "reference_status": object, "completed": bool, "steps": np.int64,
+                 "rhs_evals": np.int64}.get(c, np.float64)
+        table[c] = np.array(col, dtype=dtype)
+    return table
+
+
+def write_results(sw: Sweep, table: Dict[str, np.ndarray], path: str):
+    """The table as HDF5: /cases/<column> datasets (strings UTF-8), the sweep and scenario texts."""
+    import h5py
+    tmp = path + ".tmp"
+    with h5py.File(tmp, "w") as f:
+        f.attrs["soadyn_version"] = __version__
+        f.attrs["fingerprint"] = sw.fingerprint()
+        f.attrs["sweep"] = sw.text
+        f.attrs["scenario"] = sw.scenario_text
+        f.attrs["varied"] = json.dumps(sw.paths)
+        g = f.create_group("cases")
+        for name, col in table.items():
+            if col.dtype == object:
+                g.create_dataset(name, data=np.array([str(v) for v in col], dtype=h5py.string_dtype()))
+            else:
+                g.create_dataset(name, data=col)
+    os.replace(tmp, path)
+
+
+def read_results(path: str) -> Dict[str, np.ndarray]:
+    """A sweep's results.h5 as column name -> numpy array (strings as str)."""
+    import h5py
+    with h5py.File(path, "r") as f:
+        order = ["case"] + json.loads(f.attrs["varied"]) + list(RESULT_COLUMNS)
+        g = f["cases"]
+        out = {}
+        for name in order:
+            d = g[name]
+            out[name] = d.asstr()[()] if h5py.check_string_dtype(d.dtype) else d[()]
+        return out
+
+
+# ---------------------------------------------------------------- batches and progress
+
+def _batches(sw: Sweep, todo: List[int], size: int) -> List[List[int]]:
+    """Cases that share a reference run (same values outside simulation.*) stay in one batch."""
+    groups: Dict[str, List[int]] = {}
+    for i in todo:
+        key = json.dumps({p: v for p, v in sw.cases[i].items() if not p.startswith("simulation.")}, sort_keys=True)
+        groups.setdefault(key, []).append(i)
+    batches, cur = [], []
+    for ids in groups.values():
+        cur += ids
+        if len(cur) >= size:
+            batches.append(cur)
+            cur = []
+    if cur:
+        batches.append(cur)
+    return batches
+
+
+class _Progress:
+    def __init__(self, total: int, skipped: int, quiet: bool):
+        self.total, self.done, self.failed, self.quiet = total, skipped, 0, quiet
+        self.start, self.ran, self.last = time.monotonic(), 0, 0.0
+        self.tty = sys.stderr.isatty()
+
+    def add(self, rows: List[dict]):
+        self.done += len(rows)
+        self.ran += len(rows)
+        self.failed += sum(1 for r in rows if not r["completed"])
+        now = time.monotonic()
+        if not self.quiet and (self.tty or now - self.last >= 2.0 or self.done == self.total):
+            self.last = now
+            el = now - self.start
+            eta = el / self.ran * (self.total - self.done) if self.ran else math.nan
+            width = 30
+            bar = "#" * int(width * self.done / max(self.total, 1))
+            line = (f"[{bar:<{width}}] {self.done}/{self.total} cases, {self.failed} failed, "
+                    f"{el:.1f} s, ETA {eta:.0f} s")
+            sys.stderr.write(("\r" + line + "   ") if self.tty else line + "\n")
+            if self.tty and self.done == self.total:
+                sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+# ---------------------------------------------------------------- the sweep
+
+def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, workers: Optional[int] = None,
+          batch_size: Optional[int] = None, keep_logs: bool = False, quiet: bool = False) -> SweepResult:
+    """Run every case of a sweep file and return the table (see soadyn.ensemble for the format).
+
+    out: the results directory (default SWEEP_STEM.results beside the current directory); cases
+    already in it are skipped.  scheduler: None for an embedded Dask LocalCluster of `workers`
+    processes (default: this machine's cores) with one thread each; an address such as
+    'tcp://host:8786' or a distributed.Client for an existing cluster; 'serial' for a plain loop in
+    this process without Dask.  batch_size: cases per Dask task (default: about 8 tasks per worker,
+    at most 200 cases each).  keep_logs: each case's HDF5 log in out/logs/ (written by the worker:
+    a remote cluster needs out on a shared file system).  Results are the same, bit for bit
+    (CPU times aside), whichever way the cases run."""
+    sw = path if isinstance(path, Sweep) else Sweep(path)
+    if out is None:
+        out = os.path.basename(sw.path).rsplit(".yaml", 1)[0] + ".results"
+    out = str(out)
+    t0 = time.monotonic()
+    done = _open_store(sw, out)
+    skipped = len(done)
+    todo = [i for i in range(len(sw.cases)) if i not in done]
+    logs = os.path.abspath(os.path.join(out, "logs")) if keep_logs else None
+    progress = _Progress(len(sw.cases), skipped, quiet)
+    say = (lambda msg: None) if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
+    say(f"sweep {sw.path}: {len(sw.cases)} cases, {skipped} already done in {out}, {len(todo)} to run")
+
+    def finish(rows):
+        _save_part(out, rows)
+        for r in rows:
+            done[r["case"]] = r
+        progress.add(rows)
+
+    def payload(ids):
+        return (sw.scenario_text, os.path.abspath(sw.scenario_path), sw.settings,
+                [(i, sw.cases[i]) for i in ids], sw.reference, logs)
+
+    if todo and scheduler == "serial":
+        for ids in _batches(sw, todo, batch_size or 16):
+            finish(run_batch(*payload(ids)))
+    elif todo:
+        _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say)
+    table = _table(sw, done)
+    results = os.path.join(out, "results.h5")
+    write_results(sw, table, results)
+    failed = int(np.sum(~table["completed"]))
+    say(f"sweep done: {len(done)} cases ({failed} did not complete) in {out}/results.h5")
+    return SweepResult(table, results, len(todo), skipped, failed, time.monotonic() - t0)
+
+
+def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say):
+    try:
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise Error("soadyn sweep runs on Dask: install python3-distributed (or use --scheduler serial)") from None
+    import logging
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    cluster = None
+    if scheduler is None:
+        n = workers or os.cpu_count() or 1
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                               silence_logs=logging.ERROR)
+        client = Client(cluster)
+    elif isinstance(scheduler, str):
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, TimeoutError) as e:
+            raise Error(f"--scheduler {scheduler}: cannot reach the Dask scheduler: {e}") from None
+    else:
+        client = scheduler
+    try:
+        nworkers = max(1, len(client.scheduler_info().get("workers", {})))
+        try:
+            import bokeh  # noqa: F401  (the dashboard needs it)
+            say(f"dashboard: {client.dashboard_link}")
+        except ImportError:
+            say("dashboard: none (Dask's needs bokeh 2.4, not packaged in Debian 12: pip install 'bokeh<3')")
+        size = batch_size or max(1, min(200, math.ceil(len(todo) / (8 * nworkers))))
+        batches = _batches(sw, todo, size)
+        say(f"{len(batches)} tasks of up to {size} cases on {nworkers} worker(s)")
+        fp = sw.fingerprint()
+        # a task's key names its cases: a worker that dies has its tasks run again elsewhere
+        futures = [client.submit(run_batch, *payload(ids), key=f"soadyn-sweep-{fp}-{ids[0]}-{len(ids)}",
+                                 retries=2, pure=False) for ids in batches]
+        for fut in as_completed(futures):
+            finish(fut.result())
+            fut.release()
+    finally:
+        if client is not scheduler:
+            client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    p = argparse.ArgumentParser(prog="soadyn sweep", description="Run a sweep file's cases (on Dask) into DIR/results.h5; a stopped sweep resumes.")
+    p.add_argument("sweep", help="the sweep file (YAML)")
+    p.add_argument("-o", "--output", help="results directory (default: SWEEP.results); finished cases in it are skipped")
+    p.add_argument("--scheduler", help="a Dask scheduler's address (tcp://HOST:8786), or 'serial' for a plain loop; default: an embedded LocalCluster")
+    p.add_argument("--workers", type=int, help="LocalCluster worker processes (default: this machine's cores)")
+    p.add_argument("--batch-size", type=int, help="cases per task (default: about 8 tasks per worker)")
+    p.add_argument("--keep-logs", action="store_true", help="keep each case's HDF5 log in DIR/logs/")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
+    a = p.parse_args(argv)
+    for name in ("workers", "batch_size"):
+        if getattr(a, name) is not None and getattr(a, name) < 1:
+            p.error(f"--{name.replace('_', '-')}: expected a positive integer, got {getattr(a, name)}")
+    try:
+        r = sweep(a.sweep, a.output, scheduler=a.scheduler, workers=a.workers, batch_size=a.batch_size,
+                  keep_logs=a.keep_logs, quiet=a.quiet)
+    except Error as e:
+        print(f"soadyn: error: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("\nsoadyn: sweep interrupted; run the same command again to resume", file=sys.stderr)
+        return 130
+    return 0  # cases that did not complete are results (status column), not an error
+
+
+if __name__ == "__main__":
+    sys.exit(main())
