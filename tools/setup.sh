@@ -11,6 +11,7 @@ packages=(
   python3-numpy python3-h5py python3-matplotlib
   libjs-three chromium python3-pil   # soadyn view: three.js inlined in the page; its browser tests
   pybind11-dev python3-pybind11 python3-pytest   # the Python module and its tests
+  python3-yaml python3-distributed   # soadyn sweep: sweep files, Dask
   clang libclang-rt-14-dev   # the libFuzzer targets (tools/fuzz.sh)
 )
 missing=()
