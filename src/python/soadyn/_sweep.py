@@ -208,7 +208,7 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
                 [(i, sw.cases[i]) for i in ids], sw.reference, logs)
 
     if todo and scheduler == "serial":
-        for ids in _batches(sw, todo, batch_size or 16):
+        for ids in _batches(sw, todo, batch_size or max(1, min(200, math.ceil(len(todo) / 8)))):
             finish(run_batch(*payload(ids)))
     elif todo:
         _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say)
