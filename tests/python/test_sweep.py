@@ -33,7 +33,7 @@ vary:
 reference: {{method: cvode-adams, rtol: 1.0e-11, atol: 1.0e-13}}
 """
 DETERMINISTIC = [c for c in ("case", "simulation.method", "simulation.dt", "initial.q.theta1", "initial.q[1]", "status",
-                             "completed", "t_reached", "steps", "rhs_evals", "max_energy_error", "final_energy_error",
+                             "completed", "initial_energy", "t_reached", "steps", "rhs_evals", "max_energy_error", "final_energy_error",
                              "state_error", "final_state_error", "reference_status")]
 
 
@@ -119,6 +119,7 @@ def test_cases_are_the_scenario_edited_by_hand(sweep_file, serial):
         assert common.sum() >= 2
         assert t["steps"][i] == traj.summary.steps and t["rhs_evals"][i] == traj.summary.rhs_evals
         assert t["max_energy_error"][i] == traj.summary.max_relative_energy_error
+        assert t["initial_energy"][i] == traj.total_energy[0]
         assert t["state_error"][i] == np.max(np.abs(y[common] - yr[np.isin(ref.t, traj.t)]))
         assert t["final_state_error"][i] == np.max(np.abs(y[-1] - yr[-1]))
     # the draws: seeded, in range, and the grid as asked
@@ -247,3 +248,29 @@ def test_yaml_12_words_stay_strings(tmp_path):
     assert list(r.table["simulation.dynamics"]) == ["on", "dense", "sparse"] and r.failed == 0
     # three routes to the same q̈: the same run to rounding
     assert np.ptp(r.table["max_energy_error"]) < 1e-12
+
+
+def test_ensemble_charts(serial, tmp_path):
+    """tools/ensemble_charts.py: its medians, bands and bounded fractions are the table's"""
+    import csv
+    tool = os.path.join(os.path.dirname(SCENARIOS), "tools", "ensemble_charts.py")
+    p = subprocess.run([sys.executable, tool, serial.path, "-o", str(tmp_path), "--energy-bins", "3"],
+                       capture_output=True, text=True, timeout=120, env=dict(os.environ, MPLBACKEND="Agg"))
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "ensemble_wp.png").stat().st_size > 0 and (tmp_path / "ensemble_stability.png").stat().st_size > 0
+    t = serial.table
+    wp = list(csv.DictReader(open(tmp_path / "ensemble_wp.csv")))
+    assert len(wp) == 4
+    for r in wp:
+        sel = (t["simulation.method"] == r["method"]) & (t["simulation.dt"] == float(r["value"]))
+        assert int(r["runs"]) == 12
+        p10, p50, p90 = np.percentile(t["state_error"][sel], [10, 50, 90])
+        assert float(r["median_error"]) == p50 and float(r["p10_error"]) == p10 and float(r["p90_error"]) == p90
+        assert float(r["median_rhs_evals"]) == np.median(t["rhs_evals"][sel])
+    st = list(csv.DictReader(open(tmp_path / "ensemble_stability.csv")))
+    assert sum(int(r["runs"]) for r in st) == 48
+    bounded = t["completed"] & (t["max_energy_error"] <= 0.05)
+    for m in ("rk4", "symplectic-euler"):
+        rows = [r for r in st if r["method"] == m]
+        total = sum(int(r["runs"]) * float(r["fraction_bounded"]) for r in rows)
+        assert round(total) == bounded[t["simulation.method"] == m].sum()

@@ -38,8 +38,8 @@ import yaml
 from . import _soadyn
 from ._soadyn import Error, parse_scenario
 
-RESULT_COLUMNS = ("status", "completed", "t_reached", "steps", "rhs_evals", "cpu_seconds", "max_energy_error",
-                  "final_energy_error", "state_error", "final_state_error", "reference_status")
+RESULT_COLUMNS = ("status", "completed", "initial_energy", "t_reached", "steps", "rhs_evals", "cpu_seconds",
+                  "max_energy_error", "final_energy_error", "state_error", "final_state_error", "reference_status")
 DISTRIBUTIONS = ("values", "grid", "uniform", "normal", "log_uniform")
 
 
@@ -426,7 +426,8 @@ def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any]
     """One case's row: status, steps, RHS evaluations, CPU time, energy errors, state error
     against the reference run (max over the common output samples, and at t_end)."""
     from . import simulate
-    row: Dict[str, Any] = {"status": "", "completed": False, "t_reached": math.nan, "steps": 0, "rhs_evals": 0,
+    row: Dict[str, Any] = {"status": "", "completed": False, "initial_energy": math.nan, "t_reached": math.nan,
+                           "steps": 0, "rhs_evals": 0,
                            "cpu_seconds": math.nan, "max_energy_error": math.nan, "final_energy_error": math.nan,
                            "state_error": math.nan, "final_state_error": math.nan, "reference_status": ""}
     try:
@@ -437,7 +438,8 @@ def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any]
         row["status"] = "refused: " + _CASE_PREFIX.sub("", str(e))
         return row
     s = traj.summary
-    row.update(status=s.status, completed=bool(s.completed), t_reached=s.t_reached, steps=s.steps,
+    row.update(status=s.status, completed=bool(s.completed), t_reached=s.t_reached,
+               initial_energy=float(traj.total_energy[0]) if len(traj.t) else math.nan, steps=s.steps,
                rhs_evals=s.rhs_evals, cpu_seconds=s.cpu_seconds, max_energy_error=s.max_relative_energy_error,
                final_energy_error=s.final_relative_energy_error)
     if reference:
