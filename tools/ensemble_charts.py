@@ -58,7 +58,7 @@ def work_precision(t, out):
     n_ic = len(t["case"]) // max(1, len(rows))
     ax.set_xlabel("RHS evaluations (median per point)")
     ax.set_ylabel("max state error vs reference")
-    ax.set_title(f"work-precision over the ensemble: median, 10–90 % band (~{n_ic} runs per point)")
+    ax.set_title(f"median and 10–90 % band over ~{n_ic} runs per point", fontsize=10)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -4,6 +4,7 @@
 #   wp_<scenario>.{png,csv}   work-precision charts (tools/work_precision.py)
 #   stability.{png,md,csv}    where each method fails (tools/stability.py)
 #   run_<scenario>.png        trajectories, energy error and momentum of the demo runs (tools/plot.py)
+#   ensemble_{wp,stability}.{png,csv}   charts over ensembles (soadyn sweep, tools/ensemble_charts.py)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/bench/run.sh
@@ -14,4 +15,11 @@ for s in pendulum_on_cart double_pendulum satellite_two_arrays three_link_arm st
   build/soadyn run "scenarios/$s.yaml" -q -o "out/$s.h5"
   tools/plot.py "out/$s.h5" -o "tools/results/run_$s.png"
 done
+# ensembles: 9000 work-precision runs (1000 initial states), 8000 stability runs; resumable in out/
+build/soadyn sweep scenarios/double_pendulum_wp.sweep.yaml -o out/ensemble_wp -q
+tools/ensemble_charts.py out/ensemble_wp/results.h5 -o out/ensemble_wp
+cp out/ensemble_wp/ensemble_wp.{png,csv} tools/results/
+build/soadyn sweep scenarios/double_pendulum_stability.sweep.yaml -o out/ensemble_stability -q
+tools/ensemble_charts.py out/ensemble_stability/results.h5 -o out/ensemble_stability
+cp out/ensemble_stability/ensemble_stability.{png,csv} tools/results/
 echo "figures and tables written to tools/results/"
