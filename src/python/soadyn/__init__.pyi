@@ -157,3 +157,28 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
              output_dt: Optional[float] = None, dynamics: Optional[str] = None,
              output: Optional[str] = None) -> Trajectory: ...
 def read_log(path: str) -> Trajectory: ...
+
+# ensembles (soadyn.ensemble describes the sweep file)
+class Sweep:
+    path: str
+    scenario_path: str
+    cases: List[dict]
+    paths: List[str]
+    settings: dict
+    reference: Optional[dict]
+    def scenario(self, case: dict, settings: bool = True) -> Scenario: ...
+    def fingerprint(self) -> str: ...
+
+class SweepResult:
+    table: dict
+    path: str
+    ran: int
+    skipped: int
+    failed: int
+    wall_seconds: float
+
+def load_sweep(path: str) -> Sweep: ...
+def sweep(path: Union[str, Sweep], out: Optional[str] = None, *, scheduler: object = None,
+          workers: Optional[int] = None, batch_size: Optional[int] = None, keep_logs: bool = False,
+          quiet: bool = False) -> SweepResult: ...
+def read_results(path: str) -> dict: ...
