@@ -244,8 +244,11 @@ def test_yaml_12_words_stay_strings(tmp_path):
     p = tmp_path / "routes.sweep.yaml"
     p.write_text(f"scenario: {SCENARIOS}/pendulum_on_cart.yaml\nset: {{simulation.t_end: 0.1, simulation.method: rk4}}\n"
                  "vary:\n  - {path: simulation.dynamics, values: [on, dense, sparse]}\n")
-    r = soadyn.sweep(str(p), str(tmp_path / "out"), scheduler="serial", quiet=True)
+    r = soadyn.sweep(str(p), str(tmp_path / "out"), scheduler="serial", quiet=True, keep_logs=True)
     assert list(r.table["simulation.dynamics"]) == ["on", "dense", "sparse"] and r.failed == 0
+    for i in range(3):  # --keep-logs: each case's run log
+        log = soadyn.read_log(str(tmp_path / "out" / "logs" / f"case-{i:07d}.h5"))
+        assert log.summary.steps == r.table["steps"][i] and log.total_energy[0] == r.table["initial_energy"][i]
     # three routes to the same q̈: the same run to rounding
     assert np.ptp(r.table["max_energy_error"]) < 1e-12
 

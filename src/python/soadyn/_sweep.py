@@ -255,7 +255,12 @@ def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say):
         futures = [client.submit(run_batch, *payload(ids), key=f"soadyn-sweep-{fp}-{ids[0]}-{len(ids)}",
                                  retries=2, pure=False) for ids in batches]
         for fut in as_completed(futures):
-            finish(fut.result())
+            try:
+                rows = fut.result()
+            except Exception as e:  # e.g. a worker without soadyn: the finished batches are kept
+                raise Error(f"a sweep task failed on a worker ({type(e).__name__}: {e}); "
+                            f"finished cases are kept, run again to resume") from None
+            finish(rows)
             fut.release()
     finally:
         if client is not scheduler:
