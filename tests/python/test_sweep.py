@@ -277,3 +277,16 @@ def test_ensemble_charts(serial, tmp_path):
         rows = [r for r in st if r["method"] == m]
         total = sum(int(r["runs"]) * float(r["fraction_bounded"]) for r in rows)
         assert round(total) == bounded[t["simulation.method"] == m].sum()
+
+
+def test_index_paths_into_a_ball_joint():
+    import yaml
+    from soadyn import ensemble
+    top = os.path.join(SCENARIOS, "heavy_top.yaml")
+    base = soadyn.load_scenario(top)
+    tree = yaml.safe_load(open(top).read())
+    scene = soadyn.parse_scenario(ensemble._text(ensemble.apply(tree, base.model, {"initial.qd[2]": 7.0})), top)
+    assert np.array_equal(scene.v0, [0.0, 0.0, 7.0]) and np.array_equal(scene.q0, base.q0)
+    # a quaternion component alone leaves it non-unit: the scenario parser refuses, as for a file
+    with pytest.raises(soadyn.Error, match="unit quaternion"):
+        soadyn.parse_scenario(ensemble._text(ensemble.apply(tree, base.model, {"initial.q[1]": 0.1})), top)

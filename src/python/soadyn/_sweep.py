@@ -12,6 +12,7 @@ Output directory:
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import glob
 import json
 import math
@@ -26,13 +27,18 @@ from ._soadyn import Error, __version__
 from .ensemble import RESULT_COLUMNS, Sweep, run_batch
 
 
+@dataclasses.dataclass
 class SweepResult:
     """What soadyn.sweep returns: .table (column name -> numpy array, a row per case in case
     order), .path (results.h5), .ran (cases run now), .skipped (cases already done before),
     .failed (cases whose run did not complete), .wall_seconds."""
 
-    def __init__(self, table, path, ran, skipped, failed, wall):
-        self.table, self.path, self.ran, self.skipped, self.failed, self.wall_seconds = table, path, ran, skipped, failed, wall
+    table: Dict[str, np.ndarray]
+    path: str
+    ran: int
+    skipped: int
+    failed: int
+    wall_seconds: float
 
     def __repr__(self):
         n = len(self.table["case"])

@@ -239,6 +239,13 @@ class Sweep:
     cases[i] is {path: value}; settings are the fixed changes; reference maps simulation fields to
     the reference run's values (None: no reference)."""
 
+    path: str = ""
+    scenario_path: str = ""
+    cases: List[Dict[str, Any]] = []
+    paths: List[str] = []
+    settings: Dict[str, Any] = {}
+    reference: Optional[Dict[str, Any]] = None
+
     def __init__(self, path: str, text: Optional[str] = None):
         self.path = str(path)
         if text is None:
@@ -347,19 +354,19 @@ def load_sweep(path: str) -> Sweep:
 # ---------------------------------------------------------------- applying a case to the scenario tree
 
 def _vector_slot(model, which: str, index: int):
-    """(joint name, component or None) of q[index] or qd[index]."""
-    sizes = {"free": (7, 6), "fixed": (0, 0)}
-    k = 0
-    n_total = model.nq if which == "q" else model.nv
-    if not -n_total <= index < n_total:
-        raise ValueError(f"initial.{which}[{index}]: index out of range (the model has {n_total})")
-    index %= n_total
-    for name, kind in zip(model.joint_names, model.joint_types):
-        n = sizes.get(kind, (1, 1))[0 if which == "q" else 1]
-        if index < k + n:
-            return name, (None if kind not in sizes else index - k), n
-        k += n
-    raise ValueError(f"initial.{which}[{index}]: index out of range")
+    """(joint name, component or None for a 1-DOF joint, the joint's neutral entries) of q[index]
+    or qd[index], from the model's coordinate names (joint, or joint.component)."""
+    names = list(model.q_names if which == "q" else model.v_names)
+    if not -len(names) <= index < len(names):
+        raise ValueError(f"initial.{which}[{index}]: index out of range (the model has {len(names)})")
+    index %= len(names)
+    joint = names[index] if names[index] in model.joint_names else names[index].rsplit(".", 1)[0]
+    if joint == names[index]:
+        return joint, None, None
+    first = next(k for k, n in enumerate(names) if n.startswith(joint + "."))
+    count = sum(1 for n in names if n.startswith(joint + "."))
+    neutral = [float(x) for x in model.neutral()[first:first + count]] if which == "q" else [0.0] * count
+    return joint, index - first, neutral
 
 
 def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
@@ -368,12 +375,11 @@ def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
     for path, value in values.items():
         tokens = parse_path(path)
         if len(tokens) == 3 and tokens[0] == "initial" and tokens[1] in ("q", "qd") and isinstance(tokens[2], int):
-            joint, comp, n = _vector_slot(model, tokens[1], tokens[2])
+            joint, comp, neutral = _vector_slot(model, tokens[1], tokens[2])
             vec = out.setdefault("initial", {}).setdefault(tokens[1], {})
             if comp is None:
                 vec[joint] = value
             else:
-                neutral = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0] if tokens[1] == "q" else [0.0] * 6
                 cur = list(vec.get(joint, neutral))
                 cur[comp] = value
                 vec[joint] = cur
