@@ -154,18 +154,23 @@ def _batches(sw: Sweep, todo: List[int], size: int) -> List[List[int]]:
 class _Progress:
     def __init__(self, total: int, skipped: int, quiet: bool):
         self.total, self.done, self.failed, self.quiet = total, skipped, 0, quiet
-        self.start, self.ran, self.last = time.monotonic(), 0, 0.0
+        self.start, self.ran, self.last, self.first = time.monotonic(), 0, 0.0, None
         self.tty = sys.stderr.isatty()
 
     def add(self, rows: List[dict]):
         self.done += len(rows)
         self.ran += len(rows)
+        if self.first is None:
+            self.first = (time.monotonic(), self.ran)
         self.failed += sum(1 for r in rows if not r["completed"])
         now = time.monotonic()
         if not self.quiet and (self.tty or now - self.last >= 2.0 or self.done == self.total):
             self.last = now
             el = now - self.start
-            eta = el / self.ran * (self.total - self.done) if self.ran else math.nan
+            # the rate since the first batch came back (not counting the cluster's start)
+            t1, n1 = self.first
+            rate = (self.ran - n1) / (now - t1) if self.ran > n1 and now > t1 else self.ran / max(el, 1e-9)
+            eta = (self.total - self.done) / rate if rate > 0 else math.nan
             width = 30
             bar = "#" * int(width * self.done / max(self.total, 1))
             line = (f"[{bar:<{width}}] {self.done}/{self.total} cases, {self.failed} failed, "
