@@ -1,0 +1,148 @@
+#include "urdf_xml.hpp"
+
+#include "soadyn/types.hpp"
+
+#include <tinyxml2.h>
+
+#include <algorithm>
+#include <cctype>
+#include <regex>
+
+namespace soadyn::urdf_xml {
+
+namespace {
+
+std::string line_of(const std::string& path, int line) { return path + ":" + std::to_string(line); }
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  return s;
+}
+
+Element element(const tinyxml2::XMLElement* e) {
+  Element out{e->GetLineNum(), {}};
+  for (auto* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) out.child.emplace(c->Name(), c->GetLineNum());
+  return out;
+}
+
+// Links, joints and materials by name, refusing nameless and duplicate ones.
+void read_elements(const tinyxml2::XMLElement* robot, Index& idx) {
+  for (auto* e = robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
+    const std::string tag = e->Name();
+    auto* table = tag == "joint"      ? &idx.joints
+                  : tag == "link"     ? &idx.links
+                  : tag == "material" ? &idx.materials
+                                      : nullptr;
+    if (!table) continue;  // <transmission>, <gazebo>, namespaced extensions: not dynamics
+    const char* name = e->Attribute("name");
+    const std::string at = line_of(idx.path, e->GetLineNum());
+    if (!name) throw Error(at + ": <" + tag + ">: missing attribute 'name'");
+    if (table->count(name))
+      throw Error(at + ": " + tag + " '" + name + "': duplicate " + tag + " name (the first is at line " +
+                  std::to_string(table->at(name).line) + ")");
+    table->emplace(name, element(e));
+    if (tag == "joint") idx.joint_order.push_back(name);
+  }
+}
+
+// The link graph must be one tree before urdfdom sees it: urdfdom leaks the shared_ptr cycle it
+// builds for a cyclic graph, and its messages name no line.
+void check_tree(const tinyxml2::XMLElement* robot, const Index& idx) {
+  std::map<std::string, std::pair<std::string, int>> parent_of;  // child link → (parent link, line)
+  for (auto* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
+    const std::string at = idx.at_joint(e->Attribute("name"));
+    std::string end[2];
+    for (int k = 0; k < 2; ++k) {
+      const char* tag = k == 0 ? "parent" : "child";
+      const auto* x = e->FirstChildElement(tag);
+      const char* link = x ? x->Attribute("link") : nullptr;
+      if (!link) throw Error(at + ": expected <" + tag + " link=\"...\"/>");
+      if (!idx.links.count(link))
+        throw Error(line_of(idx.path, x->GetLineNum()) + ": joint '" + e->Attribute("name") + "': " + tag +
+                    ": no link named '" + link + "'");
+      end[k] = link;
+    }
+    if (end[0] == end[1]) throw Error(at + ": link '" + end[1] + "' is its own parent");
+    if (parent_of.count(end[1]))
+      throw Error(at + ": link '" + end[1] + "' already has a parent joint (line " +
+                  std::to_string(parent_of[end[1]].second) + "); a URDF is a tree");
+    parent_of[end[1]] = {end[0], e->GetLineNum()};
+  }
+  for (const auto& [link, pl] : parent_of) {
+    std::string at = link, chain = link;
+    for (size_t steps = 0; parent_of.count(at); ++steps) {
+      at = parent_of[at].first;
+      chain += " <- " + at;
+      if (at == link || steps > parent_of.size())
+        throw Error(line_of(idx.path, pl.second) + ": URDF: cycle in the links: " + chain);
+    }
+  }
+  // one root: every other link hangs from a joint
+  std::vector<std::pair<int, std::string>> roots;
+  for (const auto& [name, e] : idx.links)
+    if (!parent_of.count(name)) roots.emplace_back(e.line, name);
+  std::sort(roots.begin(), roots.end());
+  if (roots.size() > 1)
+    throw Error(idx.at_link(roots[1].second) + ": a second root link (the first is '" + roots[0].second + "', line " +
+                std::to_string(roots[0].first) + "); a URDF is one tree: connect it by a joint");
+}
+
+}  // namespace
+
+std::string Index::at_joint(const std::string& name) const {
+  auto it = joints.find(name);
+  return (it != joints.end() ? line_of(path, it->second.line) : path) + ": joint '" + name + "'";
+}
+
+std::string Index::at_link(const std::string& name) const {
+  auto it = links.find(name);
+  return (it != links.end() ? line_of(path, it->second.line) : path) + ": link '" + name + "'";
+}
+
+Index index(const std::string& xml, const std::string& path) {
+  tinyxml2::XMLDocument doc;
+  if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS)
+    throw Error(line_of(path, doc.ErrorLineNum()) + ": XML: " + doc.ErrorStr());
+  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  if (!robot) throw Error(path + ":1: URDF: expected a <robot> element at the top");
+  Index idx;
+  idx.path = path;
+  idx.robot_line = robot->GetLineNum();
+  read_elements(robot, idx);
+  if (idx.links.empty()) throw Error(line_of(path, idx.robot_line) + ": URDF: expected at least one <link>");
+  check_tree(robot, idx);
+  return idx;
+}
+
+std::string locate(const Index& idx, const std::string& messages) {
+  // the element: the first joint, link or material the messages name that the document has
+  static const std::regex named(R"((joint|link|material)\s*(?:\[([^\]]*)\]|'([^']*)'))", std::regex::icase);
+  // the child element a message speaks of, most specific first
+  static const std::vector<std::pair<std::string, std::string>> children = {
+      {"safety", "safety_controller"}, {"soft_", "safety_controller"}, {"k_velocity", "safety_controller"},
+      {"k_position", "safety_controller"}, {"calibration", "calibration"}, {"rising", "calibration"},
+      {"falling", "calibration"}, {"mimic", "mimic"}, {"multiplier", "mimic"}, {"dynamics", "dynamics"},
+      {"damping", "dynamics"}, {"friction", "dynamics"}, {"limit", "limit"}, {"effort", "limit"},
+      {"velocity", "limit"}, {"axis", "axis"}, {"origin", "origin"}, {"inertia", "inertial"},
+      {"mass", "inertial"}, {"visual", "visual"}, {"collision", "collision"}, {"geometry", "visual"}};
+  const std::string text = lower(messages);
+  for (std::sregex_iterator it(messages.begin(), messages.end(), named), end; it != end; ++it) {
+    const std::string kind = lower((*it)[1]);
+    const std::string name = (*it)[2].matched ? (*it)[2].str() : (*it)[3].str();
+    const auto& table = kind == "joint" ? idx.joints : kind == "link" ? idx.links : idx.materials;
+    const auto e = table.find(name);
+    if (e == table.end()) continue;
+    int line = e->second.line;
+    for (const auto& [word, tag] : children) {
+      const auto c = e->second.child.find(tag);
+      if (text.find(word) != std::string::npos && c != e->second.child.end()) {
+        line = c->second;
+        break;
+      }
+    }
+    return line_of(idx.path, line) + ": " + kind + " '" + name + "': URDF: " + messages;
+  }
+  return line_of(idx.path, idx.robot_line) + ": URDF: " + messages;
+}
+
+}  // namespace soadyn::urdf_xml
