@@ -45,7 +45,8 @@ urdf::ModelInterfaceSharedPtr read_robot(const std::string& xml, const urdf_xml:
   // only says so: any error it reports refuses the robot
   if (!robot || !messages.empty())
     throw Error(urdf_xml::locate(idx, messages.empty() ? "urdfdom could not read the robot" : messages));
-  if (!robot->getRoot()) throw Error(idx.path + ": URDF: no root link");  // urdf_xml::index checked there is one
+  if (!robot->getRoot())  // urdf_xml::index checked there is one
+    throw Error(idx.path + ":" + std::to_string(idx.robot_line) + ": URDF: no root link");
   return robot;
 }
 
