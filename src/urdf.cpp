@@ -2,8 +2,9 @@
 // every error names file:line, and the joints' document order, so that q keeps the URDF's order.
 //
 // What enters the model: links' <inertial> (mass, inertia, origin), joints' type, <origin>,
-// <axis>, <parent> and <child>.  Everything else (geometry, limits, dynamics, mimic, transmissions,
-// simulator extensions) does not change rigid-body dynamics and is read by urdfdom and ignored.
+// <axis>, <parent> and <child>.  Geometry, materials, transmissions and simulator extensions never
+// reach urdfdom; joints reach it whole (it checks their <limit>, <mimic>, ... ), and soadyn ignores
+// all but the above: none of it changes rigid-body dynamics.
 #include "soadyn/scenario.hpp"
 
 #include "urdf_xml.hpp"
@@ -33,12 +34,12 @@ class CaptureConsole : public console_bridge::OutputHandler {
   std::string messages;
 };
 
-urdf::ModelInterfaceSharedPtr read_robot(const std::string& xml, const urdf_xml::Index& idx) {
+urdf::ModelInterfaceSharedPtr read_robot(const urdf_xml::Index& idx) {
   urdf::ModelInterfaceSharedPtr robot;
   std::string messages;
   {
     CaptureConsole console;
-    robot = urdf::parseURDF(xml);
+    robot = urdf::parseURDF(idx.dynamics);
     messages = console.messages;
   }
   // urdfdom 3.0 keeps a link it could not read (a malformed <inertial> becomes zero mass) and
@@ -184,7 +185,7 @@ Model build_located(const std::vector<BodySpec>& specs, const Vec3& gravity, con
 
 Model parse_urdf(const std::string& xml, const std::string& path, bool free_root, const Vec3& gravity) {
   const urdf_xml::Index idx = urdf_xml::index(xml, path);
-  const urdf::ModelInterfaceSharedPtr robot = read_robot(xml, idx);
+  const urdf::ModelInterfaceSharedPtr robot = read_robot(idx);
 
   std::vector<BodySpec> specs{root_spec(*robot->getRoot(), free_root)};
   std::map<std::string, int> link_index{{robot->getRoot()->name, 0}};

@@ -25,15 +25,12 @@ Element element(const tinyxml2::XMLElement* e) {
   return out;
 }
 
-// Links, joints and materials by name, refusing nameless and duplicate ones.
+// Links and joints by name, refusing nameless and duplicate ones.
 void read_elements(const tinyxml2::XMLElement* robot, Index& idx) {
   for (auto* e = robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
     const std::string tag = e->Name();
-    auto* table = tag == "joint"      ? &idx.joints
-                  : tag == "link"     ? &idx.links
-                  : tag == "material" ? &idx.materials
-                                      : nullptr;
-    if (!table) continue;  // <transmission>, <gazebo>, namespaced extensions: not dynamics
+    auto* table = tag == "joint" ? &idx.joints : tag == "link" ? &idx.links : nullptr;
+    if (!table) continue;
     const char* name = e->Attribute("name");
     const std::string at = line_of(idx.path, e->GetLineNum());
     if (!name) throw Error(at + ": <" + tag + ">: missing attribute 'name'");
@@ -43,6 +40,27 @@ void read_elements(const tinyxml2::XMLElement* robot, Index& idx) {
     table->emplace(name, element(e));
     if (tag == "joint") idx.joint_order.push_back(name);
   }
+}
+
+// What urdfdom is given: <robot> with its links, each keeping only <inertial>, and its joints.
+std::string dynamics_only(tinyxml2::XMLDocument& doc, tinyxml2::XMLElement* robot) {
+  for (auto* e = robot->FirstChildElement(); e;) {
+    auto* next = e->NextSiblingElement();
+    const std::string tag = e->Name();
+    if (tag == "link") {
+      for (auto* c = e->FirstChildElement(); c;) {
+        auto* cn = c->NextSiblingElement();
+        if (std::string(c->Name()) != "inertial") e->DeleteChild(c);
+        c = cn;
+      }
+    } else if (tag != "joint") {
+      robot->DeleteChild(e);  // <material>, <transmission>, <gazebo>, extensions
+    }
+    e = next;
+  }
+  tinyxml2::XMLPrinter printer(nullptr, true);
+  doc.Print(&printer);
+  return printer.CStr();
 }
 
 // The link graph must be one tree before urdfdom sees it: urdfdom leaks the shared_ptr cycle it
@@ -103,7 +121,7 @@ Index index(const std::string& xml, const std::string& path) {
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS)
     throw Error(line_of(path, doc.ErrorLineNum()) + ": XML: " + doc.ErrorStr());
-  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
+  tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (!robot) throw Error(path + ":1: URDF: expected a <robot> element at the top");
   Index idx;
   idx.path = path;
@@ -111,12 +129,13 @@ Index index(const std::string& xml, const std::string& path) {
   read_elements(robot, idx);
   if (idx.links.empty()) throw Error(line_of(path, idx.robot_line) + ": URDF: expected at least one <link>");
   check_tree(robot, idx);
+  idx.dynamics = dynamics_only(doc, robot);
   return idx;
 }
 
 std::string locate(const Index& idx, const std::string& messages) {
-  // the element: the first joint, link or material the messages name that the document has
-  static const std::regex named(R"((joint|link|material)\s*(?:\[([^\]]*)\]|'([^']*)'))", std::regex::icase);
+  // the element: the first joint or link the messages name that the document has
+  static const std::regex named(R"((joint|link)\s*(?:\[([^\]]*)\]|'([^']*)'))", std::regex::icase);
   // the child element a message speaks of, most specific first
   static const std::vector<std::pair<std::string, std::string>> children = {
       {"safety", "safety_controller"}, {"soft_", "safety_controller"}, {"k_velocity", "safety_controller"},
@@ -124,12 +143,12 @@ std::string locate(const Index& idx, const std::string& messages) {
       {"falling", "calibration"}, {"mimic", "mimic"}, {"multiplier", "mimic"}, {"dynamics", "dynamics"},
       {"damping", "dynamics"}, {"friction", "dynamics"}, {"limit", "limit"}, {"effort", "limit"},
       {"velocity", "limit"}, {"axis", "axis"}, {"origin", "origin"}, {"inertia", "inertial"},
-      {"mass", "inertial"}, {"visual", "visual"}, {"collision", "collision"}, {"geometry", "visual"}};
+      {"mass", "inertial"}};
   const std::string text = lower(messages);
   for (std::sregex_iterator it(messages.begin(), messages.end(), named), end; it != end; ++it) {
     const std::string kind = lower((*it)[1]);
     const std::string name = (*it)[2].matched ? (*it)[2].str() : (*it)[3].str();
-    const auto& table = kind == "joint" ? idx.joints : kind == "link" ? idx.links : idx.materials;
+    const auto& table = kind == "joint" ? idx.joints : idx.links;
     const auto e = table.find(name);
     if (e == table.end()) continue;
     int line = e->second.line;

@@ -326,11 +326,24 @@ TEST(UrdfErrorLines, UrdfdomRefusalsAreLocated) {
                  "\n<inertial><inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>"),
        "robot.urdf:4: link 'b': URDF: Inertial element must have a mass element"},
       {two_links("<joint name=\"j\" type=\"continuous\">" + pc + "</joint>",
-                 "\n<visual><geometry></geometry></visual>"),
-       "robot.urdf:4: link 'b': URDF: Geometry tag contains no child element."},
+                 "\n<inertial><mass value=\"1\"/><inertia ixx=\"1\" iyy=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>"),
+       "robot.urdf:4: link 'b': URDF: Inertial: inertia element missing izz attribute"},
       {"<robot>\n<link name=\"a\"/>\n</robot>", "robot.urdf:1: URDF: No name given for the robot."},
   };
   for (const Case& c : cases) EXPECT_THAT(urdf_error(c.xml), HasSubstr(c.expect)) << c.xml;
+}
+
+// what soadyn does not read cannot refuse a robot: a malformed visual, a material defined twice
+TEST(UrdfErrorLines, IgnoredElementsAreNotRead) {
+  const std::string pc = "<parent link=\"a\"/><child link=\"b\"/>";
+  const std::string inertial = "<inertial><mass value=\"1\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" "
+                               "ixz=\"0\" iyz=\"0\"/></inertial>";
+  EXPECT_EQ(urdf_error(two_links("<joint name=\"j\" type=\"continuous\">" + pc + "</joint>",
+                                 inertial + "<visual><geometry></geometry></visual><collision/>")),
+            "(accepted)");
+  const std::string black = "<material name=\"black\"><color rgba=\"0 0 0 1\"/></material>\n";
+  EXPECT_EQ(urdf_error(two_links("<joint name=\"j\" type=\"continuous\">" + pc + "</joint>\n" + black + black)),
+            "(accepted)");
 }
 
 TEST(UrdfErrorLines, TreeErrorsAreLocated) {
