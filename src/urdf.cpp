@@ -29,14 +29,14 @@ class CaptureConsole : public console_bridge::OutputHandler {
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
     // the last words of every failure, which add nothing to the ones before them
     if (text.find("is not initialized correctly") != std::string::npos) return;
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) messages += (messages.empty() ? "" : "; ") + text;
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) messages.push_back(text);
   }
-  std::string messages;
+  std::vector<std::string> messages;
 };
 
 urdf::ModelInterfaceSharedPtr read_robot(const urdf_xml::Index& idx) {
   urdf::ModelInterfaceSharedPtr robot;
-  std::string messages;
+  std::vector<std::string> messages;
   {
     CaptureConsole console;
     robot = urdf::parseURDF(idx.dynamics);
@@ -45,7 +45,8 @@ urdf::ModelInterfaceSharedPtr read_robot(const urdf_xml::Index& idx) {
   // urdfdom 3.0 keeps a link it could not read (a malformed <inertial> becomes zero mass) and
   // only says so: any error it reports refuses the robot
   if (!robot || !messages.empty())
-    throw Error(urdf_xml::locate(idx, messages.empty() ? "urdfdom could not read the robot" : messages));
+    throw Error(urdf_xml::locate(idx, messages.empty() ? std::vector<std::string>{"urdfdom could not read the robot"}
+                                                       : messages));
   if (!robot->getRoot())  // urdf_xml::index checked there is one
     throw Error(idx.path + ":" + std::to_string(idx.robot_line) + ": URDF: no root link");
   return robot;

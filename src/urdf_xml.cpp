@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <regex>
 
 namespace soadyn::urdf_xml {
 
@@ -105,6 +104,34 @@ void check_tree(const tinyxml2::XMLElement* robot, const Index& idx) {
                 std::to_string(roots[0].first) + "); a URDF is one tree: connect it by a joint");
 }
 
+// The element a message names, as "joint [name]" or "link 'name'"; console_bridge cuts messages at
+// 1023 characters, so a name left open at the end is matched as the start of one.  A plain scan:
+// a regex would recurse once per character of a long name.
+struct Named {
+  std::string kind, name;
+  const Element* element = nullptr;
+};
+Named named(const Index& idx, const std::string& message) {
+  const std::string text = lower(message);
+  for (const std::string kind : {"joint", "link"}) {
+    const auto& table = kind == "joint" ? idx.joints : idx.links;
+    for (size_t at = text.find(kind); at != std::string::npos; at = text.find(kind, at + 1)) {
+      size_t open = at + kind.size();
+      while (open < text.size() && text[open] == ' ') ++open;
+      if (open >= text.size() || (text[open] != '[' && text[open] != '\'')) continue;
+      const size_t close = message.find(text[open] == '[' ? ']' : '\'', open + 1);
+      const std::string name = message.substr(open + 1, close == std::string::npos ? close : close - open - 1);
+      auto e = table.find(name);
+      if (e == table.end() && close == std::string::npos && !name.empty()) {
+        e = table.lower_bound(name);
+        if (e != table.end() && !e->first.starts_with(name)) e = table.end();
+      }
+      if (e != table.end()) return {kind, e->first, &e->second};
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 std::string Index::at_joint(const std::string& name) const {
@@ -133,9 +160,7 @@ Index index(const std::string& xml, const std::string& path) {
   return idx;
 }
 
-std::string locate(const Index& idx, const std::string& messages) {
-  // the element: the first joint or link the messages name that the document has
-  static const std::regex named(R"((joint|link)\s*(?:\[([^\]]*)\]|'([^']*)'))", std::regex::icase);
+std::string locate(const Index& idx, const std::vector<std::string>& messages) {
   // the child element a message speaks of, most specific first
   static const std::vector<std::pair<std::string, std::string>> children = {
       {"safety", "safety_controller"}, {"soft_", "safety_controller"}, {"k_velocity", "safety_controller"},
@@ -144,24 +169,21 @@ std::string locate(const Index& idx, const std::string& messages) {
       {"damping", "dynamics"}, {"friction", "dynamics"}, {"limit", "limit"}, {"effort", "limit"},
       {"velocity", "limit"}, {"axis", "axis"}, {"origin", "origin"}, {"inertia", "inertial"},
       {"mass", "inertial"}};
-  const std::string text = lower(messages);
-  for (std::sregex_iterator it(messages.begin(), messages.end(), named), end; it != end; ++it) {
-    const std::string kind = lower((*it)[1]);
-    const std::string name = (*it)[2].matched ? (*it)[2].str() : (*it)[3].str();
-    const auto& table = kind == "joint" ? idx.joints : idx.links;
-    const auto e = table.find(name);
-    if (e == table.end()) continue;
-    int line = e->second.line;
-    for (const auto& [word, tag] : children) {
-      const auto c = e->second.child.find(tag);
-      if (text.find(word) != std::string::npos && c != e->second.child.end()) {
-        line = c->second;
-        break;
-      }
+  std::string all;
+  for (const auto& m : messages) all += (all.empty() ? "" : "; ") + m;
+  Named e;
+  for (size_t k = 0; k < messages.size() && !e.element; ++k) e = named(idx, messages[k]);
+  if (!e.element) return line_of(idx.path, idx.robot_line) + ": URDF: " + all;
+  const std::string text = lower(all);
+  int line = e.element->line;
+  for (const auto& [word, tag] : children) {
+    const auto c = e.element->child.find(tag);
+    if (text.find(word) != std::string::npos && c != e.element->child.end()) {
+      line = c->second;
+      break;
     }
-    return line_of(idx.path, line) + ": " + kind + " '" + name + "': URDF: " + messages;
   }
-  return line_of(idx.path, idx.robot_line) + ": URDF: " + messages;
+  return line_of(idx.path, line) + ": " + e.kind + " '" + e.name + "': URDF: " + all;
 }
 
 }  // namespace soadyn::urdf_xml

@@ -36,8 +36,8 @@ struct Index {
 Index index(const std::string& xml, const std::string& path);
 
 // urdfdom's messages when it refuses the robot name the joint or link they are about; returns
-// "path:line: joint 'name': URDF: message" with the line of that element, or of its child element
-// the message speaks of (<limit>, <inertial>, ...).  Falls back to the <robot> line.
-std::string locate(const Index& idx, const std::string& messages);
+// "path:line: joint 'name': URDF: message; message" with the line of that element, or of its child
+// element the messages speak of (<limit>, <inertial>, ...).  Falls back to the <robot> line.
+std::string locate(const Index& idx, const std::vector<std::string>& messages);
 
 }  // namespace soadyn::urdf_xml

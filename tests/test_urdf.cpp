@@ -333,6 +333,15 @@ TEST(UrdfErrorLines, UrdfdomRefusalsAreLocated) {
   for (const Case& c : cases) EXPECT_THAT(urdf_error(c.xml), HasSubstr(c.expect)) << c.xml;
 }
 
+// a long name in urdfdom's message is found without recursion per character, and when cut short
+TEST(UrdfErrorLines, LongNameInAnUrdfdomMessage) {
+  const std::string name(200000, 'j');
+  const std::string xml = two_links("<joint name=\"" + name + "\" type=\"revolute\"><parent link=\"a\"/>"
+                                    "<child link=\"b\"/></joint>");
+  // console_bridge cuts the message short, within the name: the element is still found
+  EXPECT_THAT(urdf_error(xml), HasSubstr("robot.urdf:4: joint '" + name + "': URDF: Joint [jjjj"));
+}
+
 // what soadyn does not read cannot refuse a robot: a malformed visual, a material defined twice
 TEST(UrdfErrorLines, IgnoredElementsAreNotRead) {
   const std::string pc = "<parent link=\"a\"/><child link=\"b\"/>";
