@@ -125,38 +125,40 @@ std::string dof_name(const Model& m, int k) {
 // Sweep tip to base, P about each body's joint point η_i in world axes, one DOF at a time:
 //   P_i = M_i + Σ_children Φᵀ P_c⁺ Φ,   Φ = [e 0; −d̃ e], d = η_c − η_i,
 //   P⁺ = P − P g gᵀ P / (gᵀ P g) for each of the joint's columns g, last first.
-// A pivot at round-off level, relative to the size of P along g, is a DOF that carries no
-// inertia of its own.
+// D_k is the body's own inertia along g plus what its children's P⁺ add; each is a difference
+// whose terms are bounded by the body's mass moments and by the children's P before their
+// projections.  A pivot below 1e-12 of that size is round-off: the DOF carries no inertia.
 void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const std::vector<int>& spec_of) {
   std::vector<Mat3> R(m.nbodies);
-  std::vector<Vec3> eta(m.nbodies);
-  std::vector<Mat6> P(m.nbodies);
+  std::vector<Vec3> eta(m.nbodies), s(m.nbodies);
+  std::vector<Mat6> P(m.nbodies), below(m.nbodies, Mat6::Zero());  // below: Σ Φᵀ P_c Φ before projecting
   for (int i = 0; i < m.nbodies; ++i) {
     const int p = m.parent[i];
     const Mat3 Rp = p < 0 ? Mat3::Identity() : R[p];
     R[i] = Rp * m.placement[i].R;
     eta[i] = (p < 0 ? Vec3::Zero() : eta[p]) + Rp * m.placement[i].p;
-    P[i] = SpatialInertia::from_body(m.mass[i], R[i] * m.com[i], R[i] * m.inertia[i] * R[i].transpose()).matrix();
+    s[i] = R[i] * m.com[i];
+    P[i] = SpatialInertia::from_body(m.mass[i], s[i], R[i] * m.inertia[i] * R[i].transpose()).matrix();
   }
   std::vector<int> singular;
   for (int i = m.nbodies - 1; i >= 0; --i) {
     Mat6X G(6, m.nv_i[i]);
     joint_subspace(m.joint_type[i], m.axis[i], R[i], R[i], G);  // at the neutral configuration Rb = Rj
+    const Mat6 before = P[i];
+    const double mi = m.mass[i], ms = mi * s[i].norm(), rot = m.inertia[i].trace() + 2.0 * ms * s[i].norm();
     for (int j = m.nv_i[i] - 1; j >= 0; --j) {
       const Vec6 g = G.col(j), Pg = P[i] * g;
-      // gᵀ P g ≤ size for P ⪰ 0, and size (traces, no cancellation) measures the round-off in it
       const double gw = g.head<3>().norm(), gv = g.tail<3>().norm();
-      const double size = P[i].topLeftCorner<3, 3>().trace() * gw * gw +
-                          P[i].bottomRightCorner<3, 3>().trace() * gv * gv +
-                          2.0 * P[i].topRightCorner<3, 3>().norm() * gw * gv;
+      const double size = rot * gw * gw + 2.0 * ms * gw * gv + mi * gv * gv + g.dot(below[i] * g);
       const double pivot = g.dot(Pg);
-      if (pivot > 1e-10 * size) P[i] -= Pg * Pg.transpose() / pivot;
+      if (pivot > 1e-12 * size) P[i] -= Pg * Pg.transpose() / pivot;
       else singular.push_back(m.idx_v[i] + j);
     }
     if (const int p = m.parent[i]; p >= 0) {
       Mat6 Phi = Mat6::Identity();
       Phi.bottomLeftCorner<3, 3>() = -skew(eta[i] - eta[p]);
       P[p] += Phi.transpose() * P[i] * Phi;
+      below[p] += Phi.transpose() * before * Phi;
     }
   }
   if (singular.empty()) return;

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <set>
 
 namespace soadyn::urdf_xml {
 
@@ -85,14 +86,23 @@ void check_tree(const tinyxml2::XMLElement* robot, const Index& idx) {
                   std::to_string(parent_of[end[1]].second) + "); a URDF is a tree");
     parent_of[end[1]] = {end[0], e->GetLineNum()};
   }
+  // no cycle: walk up from every link until a link known to reach a root; O(N) walks in all
+  std::set<std::string> reaches_root;
   for (const auto& [link, pl] : parent_of) {
-    std::string at = link, chain = link;
-    for (size_t steps = 0; parent_of.count(at); ++steps) {
-      at = parent_of[at].first;
-      chain += " <- " + at;
-      if (at == link || steps > parent_of.size())
-        throw Error(line_of(idx.path, pl.second) + ": URDF: cycle in the links: " + chain);
+    std::vector<std::string> path{link};
+    std::set<std::string> on_path{link};
+    for (auto up = parent_of.find(link); up != parent_of.end() && !reaches_root.count(up->second.first);
+         up = parent_of.find(up->second.first)) {
+      const std::string& p = up->second.first;
+      if (!on_path.insert(p).second) {
+        std::string chain = p;  // p <- its parent <- ... <- p
+        for (auto it = std::find(path.begin(), path.end(), p) + 1; it != path.end(); ++it) chain += " <- " + *it;
+        chain += " <- " + p;
+        throw Error(line_of(idx.path, parent_of.at(p).second) + ": URDF: cycle in the links: " + chain);
+      }
+      path.push_back(p);
     }
+    reaches_root.insert(path.begin(), path.end());
   }
   // one root: every other link hangs from a joint
   std::vector<std::pair<int, std::string>> roots;

@@ -250,6 +250,34 @@ TEST(SingularMassMatrix, RodAboutItsLengthAndAFreePointMass) {
                         "(joint 'ball_free', its DOF 1), DOF 2 (joint 'ball_free', its DOF 2)"));
 }
 
+// long chains have a badly conditioned 𝓜 (the base joint moves the whole chain, the last one
+// link) but a regular one: no DOF may be called singular for it
+TEST(SingularMassMatrix, LongChainsAndBigTreesAreRegular) {
+  std::vector<BodySpec> chain;
+  for (int i = 0; i < 5000; ++i) {
+    BodySpec b;
+    b.name = "l" + std::to_string(i);
+    b.parent = i - 1;
+    b.axis = Vec3::UnitY();
+    b.placement.p = Vec3(0, 0, i ? -0.1 : 0.0);
+    b.mass = 1.0;
+    b.com = Vec3(0, 0, -0.05);
+    b.inertia = 0.01 * Mat3::Identity();
+    chain.push_back(b);
+  }
+  EXPECT_NO_THROW(Model::build(chain, urdf_gravity()));
+  Rng rng(5);
+  for (double branching : {0.0, 0.5, 1.0}) {
+    TreeOptions o;
+    o.n = 2000;
+    o.branching = branching;
+    o.prismatic = 0.2;
+    o.free_root = true;
+    o.fixed = 300;
+    EXPECT_NO_THROW(random_model(rng, o)) << "branching " << branching;
+  }
+}
+
 TEST(SingularMassMatrix, ScenarioBodiesAndModelBuild) {
   const std::string yaml = "bodies:\n"
                            "  - name: b\n"
@@ -360,6 +388,12 @@ TEST(UrdfErrorLines, TreeErrorsAreLocated) {
   EXPECT_THAT(urdf_error(two_links(j)), HasSubstr("robot.urdf:5: joint 'j': child: no link named 'c'"));
   const std::string p = "<joint name=\"j\" type=\"continuous\">\n<parent link=\"x\"/><child link=\"b\"/></joint>";
   EXPECT_THAT(urdf_error(two_links(p)), HasSubstr("robot.urdf:5: joint 'j': parent: no link named 'x'"));
+  auto joint = [](const std::string& n, const std::string& p, const std::string& c) {
+    return "<joint name=\"" + n + "\" type=\"fixed\"><parent link=\"" + p + "\"/><child link=\"" + c + "\"/></joint>\n";
+  };
+  EXPECT_THAT(urdf_error("<robot name=\"r\">\n<link name=\"a\"/><link name=\"b\"/><link name=\"c\"/><link name=\"d\"/>\n" +
+                         joint("j1", "b", "c") + joint("j2", "c", "d") + joint("j3", "d", "b") + "</robot>"),
+              HasSubstr("robot.urdf:5: URDF: cycle in the links: b <- d <- c <- b"));
   EXPECT_THAT(urdf_error("<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"/>\n</robot>"),
               HasSubstr("robot.urdf:3: link 'b': a second root link (the first is 'a', line 2)"));
   EXPECT_THAT(urdf_error("<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"a\"/>\n</robot>"),
