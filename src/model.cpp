@@ -164,7 +164,8 @@ void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const
   if (singular.empty()) return;
   std::sort(singular.begin(), singular.end());
   std::string got;
-  for (int k : singular) got += (got.empty() ? "" : ", ") + dof_name(m, k);
+  for (size_t n = 0; n < singular.size() && n < 6; ++n) got += (n ? ", " : "") + dof_name(m, singular[n]);
+  if (singular.size() > 6) got += " and " + std::to_string(singular.size() - 6) + " more";
   const int first = spec_of[m.dof_body[singular.front()]];
   refuse(specs[first], first, "mass matrix",
          "positive definite at the neutral configuration",

@@ -278,6 +278,28 @@ TEST(SingularMassMatrix, LongChainsAndBigTreesAreRegular) {
   }
 }
 
+// many singular DOFs: six named, the rest counted, on one line
+TEST(SingularMassMatrix, ManyAreCounted) {
+  std::vector<BodySpec> specs;
+  for (int i = 0; i < 10; ++i) {
+    BodySpec b;
+    b.name = "p" + std::to_string(i);
+    b.parent = i - 1;
+    b.axis = Vec3::UnitZ();
+    b.placement.p = Vec3(0, 0, 0.1);
+    b.mass = 1.0;  // point masses on the common axis
+    specs.push_back(b);
+  }
+  try {
+    Model::build(specs);
+    ADD_FAILURE() << "accepted";
+  } catch (const ModelError& e) {
+    EXPECT_EQ(e.spec, 0);
+    EXPECT_THAT(e.what(), HasSubstr("no inertia on DOF 0 (joint 'p0'), DOF 1 (joint 'p1'), DOF 2 (joint 'p2'), DOF 3 "
+                                    "(joint 'p3'), DOF 4 (joint 'p4'), DOF 5 (joint 'p5') and 4 more"));
+  }
+}
+
 TEST(SingularMassMatrix, ScenarioBodiesAndModelBuild) {
   const std::string yaml = "bodies:\n"
                            "  - name: b\n"
