@@ -157,6 +157,14 @@ TEST(UrdfPatterns, WeldedPartsAreMergedIntoTheirMovingBody) {
   EXPECT_NEAR(free.mass[0], 4.0, 1e-15);
 }
 
+// the scenario route: free_root: true frees the massless root with the trunk welded to it
+TEST(UrdfPatterns, ScenarioFreesTheDummyRoot) {
+  const Scenario sc = parse_scenario("urdf: dummy_root.urdf\nfree_root: true\n", kDir + "inline.yaml");
+  const Model twin = load_urdf(kDir + "dummy_root_merged.urdf", true, urdf_gravity());
+  EXPECT_EQ(sc.model.joint_type[0], JointType::Free);
+  expect_twins(sc.model, twin, 41);
+}
+
 // the mimic tags change nothing: every joint keeps its own q
 TEST(UrdfPatterns, MimicJointsStayIndependent) {
   const Model m = load_urdf(kDir + "mimic.urdf", false, urdf_gravity());
