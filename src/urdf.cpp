@@ -121,6 +121,7 @@ BodySpec joint_spec(const urdf::Joint& j, const urdf::Link& link, const std::map
     case urdf::Joint::REVOLUTE:
     case urdf::Joint::CONTINUOUS: s.joint = JointType::Revolute; break;
     case urdf::Joint::PRISMATIC: s.joint = JointType::Prismatic; break;
+    case urdf::Joint::PLANAR: s.joint = JointType::Planar; break;  // the axis is the plane's normal
     case urdf::Joint::FIXED: s.joint = JointType::Fixed; break;  // its <axis>, if any, means nothing
     case urdf::Joint::FLOATING:
       // a floating joint frees a body hung on the world-welded root: its q is the pose in the world
@@ -135,10 +136,9 @@ BodySpec joint_spec(const urdf::Joint& j, const urdf::Link& link, const std::map
       s.placement = Placement{};
       break;
     default:
-      throw Error(idx.at_joint(j.name) + ": type: expected revolute, continuous, prismatic, fixed or floating; "
-                                         "planar joints are not supported");
+      throw Error(idx.at_joint(j.name) + ": type: expected revolute, continuous, prismatic, planar, fixed or floating");
   }
-  if (s.joint == JointType::Revolute || s.joint == JointType::Prismatic) {
+  if (joint_traits(s.joint).has_axis) {
     if (!(s.axis.norm() > 1e-12)) throw Error(idx.at_joint(j.name) + ": axis: expected a non-zero axis, got [0, 0, 0]");
     s.axis.normalize();
   }

@@ -417,8 +417,8 @@ TEST(BadUrdf, UnsupportedJointType) {
   const std::string xml =
       "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"><inertial><mass value=\"1\"/>"
       "<inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link>\n"
-      "<joint name=\"j\" type=\"planar\"><parent link=\"a\"/><child link=\"b\"/></joint>\n</robot>";
-  EXPECT_THAT(urdf_error_of(xml), HasSubstr("robot.urdf:4: joint 'j': type: expected revolute"));
+      "<joint name=\"j\" type=\"spherical\"><parent link=\"a\"/><child link=\"b\"/></joint>\n</robot>";
+  EXPECT_THAT(urdf_error_of(xml), HasSubstr("robot.urdf:4: joint 'j': URDF: Joint [j] has no known type [spherical]"));
 }
 
 }  // namespace

@@ -165,6 +165,38 @@ TEST(UrdfPatterns, ScenarioFreesTheDummyRoot) {
   expect_twins(sc.model, twin, 41);
 }
 
+// URDF planar (axis = the plane's normal) against prismatic x, prismatic y, revolute z in the same
+// joint frame.  The two sliders only translate, along e1 = Rj x and e2 = Rj y, so in closed form
+//   𝓜_ppr = 𝓜 + diag(m_x + m_y, m_y, 0, 0),  bias_ppr = bias − [(m_x + m_y) g·e1, m_y g·e2, 0, 0],
+//   T_ppr = T + ½ (m_x + m_y) ẋ² + ½ m_y ẏ²,  V_ppr = V − m_x g·r_x − m_y g·r_y.
+TEST(UrdfPatterns, PlanarIsPrismaticPrismaticRevolute) {
+  const Model pl = load_urdf(kDir + "planar.urdf", false, urdf_gravity());
+  const Model ppr = load_urdf(kDir + "planar_ppr.urdf", false, urdf_gravity());
+  ASSERT_EQ(pl.joint_type[0], JointType::Planar);
+  ASSERT_EQ(pl.nv, 4);
+  ASSERT_EQ(ppr.nv, 4);
+  const double mx = 0.5, my = 0.25;
+  const Mat3 Rj = pl.placement[0].R;  // the table is the world-welded root: the joint frame in the world
+  const Vec3 p0 = pl.placement[0].p, e1 = Rj.col(0), e2 = Rj.col(1), g = urdf_gravity();
+  EXPECT_TRUE(pl.axis[0].isApprox(Vec3::UnitZ()));
+  Rng rng(61);
+  for (int t = 0; t < 10; ++t) {
+    const VecX q = random_q(rng, pl), v = random_v(rng, pl), tau = random_v(rng, pl, 3.0);
+    const Dynamics a = evaluate(pl, q, v, tau), b = evaluate(ppr, q, v, tau);
+    MatX M = a.M;
+    M(0, 0) += mx + my;
+    M(1, 1) += my;
+    VecX bias = a.bias;
+    bias(0) -= (mx + my) * g.dot(e1);
+    bias(1) -= my * g.dot(e2);
+    ASSERT_TRUE(near_rel(b.M, M, 1e-12)) << "state " << t;
+    ASSERT_TRUE(near_rel(b.bias, bias, 1e-12)) << "state " << t;
+    const Vec3 rx = p0 + q(0) * e1, ry = rx + q(1) * e2;
+    EXPECT_NEAR(b.T, a.T + 0.5 * (mx + my) * v(0) * v(0) + 0.5 * my * v(1) * v(1), 1e-12 * std::max(1.0, b.T));
+    EXPECT_NEAR(b.V, a.V - mx * g.dot(rx) - my * g.dot(ry), 1e-12 * std::max(1.0, std::abs(b.V)));
+  }
+}
+
 // the mimic tags change nothing: every joint keeps its own q
 TEST(UrdfPatterns, MimicJointsStayIndependent) {
   const Model m = load_urdf(kDir + "mimic.urdf", false, urdf_gravity());
