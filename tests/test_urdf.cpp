@@ -471,6 +471,10 @@ TEST(UrdfErrorLines, ModelRefusalsPointAtTheJointOrTheLink) {
                                    "<inertial><mass value=\"1\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"3\" ixy=\"0\" "
                                    "ixz=\"0\" iyz=\"0\"/></inertial>")),
               HasSubstr("robot.urdf:3: link 'b': inertia: expected principal moments obeying the triangle inequality"));
+  EXPECT_THAT(urdf_error(two_links("<joint name=\"j\" type=\"fixed\"><parent link=\"a\"/><child link=\"b\"/></joint>",
+                                   "<inertial><mass value=\"0\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" "
+                                   "ixz=\"0\" iyz=\"0\"/></inertial>")),
+              HasSubstr("robot.urdf:3: link 'b': mass: expected a positive mass for a body with inertia"));
 }
 
 // ---- one gravity rule wherever a URDF enters ------------------------------------------------------
