@@ -54,6 +54,9 @@ void check_inertia(const BodySpec& b, int i, double mass, const Mat3& I) {
     refuse(b, i, "inertia", "a symmetric matrix", fmt(I));
   const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (I + I.transpose()), Eigen::EigenvaluesOnly);
   const Vec3 l = es.eigenvalues();  // ascending
+  if (!l.allFinite())
+    refuse(b, i, "inertia", "principal moments a double can hold",
+           "an overflow computing them (mass " + fmt(mass) + ", inertia " + fmt(I) + ")");
   if (l(0) < -1e-9 * std::abs(l(2)) || !(l(2) >= 0.0))
     refuse(b, i, "inertia", "a positive semidefinite matrix (principal moments >= 0)",
            "principal moments " + fmt(l.transpose()));

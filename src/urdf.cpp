@@ -12,6 +12,8 @@
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <cmath>
+#include <cstdio>
 #include <map>
 #include <set>
 
@@ -139,7 +141,11 @@ BodySpec joint_spec(const urdf::Joint& j, const urdf::Link& link, const std::map
       throw Error(idx.at_joint(j.name) + ": type: expected revolute, continuous, prismatic, planar, fixed or floating");
   }
   if (joint_traits(s.joint).has_axis) {
-    if (!(s.axis.norm() > 1e-12)) throw Error(idx.at_joint(j.name) + ": axis: expected a non-zero axis, got [0, 0, 0]");
+    if (!(s.axis.norm() > 1e-12) || !std::isfinite(s.axis.squaredNorm())) {
+      char got[96];
+      std::snprintf(got, sizeof got, "[%g, %g, %g]", s.axis.x(), s.axis.y(), s.axis.z());
+      throw Error(idx.at_joint(j.name) + ": axis: expected a non-zero axis of norm between 1e-12 and 1e150, got " + got);
+    }
     s.axis.normalize();
   }
   mass_properties(link, s);

@@ -155,6 +155,11 @@ std::string Index::at_link(const std::string& name) const {
 }
 
 Index index(const std::string& xml, const std::string& path) {
+  // entity declarations: a URDF needs none, and nested ones expand without bound (an XML bomb)
+  if (const size_t at = xml.find("<!ENTITY"); at != std::string::npos)
+    throw Error(path + ":" + std::to_string(1 + std::count(xml.begin(), xml.begin() + long(at), '\n')) +
+                ": XML: entity declarations (<!ENTITY ...>) are refused: a URDF needs none, and nested ones expand "
+                "without bound (an XML bomb)");
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS)
     throw Error(line_of(path, doc.ErrorLineNum()) + ": XML: " + doc.ErrorStr());
