@@ -4,6 +4,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -40,6 +41,32 @@ void check_finite(const BodySpec& b, int i, const std::string& field, const Eige
   if (!m.allFinite()) refuse(b, i, field, "finite numbers", fmt(m));
 }
 
+// Mass properties of one rigid body (or one part of one): symmetric, positive semidefinite and
+// obeying the triangle inequality, each up to round-off.  A part may be a point mass (zero
+// inertia), a thin rod (one zero principal moment) or, without mass, a bare frame.
+void check_inertia(const BodySpec& b, int i, double mass, const Mat3& I) {
+  if (mass == 0.0) {
+    if (!I.isZero(0.0)) refuse(b, i, "mass", "a positive mass for a body with inertia " + fmt(I), "0");
+    return;
+  }
+  const double scale = I.cwiseAbs().maxCoeff();
+  if ((I - I.transpose()).cwiseAbs().maxCoeff() > 1e-9 * std::max(scale, 1e-300))
+    refuse(b, i, "inertia", "a symmetric matrix", fmt(I));
+  const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (I + I.transpose()), Eigen::EigenvaluesOnly);
+  const Vec3 l = es.eigenvalues();  // ascending
+  if (!l.allFinite())
+    refuse(b, i, "inertia", "principal moments a double can hold",
+           "an overflow computing them (mass " + fmt(mass) + ", inertia " + fmt(I) + ")");
+  if (l(0) < -1e-9 * std::abs(l(2)) || !(l(2) >= 0.0))
+    refuse(b, i, "inertia", "a positive semidefinite matrix (principal moments >= 0)",
+           "principal moments " + fmt(l.transpose()));
+  // triangle inequality: each principal moment is at most the sum of the other two
+  if (l(2) > (l(0) + l(1)) * (1.0 + 1e-9) + 1e-9 * l(2))
+    refuse(b, i, "inertia",
+           "principal moments obeying the triangle inequality (largest <= sum of the others)",
+           "principal moments " + fmt(l.transpose()));
+}
+
 // The checks every user-supplied body must pass.
 void validate(const BodySpec& b, int i) {
   if (b.parent < -1 || b.parent >= i)
@@ -51,9 +78,9 @@ void validate(const BodySpec& b, int i) {
   check_finite(b, i, "axis", b.axis);
   check_finite(b, i, "placement rotation", b.placement.R);
   check_finite(b, i, "placement translation", b.placement.p);
-  const bool fixed = b.joint == JointType::Fixed;
-  if (fixed ? !(b.mass >= 0.0) : !(b.mass > 0.0))
-    refuse(b, i, "mass", fixed ? "a mass >= 0" : "a positive mass", fmt(b.mass));
+  // a part may be massless; the moving body it belongs to is checked once merged
+  if (!(b.mass >= 0.0))
+    refuse(b, i, "mass", b.joint == JointType::Fixed ? "a mass >= 0" : "a positive mass", fmt(b.mass));
   const Mat3 R = b.placement.R;
   if ((R.transpose() * R - Mat3::Identity()).norm() > 1e-9 || R.determinant() < 0)
     refuse(b, i, "placement rotation", "a proper rotation matrix", fmt(R));
@@ -66,26 +93,7 @@ void validate(const BodySpec& b, int i) {
       refuse(b, i, "placement", "none for a free joint (its q is the body's pose in the world)",
              "a non-identity placement");
   }
-  if (b.mass == 0.0) {
-    if (!b.inertia.isZero(0.0)) refuse(b, i, "inertia", "zero for a massless body", fmt(b.inertia));
-    return;
-  }
-  const Mat3& I = b.inertia;
-  const double scale = I.cwiseAbs().maxCoeff();
-  if ((I - I.transpose()).cwiseAbs().maxCoeff() > 1e-9 * std::max(scale, 1e-300))
-    refuse(b, i, "inertia", "a symmetric matrix", fmt(I));
-  const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (I + I.transpose()), Eigen::EigenvaluesOnly);
-  const Vec3 l = es.eigenvalues();  // ascending
-  if (!l.allFinite())
-    refuse(b, i, "inertia", "principal moments a double can hold",
-           "an overflow computing them (mass " + fmt(Eigen::Matrix<double, 1, 1>::Constant(b.mass)) + ", inertia " + fmt(I) + ")");
-  if (!(l(0) > 0.0))
-    refuse(b, i, "inertia", "a positive definite matrix", "principal moments " + fmt(l.transpose()));
-  // triangle inequality: each principal moment is at most the sum of the other two
-  if (l(2) > (l(0) + l(1)) * (1.0 + 1e-9))
-    refuse(b, i, "inertia",
-           "principal moments obeying the triangle inequality (largest <= sum of the others)",
-           "principal moments " + fmt(l.transpose()));
+  check_inertia(b, i, b.mass, b.inertia);
 }
 
 // Where a spec body ends up: the model body it is welded into (-1 = the world) and its frame there.
@@ -104,6 +112,67 @@ void merge_mass(double& m, Vec3& c, Mat3& I, double m2, const Vec3& c2, const Ma
   I = I + parallel_axis(m, c - ct) + I2 + parallel_axis(m2, c2 - ct);
   m = mt;
   c = ct;
+}
+
+// Names DOF k: the joint's name, and for a multi-DOF joint which of its DOFs.
+std::string dof_name(const Model& m, int k) {
+  const int i = m.dof_body[k];
+  std::string name = "DOF " + std::to_string(k) + " (joint '" + m.joint_names[i] + "'";
+  if (m.nv_i[i] > 1) name += ", its DOF " + std::to_string(k - m.idx_v[i]);
+  return name + ")";
+}
+
+// 𝓜 is positive definite iff every pivot of its innovations factorization 𝓜 = (I + K) D (I + K)ᵀ
+// is: D_k = g_kᵀ P_k g_k, with P_k the articulated inertia of DOF k's subtree.  At the neutral
+// configuration every joint motion is the identity, so the frames follow from the placements.
+// Sweep tip to base, P about each body's joint point η_i in world axes, one DOF at a time:
+//   P_i = M_i + Σ_children Φᵀ P_c⁺ Φ,   Φ = [e 0; −d̃ e], d = η_c − η_i,
+//   P⁺ = P − P g gᵀ P / (gᵀ P g) for each of the joint's columns g, last first.
+// D_k is the body's own inertia along g plus what its children's P⁺ add; each is a difference
+// whose terms are bounded by the body's mass moments and by the children's P before their
+// projections.  A pivot below 1e-12 of that size is round-off: the DOF carries no inertia.
+void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const std::vector<int>& spec_of) {
+  std::vector<Mat3> R(m.nbodies);
+  std::vector<Vec3> eta(m.nbodies), s(m.nbodies);
+  std::vector<Mat6> P(m.nbodies), below(m.nbodies, Mat6::Zero());  // below: Σ Φᵀ P_c Φ before projecting
+  for (int i = 0; i < m.nbodies; ++i) {
+    const int p = m.parent[i];
+    const Mat3 Rp = p < 0 ? Mat3::Identity() : R[p];
+    R[i] = Rp * m.placement[i].R;
+    eta[i] = (p < 0 ? Vec3::Zero() : eta[p]) + Rp * m.placement[i].p;
+    s[i] = R[i] * m.com[i];
+    P[i] = SpatialInertia::from_body(m.mass[i], s[i], R[i] * m.inertia[i] * R[i].transpose()).matrix();
+  }
+  std::vector<int> singular;
+  for (int i = m.nbodies - 1; i >= 0; --i) {
+    Mat6X G(6, m.nv_i[i]);
+    joint_subspace(m.joint_type[i], m.axis[i], R[i], R[i], G);  // at the neutral configuration Rb = Rj
+    const Mat6 before = P[i];
+    const double mi = m.mass[i], ms = mi * s[i].norm(), rot = m.inertia[i].trace() + 2.0 * ms * s[i].norm();
+    for (int j = m.nv_i[i] - 1; j >= 0; --j) {
+      const Vec6 g = G.col(j), Pg = P[i] * g;
+      const double gw = g.head<3>().norm(), gv = g.tail<3>().norm();
+      const double size = rot * gw * gw + 2.0 * ms * gw * gv + mi * gv * gv + g.dot(below[i] * g);
+      const double pivot = g.dot(Pg);
+      if (pivot > 1e-12 * size) P[i] -= Pg * Pg.transpose() / pivot;
+      else singular.push_back(m.idx_v[i] + j);
+    }
+    if (const int p = m.parent[i]; p >= 0) {
+      Mat6 Phi = Mat6::Identity();
+      Phi.bottomLeftCorner<3, 3>() = -skew(eta[i] - eta[p]);
+      P[p] += Phi.transpose() * P[i] * Phi;
+      below[p] += Phi.transpose() * before * Phi;
+    }
+  }
+  if (singular.empty()) return;
+  std::sort(singular.begin(), singular.end());
+  std::string got;
+  for (size_t n = 0; n < singular.size() && n < 6; ++n) got += (n ? ", " : "") + dof_name(m, singular[n]);
+  if (singular.size() > 6) got += " and " + std::to_string(singular.size() - 6) + " more";
+  const int first = spec_of[m.dof_body[singular.front()]];
+  refuse(specs[first], first, "mass matrix",
+         "positive definite at the neutral configuration",
+         "singular: no inertia on " + got);
 }
 
 }  // namespace
@@ -157,18 +226,19 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
     m.nv += joint_nv(b.joint);
   }
 
-  // merged bodies must still be valid rigid bodies
+  // each moving body, with everything welded to it, must be a rigid body with mass
   for (int k = 0; k < m.nbodies; ++k) {
-    if (m.merged_names[k].empty()) continue;
-    BodySpec merged;
-    merged.name = m.body_names[k];
-    merged.joint = JointType::Revolute;
-    merged.mass = m.mass[k];
+    BodySpec merged = specs[spec_of[k]];
     merged.inertia = m.inertia[k];
-    if (!std::isfinite(merged.mass) || !merged.inertia.allFinite())
+    if (!std::isfinite(m.mass[k]) || !m.inertia[k].allFinite())
       refuse(merged, spec_of[k], "mass", "welded bodies whose combined inertia a double can hold",
              "an overflow (not finite) merging their masses and inertias about the joint frame");
-    validate(merged, spec_of[k]);
+    if (!(m.mass[k] > 0.0))
+      refuse(merged, spec_of[k], "mass",
+             "a positive mass for a moving body" +
+                 std::string(m.merged_names[k].empty() ? "" : " (with the bodies welded to it)"),
+             fmt(m.mass[k]));
+    check_inertia(merged, spec_of[k], m.mass[k], m.inertia[k]);
   }
 
   // DOF tree for the LᵀDL factorization: λ(k) and the depth (nilpotency of Φ_D)
@@ -189,6 +259,7 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
   }
   m.chain = true;
   for (int k = 0; k < m.nv; ++k) m.chain = m.chain && m.dof_parent[k] == k - 1;
+  check_mass_matrix(m, specs, spec_of);
   return m;
 }
 

@@ -437,7 +437,8 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   sc.text = text;
   sc.name = root["name"] ? rd.string(root["name"], "name") : std::filesystem::path(path).stem().string();
   if (root["description"]) sc.description = root["description"].as<std::string>("");
-  const Vec3 gravity = root["gravity"] ? rd.vec3(root["gravity"], "gravity") : Vec3::Zero();
+  // a URDF robot gets the URDF gravity wherever it enters; bodies written here get none by default
+  const Vec3 gravity = root["gravity"] ? rd.vec3(root["gravity"], "gravity") : root["urdf"] ? urdf_gravity() : Vec3::Zero();
 
   if (root["urdf"] && root["bodies"]) rd.fail(root["urdf"], "urdf", "give either 'bodies' or 'urdf', not both");
   if (root["urdf"]) {
@@ -471,7 +472,7 @@ Scenario load_scenario(const std::string& path, bool free_root, const std::optio
     sc.path = path;
     sc.text = text;
     sc.name = std::filesystem::path(path).stem().string();
-    sc.model = parse_urdf(text, path, free_root, gravity.value_or(Vec3(0, 0, -9.81)));
+    sc.model = parse_urdf(text, path, free_root, gravity.value_or(urdf_gravity()));
     sc.q0 = sc.model.neutral_configuration();
     sc.v0 = VecX::Zero(sc.model.nv);
   } else {

@@ -1,12 +1,17 @@
-// URDF import: urdfdom reads the robot, tinyxml2 the document order of the joints and the line of
-// every link and joint, so that errors name file:line and q keeps the URDF's own order.
+// URDF import: urdfdom reads the robot; urdf_xml.hpp gives the line of every element, so that
+// every error names file:line, and the joints' document order, so that q keeps the URDF's order.
+//
+// What enters the model: links' <inertial> (mass, inertia, origin), joints' type, <origin>,
+// <axis>, <parent> and <child>.  Geometry, materials, transmissions and simulator extensions never
+// reach urdfdom; joints reach it whole (it checks their <limit>, <mimic>, ... ), and soadyn ignores
+// all but the above: none of it changes rigid-body dynamics.
 #include "soadyn/scenario.hpp"
 
+#include "urdf_xml.hpp"
+
 #include <console_bridge/console.h>
-#include <tinyxml2.h>
 #include <urdf_parser/urdf_parser.h>
 
-#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -16,7 +21,7 @@ namespace soadyn {
 
 namespace {
 
-// Collects urdfdom's console messages instead of printing them.
+// Collects urdfdom's error messages instead of printing them.
 class CaptureConsole : public console_bridge::OutputHandler {
  public:
   CaptureConsole() { console_bridge::useOutputHandler(this); }
@@ -24,78 +29,56 @@ class CaptureConsole : public console_bridge::OutputHandler {
   CaptureConsole(const CaptureConsole&) = delete;
   CaptureConsole& operator=(const CaptureConsole&) = delete;
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
-    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) messages += (messages.empty() ? "" : "; ") + text;
+    // the last words of every failure, which add nothing to the ones before them
+    if (text.find("is not initialized correctly") != std::string::npos) return;
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) messages.push_back(text);
   }
-  std::string messages;
+  std::vector<std::string> messages;
 };
 
-struct XmlIndex {
-  std::vector<std::string> joint_order;   // joints in document order
-  std::map<std::string, int> joint_line, link_line;
-};
-
-// The link graph must be a tree before urdfdom sees it: urdfdom leaks the shared_ptr cycle it
-// builds for a cyclic graph, and its message names no line.
-void check_tree(const tinyxml2::XMLElement* robot, const std::string& path) {
-  std::map<std::string, std::pair<std::string, int>> parent_of;  // child link → (parent link, line)
-  for (auto* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
-    const auto* p = e->FirstChildElement("parent");
-    const auto* c = e->FirstChildElement("child");
-    const char* pl = p ? p->Attribute("link") : nullptr;
-    const char* cl = c ? c->Attribute("link") : nullptr;
-    const std::string at = path + ":" + std::to_string(e->GetLineNum()) + ": joint '" + e->Attribute("name") + "'";
-    if (!pl) throw Error(at + ": expected <parent link=\"...\"/>");
-    if (!cl) throw Error(at + ": expected <child link=\"...\"/>");
-    if (std::string(pl) == cl) throw Error(at + ": link '" + std::string(cl) + "' is its own parent");
-    if (parent_of.count(cl))
-      throw Error(at + ": link '" + std::string(cl) + "' already has a parent joint (line " +
-                  std::to_string(parent_of[cl].second) + "); a URDF is a tree");
-    parent_of[cl] = {pl, e->GetLineNum()};
+urdf::ModelInterfaceSharedPtr read_robot(const urdf_xml::Index& idx) {
+  urdf::ModelInterfaceSharedPtr robot;
+  std::vector<std::string> messages;
+  {
+    CaptureConsole console;
+    robot = urdf::parseURDF(idx.dynamics);
+    messages = console.messages;
   }
-  for (const auto& [link, pl] : parent_of) {
-    std::string at = link, chain = link;
-    for (size_t steps = 0; parent_of.count(at); ++steps) {
-      at = parent_of[at].first;
-      chain += " <- " + at;
-      if (at == link || steps > parent_of.size())
-        throw Error(path + ":" + std::to_string(pl.second) + ": URDF: cycle in the links: " + chain);
-    }
-  }
+  // urdfdom 3.0 keeps a link it could not read (a malformed <inertial> becomes zero mass) and
+  // only says so: any error it reports refuses the robot
+  if (!robot || !messages.empty())
+    throw Error(urdf_xml::locate(idx, messages.empty() ? std::vector<std::string>{"urdfdom could not read the robot"}
+                                                       : messages));
+  if (!robot->getRoot())  // urdf_xml::index checked there is one
+    throw Error(idx.path + ":" + std::to_string(idx.robot_line) + ": URDF: no root link");
+  return robot;
 }
 
-XmlIndex index_xml(const std::string& xml, const std::string& path) {
-  tinyxml2::XMLDocument doc;
-  // entity declarations: a URDF needs none, and nested ones expand without bound (an XML bomb)
-  if (const size_t at = xml.find("<!ENTITY"); at != std::string::npos)
-    throw Error(path + ":" + std::to_string(1 + std::count(xml.begin(), xml.begin() + long(at), '\n')) +
-                ": XML: entity declarations (<!ENTITY ...>) are refused: a URDF needs none, and nested ones expand "
-                "without bound (an XML bomb)");
-  if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS)
-    throw Error(path + ":" + std::to_string(doc.ErrorLineNum()) + ": XML: " + doc.ErrorStr());
-  const tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
-  if (!robot) throw Error(path + ":1: URDF: expected a <robot> element at the top");
-  XmlIndex idx;
-  for (auto* e = robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
-    const char* name = e->Attribute("name");
-    const std::string tag = e->Name();
-    if (!name) {
-      if (tag == "link" || tag == "joint")
-        throw Error(path + ":" + std::to_string(e->GetLineNum()) + ": <" + tag + ">: missing attribute 'name'");
-      continue;
-    }
-    if (tag == "joint") {
-      if (idx.joint_line.count(name))
-        throw Error(path + ":" + std::to_string(e->GetLineNum()) + ": joint '" + name + "': duplicate joint name");
-      idx.joint_order.push_back(name);
-      idx.joint_line[name] = e->GetLineNum();
-    } else if (tag == "link") {
-      if (idx.link_line.count(name))
-        throw Error(path + ":" + std::to_string(e->GetLineNum()) + ": link '" + name + "': duplicate link name");
-      idx.link_line[name] = e->GetLineNum();
-    }
+// Parent-first order: the URDF's own joint order when it already is, else depth-first from the
+// root with siblings in document order.
+std::vector<std::string> parent_first(const urdf::ModelInterface& robot, const urdf_xml::Index& idx) {
+  std::vector<std::string> order;
+  std::set<std::string> placed{robot.getRoot()->name};
+  for (const auto& jn : idx.joint_order) {
+    const auto j = robot.getJoint(jn);
+    if (!placed.count(j->parent_link_name)) break;
+    placed.insert(j->child_link_name);
+    order.push_back(jn);
   }
-  check_tree(robot, path);
-  return idx;
+  if (order.size() == idx.joint_order.size()) return order;
+
+  std::map<std::string, std::vector<std::string>> children;  // link → its child joints, in document order
+  for (const auto& jn : idx.joint_order) children[robot.getJoint(jn)->parent_link_name].push_back(jn);
+  order.clear();
+  std::vector<std::string> stack{robot.getRoot()->name};
+  while (!stack.empty()) {
+    const std::string link = stack.back();
+    stack.pop_back();
+    const auto& below = children[link];
+    for (auto it = below.rbegin(); it != below.rend(); ++it) stack.push_back(robot.getJoint(*it)->child_link_name);
+    order.insert(order.end(), below.begin(), below.end());  // a joint follows its parent link's joint
+  }
+  return order;
 }
 
 Placement to_placement(const urdf::Pose& p) {
@@ -105,8 +88,10 @@ Placement to_placement(const urdf::Pose& p) {
   return X;
 }
 
+// <inertial>: mass, centre of mass and inertia about it, turned from the inertial frame (origin
+// rpy) into the link frame: I_link = R I Rᵀ.  No <inertial>: a massless frame.
 void mass_properties(const urdf::Link& link, BodySpec& s) {
-  if (!link.inertial) return;  // massless; allowed only where merged by a fixed joint
+  if (!link.inertial) return;
   const urdf::Inertial& in = *link.inertial;
   const Placement X = to_placement(in.origin);
   Mat3 I;
@@ -116,127 +101,109 @@ void mass_properties(const urdf::Link& link, BodySpec& s) {
   s.inertia = X.R * I * X.R.transpose();
 }
 
-}  // namespace
+BodySpec root_spec(const urdf::Link& root, bool free_root) {
+  BodySpec s;
+  s.name = root.name;
+  s.joint = free_root ? JointType::Free : JointType::Fixed;
+  s.joint_name = free_root ? root.name + "_free" : root.name;
+  mass_properties(root, s);
+  return s;
+}
 
-Model parse_urdf(const std::string& xml, const std::string& path, bool free_root, const Vec3& gravity) {
-  const XmlIndex idx = index_xml(xml, path);
-  urdf::ModelInterfaceSharedPtr robot;
-  std::string messages;
-  {
-    CaptureConsole console;
-    robot = urdf::parseURDF(xml);
-    messages = console.messages;
+// The body below joint j: its joint's type, frame and axis, and its link's mass properties.
+BodySpec joint_spec(const urdf::Joint& j, const urdf::Link& link, const std::map<std::string, int>& link_index,
+                    bool free_root, const urdf_xml::Index& idx) {
+  BodySpec s;
+  s.name = link.name;
+  s.joint_name = j.name;
+  s.parent = link_index.at(j.parent_link_name);
+  s.placement = to_placement(j.parent_to_joint_origin_transform);
+  s.axis = Vec3(j.axis.x, j.axis.y, j.axis.z);
+  switch (j.type) {
+    case urdf::Joint::REVOLUTE:
+    case urdf::Joint::CONTINUOUS: s.joint = JointType::Revolute; break;
+    case urdf::Joint::PRISMATIC: s.joint = JointType::Prismatic; break;
+    case urdf::Joint::PLANAR: s.joint = JointType::Planar; break;  // the axis is the plane's normal
+    case urdf::Joint::FIXED: s.joint = JointType::Fixed; break;  // its <axis>, if any, means nothing
+    case urdf::Joint::FLOATING:
+      // a floating joint frees a body hung on the world-welded root: its q is the pose in the world
+      if (s.parent != 0 || free_root)
+        throw Error(idx.at_joint(j.name) + ": floating joints are supported only on a child of the root link, "
+                                           "with the root welded to the world (no --free-root)");
+      if (!s.placement.R.isIdentity(1e-12) || !s.placement.p.isZero(0.0))
+        throw Error(idx.at_joint(j.name) +
+                    ": origin: expected none for a floating joint (its q is the body's pose in the world)");
+      s.joint = JointType::Free;
+      s.parent = -1;
+      s.placement = Placement{};
+      break;
+    default:
+      throw Error(idx.at_joint(j.name) + ": type: expected revolute, continuous, prismatic, planar, fixed or floating");
   }
-  if (!robot) throw Error(path + ": URDF: " + (messages.empty() ? "urdfdom could not read the robot" : messages));
-  const urdf::LinkConstSharedPtr root = robot->getRoot();
-  if (!root) throw Error(path + ": URDF: no root link");
+  if (joint_traits(s.joint).has_axis) {
+    if (!(s.axis.norm() > 1e-12) || !std::isfinite(s.axis.squaredNorm())) {
+      char got[96];
+      std::snprintf(got, sizeof got, "[%g, %g, %g]", s.axis.x(), s.axis.y(), s.axis.z());
+      throw Error(idx.at_joint(j.name) + ": axis: expected a non-zero axis of norm between 1e-12 and 1e150, got " + got);
+    }
+    s.axis.normalize();
+  }
+  mass_properties(link, s);
+  return s;
+}
 
-  auto at_link = [&](const std::string& link) {
-    auto it = idx.link_line.find(link);
-    return path + (it != idx.link_line.end() ? ":" + std::to_string(it->second) : std::string()) + ": link '" + link + "'";
-  };
-  auto at_joint = [&](const std::string& joint) {
-    auto it = idx.joint_line.find(joint);
-    return path + (it != idx.joint_line.end() ? ":" + std::to_string(it->second) : std::string()) + ": joint '" + joint + "'";
-  };
+// A moving body is its link with every link welded to it: it needs mass somewhere in that group
+// (the links' own <inertial> may be missing).  Said in the URDF's words before Model::build.
+void check_moving_mass(const std::vector<BodySpec>& specs, bool free_root, const urdf_xml::Index& idx) {
+  std::vector<int> group(specs.size());  // the moving spec each spec is welded into, -1 = the world
+  std::map<int, bool> has_mass;          // (a negative or NaN mass is Model::build's to refuse)
+  for (int i = 0; i < int(specs.size()); ++i) {
+    const BodySpec& s = specs[i];
+    group[i] = s.joint != JointType::Fixed ? i : s.parent < 0 ? -1 : group[s.parent];
+    if (group[i] >= 0) has_mass[group[i]] = has_mass[group[i]] || s.mass != 0.0;
+  }
+  for (const auto& [g, any] : has_mass) {
+    if (any) continue;
+    const BodySpec& s = specs[g];
+    const bool root = g == 0 && free_root;
+    throw Error(idx.at_link(s.name) + ": inertial: expected mass properties for " +
+                (root ? std::string("a free root (--free-root)")
+                      : "a link that moves (joint '" + s.joint_name + "' is " + std::string(to_string(s.joint)) + ")") +
+                ", on it or on a link welded to it");
+  }
+}
 
-  // parent-first order: the URDF's own joint order when it already is, else depth-first from the root
-  std::vector<std::string> order;
-  {
-    std::set<std::string> placed{root->name};
-    bool parent_first = true;
-    for (const auto& jn : idx.joint_order) {
-      const auto j = robot->getJoint(jn);
-      if (!j || !placed.count(j->parent_link_name)) {
-        parent_first = false;
-        break;
-      }
-      placed.insert(j->child_link_name);
-      order.push_back(jn);
-    }
-    if (!parent_first) {
-      order.clear();
-      std::vector<std::string> stack{root->name};
-      while (!stack.empty()) {
-        const std::string link = stack.back();
-        stack.pop_back();
-        std::vector<std::string> children;  // in document order
-        for (const auto& jn : idx.joint_order) {
-          const auto j = robot->getJoint(jn);
-          if (j && j->parent_link_name == link) children.push_back(jn);
-        }
-        for (auto it = children.rbegin(); it != children.rend(); ++it) stack.push_back(robot->getJoint(*it)->child_link_name);
-        for (const auto& jn : children) order.push_back(jn);  // a joint follows its parent link's joint
-      }
-    }
-  }
-
-  std::vector<BodySpec> specs;
-  std::vector<std::string> where;  // location of each spec, for messages
-  std::map<std::string, int> link_index;
-  {
-    BodySpec s;
-    s.name = root->name;
-    s.joint = free_root ? JointType::Free : JointType::Fixed;
-    s.joint_name = free_root ? root->name + "_free" : root->name;
-    mass_properties(*root, s);
-    link_index[root->name] = 0;
-    specs.push_back(s);
-    where.push_back(at_link(root->name));
-  }
-  for (const auto& jn : order) {
-    const auto j = robot->getJoint(jn);
-    const auto link = robot->getLink(j->child_link_name);
-    BodySpec s;
-    s.name = link->name;
-    s.joint_name = j->name;
-    s.parent = link_index.at(j->parent_link_name);
-    s.placement = to_placement(j->parent_to_joint_origin_transform);
-    s.axis = Vec3(j->axis.x, j->axis.y, j->axis.z);
-    switch (j->type) {
-      case urdf::Joint::REVOLUTE:
-      case urdf::Joint::CONTINUOUS: s.joint = JointType::Revolute; break;
-      case urdf::Joint::PRISMATIC: s.joint = JointType::Prismatic; break;
-      case urdf::Joint::FIXED: s.joint = JointType::Fixed; break;
-      case urdf::Joint::FLOATING: {
-        // a floating joint frees a body hung on the world-welded root: its q is the pose in the world
-        if (s.parent != 0 || free_root)
-          throw Error(at_joint(jn) + ": floating joints are supported only on a child of the root link, "
-                                     "with the root welded to the world (no --free-root)");
-        if (!s.placement.R.isIdentity(1e-12) || !s.placement.p.isZero(0.0))
-          throw Error(at_joint(jn) + ": origin: expected none for a floating joint (its q is the body's pose in the world)");
-        s.joint = JointType::Free;
-        s.parent = -1;
-        s.placement = Placement{};
-        break;
-      }
-      default:
-        throw Error(at_joint(jn) + ": type: expected revolute, continuous, prismatic, fixed or floating; "
-                                   "planar joints are not supported");
-    }
-    if (s.joint == JointType::Revolute || s.joint == JointType::Prismatic) {
-      if (!(s.axis.norm() > 1e-12) || !std::isfinite(s.axis.squaredNorm())) {
-        char got[96];
-        std::snprintf(got, sizeof got, "[%g, %g, %g]", s.axis.x(), s.axis.y(), s.axis.z());
-        throw Error(at_joint(jn) + ": axis: expected a non-zero axis of norm between 1e-12 and 1e150, got " + got);
-      }
-      s.axis.normalize();
-    }
-    mass_properties(*link, s);
-    if (s.joint != JointType::Fixed && !link->inertial)
-      throw Error(at_link(link->name) + ": inertial: expected mass properties for a link that moves (joint '" +
-                  jn + "' is " + std::string(to_string(s.joint)) + ")");
-    link_index[link->name] = int(specs.size());
-    specs.push_back(s);
-    where.push_back(at_link(link->name));
-  }
-  if (free_root && !root->inertial)
-    throw Error(at_link(root->name) + ": inertial: expected mass properties for a free root (--free-root)");
+// Model::build's refusals, located at the joint's line for what the joint says (axis, placement,
+// joint, the mass matrix's DOFs) and at the link's line for mass properties.
+Model build_located(const std::vector<BodySpec>& specs, const Vec3& gravity, const urdf_xml::Index& idx) {
   try {
     return Model::build(specs, gravity);
   } catch (const ModelError& e) {
-    throw Error(where.at(e.spec) + ": " + e.detail);
+    const BodySpec& s = specs.at(e.spec);
+    const std::string field = e.detail.substr(0, e.detail.find(':'));
+    const bool joint_field = field == "axis" || field == "joint" || field.starts_with("placement") ||
+                             field == "mass matrix";
+    const bool has_joint = idx.joints.count(s.joint_name) > 0;
+    throw Error((joint_field && has_joint ? idx.at_joint(s.joint_name) : idx.at_link(s.name)) + ": " + e.detail);
   }
+}
+
+}  // namespace
+
+Model parse_urdf(const std::string& xml, const std::string& path, bool free_root, const Vec3& gravity) {
+  const urdf_xml::Index idx = urdf_xml::index(xml, path);
+  const urdf::ModelInterfaceSharedPtr robot = read_robot(idx);
+
+  std::vector<BodySpec> specs{root_spec(*robot->getRoot(), free_root)};
+  std::map<std::string, int> link_index{{robot->getRoot()->name, 0}};
+  for (const auto& jn : parent_first(*robot, idx)) {
+    const auto j = robot->getJoint(jn);
+    const auto link = robot->getLink(j->child_link_name);
+    link_index[link->name] = int(specs.size());
+    specs.push_back(joint_spec(*j, *link, link_index, free_root, idx));
+  }
+  check_moving_mass(specs, free_root, idx);
+  return build_located(specs, gravity, idx);
 }
 
 }  // namespace soadyn

@@ -54,7 +54,7 @@ TEST(ModelBuild, RefusesAsymmetricInertia) {
 TEST(ModelBuild, RefusesIndefiniteInertia) {
   auto specs = std::vector{body("a", -1)};
   specs[0].inertia = Vec3(0.1, -0.2, 0.25).asDiagonal();
-  EXPECT_THAT(refusal(specs), HasSubstr("inertia: expected a positive definite matrix"));
+  EXPECT_THAT(refusal(specs), HasSubstr("inertia: expected a positive semidefinite matrix"));
 }
 
 TEST(ModelBuild, RefusesTriangleInequalityViolation) {

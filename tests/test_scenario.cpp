@@ -319,12 +319,12 @@ TEST(BadScenario, DuplicateNames) {
 
 TEST(BadScenario, NonSpdInertiaAndTriangleInequality) {
   EXPECT_THAT(error_of(with(kGood, "inertia: [0.1, 0.1, 0.1]\n  - name: b", "inertia: [0.1, -0.1, 0.1]\n  - name: b")),
-              HasSubstr("scene.yaml:3:5: body 'a': inertia: expected a positive definite matrix"));
+              HasSubstr("scene.yaml:3:5: body 'a': inertia: expected a positive semidefinite matrix"));
   EXPECT_THAT(error_of(with(kGood, "inertia: [0.1, 0.1, 0.1]\n  - name: b", "inertia: [0.1, 0.1, 0.5]\n  - name: b")),
               HasSubstr("triangle inequality"));
   EXPECT_THAT(error_of(with(kGood, "inertia: [0.1, 0.1, 0.1]\n  - name: b",
                             "inertia: {ixx: 0.1, iyy: 0.1, izz: 0.1, ixy: 0.2}\n  - name: b")),
-              HasSubstr("positive definite"));
+              HasSubstr("positive semidefinite"));
 }
 
 TEST(BadScenario, ZeroOrNegativeMass) {
@@ -385,7 +385,7 @@ TEST(BadUrdf, MalformedXmlHasALine) {
 
 TEST(BadUrdf, SeveralRoots) {
   const std::string xml = "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/></robot>";
-  EXPECT_THAT(urdf_error_of(xml), HasSubstr("robot.urdf: URDF:"));
+  EXPECT_THAT(urdf_error_of(xml), HasSubstr("robot.urdf:1: link 'b': a second root link (the first is 'a', line 1)"));
 }
 
 TEST(BadUrdf, MovingLinkWithoutMassAndBadInertia) {
@@ -417,8 +417,8 @@ TEST(BadUrdf, UnsupportedJointType) {
   const std::string xml =
       "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"><inertial><mass value=\"1\"/>"
       "<inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link>\n"
-      "<joint name=\"j\" type=\"planar\"><parent link=\"a\"/><child link=\"b\"/></joint>\n</robot>";
-  EXPECT_THAT(urdf_error_of(xml), HasSubstr("robot.urdf:4: joint 'j': type: expected revolute"));
+      "<joint name=\"j\" type=\"spherical\"><parent link=\"a\"/><child link=\"b\"/></joint>\n</robot>";
+  EXPECT_THAT(urdf_error_of(xml), HasSubstr("robot.urdf:4: joint 'j': URDF: Joint [j] has no known type [spherical]"));
 }
 
 }  // namespace

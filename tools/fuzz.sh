@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Build the libFuzzer targets with Debian clang (address + undefined sanitizers) in build-fuzz/,
-# or run one of them for a bounded time on a seed corpus made from scenarios/ and tests/fuzz/seeds/.
+# or run one of them for a bounded time on a seed corpus made from scenarios/ (scenario) or
+# tests/fuzz/seeds/ and tests/data/urdf/ (urdf).
 #   tools/fuzz.sh build
 #   tools/fuzz.sh run scenario|urdf SECONDS
 # Exits 77 (skipped) when clang with libFuzzer is not installed.
@@ -22,7 +23,7 @@ case "${1:-}" in
     target=$2 seconds=$3
     corpus=build-fuzz/corpus_$target
     rm -rf "$corpus" && mkdir -p "$corpus"
-    if [[ $target == scenario ]]; then cp scenarios/*.yaml "$corpus/"; else cp tests/fuzz/seeds/*.urdf "$corpus/"; fi
+    if [[ $target == scenario ]]; then cp scenarios/*.yaml "$corpus/"; else cp tests/fuzz/seeds/*.urdf tests/data/urdf/*.urdf "$corpus/"; fi
     mkdir -p build-fuzz/findings_$target
     log=build-fuzz/fuzz_$target.log
     status=0

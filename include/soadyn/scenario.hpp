@@ -28,12 +28,16 @@ struct Scenario {
 };
 
 // Loads a .yaml scenario or a .urdf (then: zero initial state, default settings, no inputs).
-// `gravity` overrides the file's gravity; for a URDF the default is (0, 0, −9.81).
+// `gravity` overrides the file's gravity; a URDF's default is urdf_gravity().
 Scenario load_scenario(const std::string& path, bool free_root = false,
                        const std::optional<Vec3>& gravity = std::nullopt);
 
 // Parses scenario text; `path` names it in messages and anchors a relative `urdf:`.
 Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root = false);
+
+// The gravity of a URDF robot wherever it enters (a .urdf given to load_scenario, `urdf:` in a
+// scenario), unless the scenario's `gravity:` or the caller says otherwise: m/s², z up.
+inline Vec3 urdf_gravity() { return Vec3(0, 0, -9.81); }
 
 // URDF import.  Fixed joints are merged; the root link is welded to the world unless the URDF
 // has a floating joint or free_root is set.
