@@ -273,7 +273,7 @@ def main():
     tmp = tempfile.mkdtemp(prefix="soadyn-view-test-")
     try:
         scenes = sorted(os.path.join(SOURCE, "scenarios", f) for f in os.listdir(os.path.join(SOURCE, "scenarios"))
-                        if f.endswith(".yaml"))
+                        if f.endswith(".yaml") and not f.endswith(".sweep.yaml"))
         scenes.append(os.path.join(SOURCE, "tests", "data", "view_visuals.yaml"))
         pages = {}
         for sc in scenes:
