@@ -64,7 +64,7 @@ MUTATIONS = [
      "/solver@t_end holds the output interval",
      gtest("test_h5log", "Hdf5.*")),
     (4, "velocity-product-term", "src/kinematics.cpp",
-     "wp.cross(ddot + Gv.tail<3>());", "wp.cross(Gv.tail<3>() - ddot);",
+     "data.coriolis.col(i).tail<3>() += wp.cross(ddot);", "data.coriolis.col(i).tail<3>() -= wp.cross(ddot);",
      "a sign slip in a_i's ω_p × ḋ_i: bias and every route's q̈ wrong, yet M q̈ + bias = τ still holds",
      CLI_ROUTES),
     (4, "sparse-route-solve", "src/dynamics.cpp",
