@@ -71,6 +71,42 @@ inline std::vector<std::string> read_strings(hid_t file, const std::string& path
   return out;
 }
 
+// a scalar dataset: a string (fixed length, null-padded) or a number; "(missing)" / NaN if absent
+inline std::string scalar_text(hid_t file, const std::string& path) {
+  const hid_t d = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  if (d < 0) return "(missing)";
+  const hid_t type = H5Dget_type(d);
+  std::string s = "(not a string)";
+  if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) <= 0) {
+    s.assign(H5Tget_size(type), '\0');
+    H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data());
+    s = s.substr(0, s.find('\0'));
+  }
+  H5Tclose(type);
+  H5Dclose(d);
+  return s;
+}
+
+inline double scalar_number(hid_t file, const std::string& path) {
+  double x = std::numeric_limits<double>::quiet_NaN();
+  const hid_t d = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  if (d < 0) return x;
+  H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &x);
+  H5Dclose(d);
+  return x;
+}
+
+// the type class of a dataset (H5T_INTEGER, H5T_FLOAT, H5T_STRING; H5T_NO_CLASS if absent)
+inline H5T_class_t dataset_class(hid_t file, const std::string& path) {
+  const hid_t d = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  if (d < 0) return H5T_NO_CLASS;
+  const hid_t type = H5Dget_type(d);
+  const H5T_class_t c = H5Tget_class(type);
+  H5Tclose(type);
+  H5Dclose(d);
+  return c;
+}
+
 // attribute `name` of the object at `path`: a string, or a number; "(missing)" / NaN if absent
 inline std::string string_attribute(hid_t file, const std::string& path, const std::string& name) {
   const hid_t a = H5Aopen_by_name(file, path.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);

@@ -56,6 +56,20 @@ class FileCheck {
     EXPECT_EQ(read_strings(f_, path), expected) << path;
   }
 
+  // scalar datasets: a string, or a number stored as an integer or a double
+  void scalar(const std::string& path, const std::string& expected) {
+    seen_.insert(path);
+    EXPECT_EQ(dataset_class(f_, path), H5T_STRING) << path;
+    EXPECT_EQ(scalar_text(f_, path), expected) << path;
+  }
+  void scalar(const std::string& path, double expected, H5T_class_t type, double tol = -1) {
+    seen_.insert(path);
+    EXPECT_EQ(dataset_class(f_, path), type) << path;
+    const double got = scalar_number(f_, path), t = tol < 0 ? tol_ : tol;
+    EXPECT_LE(std::abs(got - expected), t * std::max(1.0, std::abs(expected))) << path << " = " << got << ", expected "
+                                                                             << expected;
+  }
+
   void text(const std::string& path, const std::string& name, const std::string& expected) {
     seen_.insert(path + "@" + name);
     EXPECT_EQ(string_attribute(f_, path, name), expected) << path << "@" << name;
@@ -89,15 +103,17 @@ class FileCheck {
   std::set<std::string> seen_;
 };
 
-// the whole layout of a run file (h5log.hpp) against the run's samples, summary and settings
+// the whole layout of a run file (h5log.hpp, layout_version 2) against the run's samples, summary
+// and settings
 void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& s, const std::vector<Sample>& x,
                     const RunSummary& r, const std::string& version, bool same_process) {
   const Model& m = sc.model;
   const size_t T = x.size();
   c.object("/");
-  c.text("/", "scenario", sc.text);
   c.text("/", "scenario_path", sc.path);
   c.text("/", "soadyn_version", version);
+  c.number("/", "layout_version", 2, H5T_INTEGER);
+  c.scalar("/scenario", sc.text);
 
   c.object("/model");
   c.number("/model", "nq", m.nq, H5T_INTEGER);
@@ -105,25 +121,42 @@ void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& 
   c.strings("/model/joint_names", m.joint_names);
   c.series("/model/parents", size_t(m.nbodies), 0, [&](size_t i, int) { return double(m.parent[i]); });
 
+  // fixed at the start: attributes
   c.object("/solver");
   c.text("/solver", "method", s.method);
   c.text("/solver", "dynamics", s.dynamics);
-  c.text("/solver", "status", r.status);
-  c.text("/solver", "quaternion_handling", r.quaternion_handling);
   c.number("/solver", "rtol", s.rtol, H5T_FLOAT);
   c.number("/solver", "atol", s.atol, H5T_FLOAT);
   c.number("/solver", "dt", s.dt, H5T_FLOAT);
   c.number("/solver", "t_end", s.t_end, H5T_FLOAT);
   c.number("/solver", "output_dt", r.output_dt, H5T_FLOAT);
-  c.number("/solver", "t_reached", r.t_reached, H5T_FLOAT);
-  c.number("/solver", "steps", double(r.stats.steps), H5T_INTEGER);
-  c.number("/solver", "rhs_evals", double(r.stats.rhs_evals), H5T_INTEGER);
-  c.number("/solver", "jac_evals", double(r.stats.jac_evals), H5T_INTEGER);
-  c.number("/solver", "error_test_failures", double(r.stats.error_test_failures), H5T_INTEGER);
-  c.number("/solver", "nonlinear_iterations", double(r.stats.nonlinear_iterations), H5T_INTEGER);
+  // rewritten at every flush: scalar datasets, here as the run ended
+  c.scalar("/solver/status", r.status);
+  c.scalar("/solver/quaternion_handling", r.quaternion_handling);
+  c.scalar("/solver/t_reached", r.t_reached, H5T_FLOAT);
+  c.scalar("/solver/steps", double(r.stats.steps), H5T_INTEGER);
+  c.scalar("/solver/rhs_evals", double(r.stats.rhs_evals), H5T_INTEGER);
+  c.scalar("/solver/jac_evals", double(r.stats.jac_evals), H5T_INTEGER);
+  c.scalar("/solver/error_test_failures", double(r.stats.error_test_failures), H5T_INTEGER);
+  c.scalar("/solver/nonlinear_iterations", double(r.stats.nonlinear_iterations), H5T_INTEGER);
   // CPU time: exact when this process wrote the file; from another process, only plausible
-  c.number("/solver", "cpu_seconds", same_process ? r.cpu_seconds : 30.0, H5T_FLOAT, same_process ? 0.0 : 1.0);
+  c.scalar("/solver/cpu_seconds", same_process ? r.cpu_seconds : 30.0, H5T_FLOAT, same_process ? 0.0 : 1.0);
 
+  // /samples holds every number; the series are views of its columns
+  std::vector<std::vector<double>> rows;
+  for (const Sample& k : x) {
+    std::vector<double> row{k.t};
+    for (const VecX* v : {&k.q, &k.qd, &k.qdd}) row.insert(row.end(), v->data(), v->data() + v->size());
+    row.insert(row.end(), {k.kinetic, k.potential, k.total});
+    row.insert(row.end(), k.linear.data(), k.linear.data() + 3);
+    row.insert(row.end(), k.angular.data(), k.angular.data() + 3);
+    rows.push_back(row);
+  }
+  const int W = 1 + m.nq + 2 * m.nv + 3 + 6;
+  c.series("/samples", T, W, [&](size_t k, int j) { return rows[k][size_t(j)]; });
+  c.text("/samples", "columns",
+         "time 1, q " + std::to_string(m.nq) + ", qd " + std::to_string(m.nv) + ", qdd " + std::to_string(m.nv) +
+             ", energy/kinetic 1, energy/potential 1, energy/total 1, momentum/linear 3, momentum/angular 3");
   c.series("/time", T, 0, [&](size_t k, int) { return x[k].t; });
   c.series("/q", T, m.nq, [&](size_t k, int j) { return x[k].q(j); });
   c.series("/qd", T, m.nv, [&](size_t k, int j) { return x[k].qd(j); });
