@@ -7,6 +7,7 @@
 #include "soadyn/kinematics.hpp"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <cstdint>
@@ -32,7 +33,7 @@ inline std::uint64_t seed_of(const std::uint8_t* data, std::size_t size) {
   std::abort();
 }
 
-// 𝓜 finite, symmetric and positive definite (a Cholesky factor exists) at neutral and at three
+// 𝓜 finite, symmetric and positive definite (up to rounding) at neutral and at three
 // configurations: each coordinate moved by up to ±π, quaternions renormalized
 inline void check_mass_matrix(const Model& m, std::uint64_t seed) {
   Data d(m);
@@ -49,8 +50,13 @@ inline void check_mass_matrix(const Model& m, std::uint64_t seed) {
     const MatX& M = d.Mass;
     if (!M.allFinite()) trap("not finite", config, M);
     if (!M.isApprox(M.transpose(), 1e-12)) trap("not symmetric", config, M);
-    const Eigen::LLT<MatX> llt(M);
-    if (llt.info() != Eigen::Success) trap("not positive definite (no Cholesky factor)", config, M);
+    // positive definite up to rounding: a Cholesky factor, or else no eigenvalue below −1e-9 λ_max
+    // (a model with absurd scales, a 1e62 m offset, may be singular to working precision — a
+    // validation matter — but never indefinite)
+    if (Eigen::LLT<MatX>(M).info() == Eigen::Success) continue;
+    const Eigen::VectorXd l = Eigen::SelfAdjointEigenSolver<MatX>(M, Eigen::EigenvaluesOnly).eigenvalues();
+    if (!(l.minCoeff() >= -1e-9 * std::max(l.maxCoeff(), 0.0)) || !(l.maxCoeff() > 0))
+      trap("not positive definite (an eigenvalue below -1e-9 of the largest)", config, M);
   }
 }
 
