@@ -58,6 +58,37 @@ TEST(NoteExamples, Example1PendulumOnCart) {
   }
 }
 
+// The positions and inertias the closed forms of Examples 2–4 need, computed here from each
+// example's geometry (axes, joint placements, centres of mass) with Rodrigues' formula and the
+// quaternion's matrix — never from the Data under test.
+Mat3 rodrigues(const Vec3& unit_axis, double angle) {
+  const Mat3 K = skew(unit_axis);
+  return Mat3::Identity() + std::sin(angle) * K + (1 - std::cos(angle)) * K * K;
+}
+
+Mat3 quaternion_matrix(double w, double x, double y, double z) {
+  const double n = std::sqrt(w * w + x * x + y * y + z * z);
+  w /= n, x /= n, y /= n, z /= n;
+  Mat3 R;
+  R << 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),  //
+      2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),   //
+      2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y);
+  return R;
+}
+
+// body j of an example at one configuration, inertial: η_j, s_j, r_j = η_j + s_j, I_j about the cm
+struct Pose {
+  Mat3 R;
+  Vec3 eta, s, r;
+  Mat3 I;
+  double m;
+};
+
+Pose pose(const BodySpec& b, const Mat3& R, const Vec3& eta) {
+  const Vec3 s = R * b.com;
+  return {R, eta, s, eta + s, R * b.inertia * R.transpose(), b.mass};
+}
+
 // Example 2, double pendulum about e_x: (N6) expanded, r1 = s1, r2 = d2 + s2
 TEST(NoteExamples, Example2DoublePendulum) {
   Rng rng(2);
@@ -67,10 +98,13 @@ TEST(NoteExamples, Example2DoublePendulum) {
     b2.placement.p = rng.vec3(-1, 1);
     const Model model = Model::build({b1, b2});
     Data data(model);
-    const Computed c = both(model, data, Eigen::Vector2d(rng.uniform(-4, 4), rng.uniform(-4, 4)));
-    const Mat3 I1 = inertia_cm(data, 0), I2 = inertia_cm(data, 1);
-    const Vec3 s1 = data.s.col(0), s2 = data.s.col(1), d2 = data.d.col(1);
-    const Mat3 r1 = skew(s1), r2 = skew(d2 + s2), S2 = skew(s2);
+    const double th1 = rng.uniform(-4, 4), th2 = rng.uniform(-4, 4);
+    const Computed c = both(model, data, Eigen::Vector2d(th1, th2));
+    // η_1 = 0, η_2 = d_2 = C_1 p_2; C_1 = rot(e_x, θ_1), C_2 = C_1 rot(e_x, θ_2)
+    const Mat3 C1 = rodrigues(ex, th1), C2 = C1 * rodrigues(ex, th2);
+    const Pose p1 = pose(b1, C1, Vec3::Zero()), p2 = pose(b2, C2, C1 * b2.placement.p);
+    const Mat3 r1 = skew(p1.r), r2 = skew(p2.r), S2 = skew(p2.s);
+    const Mat3 &I1 = p1.I, &I2 = p2.I;
     const double m1 = b1.mass, m2 = b2.mass;
     MatX expected(2, 2);
     expected << ex.dot((I1 + I2 - m1 * r1 * r1 - m2 * r2 * r2) * ex), ex.dot((I2 - m2 * r2 * S2) * ex),
@@ -99,17 +133,20 @@ TEST(NoteExamples, Example3SatelliteWithTwoArrays) {
     q.tail<2>() = Eigen::Vector2d(rng.uniform(-4, 4), rng.uniform(-4, 4));
     const Computed c = both(model, data, q);
 
-    const Vec3 e = data.R[0] * ex;
+    // C_1 from the quaternion (w, x, y, z); η_1 = the bus position; d_j = C_1 p_j;
+    // C_j = C_1 rot(e_x, θ_j).  Positions relative to η_1.
+    const Mat3 C1 = quaternion_matrix(q(3), q(4), q(5), q(6));
+    const std::vector<Pose> P = {pose(bus, C1, Vec3::Zero()),
+                                 pose(a2, C1 * rodrigues(ex, q(7)), C1 * a2.placement.p),
+                                 pose(a3, C1 * rodrigues(ex, q(8)), C1 * a3.placement.p)};
+    const Vec3 e = C1 * ex;
     double mbar = 0.0;
     Vec3 h = Vec3::Zero();
     Mat3 I00 = Mat3::Zero();
-    std::vector<Vec3> r(3);
     for (int j = 0; j < 3; ++j) {
-      r[j] = data.r.col(j) - data.eta.col(0);  // r_1 = s_1, r_j = d_j + s_j
-      const double mj = model.mass[j];
-      I00 += inertia_cm(data, j) - mj * skew(r[j]) * skew(r[j]);
-      mbar += mj;
-      h += mj * r[j];
+      I00 += P[j].I - P[j].m * skew(P[j].r) * skew(P[j].r);  // r_1 = s_1, r_j = d_j + s_j
+      mbar += P[j].m;
+      h += P[j].m * P[j].r;
     }
     const Vec3 cbar = h / mbar;
     MatX expected = MatX::Zero(8, 8);
@@ -118,8 +155,8 @@ TEST(NoteExamples, Example3SatelliteWithTwoArrays) {
     expected.block<3, 3>(3, 0) = -mbar * skew(cbar);
     expected.block<3, 3>(3, 3) = mbar * Mat3::Identity();
     for (int j = 1; j < 3; ++j) {
-      const double mj = model.mass[j];
-      const Mat3 Ij = inertia_cm(data, j), S = skew(data.s.col(j)), Rj = skew(r[j]);
+      const double mj = P[j].m;
+      const Mat3 &Ij = P[j].I, S = skew(P[j].s), Rj = skew(P[j].r);
       expected.block<3, 1>(0, 5 + j) = (Ij - mj * Rj * S) * e;
       expected.block<3, 1>(3, 5 + j) = -mj * S * e;
       expected.block<1, 3>(5 + j, 0) = e.transpose() * (Ij - mj * S * Rj);
@@ -135,17 +172,25 @@ TEST(NoteExamples, Example3SatelliteWithTwoArrays) {
 // written e_x, but they turn with θ_1 about e_z.  (P7) holds with e_x read as the inertial image
 // of body 1's x axis, C_1 e_x = g_2 = g_3; with the literal inertial e_x it holds only at
 // θ_1 = 0 (mod π).  We test the corrected reading, and that the literal one fails elsewhere.
-MatX example4_closed_form(const Model& model, const Data& data, const Vec3& e) {
-  const Vec3 eta2 = data.eta.col(1);  // η_2 = d_2 (η_1 = 0)
-  std::vector<Vec3> r(3);
-  std::vector<Mat3> I(3);
-  for (int j = 0; j < 3; ++j) {
-    r[j] = data.r.col(j);
-    I[j] = inertia_cm(data, j);
-  }
-  auto m = [&](int j) { return model.mass[j]; };
+struct Arm {
+  BodySpec b1, b2, b3;
+};
+
+// C_1 = rot(e_z, θ_1), C_2 = C_1 rot(e_x, θ_2), C_3 = C_2 rot(e_x, θ_3); η_1 = 0, η_2 = C_1 p_2,
+// η_3 = η_2 + C_2 p_3
+std::vector<Pose> arm_poses(const Arm& a, const Vec3& q) {
+  const Mat3 C1 = rodrigues(ez, q(0)), C2 = C1 * rodrigues(ex, q(1)), C3 = C2 * rodrigues(ex, q(2));
+  const Vec3 eta2 = C1 * a.b2.placement.p, eta3 = eta2 + C2 * a.b3.placement.p;
+  return {pose(a.b1, C1, Vec3::Zero()), pose(a.b2, C2, eta2), pose(a.b3, C3, eta3)};
+}
+
+MatX example4_closed_form(const std::vector<Pose>& P, const Vec3& e) {
+  const Vec3 eta2 = P[1].eta;  // η_2 = d_2 (η_1 = 0)
+  auto m = [&](int j) { return P[j].m; };
   auto sk = [](const Vec3& v) { return skew(v); };
-  const Mat3 S3 = sk(data.s.col(2)), E2 = sk(eta2);
+  std::vector<Vec3> r = {P[0].r, P[1].r, P[2].r};
+  std::vector<Mat3> I = {P[0].I, P[1].I, P[2].I};
+  const Mat3 S3 = sk(P[2].s), E2 = sk(eta2);
   MatX M(3, 3);
   Mat3 A11 = Mat3::Zero(), A12 = Mat3::Zero(), A22 = Mat3::Zero(), A21 = Mat3::Zero();
   for (int j = 0; j < 3; ++j) A11 += I[j] - m(j) * sk(r[j]) * sk(r[j]);
@@ -166,37 +211,39 @@ MatX example4_closed_form(const Model& model, const Data& data, const Vec3& e) {
   return M;
 }
 
+Arm random_arm(Rng& rng) {
+  Arm a{random_body(rng, "base", -1, JointType::Revolute, ez), random_body(rng, "upper_arm", 0, JointType::Revolute, ex),
+        random_body(rng, "forearm", 1, JointType::Revolute, ex)};
+  a.b2.placement.p = rng.vec3(-1, 1);
+  a.b3.placement.p = rng.vec3(-1, 1);
+  return a;
+}
+
 TEST(NoteExamples, Example4ThreeLinkArm) {
   Rng rng(4);
   int literal_reading_failures = 0;
   for (int t = 0; t < kTrials; ++t) {
-    auto b1 = random_body(rng, "base", -1, JointType::Revolute, ez);
-    auto b2 = random_body(rng, "upper_arm", 0, JointType::Revolute, ex);
-    auto b3 = random_body(rng, "forearm", 1, JointType::Revolute, ex);
-    b2.placement.p = rng.vec3(-1, 1);
-    b3.placement.p = rng.vec3(-1, 1);
-    const Model model = Model::build({b1, b2, b3});
+    const Arm arm = random_arm(rng);
+    const Model model = Model::build({arm.b1, arm.b2, arm.b3});
     Data data(model);
     const Eigen::Vector3d q(rng.uniform(0.2, 2.9), rng.uniform(-4, 4), rng.uniform(-4, 4));
     const Computed c = both(model, data, q);
-    const Vec3 g2 = data.R[0] * ex;  // C_1 e_x
-    const MatX expected = example4_closed_form(model, data, g2);
+    const std::vector<Pose> P = arm_poses(arm, q);
+    const Vec3 g2 = P[0].R * ex;  // C_1 e_x
+    const MatX expected = example4_closed_form(P, g2);
     ASSERT_TRUE(near_rel(c.literal, expected, 1e-12)) << "trial " << t;
     ASSERT_TRUE(near_rel(c.composite, expected, 1e-12)) << "trial " << t;
-    if (!near_rel(c.composite, example4_closed_form(model, data, ex), 1e-6)) ++literal_reading_failures;
+    if (!near_rel(c.composite, example4_closed_form(P, ex), 1e-6)) ++literal_reading_failures;
   }
   EXPECT_EQ(literal_reading_failures, kTrials) << "the literal inertial e_x should fail for θ_1 in (0.2, 2.9)";
   // and at θ_1 = 0 both readings agree
   Rng rng0(40);
-  auto b1 = random_body(rng0, "base", -1, JointType::Revolute, ez);
-  auto b2 = random_body(rng0, "upper_arm", 0, JointType::Revolute, ex);
-  auto b3 = random_body(rng0, "forearm", 1, JointType::Revolute, ex);
-  b2.placement.p = rng0.vec3();
-  b3.placement.p = rng0.vec3();
-  const Model model = Model::build({b1, b2, b3});
+  Arm arm = random_arm(rng0);
+  const Model model = Model::build({arm.b1, arm.b2, arm.b3});
   Data data(model);
-  const Computed c = both(model, data, Eigen::Vector3d(0.0, 0.7, -1.3));
-  EXPECT_TRUE(near_rel(c.composite, example4_closed_form(model, data, ex), 1e-12));
+  const Eigen::Vector3d q(0.0, 0.7, -1.3);
+  const Computed c = both(model, data, q);
+  EXPECT_TRUE(near_rel(c.composite, example4_closed_form(arm_poses(arm, q), ex), 1e-12));
 }
 
 // literal procedure = composite algorithm on random trees

@@ -55,8 +55,8 @@ TEST_P(Conservation, EnergyDriftIsSmallAndFallsWithTolerance) {
 
 INSTANTIATE_TEST_SUITE_P(Scenarios, Conservation, ::testing::ValuesIn(kScenarios));
 
-// the satellite: momentum conserved to 1e-9, unit quaternion to 1e-12
-TEST(Satellite, MomentumAndQuaternion) {
+// the satellite: momentum conserved to 1e-9 by both CVODE methods
+TEST(Satellite, MomentumIsConserved) {
   const Scenario sc = load_scenario(kDir + "satellite_two_arrays.yaml");
   for (const char* method : {"cvode-adams", "cvode-bdf"}) {
     std::vector<Sample> samples;
@@ -66,21 +66,50 @@ TEST(Satellite, MomentumAndQuaternion) {
     const double L = s0.linear.norm(), H = s0.angular.norm();
     ASSERT_GT(L, 1.0);
     ASSERT_GT(H, 1.0);
-    double worst_l = 0, worst_h = 0, worst_q = 0;
+    double worst_l = 0, worst_h = 0;
     for (const Sample& s : samples) {
       worst_l = std::max(worst_l, (s.linear - s0.linear).norm() / L);
       worst_h = std::max(worst_h, (s.angular - s0.angular).norm() / H);
-      worst_q = std::max(worst_q, std::abs(s.q.segment<4>(3).norm() - 1.0));
     }
     EXPECT_LE(worst_l, 1e-9) << method;
     EXPECT_LE(worst_h, 1e-9) << method;
-    EXPECT_LE(worst_q, 1e-12) << method;
-    if (std::string(method) == "cvode-bdf") {
-      EXPECT_NE(r.quaternion_handling.find("CVodeSetProjFn"), std::string::npos);
-    }
     // the bus really turned: the check is not vacuous
     EXPECT_GT((samples.back().q.segment<4>(3) - s0.q.segment<4>(3)).norm(), 0.1);
   }
+}
+
+// The unit quaternion, where normalizing the output cannot hide a drift: Adams' own state (the q
+// of CVODE's last right-hand-side evaluation; its outputs are normalized), BDF's projected
+// outputs (not renormalized), and the orientation both reach, which normalizing cannot fix.
+TEST(Satellite, QuaternionStaysUnitInTheIntegratorState) {
+  const Scenario sc = load_scenario(kDir + "satellite_two_arrays.yaml");
+  const int k = sc.model.idx_q[0] + 3;
+  std::vector<Eigen::Vector4d> final_quaternion;
+  for (const char* method : {"cvode-adams", "cvode-bdf"}) {
+    SimulationSettings s = sc.simulation;
+    s.method = method;
+    s.rtol = 1e-12;
+    s.atol = 1e-14;
+    System sys(sc.model, sc.inputs, parse_fd_method(s.dynamics));
+    VecX y(sys.size());
+    y << sc.q0, sc.v0;
+    double t = 0;
+    auto integrator = make_integrator(method, sys, s, t, y);
+    const bool projected = integrator->quaternion_handling().find("CVodeSetProjFn") != std::string::npos;
+    EXPECT_EQ(projected, std::string(method) == "cvode-bdf") << integrator->quaternion_handling();
+    double worst = 0;
+    for (int n = 1; n <= 200; ++n) {
+      integrator->advance(0.25 * n, t, y);
+      // BDF: the output is CVODE's projected state; Adams: the state its last RHS call saw
+      const Eigen::Vector4d raw = projected ? Eigen::Vector4d(y.segment<4>(k)) : Eigen::Vector4d(sys.q.segment<4>(k));
+      worst = std::max(worst, std::abs(raw.norm() - 1.0));
+    }
+    EXPECT_LE(worst, projected ? 1e-12 : 1e-10) << method;
+    final_quaternion.push_back(y.segment<4>(k));
+  }
+  // Adams and BDF reach the same orientation after 50 s of tumbling (q and −q are one rotation)
+  const Eigen::Vector4d &a = final_quaternion[0], &b = final_quaternion[1];
+  EXPECT_LE(std::min((a - b).norm(), (a + b).norm()), 1e-9) << a.transpose() << " vs " << b.transpose();
 }
 
 // observed convergence order on the double pendulum against CVODE at rtol 1e-13
@@ -136,17 +165,6 @@ std::vector<double> read_doubles(hid_t file, const char* path, hsize_t* rows = n
   return out;
 }
 
-std::string read_string_attribute(hid_t obj, const char* name) {
-  const hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
-  if (a < 0) return "(missing)";
-  const hid_t type = H5Aget_type(a);  // read in the file's own string type (UTF-8, fixed length)
-  std::string s(H5Tget_size(type), '\0');
-  H5Aread(a, type, s.data());
-  H5Tclose(type);
-  H5Aclose(a);
-  return s.substr(0, s.find('\0'));
-}
-
 // /solver's run-time values and /scenario are scalar datasets (SWMR allows rewriting them in place)
 std::string read_string_dataset(hid_t obj, const char* name) {
   const hid_t d = H5Dopen2(obj, name, H5P_DEFAULT);
@@ -159,68 +177,9 @@ std::string read_string_dataset(hid_t obj, const char* name) {
   return s.substr(0, s.find('\0'));
 }
 
-double read_double_dataset(hid_t obj, const char* name) {
-  double x = std::nan("");
-  const hid_t d = H5Dopen2(obj, name, H5P_DEFAULT);
-  if (d < 0) return x;
-  H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &x);
-  H5Dclose(d);
-  return x;
-}
-
-double read_double_attribute(hid_t obj, const char* name) {
-  double x = std::nan("");
-  const hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
-  if (a < 0) return x;
-  H5Aread(a, H5T_NATIVE_DOUBLE, &x);
-  H5Aclose(a);
-  return x;
-}
-
 int run_cli(const std::string& args) { return std::system((std::string(SOADYN_CLI) + " " + args + " > /dev/null 2>&1").c_str()); }
 
-TEST(Hdf5, FileWrittenByRunMatchesTheInMemoryRun) {
-  const std::string out = tmp("run.h5");
-  ASSERT_EQ(run_cli("run " + kDir + "double_pendulum.yaml --t-end 2 -o " + out), 0);
-  const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
-  SimulationSettings s = sc.simulation;
-  s.t_end = 2;
-  std::vector<Sample> mem;
-  ASSERT_TRUE(simulate(sc, s, nullptr, &mem).completed);
-
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  const hid_t f = H5Fopen(out.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  ASSERT_GE(f, 0);
-  hsize_t rows = 0, cols = 0;
-  const auto total = read_doubles(f, "/energy/total", &rows);
-  ASSERT_EQ(rows, mem.size());
-  for (size_t k = 0; k < mem.size(); ++k) EXPECT_NEAR(total[k], mem[k].total, 1e-12 * std::abs(mem[k].total) + 1e-14);
-  const auto q = read_doubles(f, "/q", &rows, &cols);
-  EXPECT_EQ(cols, 2u);
-  EXPECT_NEAR(q[2 * (rows - 1) + 1], mem.back().q(1), 1e-12);
-  for (const char* path : {"/time", "/qd", "/qdd", "/energy/kinetic", "/energy/potential", "/momentum/linear", "/momentum/angular"}) {
-    read_doubles(f, path, &rows);
-    EXPECT_EQ(rows, mem.size()) << path;
-  }
-  const hid_t solver = H5Gopen2(f, "/solver", H5P_DEFAULT);
-  EXPECT_EQ(read_string_dataset(solver, "status"), "completed");
-  EXPECT_EQ(read_string_attribute(solver, "method"), "cvode-adams");
-  EXPECT_NEAR(read_double_dataset(solver, "t_reached"), 2.0, 1e-12);
-  EXPECT_NEAR(read_double_attribute(solver, "rtol"), 1e-10, 1e-24);
-  for (const char* a : {"atol", "dt"}) EXPECT_GT(H5Aexists(solver, a), 0) << a;
-  for (const char* d : {"steps", "rhs_evals", "jac_evals", "error_test_failures", "nonlinear_iterations", "cpu_seconds"})
-    EXPECT_GT(H5Lexists(solver, d, H5P_DEFAULT), 0) << d;
-  H5Gclose(solver);
-  EXPECT_EQ(read_string_dataset(f, "scenario"), sc.text);
-  EXPECT_NE(read_string_attribute(f, "soadyn_version"), "(missing)");
-  const hid_t model = H5Gopen2(f, "/model", H5P_DEFAULT);
-  EXPECT_GT(H5Aexists(model, "nq"), 0);
-  EXPECT_GT(H5Lexists(model, "joint_names", H5P_DEFAULT), 0);
-  EXPECT_GT(H5Lexists(model, "parents", H5P_DEFAULT), 0);
-  H5Gclose(model);
-  H5Fclose(f);
-  std::filesystem::remove(out);
-}
+// (the round trip of every dataset and attribute is in test_h5log.cpp)
 
 TEST(Instability, Rk4BeyondItsLimitStopsCleanly) {
   const std::string out = tmp("unstable.h5");

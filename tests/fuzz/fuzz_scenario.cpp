@@ -1,8 +1,11 @@
 // libFuzzer target: scenario text → model → mass matrix and bias.  Any exception other than
-// soadyn::Error, any crash, leak or hang is a finding.
+// soadyn::Error, any crash, leak or hang is a finding; so is an accepted model whose mass matrix
+// is not finite or not positive definite (fuzz_check.hpp).
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
 #include "soadyn/scenario.hpp"
+
+#include "fuzz_check.hpp"
 
 #include <cstdint>
 #include <string>
@@ -17,6 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     soadyn::mass_matrix(sc.model, d);
     soadyn::update_velocities(sc.model, d, sc.v0);
     soadyn::bias_forces(sc.model, d);
+    soadyn::fuzz::check_mass_matrix(sc.model, soadyn::fuzz::seed_of(data, size));
   } catch (const soadyn::Error&) {
   }
   return 0;

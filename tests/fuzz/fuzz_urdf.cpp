@@ -1,7 +1,11 @@
-// libFuzzer target: URDF text → model → mass matrix.
+// libFuzzer target: URDF text → model → mass matrix.  A crash, leak, hang or an exception other
+// than soadyn::Error is a finding; so is an accepted model whose mass matrix is not finite or not
+// positive definite (fuzz_check.hpp).
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
 #include "soadyn/scenario.hpp"
+
+#include "fuzz_check.hpp"
 
 #include <cstdint>
 #include <string>
@@ -15,6 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       soadyn::Data d(m);
       soadyn::update_kinematics(m, d, m.neutral_configuration());
       soadyn::mass_matrix(m, d);
+      soadyn::fuzz::check_mass_matrix(m, soadyn::fuzz::seed_of(data, size));
     } catch (const soadyn::Error&) {
     }
   }

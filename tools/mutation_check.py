@@ -1,0 +1,198 @@
+#!/usr/bin/python3
+"""Mutation check: each of issue 17's honest tests fails against a deliberately broken build.
+
+Copies the working tree (tracked and untracked, not ignored files) to a scratch directory, builds
+there, checks that every test passes on the unmodified copy, then for each mutation: applies one
+small patch to the scratch copy, rebuilds the one target, runs the one test, expects it to fail,
+and restores the file.  The working tree itself is never written to.  Not part of CI (it
+rebuilds once per mutation, and the fuzzer mutation needs the clang build): run it by hand.
+
+    tools/mutation_check.py [--scratch DIR] [--only NAME ...] [--list]
+
+Prints one line per mutation (caught by which test, or SURVIVED) and exits 1 if any survived or
+a test failed on the unmodified copy.  A mutation whose text is no longer in its file is reported
+as STALE (the code moved: update the table below).
+"""
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PY = "/usr/bin/python3"
+
+
+def gtest(binary, test_filter):
+    return {"build": [binary], "run": [f"build/tests/{binary}", f"--gtest_filter={test_filter}"],
+            "test": f"{binary} {test_filter}"}
+
+
+CLI_ROUTES = {"build": ["soadyn_cli"], "run": [PY, "tests/test_cli.py", "ForwardDynamicsRoutes"],
+              "test": "test_cli.py ForwardDynamicsRoutes"}
+
+
+def tool(name):
+    return {"build": ["soadyn_cli"], "run": ["ctest", "--test-dir", "build", "-R", f"^{name}$", "--output-on-failure"],
+            "test": f"ctest {name}"}
+
+
+# the URDF fuzz target on one input: the seed with a negative base mass (refused by a sound build)
+FUZZ_URDF = {"build": [], "fuzz": True,
+             "run": ["sh", "-c", "sed 's/mass value=\"4\"/mass value=\"-4\"/' tests/fuzz/seeds/branched_arm.urdf"
+                     " > build-fuzz/negative_mass.urdf && grep -q 'value=\"-4\"' build-fuzz/negative_mass.urdf &&"
+                     " ASAN_OPTIONS=detect_leaks=0 build-fuzz/fuzz_urdf build-fuzz/negative_mass.urdf"],
+             "test": "fuzz_urdf on the seed with <mass value=\"-4\"/>", "expect": "fuzz: accepted model"}
+
+# (item of issue 17, name, file, text, replacement, what the mutant breaks, test)
+MUTATIONS = [
+    (1, "dense-route-allocates", "src/dynamics.cpp",
+     "data.llt.compute(data.Mass);", "data.llt = Eigen::LLT<MatX>(data.Mass);",
+     "the dense route builds a new Cholesky object (a heap matrix) on every call",
+     gtest("test_no_alloc", "NoAllocation.AlgorithmsAllocateNothingPerCall")),
+    (2, "quaternion-rate-sign", "src/joint.cpp",
+     "qdot[3] = 0.5 * (-ox * x - oy * y - oz * z);", "qdot[3] = 0.5 * (ox * x - oy * y - oz * z);",
+     "a sign slip in the quaternion rate: |quat| no longer constant (hidden by normalized outputs)",
+     gtest("test_simulation", "Satellite.QuaternionStaysUnitInTheIntegratorState")),
+    (3, "h5-potential-is-kinetic", "src/h5log.cpp",
+     "b.insert(b.end(), {s.kinetic, s.potential, s.total});", "b.insert(b.end(), {s.kinetic, s.kinetic, s.total});",
+     "/energy/potential logs the kinetic energy",
+     gtest("test_h5log", "Hdf5.*")),
+    (3, "h5-t-end-attribute", "src/h5log.cpp",
+     'attribute(g_solver, "t_end", settings.t_end);', 'attribute(g_solver, "t_end", settings.output_dt);',
+     "/solver@t_end holds the output interval",
+     gtest("test_h5log", "Hdf5.*")),
+    (4, "velocity-product-term", "src/kinematics.cpp",
+     "data.coriolis.col(i).tail<3>() += wp.cross(ddot);", "data.coriolis.col(i).tail<3>() -= wp.cross(ddot);",
+     "a sign slip in a_i's ω_p × ḋ_i: bias and every route's q̈ wrong, yet M q̈ + bias = τ still holds",
+     CLI_ROUTES),
+    (4, "sparse-route-solve", "src/dynamics.cpp",
+     "for (int k = 0; k < model.nv; ++k) x(k) /= H(k, k);", "for (int k = 1; k < model.nv; ++k) x(k) /= H(k, k);",
+     "the tree-sparse route forgets the first pivot",
+     CLI_ROUTES),
+    (5, "bdf-ignores-rtol", "src/cvode.cpp",
+     "CVodeSStolerances(mem, s.rtol, s.atol)", "CVodeSStolerances(mem, bdf ? 1e4 * s.rtol : s.rtol, s.atol)",
+     "BDF runs at 10^4 times the requested relative tolerance",
+     gtest("test_stability", "Stability.BdfOnTheStiffArmIsAccurate")),
+    (6, "placement-not-turned", "src/kinematics.cpp",
+     "eta_p + Rp * model.placement[i].p + Rj * pm", "eta_p + model.placement[i].p + Rj * pm",
+     "joint placements are added in world axes instead of the parent's: every η_i off, consistently",
+     gtest("test_mass_matrix", "NoteExamples.Example2*:NoteExamples.Example3*:NoteExamples.Example4*")),
+    (7, "negative-mass-accepted", "src/model.cpp",
+     "if (fixed ? !(b.mass >= 0.0) : !(b.mass > 0.0))", "if (fixed ? !(b.mass >= 0.0) : !(b.mass != 0.0))",
+     "Model::build accepts a negative mass: 𝓜 not positive definite",
+     FUZZ_URDF),
+    (9, "plot-wrong-columns", "tools/plot.py",
+     "cols = list(range(7, nq))", "cols = list(range(6, nq - 1))",
+     "plot.py draws the quaternion's last component and the left array as the two arrays",
+     tool("tool_plot")),
+    (9, "wp-error-without-velocities", "tools/work_precision.py",
+     'e = np.concatenate([r["q"] - ref["q"], r["qd"] - ref["qd"]])', 'e = r["q"] - ref["q"]',
+     "work_precision.py's state error leaves out the velocities",
+     tool("tool_work_precision")),
+    (9, "stability-bound-loose", "tools/stability.py",
+     "BOUND = 0.05", "BOUND = 0.5",
+     "stability.py calls a run with 50 % energy error bounded",
+     tool("tool_stability")),
+]
+
+
+def sh(cmd, cwd, log, env=None, timeout=3600, expect=None):
+    """run cmd, its output appended to the log; with `expect`, a failure counts only if the output says so"""
+    with open(log, "a") as f:
+        f.write(f"\n$ {' '.join(cmd)}\n")
+        f.flush()
+        try:
+            p = subprocess.run(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, env=env,
+                               timeout=timeout, text=True, errors="replace")
+        except subprocess.TimeoutExpired:
+            f.write("timed out\n")
+            return 124
+        f.write(p.stdout)
+        if p.returncode != 0 and expect and expect not in p.stdout:
+            f.write(f"(failed, but without '{expect}': not counted as caught)\n")
+            return 0
+        return p.returncode
+
+
+def copy_tree(scratch):
+    files = subprocess.run(["git", "ls-files", "-co", "--exclude-standard", "-z"], cwd=ROOT, check=True,
+                           capture_output=True).stdout.split(b"\0")
+    for rel in (f.decode() for f in files if f):
+        src, dst = os.path.join(ROOT, rel), os.path.join(scratch, rel)
+        if not os.path.isfile(src):
+            continue
+        os.makedirs(os.path.dirname(dst), exist_ok=True)
+        if not os.path.exists(dst) or open(src, "rb").read() != open(dst, "rb").read():
+            shutil.copy2(src, dst)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--scratch", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), "soadyn_mutation"))
+    ap.add_argument("--only", nargs="*", help="names of the mutations to run (default: all)")
+    ap.add_argument("--list", action="store_true")
+    args = ap.parse_args()
+    chosen = [m for m in MUTATIONS if not args.only or m[1] in args.only]
+    if args.list:
+        for item, name, path, *_ , what, t in chosen:
+            print(f"item {item}  {name:28s} {path:24s} {t['test']}\n    {what}")
+        return 0
+    scratch = os.path.abspath(args.scratch)
+    if os.path.commonpath([scratch, ROOT]) == ROOT:
+        sys.exit("mutation_check: the scratch directory must be outside the working tree")
+    os.makedirs(scratch, exist_ok=True)
+    copy_tree(scratch)
+    log = os.path.join(scratch, "mutation_check.log")
+    open(log, "w").close()
+    env = dict(os.environ, CCACHE_BASEDIR=scratch, SOADYN=os.path.join(scratch, "build", "soadyn"),
+               SOADYN_SOURCE_DIR=scratch, MPLBACKEND="Agg")
+    print(f"scratch copy: {scratch}  (log: {log})")
+    if sh(["cmake", "-S", ".", "-B", "build", "-DCMAKE_BUILD_TYPE=Release", "-DSOADYN_WERROR=ON",
+           "-DSOADYN_BUILD_TESTS=ON", "-DSOADYN_BUILD_BENCH=OFF", "-DCMAKE_CXX_COMPILER_LAUNCHER=ccache"],
+          scratch, log, env) != 0:
+        sys.exit("mutation_check: cmake failed (see the log)")
+
+    def build(t):
+        if t.get("fuzz"):
+            return sh(["nice", "tools/fuzz.sh", "build"], scratch, log, env)
+        return sh(["nice", "cmake", "--build", "build", "-j2", "--target", *t["build"]], scratch, log, env)
+
+    # the unmodified copy: every test used must build and pass, or a failure below means nothing
+    tests = {}
+    for m in chosen:
+        tests.setdefault(m[6]["test"], m[6])
+    for t in tests.values():
+        if build(t) != 0 or sh(t["run"], scratch, log, env) != 0:
+            print(f"BASELINE FAILED: {t['test']} fails on the unmodified copy (see the log)")
+            return 1
+        print(f"baseline passes: {t['test']}")
+
+    survived = 0
+    for item, name, path, old, new, what, t in chosen:
+        target = os.path.join(scratch, path)
+        original = open(target, encoding="utf-8").read()
+        if original.count(old) != 1:
+            print(f"item {item}  {name:28s} STALE: the text to mutate is not (once) in {path}")
+            survived += 1
+            continue
+        start = time.time()
+        try:
+            with open(target, "w", encoding="utf-8") as f:
+                f.write(original.replace(old, new))
+            if build(t) != 0:
+                verdict = "BROKEN: the mutant does not build (fix the table below)"
+            else:
+                rc = sh(t["run"], scratch, log, env, expect=t.get("expect"))
+                verdict = f"caught by {t['test']} (exit {rc})" if rc != 0 else f"SURVIVED {t['test']}"
+        finally:
+            with open(target, "w", encoding="utf-8") as f:
+                f.write(original)
+        survived += verdict.startswith(("SURVIVED", "BROKEN"))
+        print(f"item {item}  {name:28s} {verdict}  [{time.time() - start:.0f} s]\n    mutant: {what}", flush=True)
+    return 1 if survived else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
