@@ -78,6 +78,16 @@ void validate(const BodySpec& b, int i) {
   check_finite(b, i, "axis", b.axis);
   check_finite(b, i, "placement rotation", b.placement.R);
   check_finite(b, i, "placement translation", b.placement.p);
+  // magnitudes whose products in 𝓜 (m r² summed over a tree of any size) stay far below overflow:
+  // beyond these a double cannot hold the model's mass matrix, so it would come out inf or NaN
+  constexpr double max_mass = 1e50, max_length = 1e50, max_inertia = 1e150;
+  if (std::abs(b.mass) > max_mass) refuse(b, i, "mass", "at most 1e50 kg", fmt(b.mass));
+  if (b.com.cwiseAbs().maxCoeff() > max_length)
+    refuse(b, i, "centre of mass", "coordinates within 1e50 m", fmt(b.com.transpose()));
+  if (b.placement.p.cwiseAbs().maxCoeff() > max_length)
+    refuse(b, i, "placement translation", "coordinates within 1e50 m", fmt(b.placement.p.transpose()));
+  if (b.inertia.cwiseAbs().maxCoeff() > max_inertia)
+    refuse(b, i, "inertia", "entries of at most 1e150 kg m^2", fmt(b.inertia));
   // a part may be massless; the moving body it belongs to is checked once merged
   if (!(b.mass >= 0.0))
     refuse(b, i, "mass", b.joint == JointType::Fixed ? "a mass >= 0" : "a positive mass", fmt(b.mass));
