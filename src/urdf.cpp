@@ -57,6 +57,9 @@ urdf::ModelInterfaceSharedPtr read_robot(const urdf_xml::Index& idx) {
 // Parent-first order: the URDF's own joint order when it already is, else depth-first from the
 // root with siblings in document order.
 std::vector<std::string> parent_first(const urdf::ModelInterface& robot, const urdf_xml::Index& idx) {
+  // every joint of the document must have reached urdfdom's model (a name it read differently would not)
+  for (const auto& jn : idx.joint_order)
+    if (!robot.getJoint(jn)) throw Error(idx.at_joint(jn) + ": urdfdom did not read this joint");
   std::vector<std::string> order;
   std::set<std::string> placed{robot.getRoot()->name};
   for (const auto& jn : idx.joint_order) {
