@@ -232,7 +232,9 @@ def test_paths_into_lists_and_free_joints():
     base = soadyn.load_scenario(sat)
     tree = __import__("yaml").safe_load(open(sat).read())
     from soadyn import ensemble
+    before = __import__("copy").deepcopy(tree)
     edited = ensemble.apply(tree, base.model, {"initial.q[1]": 0.25, "initial.qd[7]": -0.5, "bodies[0].mass": 123.0})
+    assert tree == before  # the edit copies what it changes: the base tree is shared by every case
     scene = soadyn.parse_scenario(__import__("yaml").safe_dump(edited), sat)
     assert scene.q0[1] == 0.25 and scene.v0[7] == -0.5 and scene.model.masses[0] == 123.0
     assert np.array_equal(np.delete(scene.q0, 1), np.delete(base.q0, 1))

@@ -6,7 +6,7 @@ Dask LocalCluster of 1 and 2 worker processes (the scaling).
     PYTHONPATH=build/python /usr/bin/python3 tools/bench/sweep_throughput.py [--cases 10000]
 
 Each case: the double pendulum, rk4 at dt = 1e-2 for 0.2 s (20 steps) from a random initial state.
-Prints a markdown table; walls include the cluster's start (reported apart as well).
+Prints a markdown table; the cluster's start is timed apart and not in the walls.
 """
 import argparse
 import os

@@ -22,7 +22,7 @@ where it was.  The table of results is DIR/results.h5.
 """
 from __future__ import annotations
 
-import copy
+import functools
 import hashlib
 import json
 import math
@@ -369,14 +369,42 @@ def _vector_slot(model, which: str, index: int):
     return joint, index - first, neutral
 
 
+class _Copy:
+    """A copy of a scenario tree that shares every container it has not edited with the base
+    (path copying: an edit copies only the mappings and lists on its path, not the whole tree)."""
+
+    def __init__(self, tree: dict):
+        self.root = dict(tree)
+        self._own = {id(self.root)}
+
+    def child(self, node, key, default=None):
+        """node[key] made this copy's own (node itself must be); `default` (a new container) when
+        it is absent or null, None when it is absent and there is no default."""
+        value = node.get(key) if isinstance(node, dict) else node[key]
+        if value is None and default is not None:
+            value = default
+        elif isinstance(value, (dict, list)) and id(value) not in self._own:
+            value = dict(value) if isinstance(value, dict) else list(value)
+        else:
+            return value
+        node[key] = value
+        self._own.add(id(value))
+        return value
+
+
+@functools.lru_cache(maxsize=4096)
+def _tokens(path: str) -> Tuple[Any, ...]:
+    return tuple(parse_path(path))
+
+
 def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
-    """A copy of the scenario tree with each {path: value} set."""
-    out = copy.deepcopy(tree)
+    """A copy of the scenario tree with each {path: value} set (the base tree is left unchanged)."""
+    out = _Copy(tree)
     for path, value in values.items():
-        tokens = parse_path(path)
+        tokens = _tokens(path)
         if len(tokens) == 3 and tokens[0] == "initial" and tokens[1] in ("q", "qd") and isinstance(tokens[2], int):
             joint, comp, neutral = _vector_slot(model, tokens[1], tokens[2])
-            vec = out.setdefault("initial", {}).setdefault(tokens[1], {})
+            vec = out.child(out.child(out.root, "initial", {}), tokens[1], {})
             if comp is None:
                 vec[joint] = value
             else:
@@ -384,7 +412,7 @@ def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
                 cur[comp] = value
                 vec[joint] = cur
             continue
-        node = out
+        node = out.root
         for i, tok in enumerate(tokens):
             last = i == len(tokens) - 1
             where = ".".join(str(t) for t in tokens[:i + 1])
@@ -395,29 +423,29 @@ def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
                 if last:
                     node[tok] = value
                 else:
-                    node = node[tok]
+                    node = out.child(node, tok)
             elif isinstance(node, list):  # a list entry by its name (bodies) or joint (inputs)
-                match = [e for e in node if isinstance(e, dict) and tok in (e.get("name"), e.get("joint"))]
+                match = [k for k, e in enumerate(node) if isinstance(e, dict) and tok in (e.get("name"), e.get("joint"))]
                 if len(match) != 1:
                     names = [str(e.get("name", e.get("joint"))) for e in node if isinstance(e, dict)]
                     raise ValueError(f"{'no' if not match else 'more than one'} entry named '{tok}' "
                                      f"(the scenario has {', '.join(names)})")
                 if last:
                     raise ValueError(f"{where} names a whole entry; name a field of it")
-                node = match[0]
+                node = out.child(node, match[0])
             elif isinstance(node, dict):
                 if last:
                     node[tok] = value
                 else:
                     if node.get(tok) is None:
                         if tok in ("initial", "simulation", "q", "qd"):
-                            node[tok] = {}
-                        else:
-                            raise ValueError(f"the scenario has no '{where}'")
-                    node = node[tok]
+                            node = out.child(node, tok, {})
+                            continue
+                        raise ValueError(f"the scenario has no '{where}'")
+                    node = out.child(node, tok)
             else:
                 raise ValueError(f"'{'.'.join(str(t) for t in tokens[:i])}' is a value, not a mapping or list")
-    return out
+    return out.root
 
 
 # ---------------------------------------------------------------- running cases (on a worker)
@@ -449,9 +477,9 @@ def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any]
                rhs_evals=s.rhs_evals, cpu_seconds=s.cpu_seconds, max_energy_error=s.max_relative_energy_error,
                final_energy_error=s.final_relative_energy_error)
     if reference:
-        rtree = copy.deepcopy(tree)
-        rtree.setdefault("simulation", {}).update(reference)
-        key = _text(rtree)
+        rtree = _Copy(tree)
+        rtree.child(rtree.root, "simulation", {}).update(reference)
+        key = _text(rtree.root)
         if cache is not None and key in cache:
             rstatus, ref = cache[key]
         else:
