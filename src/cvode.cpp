@@ -12,6 +12,7 @@
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <memory>
@@ -95,26 +96,46 @@ class Cvode : public Integrator {
   }
 
   void advance(double t_out, double& t, VecX& y) override {
-    const long left = max_steps_ - stats().steps;
-    if (left <= 0) fail(t, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
-    check(CVodeSetMaxNumSteps(mem_.get(), left), "CVodeSetMaxNumSteps");
-    double t_reached = t;
-    const int flag = CVode(mem_.get(), t_out, y_.get(), &t_reached, CV_NORMAL);
-    if (pending_) {
-      auto e = pending_;
-      pending_ = nullptr;
-      std::rethrow_exception(e);
+    void* mem = mem_.get();
+    // CVODE's own CV_NORMAL, one internal step at a time so that a stop request is seen before
+    // every step: step until t_n ≥ t_out, then interpolate y(t_out) from the Nordsieck history.
+    double tn = t;
+    check(CVodeGetCurrentTime(mem, &tn), "CVodeGetCurrentTime");
+    int flag = CV_SUCCESS;
+    while (tn < t_out) {
+      if (stop_requested()) {  // y_ holds y(t_n), the last step's state
+        t = tn;
+        y = map(y_.get());
+        if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
+        return;
+      }
+      if (stats().steps >= max_steps_) fail(tn, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
+      flag = CVode(mem, t_out, y_.get(), &tn, CV_ONE_STEP);
+      if (pending_) {
+        auto e = pending_;
+        pending_ = nullptr;
+        std::rethrow_exception(e);
+      }
+      if (flag < 0) break;
     }
-    t = t_reached;
+    if (flag >= 0) {
+      flag = CVodeGetDky(mem, t_out, 0, y_.get());
+      tn = t_out;
+    }
+    t = tn;
     y = map(y_.get());
     if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
     if (flag < 0) {
-      std::string why = flag == CV_TOO_MUCH_WORK ? "too much work (the maximum number of steps)" : flag_name(flag);
+      std::string why = flag_name(flag);
       if (!error_message_.empty()) why += ": " + error_message_;
       fail(t, why);
     }
     if (const int bad = first_non_finite(y); bad >= 0)
-      throw SimulationError("unstable at t = " + std::to_string(t) + " s: " + sys_.component_name(bad) + " is not finite", t);
+    {
+      char at[32];
+      std::snprintf(at, sizeof at, "%.9g", t);
+      throw SimulationError(std::string("unstable at t = ") + at + " s: " + sys_.component_name(bad) + " is not finite", t);
+    }
   }
 
   IntegratorStats stats() const override {

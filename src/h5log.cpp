@@ -1,4 +1,5 @@
 #include "soadyn/h5log.hpp"
+#include "soadyn/text.hpp"
 
 #include <hdf5.h>
 

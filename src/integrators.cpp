@@ -51,6 +51,7 @@ class FixedStep : public Integrator {
     const long n = std::max<long>(1, long(std::ceil((t_out - t) / dt_ * (1 - 1e-12))));
     const double h = (t_out - t) / double(n);
     for (long k = 0; k < n; ++k) {
+      if (stop_requested()) return;  // t < t_out: the run ends here
       prev_ = y;
       step(t, h, y);
       t = k + 1 == n ? t_out : t + h;

@@ -1,6 +1,7 @@
 #include "soadyn/model.hpp"
 
 #include "soadyn/inertia.hpp"
+#include "soadyn/text.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -33,7 +34,7 @@ std::string fmt(const Eigen::MatrixXd& m) {
 
 [[noreturn]] void refuse(const BodySpec& b, int i, const std::string& field, const std::string& expected,
                          const std::string& got) {
-  throw ModelError(i, "body '" + b.name + "' (index " + std::to_string(i) + ")",
+  throw ModelError(i, "body '" + printable(b.name) + "' (index " + std::to_string(i) + ")",
                    field + ": expected " + expected + ", got " + got);
 }
 
@@ -69,6 +70,10 @@ void check_inertia(const BodySpec& b, int i, double mass, const Mat3& I) {
 
 // The checks every user-supplied body must pass.
 void validate(const BodySpec& b, int i) {
+  // names go into UTF-8 attributes of the logs and into messages
+  if (!is_valid_utf8(b.name)) refuse(b, i, "name", "a valid UTF-8 name", "'" + printable(b.name) + "'");
+  if (!is_valid_utf8(b.joint_name))
+    refuse(b, i, "joint", "a valid UTF-8 name", "'" + printable(b.joint_name) + "'");
   if (b.parent < -1 || b.parent >= i)
     refuse(b, i, "parent", "a body listed before it (index -1.." + std::to_string(i - 1) + ")",
            std::to_string(b.parent));

@@ -1,6 +1,7 @@
 #include "soadyn/scenario.hpp"
 
 #include "soadyn/integrators.hpp"
+#include "soadyn/text.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -268,7 +269,7 @@ BodyNodes read_bodies(const Reader& rd, const YAML::Node& list) {
     rd.keys(b, f, {"name", "parent", "joint", "origin", "mass", "com", "inertia", "inertia_rpy"});
     BodySpec s;
     s.name = rd.string(rd.require(b, "name", f), f + ".name");
-    const std::string fb = "body '" + s.name + "'";
+    const std::string fb = "body '" + printable(s.name) + "'";
     if (index.count(s.name) || s.name == "world") rd.fail(b["name"], fb + ".name", "duplicate body name '" + s.name + "'");
     s.parent = read_parent(rd, b, s.name, fb, index, declared);
     read_joint(rd, b, fb, joint_names, s);
@@ -286,7 +287,7 @@ Model build_located(const Reader& rd, const BodyNodes& bodies, const Vec3& gravi
     return Model::build(bodies.specs, gravity);
   } catch (const ModelError& e) {
     const int k = e.spec >= 0 && e.spec < int(bodies.nodes.size()) ? e.spec : 0;
-    rd.fail(bodies.nodes[k], "body '" + bodies.specs[k].name + "'", e.detail);
+    rd.fail(bodies.nodes[k], "body '" + printable(bodies.specs[k].name) + "'", e.detail);
   }
 }
 

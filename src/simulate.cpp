@@ -52,29 +52,6 @@ double output_interval(const SimulationSettings& s) {
 
 double output_rows(const SimulationSettings& s) { return 1 + std::ceil(s.t_end / output_interval(s) * (1 - 1e-12)); }
 
-bool is_valid_utf8(const std::string& text) {
-  const auto* p = reinterpret_cast<const unsigned char*>(text.data());
-  const auto* end = p + text.size();
-  while (p < end) {
-    const unsigned c = *p;
-    int n = 0;
-    unsigned cp = 0, min = 0;
-    if (c < 0x80) n = 0, cp = c;
-    else if ((c & 0xE0) == 0xC0) n = 1, cp = c & 0x1F, min = 0x80;
-    else if ((c & 0xF0) == 0xE0) n = 2, cp = c & 0x0F, min = 0x800;
-    else if ((c & 0xF8) == 0xF0) n = 3, cp = c & 0x07, min = 0x10000;
-    else return false;
-    if (end - p < n + 1) return false;
-    for (int k = 1; k <= n; ++k) {
-      if ((p[k] & 0xC0) != 0x80) return false;
-      cp = (cp << 6) | (p[k] & 0x3F);
-    }
-    if (n > 0 && (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))) return false;
-    p += n + 1;
-  }
-  return true;
-}
-
 namespace {
 std::string g(double x) {
   char buf[32];
@@ -102,18 +79,6 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
                 " steps, more than 2^53: raise dt or lower t_end");
   if (!is_fixed_step(s.method) && s.max_steps <= 0)
     throw Error("simulation settings: max_steps must be positive, got " + std::to_string(s.max_steps));
-  for (size_t i = 0; i < sc.model.joint_names.size(); ++i)
-    for (const std::string* name : {&sc.model.body_names[i], &sc.model.joint_names[i]})
-      if (!is_valid_utf8(*name)) {
-        std::string shown;  // the bytes outside printable ASCII as \xHH
-        for (unsigned char c : *name) {
-          char hex[8];
-          std::snprintf(hex, sizeof hex, "\\x%02x", c);
-          shown += c >= 0x20 && c < 0x7f ? std::string(1, char(c)) : std::string(hex);
-        }
-        throw Error(sc.path + ": " + (name == &sc.model.body_names[i] ? "body" : "joint") + " '" + shown +
-                    "': the name is not valid UTF-8");
-      }
   if (sc.model.nv == 0)
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
   std::vector<std::string> warnings;
@@ -183,6 +148,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   const long outputs = std::max<long>(1, std::lround(std::ceil(settings.t_end / output_dt * (1 - 1e-12))));
   try {
     bool interrupted = false;
+    integrator->set_stop(stop);
     for (long k = 1; k <= outputs; ++k) {
       if (stop && stop->load() != 0) {
         summary.status = interrupted_status(stop->load(), t);
@@ -190,10 +156,19 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
         break;
       }
       const double t_out = k == outputs ? settings.t_end : double(k) * output_dt;
+      const double t_before = t;
       integrator->advance(t_out, t, y);
+      // a stop between steps: the last row is the state where the run ended, off the output grid
+      const bool stopped = stop && t < t_out;
+      if (stopped) {
+        summary.status = interrupted_status(stop->load(), t);
+        interrupted = true;
+        if (t == t_before) break;  // no step since the last row
+      }
       record(observe(sys, t, y.head(m.nq), y.tail(m.nv)));  // not counted as the integrator's work
       update();
       if (observer) observer->on_progress(summary);
+      if (stopped) break;
     }
     if (!interrupted) {
       summary.status = "completed";

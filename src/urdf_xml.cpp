@@ -1,6 +1,7 @@
 #include "urdf_xml.hpp"
 
 #include "soadyn/types.hpp"
+#include "soadyn/text.hpp"
 
 #include <tinyxml2.h>
 
@@ -35,7 +36,7 @@ void read_elements(const tinyxml2::XMLElement* robot, Index& idx) {
     const std::string at = line_of(idx.path, e->GetLineNum());
     if (!name) throw Error(at + ": <" + tag + ">: missing attribute 'name'");
     if (table->count(name))
-      throw Error(at + ": " + tag + " '" + name + "': duplicate " + tag + " name (the first is at line " +
+      throw Error(at + ": " + tag + " '" + printable(name) + "': duplicate " + tag + " name (the first is at line " +
                   std::to_string(table->at(name).line) + ")");
     table->emplace(name, element(e));
     if (tag == "joint") idx.joint_order.push_back(name);
@@ -146,12 +147,12 @@ Named named(const Index& idx, const std::string& message) {
 
 std::string Index::at_joint(const std::string& name) const {
   auto it = joints.find(name);
-  return (it != joints.end() ? line_of(path, it->second.line) : path) + ": joint '" + name + "'";
+  return (it != joints.end() ? line_of(path, it->second.line) : path) + ": joint '" + printable(name) + "'";
 }
 
 std::string Index::at_link(const std::string& name) const {
   auto it = links.find(name);
-  return (it != links.end() ? line_of(path, it->second.line) : path) + ": link '" + name + "'";
+  return (it != links.end() ? line_of(path, it->second.line) : path) + ": link '" + printable(name) + "'";
 }
 
 Index index(const std::string& xml, const std::string& path) {

@@ -27,6 +27,8 @@ import kill_loop  # noqa: E402
 PENDULUM = os.path.join(SCENARIOS, "double_pendulum.yaml")
 # 2e6 rk4 steps, a second or more: long enough to act on a running run
 LONG = ["--method", "rk4", "--dt", "1e-5", "--t-end", "20", "--flush-interval", "0.05"]
+# 10⁶ rk4 steps between two outputs
+SLOW = ["--method", "rk4", "--dt", "1e-6", "--output-dt", "1", "--t-end", "100", "--flush-interval", "0.01"]
 
 
 def run(*args, timeout=120):
@@ -112,34 +114,72 @@ class Signals(Base):
                 self.assertEqual(f["solver/t_reached"][()], f["time"][-1])
             self.assertNoLitter(out)
 
-    def test_second_sigint_exits_at_once_and_the_file_reads(self):
-        # one output step takes about a second: the first SIGINT waits for its end, the second does not
-        slow = ["--method", "rk4", "--dt", "1e-6", "--output-dt", "1", "--t-end", "100", "--flush-interval", "0.01"]
+    def test_a_signal_ends_the_run_between_two_steps(self):
+        # one output interval is 10⁶ steps (a second or more): the run must not wait for its end
+        out = self.path("between.h5")
+        p = self.start(PENDULUM, *SLOW, "-o", out)
+        self.assertTrue(wait_for(lambda: os.path.exists(out)), "the file is put in place at the first output")
+        time.sleep(0.2)
+        p.send_signal(signal.SIGTERM)
+        _, stderr = p.communicate(timeout=60)
+        self.assertEqual(p.returncode, 143, stderr)
+        self.assertWhole(out, status=r"^interrupted by SIGTERM at t = ")
+        with h5py.File(out, "r") as f:
+            t = f["time"][:]
+            steps = int(f["solver/steps"][()])
+        self.assertGreater(t[-1], t[-2])
+        self.assertGreater(abs(t[-1] - round(t[-1])), 1e-4, f"the last row (t = {t[-1]}) is off the output grid")
+        self.assertAlmostEqual(t[-1], steps * 1e-6, delta=1e-9 * steps, msg="the state after the last whole step")
+
+    def test_a_second_signal_exits_at_once_and_the_file_reads(self):
+        # SIGINT and SIGTERM sent together: two different signals are both delivered, the second
+        # while the first has only set the stop flag, so the run leaves at once
         out = self.path("twice.h5")
-        p = self.start(PENDULUM, *slow, "-o", out)
+        p = self.start(PENDULUM, *SLOW, "-o", out)
         self.assertTrue(wait_for(lambda: os.path.exists(out)))
         p.send_signal(signal.SIGINT)
-        time.sleep(0.05)
-        sent = time.monotonic()
-        p.send_signal(signal.SIGINT)
+        p.send_signal(signal.SIGTERM)
         _, stderr = p.communicate(timeout=60)
-        self.assertEqual(p.returncode, 130, stderr)
-        self.assertLess(time.monotonic() - sent, 0.9, "the second SIGINT does not wait for the step")
+        self.assertIn(p.returncode, (130, 143), stderr)
         self.assertIn("interrupted twice", stderr)
         self.assertWhole(out, status="^running$")  # left at once: the status of its last flush
         self.assertFalse(os.path.exists(out + ".lock"))
 
         # before the first flush: the older file is kept byte for byte, nothing is left behind
         old, h = self.old_file("kept.h5")
-        p = self.start(PENDULUM, *slow, "-o", old)
+        p = self.start(PENDULUM, *SLOW, "-o", old)
         self.assertTrue(wait_for(lambda: glob.glob(old + ".*.tmp")), "the file is being built")
         p.send_signal(signal.SIGINT)
-        time.sleep(0.05)
-        p.send_signal(signal.SIGINT)
-        p.communicate(timeout=60)
-        self.assertEqual(p.returncode, 130)
+        p.send_signal(signal.SIGTERM)
+        _, stderr = p.communicate(timeout=60)
+        self.assertIn(p.returncode, (130, 143), stderr)
+        self.assertIn("interrupted twice", stderr)
         self.assertEqual(digest(old), h)
         self.assertNoLitter(old)
+
+    def test_a_second_sigint_during_the_final_flush(self):
+        # a row per step and no flush for minutes: the first SIGINT's final flush writes about a
+        # second of rows, and a second SIGINT 20 ms later cuts it short; the file keeps its last flush
+        buffered = ["--method", "rk4", "--dt", "1e-6", "--output-dt", "1e-6", "--t-end", "5",
+                    "--flush-interval", "600", "--max-output-size", "4G"]
+        twice = 0
+        for trial in range(3):
+            out = self.path(f"flush{trial}.h5")
+            p = self.start(PENDULUM, *buffered, "-o", out)
+            self.assertTrue(wait_for(lambda: os.path.exists(out)))
+            time.sleep(1.0)
+            p.send_signal(signal.SIGINT)
+            time.sleep(0.02)
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+            _, stderr = p.communicate(timeout=60)
+            self.assertEqual(p.returncode, 130, stderr)
+            twice += "interrupted twice" in stderr
+            self.assertWhole(out, status=r"^(running|interrupted by SIGINT at t = \S+)$")
+            self.assertFalse(os.path.exists(out + ".lock"))
+            if twice:
+                break
+        self.assertGreater(twice, 0, "the final flush was never caught by the second SIGINT")
 
 
 class OneFile(Base):
@@ -368,7 +408,18 @@ class Messages(Base):
                                              "1e-12 and 1e150, got [1e+200, 1e+200, 0]")
         bad = self.write("names.yaml", body.replace("AXIS", "[1, 0, 0]").replace("name: a", "name: a\xff\xfeb")
                          .encode("latin-1"))
-        self.refused("run", bad, expect=f"{bad}: body 'a\\xff\\xfeb': the name is not valid UTF-8")
+        for cmd in ("run", "inspect"):  # refused where the model is built, for every command
+            p = run(cmd, bad)
+            self.assertEqual(p.returncode, 2, p.stderr)
+            self.assertRegex(p.stderr.strip(), r"^soadyn: error: " + re.escape(bad) +
+                             r":2:\d+: body 'a\\xff\\xfeb': name: expected a valid UTF-8 name, got 'a\\xff\\xfeb'$")
+        urdf = self.write("names.urdf", '<robot name="r"><link name="base"/><link name="a\xffb"><inertial><mass value="1"/>'
+                          '<inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>\n'
+                          '<joint name="j" type="revolute"><parent link="base"/><child link="a\xffb"/><axis xyz="1 0 0"/>'
+                          '<limit effort="1" velocity="1" lower="-1" upper="1"/></joint></robot>\n'.encode("latin-1"))
+        p = run("inspect", urdf)
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertIn("expected a valid UTF-8 name, got 'a\\xffb'", p.stderr)
         quat = self.write("quat.yaml", b"bodies:\n  - {name: f, joint: {type: free}, mass: 1, inertia: [1, 1, 1]}\n"
                                        b"initial:\n  q: {f: [0, 0, 0, 0, 0, 0, 0]}\n")
         p = run("run", quat)

@@ -1,10 +1,12 @@
-// The library's stop hook: simulate() ends at the next output step once `stop` is non-zero, keeps
-// what it logged, and says which signal (or none) ended it.
+// The library's stop hook: simulate() ends before the next integrator step once `stop` is non-zero,
+// keeps what it logged (plus the state where it ended), and says which signal (or none) ended it.
 #include "soadyn/simulate.hpp"
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <csignal>
+#include <thread>
 
 using namespace soadyn;
 
@@ -60,6 +62,47 @@ TEST(StopHook, SetBeforeTheRunAndWithoutASignal) {
   // a zero flag changes nothing
   stop = 0;
   EXPECT_TRUE(simulate(sc, sc.simulation, nullptr, nullptr, &stop).completed);
+}
+
+// One output interval of 10⁶ rk4 steps (about a second), the flag set from another thread 20 ms in,
+// as a signal would: the run ends between two steps, far from any output time, and logs that state.
+TEST(StopHook, EndsBetweenTwoStepsNotAtTheNextOutput) {
+  const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
+  for (const char* method : {"rk4", "cvode-adams"}) {
+    SimulationSettings s = sc.simulation;
+    s.method = method;
+    s.dt = 1e-3;
+    s.t_end = s.output_dt = 1000.0;
+    s.rtol = 1e-12, s.atol = 1e-12;
+    s.max_steps = 100000000;
+    std::atomic<int> stop{0};
+    std::thread signaller([&] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      stop = SIGINT;
+    });
+    std::vector<Sample> samples;
+    const RunSummary r = simulate(sc, s, nullptr, &samples, &stop);
+    signaller.join();
+    ASSERT_EQ(samples.size(), 2u) << method << ": the initial state and the state where the run ended";
+    const double t = samples.back().t;
+    EXPECT_GT(t, 0.0) << method;
+    EXPECT_LT(t, 100.0) << method << ": ended long before the output time";
+    EXPECT_EQ(r.t_reached, t);
+    EXPECT_EQ(r.status, interrupted_status(SIGINT, t));
+    if (std::string(method) == "rk4") {
+      // a whole number of steps of 1 ms, and the state an uninterrupted run has there
+      EXPECT_NEAR(t / s.dt, double(r.stats.steps), 1e-6) << "t = " << t << ", steps = " << r.stats.steps;
+      SimulationSettings ref = s;
+      ref.t_end = ref.output_dt = double(r.stats.steps) * s.dt;
+      std::vector<Sample> full;
+      ASSERT_TRUE(simulate(sc, ref, nullptr, &full).completed);
+      EXPECT_LT((full.back().q - samples.back().q).norm(), 1e-9);
+      EXPECT_LT((full.back().qd - samples.back().qd).norm(), 1e-9);
+    } else {
+      // CVODE's last internal step: energy kept as the tolerance allows, no interpolation past it
+      EXPECT_LT(r.max_relative_energy_error, 1e-8);
+    }
+  }
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "soadyn/inputs.hpp"
 #include "soadyn/settings.hpp"
 
+#include <atomic>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -60,11 +61,19 @@ struct IntegratorStats {
 class Integrator {
  public:
   virtual ~Integrator() = default;
-  // advance (t, y) to t_out; throws SimulationError when the run cannot continue
+  // advance (t, y) to t_out; throws SimulationError when the run cannot continue.  Returns early,
+  // with t < t_out and y the state at t, when a stop was requested (set_stop) before a step.
   virtual void advance(double t_out, double& t, VecX& y) = 0;
+  // `stop` (nullptr: none) is read before every step; a non-zero value ends advance() there.  Only
+  // read, so a signal handler may set it.
+  void set_stop(const std::atomic<int>* stop) { stop_ = stop; }
+  bool stop_requested() const { return stop_ && stop_->load(std::memory_order_relaxed) != 0; }
   virtual IntegratorStats stats() const = 0;
   // how the quaternion of a free root is kept unit ("none" without a free joint)
   virtual std::string quaternion_handling() const = 0;
+
+ private:
+  const std::atomic<int>* stop_ = nullptr;
 };
 
 // The one registry of integration methods: the name users write, a line about it, whether it takes

@@ -46,7 +46,7 @@ Sample observe(System& system, double t, const VecX& q, const VecX& v);
 
 // Throws soadyn::Error if sc cannot be run with settings: t_end, output_dt, dt or atol not positive
 // and finite, rtol outside (0, 1), more steps or rows than 2^53 (time would no longer count
-// exactly), a name that is not valid UTF-8, or a model without degrees of freedom.  Returns
+// exactly), or a model without degrees of freedom (names are checked as UTF-8 by Model::build).  Returns
 // warnings (a tolerance below what double precision can deliver).  simulate() calls it; call it
 // first to refuse before any output.
 std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings& settings);
@@ -57,8 +57,6 @@ double output_interval(const SimulationSettings& settings);
 // Rows a run logs: the initial state and one per output time.
 double output_rows(const SimulationSettings& settings);
 
-// True if `text` is well-formed UTF-8 (no overlong forms, surrogates or code points past U+10FFFF).
-bool is_valid_utf8(const std::string& text);
 
 // Fixed-step methods (rk4, euler, …) as opposed to CVODE's.
 bool is_fixed_step(const std::string& method);
@@ -66,7 +64,8 @@ bool is_fixed_step(const std::string& method);
 // Simulates sc with settings (its own `simulation` section, possibly overridden).  Never throws
 // for a run that fails midway: the summary says how it ended (completed = false) and the
 // observer has everything logged up to then.  Throws soadyn::Error for bad settings.
-// `stop` (nullptr: none) ends the run at the next output step once it holds a non-zero value: a
+// `stop` (nullptr: none) ends the run before the next integrator step once it holds a non-zero value
+// (the last logged row is the state there, off the output grid): a
 // signal number gives the status "interrupted by SIG<NAME> at t = <t>", −1 "interrupted at t = <t>".
 // It is only read, so a signal handler may set it.
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer = nullptr,

@@ -82,7 +82,7 @@ void add_run(CLI::App& app, RunOptions& o) {
 
 namespace {
 
-// SIGINT, SIGTERM, SIGHUP: the first ends the run at the next output step (simulate's stop hook);
+// SIGINT, SIGTERM, SIGHUP: the first ends the run before the next integrator step (simulate's stop hook);
 // a second leaves at once, the file as of its last flush (valid: SWMR).  Only async-signal-safe
 // calls in the handler.
 std::atomic<int> g_stop{0};

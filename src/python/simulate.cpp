@@ -1,6 +1,6 @@
 // soadyn._simulate: a run on a worker thread without the GIL, while the calling thread waits and
 // lets Python's signal handlers run every 10 ms; one that raises (Ctrl-C: KeyboardInterrupt) sets
-// the library's stop flag, the run ends at its next output step, and the log is finished.
+// the library's stop flag, the run ends before its next integrator step, and the log is finished.
 #include "common.hpp"
 
 #include "soadyn/h5log.hpp"
