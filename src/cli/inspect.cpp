@@ -59,10 +59,8 @@ void add_inspect(CLI::App& app, InspectOptions& o) {
       "Print the system mass matrix M(q) (eq. 14), bias(q, qd), qdd for --tau, energy and momentum at one state.\n"
       "MODEL is a .yaml scenario or a .urdf; without --q/--qd the scenario's initial state (zeros for a URDF).");
   c->add_option("MODEL", o.model, "scenario (.yaml) or robot (.urdf)")->required();
-  c->add_option("--q", o.q, "configuration, comma-separated, nq numbers (free root: x,y,z,qw,qx,qy,qz first)");
-  c->add_option("--qd", o.qd, "velocities, comma-separated, nv numbers (free root: wx,wy,wz,vx,vy,vz first)");
+  add_state_options(c, o.state, "the state");
   c->add_option("--tau", o.tau, "joint forces for qdd, comma-separated, nv numbers (default zero)");
-  c->add_option("--gravity", o.gravity, "gravity gx,gy,gz in m/s^2 (default: the scenario's; 0,0,-9.81 for a URDF)");
   c->add_flag("--free-root", o.free_root, "give a URDF's root link a free joint instead of welding it to the world");
   c->add_flag("--json", o.json, "print one JSON object on stdout");
   c->add_option("--method", o.method, "forward-dynamics route for qdd: " + join(fd_method_names(), " | ") + " (default on)")
@@ -84,6 +82,33 @@ std::string num(double x) {
   std::snprintf(buf, sizeof buf, "%.17g", x);
   return buf;
 }
+
+}  // namespace
+
+void add_state_options(CLI::App* c, StateOptions& o, const std::string& what) {
+  c->add_option("--q", o.q, "configuration of " + what + ", comma-separated, nq numbers (free root: x,y,z,qw,qx,qy,qz first)");
+  c->add_option("--qd", o.qd, "velocities of " + what + ", comma-separated, nv numbers (free root: wx,wy,wz,vx,vy,vz first)");
+  c->add_option("--gravity", o.gravity, "gravity gx,gy,gz in m/s^2 (default: the scenario's; 0,0,-9.81 for a URDF)");
+}
+
+std::optional<Vec3> gravity_option(const StateOptions& o) {
+  if (o.gravity.empty()) return std::nullopt;
+  return Vec3(vector_option("--gravity", o.gravity, 3, Vec3::Zero()));
+}
+
+void state_from_options(const Model& m, const StateOptions& o, VecX& q, VecX& v) {
+  q = vector_option("--q", o.q, m.nq, q);
+  for (int i = 0; i < m.nbodies; ++i)
+    if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
+      const double norm = q.segment<4>(m.idx_q[i] + k).norm();
+      if (std::abs(norm - 1.0) > 1e-6)
+        throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + num(norm));
+    }
+  m.normalize(q);
+  v = vector_option("--qd", o.qd, m.nv, v);
+}
+
+namespace {
 
 std::string json_string(const std::string& s) {
   std::string o = "\"";
@@ -123,15 +148,9 @@ struct Inspection {
 Inspection inspect(const Scenario& sc, const InspectOptions& o) {
   const Model& m = sc.model;
   Inspection r;
-  r.q = vector_option("--q", o.q, m.nq, sc.q0);
-  for (int i = 0; i < m.nbodies; ++i)
-    if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
-      const double norm = r.q.segment<4>(m.idx_q[i] + k).norm();
-      if (std::abs(norm - 1.0) > 1e-6)
-        throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + num(norm));
-    }
-  m.normalize(r.q);
-  r.v = vector_option("--qd", o.qd, m.nv, sc.v0);
+  r.q = sc.q0;
+  r.v = sc.v0;
+  state_from_options(m, o.state, r.q, r.v);
   r.tau = vector_option("--tau", o.tau, m.nv, VecX::Zero(m.nv));
 
   Data d(m);
@@ -193,9 +212,7 @@ void print_tables(const Scenario& sc, const Inspection& r, const std::string& me
 }  // namespace
 
 int run_inspect(const InspectOptions& o) {
-  std::optional<Vec3> gravity;
-  if (!o.gravity.empty()) gravity = vector_option("--gravity", o.gravity, 3, Vec3::Zero());
-  const Scenario sc = load_scenario(o.model, o.free_root, gravity);
+  const Scenario sc = load_scenario(o.model, o.free_root, gravity_option(o.state));
   const Inspection r = inspect(sc, o);
   if (o.json) print_json(sc.model, r, o.method);
   else print_tables(sc, r, o.method);

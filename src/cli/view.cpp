@@ -303,7 +303,7 @@ int run_view(const ViewOptions& o) {
     std::printf("run                    %s (%s)\n", o.run.c_str(), run.status.empty() ? "status unknown" : run.status.c_str());
     std::printf("bodies                 %zu\n", N);
     std::printf("frames                 %s\n", rule);
-    std::printf("page                   %s (%.2f MB)\n", out.c_str(), double(page.size()) / 1e6);
+    std::printf("page                   %s (%.3g MB)\n", out.c_str(), double(page.size()) / 1e6);
   }
   return 0;
 }
