@@ -40,9 +40,7 @@ Sample observe(System& sys, double t, const VecX& y) {
   s.body_com = d.r;
   s.body_orientation.resize(4, m.nbodies);
   for (int i = 0; i < m.nbodies; ++i) {
-    Eigen::Quaterniond u(d.R[i]);
-    if (u.w() < 0) u.coeffs() = -u.coeffs();
-    s.body_orientation.col(i) << u.w(), u.x(), u.y(), u.z();
+    s.body_orientation.col(i) = attitude_quaternion(d.R[i]);
   }
   sys.inputs.evaluate(t, q, v, sys.tau);
   forward_dynamics(m, d, sys.tau, sys.method);

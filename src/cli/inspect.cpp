@@ -142,6 +142,8 @@ struct Inspection {
   MatX M;
   double T = 0.0, V = 0.0;
   Momentum h;
+  Mat3X position, com;                            // η_i and r_i, inertial
+  Eigen::Matrix<double, 4, Eigen::Dynamic> orientation;  // [w x y z], body → inertial, w ≥ 0
 };
 
 // q (unit quaternions checked, then normalized), v and τ from the options, then 𝓜, bias and q̈.
@@ -165,6 +167,13 @@ Inspection inspect(const Scenario& sc, const InspectOptions& o) {
   r.T = kinetic_energy(m, d);
   r.V = potential_energy(m, d);
   r.h = momentum(m, d);
+  // body poses as soadyn run logs them
+  r.position = d.eta;
+  r.com = d.r;
+  r.orientation.resize(4, m.nbodies);
+  for (int i = 0; i < m.nbodies; ++i) {
+    r.orientation.col(i) = attitude_quaternion(d.R[i]);
+  }
   return r;
 }
 
@@ -178,7 +187,12 @@ void print_json(const Model& m, const Inspection& r, const std::string& method) 
   out += "], \"bias\": " + json_array(r.bias) + ", \"tau\": " + json_array(r.tau) + ", \"qdd\": " + json_array(r.qdd);
   out += ", \"kinetic_energy\": " + num(r.T) + ", \"potential_energy\": " + num(r.V);
   out += ", \"momentum\": {\"linear\": " + json_array(r.h.linear) + ", \"angular\": " + json_array(r.h.angular) + "}";
-  out += ", \"method\": " + json_string(method) + "}";
+  out += ", \"bodies\": [";
+  for (int i = 0; i < m.nbodies; ++i)
+    out += std::string(i ? ", " : "") + "{\"name\": " + json_string(m.body_names[i]) +
+           ", \"position\": " + json_array(r.position.col(i)) + ", \"orientation\": " + json_array(r.orientation.col(i)) +
+           ", \"com\": " + json_array(r.com.col(i)) + "}";
+  out += "], \"method\": " + json_string(method) + "}";
   std::cout << out << std::endl;
 }
 
@@ -204,6 +218,13 @@ void print_tables(const Scenario& sc, const Inspection& r, const std::string& me
   print_vector("tau", vlab, r.tau);
   print_vector("qdd = M^-1 (tau - bias)  [" + method + "]", vlab, r.qdd);
   std::printf("energy     kinetic % .10e   potential % .10e   total % .10e J\n", r.T, r.V, r.T + r.V);
+  std::printf("bodies     frame origin (m), attitude [w x y z] body -> inertial, centre of mass (m); inertial\n");
+  for (int i = 0; i < m.nbodies; ++i) {
+    const Vec3 p = r.position.col(i), c = r.com.col(i);
+    const Eigen::Vector4d u = r.orientation.col(i);
+    std::printf("  %-20s [% .10e, % .10e, % .10e]  [% .10e, % .10e, % .10e, % .10e]  [% .10e, % .10e, % .10e]\n",
+                m.body_names[i].c_str(), p(0), p(1), p(2), u(0), u(1), u(2), u(3), c(0), c(1), c(2));
+  }
   std::printf("momentum   linear  [% .6e, % .6e, % .6e]\n", r.h.linear.x(), r.h.linear.y(), r.h.linear.z());
   std::printf("           angular [% .6e, % .6e, % .6e] (about the inertial origin)\n", r.h.angular.x(),
               r.h.angular.y(), r.h.angular.z());
