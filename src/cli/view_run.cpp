@@ -131,16 +131,19 @@ RunFile read_run(const std::string& path) {
   r.q = read_matrix(file, "/q", path);
   if (exists(file, "/energy/kinetic")) r.kinetic = read_matrix(file, "/energy/kinetic", path).col(0);
   if (exists(file, "/energy/total")) r.total = read_matrix(file, "/energy/total", path).col(0);
+  if (exists(file, "/energy/work_inputs")) r.work = read_matrix(file, "/energy/work_inputs", path).col(0);
 
   // rows: as many as every series has (a run stopped mid-write keeps whole rows only)
   Eigen::Index rows = std::min(r.time.size(), r.q.rows());
   if (r.kinetic.size()) rows = std::min(rows, r.kinetic.size());
   if (r.total.size()) rows = std::min(rows, r.total.size());
+  if (r.work.size()) rows = std::min(rows, r.work.size());
   if (rows == 0) throw Error(path + ": the run logged no samples");
   r.time.conservativeResize(rows);
   r.q.conservativeResize(rows, Eigen::NoChange);
   if (r.kinetic.size()) r.kinetic.conservativeResize(rows);
   if (r.total.size()) r.total.conservativeResize(rows);
+  if (r.work.size()) r.work.conservativeResize(rows);
   for (Eigen::Index k = 1; k < rows; ++k)
     if (!(r.time(k) >= r.time(k - 1))) throw Error(path + ": /time decreases at row " + std::to_string(k));
 
