@@ -132,7 +132,7 @@ std::string json_array(const V& v) {
 
 void print_vector(const std::string& title, const std::vector<std::string>& labels, const VecX& v) {
   std::printf("%s\n", title.c_str());
-  for (Eigen::Index k = 0; k < v.size(); ++k) std::printf("  %-24s % .10e\n", labels[k].c_str(), v(k));
+  for (Eigen::Index k = 0; k < v.size(); ++k) std::printf("  %-24s % .17g\n", labels[k].c_str(), v(k));
 }
 
 
@@ -211,22 +211,22 @@ void print_tables(const Scenario& sc, const Inspection& r, const std::string& me
   std::printf("mass matrix M(q) (%d x %d)\n", m.nv, m.nv);
   for (int k = 0; k < m.nv; ++k) {
     std::printf("  %-24s", vlab[k].c_str());
-    for (int c = 0; c < m.nv; ++c) std::printf(" % .6e", r.M(k, c));
+    for (int c = 0; c < m.nv; ++c) std::printf(" % 14.9g", r.M(k, c));
     std::printf("\n");
   }
   print_vector("bias(q, qd) (Coriolis, centrifugal, gyroscopic, gravity)", vlab, r.bias);
   print_vector("tau", vlab, r.tau);
   print_vector("qdd = M^-1 (tau - bias)  [" + method + "]", vlab, r.qdd);
-  std::printf("energy     kinetic % .10e   potential % .10e   total % .10e J\n", r.T, r.V, r.T + r.V);
+  std::printf("energy     kinetic % .17g   potential % .17g   total % .17g J\n", r.T, r.V, r.T + r.V);
   std::printf("bodies     frame origin (m), attitude [w x y z] body -> inertial, centre of mass (m); inertial\n");
   for (int i = 0; i < m.nbodies; ++i) {
     const Vec3 p = r.position.col(i), c = r.com.col(i);
     const Eigen::Vector4d u = r.orientation.col(i);
-    std::printf("  %-20s [% .10e, % .10e, % .10e]  [% .10e, % .10e, % .10e, % .10e]  [% .10e, % .10e, % .10e]\n",
+    std::printf("  %-20s [% .12g, % .12g, % .12g]  [% .12g, % .12g, % .12g, % .12g]  [% .12g, % .12g, % .12g]\n",
                 m.body_names[i].c_str(), p(0), p(1), p(2), u(0), u(1), u(2), u(3), c(0), c(1), c(2));
   }
-  std::printf("momentum   linear  [% .6e, % .6e, % .6e]\n", r.h.linear.x(), r.h.linear.y(), r.h.linear.z());
-  std::printf("           angular [% .6e, % .6e, % .6e] (about the inertial origin)\n", r.h.angular.x(),
+  std::printf("momentum   linear  [% .10g, % .10g, % .10g]\n", r.h.linear.x(), r.h.linear.y(), r.h.linear.z());
+  std::printf("           angular [% .10g, % .10g, % .10g] (about the inertial origin)\n", r.h.angular.x(),
               r.h.angular.y(), r.h.angular.z());
 }
 
