@@ -1,6 +1,9 @@
 #include "soadyn/h5log.hpp"
 #include "soadyn/text.hpp"
 
+#include "h5_util.hpp"
+#include "log_layout.hpp"
+
 #include <hdf5.h>
 
 #include <unistd.h>
@@ -9,76 +12,17 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <sstream>
 
 namespace soadyn {
 
+using h5::attribute;
+using h5::check;
+using h5::Id;
+using h5::Scalar;
+using H5Failure = h5::Failure;
+
 namespace {
-
-// the cause of the last failed HDF5 call: the errno its file driver recorded (0: none) and its text
-int last_errno = 0;
-std::string last_cause;
-
-herr_t find_errno(unsigned, const H5E_error2_t* e, void* found) {
-  const char* at = e->desc ? std::strstr(e->desc, "errno = ") : nullptr;
-  if (at && *static_cast<int*>(found) == 0) *static_cast<int*>(found) = std::atoi(at + 8);
-  return 0;
-}
-
-// Records why the HDF5 call that just failed did so; must run before any other HDF5 call, which
-// would clear the library's error stack.
-void record_cause() {
-  int err = 0;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, find_errno, &err);
-  last_errno = err;
-  last_cause = err ? std::strerror(err) : "";
-}
-
-struct H5Failure : Error {
-  H5Failure(const std::string& what, std::string cause) : Error(what), cause(std::move(cause)) {}
-  std::string cause;
-};
-
-[[noreturn]] void fail(const std::string& what) {
-  record_cause();
-  throw H5Failure("HDF5: " + what + " failed", last_cause);
-}
-
-void check(herr_t status, const std::string& what) {
-  if (status < 0) fail(what);
-}
-
-// A move-only owner of one HDF5 id, closed with the function for its kind.  release() gives the id
-// up without closing it: after a failed write the library must not touch the file again.
-class Id {
- public:
-  Id() = default;
-  Id(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(id), close_(close) {
-    if (id < 0) fail(what);
-  }
-  Id(Id&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
-  Id& operator=(Id&& o) noexcept {
-    if (this != &o) {
-      reset();
-      id_ = o.id_;
-      close_ = o.close_;
-      o.id_ = -1;
-    }
-    return *this;
-  }
-  Id(const Id&) = delete;
-  Id& operator=(const Id&) = delete;
-  ~Id() { reset(); }
-  void reset() {
-    if (id_ >= 0 && close_) close_(id_);
-    id_ = -1;
-  }
-  void release() { id_ = -1; }
-  operator hid_t() const { return id_; }
-
- private:
-  hid_t id_ = -1;
-  herr_t (*close_)(hid_t) = nullptr;
-};
 
 std::string number(double x) {
   char buf[32];
@@ -86,76 +30,62 @@ std::string number(double x) {
   return buf;
 }
 
-Id group(hid_t parent, const char* name) {
-  return Id(H5Gcreate2(parent, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, std::string("creating group ") + name);
+// the conventions a reader needs to make sense of q and v
+const char* kFreeJoint =
+    "q = [x y z qw qx qy qz]: the body frame's origin in inertial coordinates (m) and the unit quaternion of its "
+    "attitude, body to inertial, w first; v = qd = [wx wy wz vx vy vz] = [omega; eta_dot]: the body's angular "
+    "velocity and the velocity of its frame's origin, both in inertial coordinates (qd is v, not the derivative of q)";
+const char* kBallJoint =
+    "q = [qw qx qy qz]: the unit quaternion of the child's frame relative to the joint frame (child to joint "
+    "frame), w first; v = qd = [wx wy wz]: the child's angular velocity relative to the parent, in the child's frame";
+const char* kPlanarJoint =
+    "q = [x y theta]: translation along e1 and e2 spanning the plane normal to the axis n, then rotation theta "
+    "about n (e1: the coordinate axis least aligned with n, made orthogonal to it; e2 = n x e1); v = their rates";
+const char* kUnits = "SI: s, m, kg, rad, J; quaternion components are dimensionless (1)";
+const char* kBodies =
+    "N bodies, those of the model after fixed joints are merged (a body welded by a fixed joint moves with the one "
+    "it is welded to); position: each body frame's origin (its joint point), orientation: the unit quaternion "
+    "[w x y z] of its attitude, body to inertial, with w >= 0, com: its centre of mass (merged bodies included); "
+    "all in inertial coordinates";
+
+// "rad", or one unit per column when they differ
+void units_attribute(hid_t obj, const std::vector<std::string>& units) {
+  if (std::all_of(units.begin(), units.end(), [&](const std::string& u) { return u == units.front(); }))
+    attribute(obj, "units", units.front());
+  else
+    attribute(obj, "units", units);
 }
-
-// a fixed-length string type of `size` bytes, UTF-8 when the text is valid UTF-8
-Id string_type(size_t size, bool utf8) {
-  Id type(H5Tcopy(H5T_C_S1), H5Tclose, "H5Tcopy");
-  check(H5Tset_size(type, std::max<size_t>(1, size)), "H5Tset_size");
-  check(H5Tset_strpad(type, H5T_STR_NULLPAD), "H5Tset_strpad");
-  check(H5Tset_cset(type, utf8 ? H5T_CSET_UTF8 : H5T_CSET_ASCII), "H5Tset_cset");
-  return type;
-}
-
-// scalar attributes, written once before SWMR writing starts
-template <class T>
-void attribute(hid_t obj, const char* name, T value) {
-  static_assert(std::is_same_v<T, double> || std::is_same_v<T, long>);
-  const hid_t type = std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_LONG;
-  Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
-  Id attr(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
-  check(H5Awrite(attr, type, &value), std::string("writing attribute ") + name);
-}
-
-void attribute(hid_t obj, const char* name, const std::string& value) {
-  Id type = string_type(value.size(), is_valid_utf8(value));
-  Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
-  Id attr(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
-  const std::string padded = value.empty() ? std::string(1, '\0') : value;
-  check(H5Awrite(attr, type, padded.data()), std::string("writing attribute ") + name);
-}
-
-// A scalar dataset whose storage is allocated at creation: later writes overwrite its bytes in
-// place and change no metadata, which SWMR allows at any time.
-struct Scalar {
-  Id dset, type;
-  size_t size = 0;  // strings: fixed length in bytes
-  Scalar() = default;
-  Scalar(hid_t parent, const char* name, hid_t mem_type, Id file_type = Id()) {
-    Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
-    Id props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "H5Pcreate");
-    check(H5Pset_alloc_time(props, H5D_ALLOC_TIME_EARLY), "H5Pset_alloc_time");
-    type = std::move(file_type);
-    const hid_t t = type >= 0 ? hid_t(type) : mem_type;
-    if (type >= 0) size = H5Tget_size(type);
-    dset = Id(H5Dcreate2(parent, name, t, space, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose, std::string("creating ") + name);
-  }
-  void write(double x) { check(H5Dwrite(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &x), "writing /solver"); }
-  void write(long x) { check(H5Dwrite(dset, H5T_NATIVE_LONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, &x), "writing /solver"); }
-  void write(std::string s) {
-    if (s.size() > size) {  // cut at a character boundary
-      size_t n = size - 3;
-      while (n > 0 && (static_cast<unsigned char>(s[n]) & 0xC0) == 0x80) --n;
-      s = s.substr(0, n) + "...";
-    }
-    s.resize(size, '\0');
-    check(H5Dwrite(dset, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data()), "writing /solver");
-  }
-  void release() { dset.release(), type.release(); }
-};
-
-Scalar string_scalar(hid_t parent, const char* name, size_t size) {
-  return Scalar(parent, name, -1, string_type(size, true));
-}
-
-// the bytes of one row: t, q, q̇, q̈, T, V, E, linear and angular momentum
-int row_width(const Model& m) { return 1 + m.nq + 2 * m.nv + 3 + 6; }
 
 }  // namespace
 
-std::uint64_t row_bytes(const Model& model) { return std::uint64_t(row_width(model)) * sizeof(double); }
+LogGroups LogGroups::parse(const std::string& text) {
+  LogGroups g{false, false, false, false};
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (item == "state") g.state = true;
+    else if (item == "energy") g.energy = true;
+    else if (item == "momentum") g.momentum = true;
+    else if (item == "bodies") g.bodies = true;
+    else if (item == "all") g = LogGroups{};
+    else
+      throw Error("--log: expected a comma-separated list of state, energy, momentum, bodies (or all); got '" + item +
+                  "' in '" + text + "'");
+  }
+  if (text.empty() || text.back() == ',') throw Error("--log: expected a comma-separated list of groups, got '" + text + "'");
+  return g;
+}
+
+std::string LogGroups::str() const {
+  std::string out;
+  for (const auto& [on, name] : {std::pair{state, "state"}, {energy, "energy"}, {momentum, "momentum"}, {bodies, "bodies"}})
+    if (on) out += (out.empty() ? "" : ",") + std::string(name);
+  return out;
+}
+
+std::uint64_t row_bytes(const Model& model, const LogGroups& groups) {
+  return std::uint64_t(log::layout(model, groups).columns.size()) * sizeof(double);
+}
 
 struct H5Log::Impl {
   std::string path, tmp_path;
@@ -165,7 +95,11 @@ struct H5Log::Impl {
   hsize_t rows = 0;            // rows in the file
   std::vector<double> buffer;  // rows not yet written
   double t_last = 0.0, t_flushed = -1.0;
-  Scalar status, quaternion, t_reached, cpu, steps, rhs, jac, etf, nli;
+  LogGroups groups;
+  Scalar status, quaternion, t_reached, cpu, steps, rhs, jac, etf, nli, max_balance, final_balance;
+  std::vector<Scalar*> scalars() {
+    return {&status, &quaternion, &t_reached, &cpu, &steps, &rhs, &jac, &etf, &nli, &max_balance, &final_balance};
+  }
   std::chrono::steady_clock::time_point last_flush;
   std::chrono::duration<double> flush_interval{0.5};
   long flushes = 0;
@@ -174,7 +108,7 @@ struct H5Log::Impl {
   // after a failed write: give every id up unclosed, so nothing writes to the file again
   void abandon() {
     broken = true;
-    for (Scalar* s : {&status, &quaternion, &t_reached, &cpu, &steps, &rhs, &jac, &etf, &nli}) s->release();
+    for (Scalar* s : scalars()) s->release();
     samples.release();
     file.release();
   }
@@ -194,81 +128,94 @@ struct H5Log::Impl {
 
 namespace {
 
-// /time, /q, … as views of columns [first, first + cols) of /samples (cols = 0: one column, 1-D)
-void view(hid_t parent, const char* name, int first, int cols, int width) {
-  const int rank = cols > 0 ? 2 : 1;
-  const hsize_t c = hsize_t(std::max(1, cols));
-  hsize_t dims[2] = {0, c}, maxdims[2] = {H5S_UNLIMITED, c};
+// a view of /samples' columns (log_layout.hpp): rank 1, 2, or 3 (T × bodies × cols)
+void create_view(hid_t file, const log::View& v, int width) {
+  const hsize_t c = hsize_t(std::max(1, v.cols)), nb = hsize_t(v.bodies), n = v.bodies > 0 ? nb * c : c;
+  const int rank = v.bodies > 0 ? 3 : v.cols > 0 ? 2 : 1;
+  hsize_t dims[3] = {0, v.bodies > 0 ? nb : c, c}, maxdims[3] = {H5S_UNLIMITED, dims[1], c};
   Id vspace(H5Screate_simple(rank, dims, maxdims), H5Sclose, "H5Screate_simple");
-  hsize_t start[2] = {0, 0}, stride[2] = {1, 1}, count[2] = {H5S_UNLIMITED, 1}, block[2] = {1, c};
+  // one block per row: the row's n numbers, in row-major order
+  hsize_t start[3] = {0, 0, 0}, stride[3] = {1, 1, 1}, count[3] = {H5S_UNLIMITED, 1, 1}, block[3] = {1, dims[1], c};
   check(H5Sselect_hyperslab(vspace, H5S_SELECT_SET, start, stride, count, block), "selecting a view");
   hsize_t sdims[2] = {0, hsize_t(width)}, smax[2] = {H5S_UNLIMITED, hsize_t(width)};
   Id sspace(H5Screate_simple(2, sdims, smax), H5Sclose, "H5Screate_simple");
-  hsize_t sstart[2] = {0, hsize_t(first)}, sblock[2] = {1, c};
+  hsize_t sstart[2] = {0, hsize_t(v.first)}, sblock[2] = {1, n};
   check(H5Sselect_hyperslab(sspace, H5S_SELECT_SET, sstart, stride, count, sblock), "selecting a view's source");
   Id props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "H5Pcreate");
-  check(H5Pset_virtual(props, vspace, ".", "/samples", sspace), std::string("mapping view ") + name);
-  Id d(H5Dcreate2(parent, name, H5T_NATIVE_DOUBLE, vspace, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose,
-       std::string("creating view ") + name);
+  check(H5Pset_virtual(props, vspace, ".", "/samples", sspace), "mapping view " + v.path);
+  Id d(H5Dcreate2(file, v.path.c_str(), H5T_NATIVE_DOUBLE, vspace, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose,
+       "creating view " + v.path);
+  units_attribute(d, v.units);
 }
 
 }  // namespace
 
-H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettings& settings, const std::string& version)
+H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettings& settings, const std::string& version,
+             const LogGroups& groups)
     : impl_(std::make_unique<Impl>()) {
   H5dont_atexit();  // no flush at exit of a file a failed write left behind
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
   Impl& im = *impl_;
   im.path = path;
   im.tmp_path = temporary_path(path);
+  im.groups = groups;
   const Model& m = sc.model;
-  im.width = row_width(m);
+  const log::Layout lay = log::layout(m, groups);
+  im.width = int(lay.columns.size());
   try {
     Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "H5Pcreate");
     check(H5Pset_libver_bounds(fapl, H5F_LIBVER_LATEST, H5F_LIBVER_LATEST), "H5Pset_libver_bounds");
     const hid_t f = H5Fcreate(im.tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
     if (f < 0) {
-      record_cause();
-      if (last_errno == ENOSPC || last_errno == EDQUOT || last_errno == EIO || last_errno == EFBIG) {
+      h5::record_cause();
+      const std::string& cause = h5::last_cause;
+      if (h5::last_errno == ENOSPC || h5::last_errno == EDQUOT || h5::last_errno == EIO || h5::last_errno == EFBIG) {
         std::remove(im.tmp_path.c_str());
-        throw IoError(std::string(1, char(std::tolower(static_cast<unsigned char>(last_cause[0])))) + last_cause.substr(1) +
+        throw IoError(std::string(1, char(std::tolower(static_cast<unsigned char>(cause[0])))) + cause.substr(1) +
                       " while creating " + path + " (the output was not written; an existing file there is unchanged)");
       }
-      throw Error(path + ": cannot create the output file " + im.tmp_path +
-                  (last_cause.empty() ? std::string() : " (" + last_cause + ")") + "; is the directory writable?");
+      throw Error(path + ": cannot create the output file " + im.tmp_path + (cause.empty() ? std::string() : " (" + cause + ")") +
+                  "; is the directory writable?");
     }
     im.file = Id(f, H5Fclose, "H5Fcreate");
     attribute(im.file, "soadyn_version", version);
     attribute(im.file, "scenario_path", sc.path);
-    attribute(im.file, "layout_version", 2L);
+    attribute(im.file, "layout_version", 3L);
+    attribute(im.file, "log_groups", groups.str());
     {
-      Id type = string_type(sc.text.size(), is_valid_utf8(sc.text));
+      Id type = h5::string_type(sc.text.size(), is_valid_utf8(sc.text));
       Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
       Id d(H5Dcreate2(im.file, "scenario", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, "creating /scenario");
       const std::string padded = sc.text.empty() ? std::string(1, '\0') : sc.text;
       check(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, padded.data()), "writing /scenario");
     }
 
-    Id g_model = group(im.file, "model");
-    attribute(g_model, "nq", long(m.nq));
-    attribute(g_model, "nv", long(m.nv));
     {
-      // joint_names: fixed-length UTF-8 strings; parents: ints (-1 = world)
-      size_t width = 1;
-      for (const auto& n : m.joint_names) width = std::max(width, n.size());
-      std::vector<char> names(width * m.nbodies, '\0');
-      for (int i = 0; i < m.nbodies; ++i) std::copy(m.joint_names[i].begin(), m.joint_names[i].end(), names.begin() + i * width);
-      Id type = string_type(width, true);
-      hsize_t n = hsize_t(m.nbodies);
-      Id space(H5Screate_simple(1, &n, nullptr), H5Sclose, "H5Screate_simple");
-      Id d(H5Dcreate2(g_model, "joint_names", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, "joint_names");
-      check(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, names.data()), "writing joint_names");
-      std::vector<int> parents(m.parent.begin(), m.parent.end());
-      Id dp(H5Dcreate2(g_model, "parents", H5T_NATIVE_INT, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, "parents");
-      check(H5Dwrite(dp, H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, parents.data()), "writing parents");
+      // the model: names and units of every column of q and v, the joints, the tree, the conventions
+      Id g = h5::group(im.file, "model");
+      attribute(g, "nq", long(m.nq));
+      attribute(g, "nv", long(m.nv));
+      attribute(g, "q_names", m.q_names());
+      attribute(g, "v_names", m.v_names());
+      attribute(g, "q_units", log::q_units(m));
+      attribute(g, "v_units", log::v_units(m));
+      std::vector<std::string> types;
+      for (JointType t : m.joint_type) types.emplace_back(to_string(t));
+      attribute(g, "joint_names", m.joint_names);
+      attribute(g, "joint_types", types);
+      attribute(g, "body_names", m.body_names);
+      attribute(g, "gravity", std::vector<double>(m.gravity.data(), m.gravity.data() + 3));
+      attribute(g, "gravity_units", std::string("m/s^2"));
+      attribute(g, "units", std::string(kUnits));
+      attribute(g, "free_joint", std::string(kFreeJoint));
+      attribute(g, "ball_joint", std::string(kBallJoint));
+      attribute(g, "planar_joint", std::string(kPlanarJoint));
+      h5::int_dataset(g, "parents", std::vector<int>(m.parent.begin(), m.parent.end()), "1");
+      h5::int_dataset(g, "joint_q_index", std::vector<int>(m.idx_q.begin(), m.idx_q.end()), "1");
+      h5::int_dataset(g, "joint_v_index", std::vector<int>(m.idx_v.begin(), m.idx_v.end()), "1");
     }
 
-    Id g_solver = group(im.file, "solver");
+    Id g_solver = h5::group(im.file, "solver");
     attribute(g_solver, "method", settings.method);
     attribute(g_solver, "rtol", settings.rtol);
     attribute(g_solver, "atol", settings.atol);
@@ -276,8 +223,8 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
     attribute(g_solver, "output_dt", output_interval(settings));
     attribute(g_solver, "t_end", settings.t_end);
     attribute(g_solver, "dynamics", settings.dynamics);
-    im.status = string_scalar(g_solver, "status", 1024);
-    im.quaternion = string_scalar(g_solver, "quaternion_handling", 256);
+    im.status = h5::string_scalar(g_solver, "status", 1024);
+    im.quaternion = h5::string_scalar(g_solver, "quaternion_handling", 256);
     im.t_reached = Scalar(g_solver, "t_reached", H5T_NATIVE_DOUBLE);
     im.cpu = Scalar(g_solver, "cpu_seconds", H5T_NATIVE_DOUBLE);
     im.steps = Scalar(g_solver, "steps", H5T_NATIVE_LONG);
@@ -285,9 +232,14 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
     im.jac = Scalar(g_solver, "jac_evals", H5T_NATIVE_LONG);
     im.etf = Scalar(g_solver, "error_test_failures", H5T_NATIVE_LONG);
     im.nli = Scalar(g_solver, "nonlinear_iterations", H5T_NATIVE_LONG);
+    im.max_balance = Scalar(g_solver, "max_energy_balance_error", H5T_NATIVE_DOUBLE);
+    im.final_balance = Scalar(g_solver, "final_energy_balance_error", H5T_NATIVE_DOUBLE);
+    for (Scalar* s : {&im.t_reached, &im.cpu}) attribute(s->dset, "units", std::string("s"));
+    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.max_balance, &im.final_balance})
+      attribute(s->dset, "units", std::string("1"));
     im.status.write(std::string("running"));
     im.quaternion.write(std::string());
-    for (Scalar* s : {&im.t_reached, &im.cpu}) s->write(0.0);
+    for (Scalar* s : {&im.t_reached, &im.cpu, &im.max_balance, &im.final_balance}) s->write(0.0);
     for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli}) s->write(0L);
 
     {
@@ -299,19 +251,18 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
       check(H5Pset_chunk(props, 2, chunk), "H5Pset_chunk");
       im.samples = Id(H5Dcreate2(im.file, "samples", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose,
                       "creating /samples");
-      attribute(im.samples, "columns",
-                "time 1, q " + std::to_string(m.nq) + ", qd " + std::to_string(m.nv) + ", qdd " + std::to_string(m.nv) +
-                    ", energy/kinetic 1, energy/potential 1, energy/total 1, momentum/linear 3, momentum/angular 3");
+      std::vector<std::string> names, units;
+      for (const log::Column& c : lay.columns) names.push_back(c.name), units.push_back(c.unit);
+      attribute(im.samples, "column_names", names);
+      attribute(im.samples, "column_units", units);
     }
-    Id g_energy = group(im.file, "energy"), g_momentum = group(im.file, "momentum");
-    int col = 0;
-    view(im.file, "time", col, 0, im.width), col += 1;
-    view(im.file, "q", col, m.nq, im.width), col += m.nq;
-    view(im.file, "qd", col, m.nv, im.width), col += m.nv;
-    view(im.file, "qdd", col, m.nv, im.width), col += m.nv;
-    for (const char* e : {"kinetic", "potential", "total"}) view(g_energy, e, col, 0, im.width), col += 1;
-    view(g_momentum, "linear", col, 3, im.width), col += 3;
-    view(g_momentum, "angular", col, 3, im.width), col += 3;
+    for (const std::string& g : lay.groups) h5::group(im.file, g.c_str() + 1);
+    if (groups.bodies) {
+      Id g(H5Gopen2(im.file, "bodies", H5P_DEFAULT), H5Gclose, "opening /bodies");
+      attribute(g, "description", std::string(kBodies));
+      h5::string_dataset(g, "names", m.body_names);
+    }
+    for (const log::View& v : lay.views) create_view(im.file, v, im.width);
     check(H5Fstart_swmr_write(im.file), "H5Fstart_swmr_write");  // writes everything so far
   } catch (const H5Failure& e) {
     im.io_error(e);
@@ -338,14 +289,7 @@ H5Log::~H5Log() {
 }
 
 void H5Log::on_sample(const Sample& s) {
-  auto& b = impl_->buffer;
-  b.push_back(s.t);
-  b.insert(b.end(), s.q.data(), s.q.data() + s.q.size());
-  b.insert(b.end(), s.qd.data(), s.qd.data() + s.qd.size());
-  b.insert(b.end(), s.qdd.data(), s.qdd.data() + s.qdd.size());
-  b.insert(b.end(), {s.kinetic, s.potential, s.total});
-  b.insert(b.end(), s.linear.data(), s.linear.data() + 3);
-  b.insert(b.end(), s.angular.data(), s.angular.data() + 3);
+  log::append_row(impl_->groups, s, impl_->buffer);
   impl_->t_last = s.t;
 }
 
@@ -375,6 +319,8 @@ void H5Log::flush(const RunSummary* summary) {
       im.jac.write(summary->stats.jac_evals);
       im.etf.write(summary->stats.error_test_failures);
       im.nli.write(summary->stats.nonlinear_iterations);
+      im.max_balance.write(summary->max_energy_balance_error);
+      im.final_balance.write(summary->final_energy_balance_error);
     }
     check(H5Fflush(im.file, H5F_SCOPE_LOCAL), "H5Fflush");
     im.rows += n;
@@ -413,17 +359,14 @@ void H5Log::on_finish(const RunSummary& summary) {
   }
   flush(&summary);
   if (im.broken) return;
-  for (Scalar* s : {&im.status, &im.quaternion, &im.t_reached, &im.cpu, &im.steps, &im.rhs, &im.jac, &im.etf, &im.nli}) {
-    s->dset.reset();
-    s->type.reset();
-  }
+  for (Scalar* s : im.scalars()) s->reset();
   im.samples.reset();
   // closing ends SWMR writing: the file then opens without the SWMR-read flag
   if (H5Fclose(im.file) < 0) {
-    record_cause();
+    h5::record_cause();
     im.file.release();
     im.abandon();
-    throw IoError((last_cause.empty() ? std::string("an HDF5 error") : last_cause) + " while closing " + im.path +
+    throw IoError((h5::last_cause.empty() ? std::string("an HDF5 error") : h5::last_cause) + " while closing " + im.path +
                   " (rows up to t = " + number(im.t_flushed) + " s are kept)");
   }
   im.file.release();

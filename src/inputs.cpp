@@ -13,6 +13,16 @@ void Inputs::evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> t
   for (const auto& d : dampers) tau(d.dof) -= d.damping * v(d.dof);
 }
 
+Inputs::Power Inputs::power(double t, const VecX& v) const {
+  // P = Σ τ_k q̇_k over torques and dampers; D = Σ c q̇²
+  Power p;
+  for (const auto& u : torques)
+    p.inputs += (u.constant + u.amplitude * std::sin(2 * std::numbers::pi * u.frequency * t + u.phase)) * v(u.dof);
+  for (const auto& d : dampers) p.dissipated += d.damping * v(d.dof) * v(d.dof);
+  p.inputs -= p.dissipated;
+  return p;
+}
+
 double Inputs::spring_energy(const VecX& q) const {
   double V = 0.0;
   for (const auto& s : springs) V += 0.5 * s.stiffness * (q(s.coord) - s.rest) * (q(s.coord) - s.rest);

@@ -10,7 +10,14 @@
 namespace soadyn {
 
 System::System(const Model& m, const Inputs& in, FdMethod fd)
-    : model(m), inputs(in), method(fd), data(m), q(m.nq), v(m.nv), tau(m.nv), qd(m.nq) {}
+    : model(m), inputs(in), method(fd), nquad(in.does_work() ? 2 : 0), data(m), q(m.nq), v(m.nv), tau(m.nv), qd(m.nq) {}
+
+VecX System::state(const VecX& q0, const VecX& v0) const {
+  VecX y = VecX::Zero(size());
+  y.head(model.nq) = q0;
+  y.segment(model.nq, model.nv) = v0;
+  return y;
+}
 
 void System::rhs(double t, const double* y, double* ydot) {
   ++rhs_evals;
@@ -23,9 +30,17 @@ void System::rhs(double t, const double* y, double* ydot) {
   model.qdot(q, v, qd);
   Eigen::Map<VecX>(ydot, model.nq) = qd;
   Eigen::Map<VecX>(ydot + model.nq, model.nv) = data.qdd;
+  if (nquad > 0) {
+    // Ẇ = (τ_torques + τ_dampers) · q̇,  Ḋ = Σ c q̇²
+    const Inputs::Power p = inputs.power(t, v);
+    ydot[model.nq + model.nv] = p.inputs;
+    ydot[model.nq + model.nv + 1] = p.dissipated;
+  }
 }
 
 std::string System::component_name(int k) const {
+  if (k == model.nq + model.nv && nquad > 0) return "the inputs' work W (quadrature)";
+  if (k == model.nq + model.nv + 1 && nquad > 0) return "the dampers' dissipated energy D (quadrature)";
   const bool is_q = k < model.nq;
   const int idx = is_q ? k : k - model.nq;
   const std::vector<std::string> names = is_q ? model.q_names() : model.v_names();
@@ -60,7 +75,7 @@ class FixedStep : public Integrator {
       if (first_non_finite(y) >= 0) {
         // worst DOF: the largest velocity in the last finite state, the one blowing up
         Eigen::Index worst = 0;
-        prev_.tail(sys_.model.nv).cwiseAbs().maxCoeff(&worst);
+        prev_.segment(sys_.model.nq, sys_.model.nv).cwiseAbs().maxCoeff(&worst);
         std::ostringstream os;
         os << "unstable at t = " << t << " s: the state is not finite after a step of " << h << " s; worst DOF "
            << sys_.component_name(sys_.model.nq + int(worst)) << " = " << prev_(sys_.model.nq + worst) << " before it";
@@ -99,12 +114,13 @@ class Euler : public FixedStep {
 
 class SymplecticEuler : public FixedStep {
   using FixedStep::FixedStep;
-  // v ← v + h q̈(q, v);  q ← q + h q̇(q, v⁺)
+  // v ← v + h q̈(q, v);  q ← q + h q̇(q, v⁺);  quadratures W, D ← + h (P, D)(q, v) (left rectangle)
   void step(double t, double h, VecX& y) override {
     const int nq = sys_.model.nq, nv = sys_.model.nv;
     f(t, y, k1_);
-    y.tail(nv) += h * k1_.tail(nv);
-    sys_.model.qdot(y.head(nq), y.tail(nv), k2_.head(nq));
+    y.segment(nq, nv) += h * k1_.segment(nq, nv);
+    y.tail(sys_.nquad) += h * k1_.tail(sys_.nquad);
+    sys_.model.qdot(y.head(nq), y.segment(nq, nv), k2_.head(nq));
     y.head(nq) += h * k2_.head(nq);
   }
 };

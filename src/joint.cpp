@@ -6,13 +6,16 @@ namespace soadyn {
 
 const std::vector<JointTraits>& joint_traits_table() {
   static const std::vector<JointTraits> table = {
-      {JointType::Revolute, "revolute", 1, 1, -1, true, false, {""}, {""}},
-      {JointType::Prismatic, "prismatic", 1, 1, -1, true, false, {""}, {""}},
-      {JointType::Ball, "ball", 4, 3, 0, false, false, {"qw", "qx", "qy", "qz"}, {"wx", "wy", "wz"}},
-      {JointType::Planar, "planar", 3, 3, -1, true, false, {"x", "y", "theta"}, {"x", "y", "theta"}},
+      {JointType::Revolute, "revolute", 1, 1, -1, true, false, {""}, {""}, {"rad"}, {"rad/s"}},
+      {JointType::Prismatic, "prismatic", 1, 1, -1, true, false, {""}, {""}, {"m"}, {"m/s"}},
+      {JointType::Ball, "ball", 4, 3, 0, false, false, {"qw", "qx", "qy", "qz"}, {"wx", "wy", "wz"}, {"1", "1", "1", "1"},
+       {"rad/s", "rad/s", "rad/s"}},
+      {JointType::Planar, "planar", 3, 3, -1, true, false, {"x", "y", "theta"}, {"x", "y", "theta"}, {"m", "m", "rad"},
+       {"m/s", "m/s", "rad/s"}},
       {JointType::Free, "free", 7, 6, 3, false, true, {"x", "y", "z", "qw", "qx", "qy", "qz"},
-       {"wx", "wy", "wz", "vx", "vy", "vz"}},
-      {JointType::Fixed, "fixed", 0, 0, -1, false, false, {}, {}},
+       {"wx", "wy", "wz", "vx", "vy", "vz"}, {"m", "m", "m", "1", "1", "1", "1"},
+       {"rad/s", "rad/s", "rad/s", "m/s", "m/s", "m/s"}},
+      {JointType::Fixed, "fixed", 0, 0, -1, false, false, {}, {}, {}, {}},
   };
   return table;
 }

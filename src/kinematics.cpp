@@ -97,4 +97,10 @@ void jacobian(const Model& model, const Data& data, MatX& J) {
   }
 }
 
+Eigen::Vector4d attitude_quaternion(const Mat3& R) {
+  Eigen::Quaterniond u(R);
+  if (u.w() < 0) u.coeffs() = -u.coeffs();
+  return {u.w(), u.x(), u.y(), u.z()};
+}
+
 }  // namespace soadyn

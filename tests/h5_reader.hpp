@@ -26,10 +26,13 @@ class H5File {
   hid_t id = -1;
 };
 
-// a numeric dataset as doubles, row-major, with its shape (cols = 0 for one dimension); empty if absent
+// a numeric dataset as doubles, row-major, with its shape (cols = 0 for one dimension; for three,
+// cols = the product of the last two, given in dims); empty if absent
 struct Table {
   std::vector<double> values;
   hsize_t rows = 0, cols = 0;
+  int rank = 0;
+  hsize_t dims[3] = {0, 0, 0};
   bool found = false;
   double at(hsize_t r, hsize_t c = 0) const { return values[r * (cols ? cols : 1) + c]; }
 };
@@ -39,10 +42,17 @@ inline Table read_table(hid_t file, const std::string& path) {
   const hid_t d = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
   if (d < 0) return t;
   const hid_t space = H5Dget_space(d);
-  hsize_t dims[2] = {0, 0};
-  const int rank = H5Sget_simple_extent_dims(space, dims, nullptr);
+  hsize_t* dims = t.dims;
+  const int rank = H5Sget_simple_extent_ndims(space);
+  if (rank < 1 || rank > 3) {
+    H5Sclose(space);
+    H5Dclose(d);
+    return t;
+  }
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  t.rank = rank;
   t.rows = dims[0];
-  t.cols = rank == 2 ? dims[1] : 0;
+  t.cols = rank == 3 ? dims[1] * dims[2] : rank == 2 ? dims[1] : 0;
   t.values.resize(t.rows * (t.cols ? t.cols : 1));
   t.found = t.values.empty() || H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t.values.data()) >= 0;
   H5Sclose(space);
@@ -68,6 +78,59 @@ inline std::vector<std::string> read_strings(hid_t file, const std::string& path
   H5Sclose(space);
   H5Tclose(type);
   H5Dclose(d);
+  return out;
+}
+
+// a one-dimensional dataset or attribute of variable-length strings; {"(missing)"} if absent
+inline std::vector<std::string> read_vlen_strings(hid_t obj, bool attribute) {
+  const hid_t type = attribute ? H5Aget_type(obj) : H5Dget_type(obj);
+  const hid_t space = attribute ? H5Aget_space(obj) : H5Dget_space(obj);
+  std::vector<std::string> out;
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0 && H5Sget_simple_extent_ndims(space) == 1) {
+    const hid_t mem = H5Tcopy(H5T_C_S1);
+    H5Tset_size(mem, H5T_VARIABLE);
+    H5Tset_cset(mem, H5Tget_cset(type));
+    std::vector<char*> p(size_t(n), nullptr);
+    const herr_t ok = n == 0 ? 0 : attribute ? H5Aread(obj, mem, p.data()) : H5Dread(obj, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data());
+    for (char* c : p) {
+      if (ok >= 0) out.push_back(c ? c : "");
+      H5free_memory(c);
+    }
+    H5Tclose(mem);
+  } else {
+    out.push_back("(not a list of variable-length strings)");
+  }
+  H5Sclose(space);
+  H5Tclose(type);
+  return out;
+}
+
+inline std::vector<std::string> string_list_attribute(hid_t file, const std::string& path, const std::string& name) {
+  const hid_t a = H5Aopen_by_name(file, path.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+  if (a < 0) return {"(missing)"};
+  std::vector<std::string> out = read_vlen_strings(a, true);
+  H5Aclose(a);
+  return out;
+}
+
+inline std::vector<std::string> string_list_dataset(hid_t file, const std::string& path) {
+  const hid_t d = H5Dopen2(file, path.c_str(), H5P_DEFAULT);
+  if (d < 0) return {"(missing)"};
+  std::vector<std::string> out = read_vlen_strings(d, false);
+  H5Dclose(d);
+  return out;
+}
+
+// a one-dimensional numeric attribute; empty if absent
+inline std::vector<double> numbers_attribute(hid_t file, const std::string& path, const std::string& name) {
+  const hid_t a = H5Aopen_by_name(file, path.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
+  if (a < 0) return {};
+  const hid_t space = H5Aget_space(a);
+  std::vector<double> out(size_t(H5Sget_simple_extent_npoints(space)));
+  if (!out.empty()) H5Aread(a, H5T_NATIVE_DOUBLE, out.data());
+  H5Sclose(space);
+  H5Aclose(a);
   return out;
 }
 
@@ -112,8 +175,11 @@ inline std::string string_attribute(hid_t file, const std::string& path, const s
   const hid_t a = H5Aopen_by_name(file, path.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT);
   if (a < 0) return "(missing)";
   const hid_t type = H5Aget_type(a);
+  const hid_t space = H5Aget_space(a);
+  const bool scalar = H5Sget_simple_extent_type(space) == H5S_SCALAR;
+  H5Sclose(space);
   std::string s = "(not a string)";
-  if (H5Tget_class(type) == H5T_STRING) {
+  if (H5Tget_class(type) == H5T_STRING && scalar) {
     if (H5Tis_variable_str(type) > 0) {
       char* p = nullptr;
       if (H5Aread(a, type, &p) >= 0 && p) s = p;

@@ -414,5 +414,89 @@ class BadInput(unittest.TestCase):
         self.assertIn("--free-root", run("inspect", "--help").stdout)
 
 
+class RunLog(unittest.TestCase):
+    """soadyn run: its state options, its log groups, and body poses that agree with inspect."""
+
+    def setUp(self):
+        self.dir = tempfile.TemporaryDirectory()
+
+    def tearDown(self):
+        self.dir.cleanup()
+
+    def run_ok(self, *args):
+        p = run("run", *args)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        return p
+
+    def test_body_poses_match_inspect_at_sampled_states(self):
+        import h5py
+        for scene in ("satellite_two_arrays", "heavy_top", "three_link_arm", "pendulum_on_cart", "spherical_pendulum",
+                      "driven_pendulum"):
+            out = os.path.join(self.dir.name, scene + ".h5")
+            self.run_ok(f"{SCENARIOS}/{scene}.yaml", "--t-end", "1", "-q", "-o", out)
+            with h5py.File(out, "r") as f:
+                q, qd = f["q"][:], f["qd"][:]
+                names = list(f["model"].attrs["body_names"])
+                self.assertEqual(list(f["bodies/names"].asstr()[:]), names)
+                poses = {k: f["bodies/" + k][:] for k in ("position", "orientation", "com")}
+            self.assertEqual(poses["position"].shape, (len(q), len(names), 3))
+            self.assertEqual(poses["orientation"].shape, (len(q), len(names), 4))
+            for row in (0, len(q) // 2, len(q) - 1):
+                got = inspect(f"{SCENARIOS}/{scene}.yaml", "--q", ",".join(repr(float(x)) for x in q[row]),
+                              "--qd", ",".join(repr(float(x)) for x in qd[row]))
+                self.assertEqual([b["name"] for b in got["bodies"]], names)
+                for i, b in enumerate(got["bodies"]):
+                    for k in ("position", "orientation", "com"):
+                        np.testing.assert_allclose(poses[k][row, i], b[k], rtol=0, atol=1e-12,
+                                                   err_msg=f"{scene} row {row} body {b['name']} {k}")
+
+    def test_initial_state_and_gravity_options(self):
+        import h5py
+        out = os.path.join(self.dir.name, "dp.h5")
+        self.run_ok(f"{SCENARIOS}/double_pendulum.yaml", "--q", "-0.25,0.5", "--qd", "1,-2", "--gravity", "0,0,-1",
+                    "--t-end", "0.5", "-q", "-o", out)
+        with h5py.File(out, "r") as f:
+            self.assertEqual(list(f["q"][0]), [-0.25, 0.5])
+            self.assertEqual(list(f["qd"][0]), [1.0, -2.0])
+            self.assertEqual(list(f["model"].attrs["gravity"]), [0.0, 0.0, -1.0])
+            E = f["energy/total"][:]
+        ref = inspect(f"{SCENARIOS}/double_pendulum.yaml", "--q", "-0.25,0.5", "--qd", "1,-2", "--gravity", "0,0,-1")
+        self.assertAlmostEqual(E[0], ref["kinetic_energy"] + ref["potential_energy"], places=12)
+        # the same refusals as inspect's
+        f = f"{SCENARIOS}/double_pendulum.yaml"
+        BadInput.refused(self, "run", f, "--q", "1,2,3", expect="--q: expected 2 numbers, got 3")
+        BadInput.refused(self, "run", f"{SCENARIOS}/satellite_two_arrays.yaml", "--q", "0,0,0,2,0,0,0,0,0",
+                         expect="expected a unit quaternion")
+        BadInput.refused(self, "run", f, "--gravity", "0,0", expect="--gravity: expected 3 numbers, got 2")
+
+    def test_log_groups(self):
+        import h5py
+        out = os.path.join(self.dir.name, "lean.h5")
+        self.run_ok(f"{SCENARIOS}/three_link_arm.yaml", "--log", "energy,state", "--t-end", "0.1", "-q", "-o", out)
+        with h5py.File(out, "r") as f:
+            self.assertEqual(f.attrs["log_groups"], "state,energy")
+            self.assertEqual(f["samples"].shape[1], 1 + 3 + 3 + 3 + 5)
+            self.assertEqual(sorted(f), ["energy", "model", "q", "qd", "qdd", "samples", "scenario", "solver", "time"])
+        out = os.path.join(self.dir.name, "bodies.h5")
+        self.run_ok(f"{SCENARIOS}/three_link_arm.yaml", "--log", "bodies", "--t-end", "0.1", "-q", "-o", out)
+        with h5py.File(out, "r") as f:
+            self.assertEqual(f["samples"].shape[1], 1 + 30)
+            self.assertNotIn("q", f)
+        BadInput.refused(self, "run", f"{SCENARIOS}/three_link_arm.yaml", "--log", "state,poses", "-o", out,
+                         expect="--log: expected a comma-separated list of state, energy, momentum, bodies (or all); "
+                                "got 'poses' in 'state,poses'")
+
+    def test_help_and_figures(self):
+        p = run("run", "--help")
+        self.assertEqual(p.returncode, 0)
+        for text in ("MODEL", ".urdf", "--q", "--qd", "--gravity", "--log"):
+            self.assertIn(text, p.stdout)
+        out = os.path.join(self.dir.name, "a.h5")
+        p = self.run_ok(f"{SCENARIOS}/double_pendulum.yaml", "--rtol", "1e-7", "--atol", "1e-9", "--t-end", "0.2", "-o", out)
+        self.assertIn("(rtol 1e-07, atol 1e-09)", p.stdout)
+        self.assertRegex(p.stdout, r"CPU time +[0-9.]+(e-?[0-9]+)? s\n")
+        self.assertRegex(p.stdout, r"energy balance error +[0-9.]+(e-?[0-9]+)? \(final; max over the run")
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=2)

@@ -197,7 +197,7 @@ class OneFile(Base):
         self.assertWhole(out, status="^completed$")
         with h5py.File(out, "r") as f:
             self.assertEqual(len(f["time"]), 2001)
-            self.assertEqual(f["model/joint_names"].shape, (2,))
+            self.assertEqual(list(f["model"].attrs["joint_names"]), ["theta1", "theta2"])
         self.assertNoLitter(out)
 
     def test_output_equal_to_an_input_is_refused(self):
@@ -369,8 +369,17 @@ class Settings(Base):
 
     def test_projected_size(self):
         self.refused("--output-dt", "1e-9", "--t-end", "10", expect="more than --max-output-size 1G")
-        # 100001 rows of 16 doubles: 12 MiB
-        self.refused("--output-dt", "1e-4", "--max-output-size", "10M", expect="12.2 MiB")
+        # 100001 rows of 38 doubles (t, q 2, qd 2, qdd 2, energy 5, momentum 6, bodies 2 x 10): 29 MiB
+        self.refused("--output-dt", "1e-4", "--max-output-size", "10M", expect="29 MiB (100001 rows of 304 bytes)")
+        # a lean log is smaller: t, q, qd, qdd and the energies, 12 doubles, 9.16 MiB
+        p = run("run", PENDULUM, "--output-dt", "1e-4", "--max-output-size", "10M", "--log", "state,energy", "-q",
+                "-o", self.path("lean.h5"))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        with h5py.File(self.path("lean.h5"), "r") as f:
+            self.assertEqual(f["samples"].shape, (100001, 12))
+            self.assertEqual(f.attrs["log_groups"], "state,energy")
+            self.assertNotIn("bodies", f)
+            self.assertNotIn("momentum", f)
         p = run("run", PENDULUM, "--output-dt", "1e-4", "--t-end", "0.01", "--max-output-size", "10M", "-q",
                 "-o", self.path("ok.h5"))
         self.assertEqual(p.returncode, 0, p.stderr)

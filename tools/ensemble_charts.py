@@ -5,7 +5,7 @@
   (simulation.rtol), the median RHS evaluations against the median state error (vs the sweep's
   reference run), with the 10–90 % band over the ensemble's initial conditions.
 - Stability map per method: step size × initial energy → fraction of runs that stay bounded
-  (completed, and the relative energy error never above --bound, 5 % as in tools/stability.py).
+  (completed, and the relative energy-balance error never above --bound, 5 % as in tools/stability.py).
 
     tools/ensemble_charts.py DIR/results.h5 [-o OUTDIR] [--bound 0.05] [--energy-bins 10]
 
@@ -76,7 +76,7 @@ def stability_map(t, out, bound, nbins):
         print("stability map: needs a varied simulation.dt", file=sys.stderr)
         return False
     methods = t["simulation.method"] if "simulation.method" in t else np.array(["(base)"] * len(t["case"]))
-    bounded = t["completed"] & (t["max_energy_error"] <= bound)
+    bounded = t["completed"] & (t["max_energy_balance_error"] <= bound)
     e0 = t["initial_energy"]
     edges = np.quantile(e0[np.isfinite(e0)], np.linspace(0, 1, nbins + 1))
     edges[-1] = np.nextafter(edges[-1], np.inf)
@@ -114,7 +114,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", help="a sweep's results.h5")
     ap.add_argument("-o", "--out", default=".", help="directory for the charts (default .)")
-    ap.add_argument("--bound", type=float, default=0.05, help="largest relative energy error that counts as bounded")
+    ap.add_argument("--bound", type=float, default=0.05, help="largest relative energy-balance error that counts as bounded")
     ap.add_argument("--energy-bins", type=int, default=10, help="initial-energy bins (quantiles) of the stability map")
     a = ap.parse_args()
     try:

@@ -34,7 +34,9 @@ def main():
     with f:
         t = f["time"][:]
         q, qd = f["q"][:], f["qd"][:]
-        names = [n.decode() if isinstance(n, bytes) else str(n) for n in f["model/joint_names"][:]]
+        model = f["model"]  # joint names: str attributes (layout 3), a dataset before
+        raw = model.attrs["joint_names"] if "joint_names" in model.attrs else model["joint_names"][:]
+        names = [n.decode() if isinstance(n, bytes) else str(n) for n in raw]
         nq, nv = int(f["model"].attrs["nq"]), int(f["model"].attrs["nv"])
         E = f["energy/total"][:]
         T = f["energy/kinetic"][:]

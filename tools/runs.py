@@ -26,13 +26,14 @@ except ImportError:
 _scenes = {}
 
 
-def energy_summary(r, t, E, T):
+def energy_summary(r, t, E, T, W):
+    """the energy-balance error (E(t) - E(0) - W(t)) / max(|E0|, peak T), W the inputs' work"""
     r["t"] = t
     scale = max(abs(E[0]), T.max(), 1e-300)
     with np.errstate(invalid="ignore", divide="ignore"):
-        r["E_rel"] = (E - E[0]) / scale
-    r["energy_error"] = float(np.abs(r["E_rel"]).max())
-    r["energy_final"] = float(r["E_rel"][-1])
+        r["E_rel"] = (E - E[0] - W) / scale
+    r["balance_error"] = float(np.abs(r["E_rel"]).max())
+    r["balance_final"] = float(r["E_rel"][-1])
     return r
 
 
@@ -46,11 +47,11 @@ def run_in_process(scenario, method, t_end=None, rtol=None, dt=None, output_dt=N
     r = {"scenario": scenario, "method": method, "rtol": rtol, "dt": dt, "ok": s.completed, "status": s.status,
          "cpu": s.cpu_seconds, "rhs": s.rhs_evals, "steps": s.steps, "t_reached": s.t_reached,
          "q": tr.q[-1], "qd": tr.v[-1]}
-    return energy_summary(r, tr.t, tr.total_energy, tr.kinetic_energy)
+    return energy_summary(r, tr.t, tr.total_energy, tr.kinetic_energy, tr.work_inputs)
 
 
 def run(scenario, method, t_end=None, rtol=None, dt=None, output_dt=None, timeout=900):
-    """One run; returns a dict with the final state, energy errors, CPU time, status."""
+    """One run; returns a dict with the final state, energy-balance errors, CPU time, status."""
     if soadyn is not None:
         return run_in_process(scenario, method, t_end, rtol, dt, output_dt)
     with tempfile.TemporaryDirectory() as d:
@@ -80,8 +81,9 @@ def run(scenario, method, t_end=None, rtol=None, dt=None, output_dt=None, timeou
             r["steps"] = int(s["steps"][()])
             r["t_reached"] = float(s["t_reached"][()])
             t, E, T = f["time"][:], f["energy/total"][:], f["energy/kinetic"][:]
+            W = f["energy/work_inputs"][:] if "energy/work_inputs" in f else np.zeros_like(E)
             r["q"], r["qd"] = f["q"][-1], f["qd"][-1]
-        return energy_summary(r, t, E, T)
+        return energy_summary(r, t, E, T, W)
 
 
 def run_many(jobs, workers=2):

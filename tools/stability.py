@@ -5,7 +5,7 @@ For each fixed-step method and scenario (the note's four and the stiff arm), bis
 largest step that keeps the energy bounded over a long run -- completed, and E(t) never above
 E(0) + 5 % of max(|E0|, peak T) nor, for conservative scenes, below E(0) - 5 % -- then classify
 what happens at twice that step: blow-up (non-finite state), energy growth, numerical damping.
-For CVODE, the energy error and work as rtol loosens.  Writes tools/results/stability.{md,csv,png}.
+For CVODE, the energy-balance error and work as rtol loosens.  Writes tools/results/stability.{md,csv,png}.
 
     tools/stability.py [--t-end T] [--out tools/results]
 """
@@ -84,15 +84,15 @@ def main():
              "| scenario | " + " | ".join(runs.FIXED) + " |", "|---" * (len(runs.FIXED) + 1) + "|"]
     for s in SCENES:
         lines.append(f"| {s} | " + " | ".join(f"{table[(s, m)][0]:.3g} s: {table[(s, m)][1]}" for m in runs.FIXED) + " |")
-    lines += ["", "CVODE as rtol loosens: max relative energy error / RHS evaluations (stiff_arm is damped: its",
-              "'energy error' is the dissipated energy, the same for every rtol; its RHS count is the point):", "",
+    lines += ["", "CVODE as rtol loosens: max relative energy-balance error |E(t) - E(0) - W(t)| / max(|E0|, peak T)",
+              "(W the work of torques and dampers) / RHS evaluations:", "",
               "| scenario | method | " + " | ".join(f"rtol {rt:g}" for rt in (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)) + " |",
               "|---" * 7 + "|"]
     for s in SCENES:
         for m in runs.CVODE:
             rs = [r for r in cvode if r["scenario"] == s and r["method"] == m]
             lines.append(f"| {s} | {m} | " + " | ".join(
-                (f"{r['energy_error']:.1e} / {r['rhs']}" if r["ok"] else f"failed: {r['status'][:60]}") for r in rs) + " |")
+                (f"{r['balance_error']:.1e} / {r['rhs']}" if r["ok"] else f"failed: {r['status'][:60]}") for r in rs) + " |")
     md = "\n".join(lines) + "\n"
     with open(os.path.join(args.out, "stability.md"), "w") as f:
         f.write(md)

@@ -2,7 +2,7 @@
 """Work-precision charts: for each of the note's four scenarios, every method over a sweep
 (CVODE Adams and BDF over rtol 1e-3 ... 1e-12; fixed-step methods over step sizes from well
 inside to two decades past their stability limit), error at t_end against a reference run
-(CVODE Adams, rtol 1e-13) and energy error, against CPU time.  One PNG per scenario in
+(CVODE Adams, rtol 1e-13) and energy-balance error, against CPU time.  One PNG per scenario in
 tools/results/, the data as CSV beside it.
 
     tools/work_precision.py [--t-end T] [--out tools/results]
@@ -67,10 +67,10 @@ def main():
         results = runs.run_many(jobs)
         with open(os.path.join(args.out, f"wp_{scene}.csv"), "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["method", "rtol", "dt", "cpu_seconds", "rhs_evals", "state_error", "energy_error", "status"])
+            w.writerow(["method", "rtol", "dt", "cpu_seconds", "rhs_evals", "state_error", "balance_error", "status"])
             for r in results:
                 w.writerow([r["method"], r["rtol"] or "", r["dt"] or "", f"{r['cpu']:.6g}", r.get("rhs", ""),
-                            f"{state_error(r, ref):.3e}", f"{r.get('energy_error', float('nan')):.3e}", r["status"]])
+                            f"{state_error(r, ref):.3e}", f"{r.get('balance_error', float('nan')):.3e}", r["status"]])
         fig, ax = plt.subplots(1, 2, figsize=(12, 4.6))
         for k, m in enumerate(runs.CVODE + runs.FIXED):
             rs = [r for r in results if r["method"] == m and r["ok"]]
@@ -78,7 +78,7 @@ def main():
                 continue
             cpu = [max(r["cpu"], 1e-5) for r in rs]
             ax[0].loglog(cpu, [max(state_error(r, ref), 1e-16) for r in rs], "o-", color=f"C{k}", ms=3, label=m)
-            ax[1].loglog(cpu, [max(r["energy_error"], 1e-16) for r in rs], "o-", color=f"C{k}", ms=3, label=m)
+            ax[1].loglog(cpu, [max(r["balance_error"], 1e-16) for r in rs], "o-", color=f"C{k}", ms=3, label=m)
             failed = [r for r in results if r["method"] == m and not r["ok"]]
             if failed:
                 ax[0].plot([], [], " ", label=f"  {m}: {len(failed)} runs blew up (dt >= {min(r['dt'] or 0 for r in failed):g})")

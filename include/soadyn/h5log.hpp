@@ -1,15 +1,26 @@
-// HDF5 run files.  Layout (one file per run):
-//   /samples (T×W)   every logged number, one row per output time: t, q, q̇, q̈, T, V, E, p, h
-//   /time (T)  /q (T×nq)  /qd (T×nv)  /qdd (T×nv)
-//   /energy/kinetic, /energy/potential, /energy/total (T)
-//   /momentum/linear, /momentum/angular (T×3)
-//        — views (HDF5 virtual datasets) of /samples' columns, so every series has one length
+// HDF5 run files.  Layout (one file per run, layout_version 3):
+//   /samples (T×W)   every logged number, one row per output time; attributes column_names and
+//                    column_units (W strings each: "time", "q.bus.x", "qd.left", "energy.total",
+//                    "momentum.linear.x", "bodies.position.bus.x", …; "s", "m", "rad", "1", …)
+//   views (HDF5 virtual datasets) of /samples' columns, so every series has one length at every
+//   instant, each with a `units` attribute (one string, or one per column when they differ):
+//     /time (T)                                                    always
+//     /q (T×nq)  /qd (T×nv)  /qdd (T×nv)                           group "state"
+//     /energy/kinetic, potential, total, work_inputs, dissipated (T)  group "energy"
+//     /momentum/linear, /momentum/angular (T×3)                    group "momentum"
+//     /bodies/position, /bodies/com (T×N×3), /bodies/orientation (T×N×4, w x y z)  group "bodies"
+//   /bodies/names    the N bodies (after fixed joints are merged), a string dataset
 //   /scenario        the scenario's full text (a string dataset: any size)
-//   /model: datasets joint_names, parents; attributes nq, nv
+//   /model: attributes nq, nv, q_names, v_names, q_units, v_units, joint_names, joint_types,
+//           body_names, gravity, units, free_joint, ball_joint, planar_joint (conventions);
+//           datasets parents, joint_q_index, joint_v_index (ints, −1 = world)
 //   /solver: attributes method, rtol, atol, dt, output_dt, t_end, dynamics (fixed at the start);
 //            scalar datasets status, t_reached, steps, rhs_evals, jac_evals, error_test_failures,
-//            nonlinear_iterations, cpu_seconds, quaternion_handling (rewritten at every flush)
-//   root attributes: scenario_path, soadyn_version, layout_version
+//            nonlinear_iterations, cpu_seconds, quaternion_handling, max_energy_balance_error,
+//            final_energy_balance_error (rewritten at every flush)
+//   root attributes: scenario_path, soadyn_version, layout_version, log_groups
+// Strings: every attribute string is variable-length UTF-8 (h5py returns str); string datasets
+// (/scenario, /bodies/names, /solver/status, …) read as str with h5py's .asstr().
 //
 // Consistency: the file uses HDF5's single-writer/multiple-reader mode (SWMR, latest format).
 // Everything is created before SWMR writing starts; afterwards the writer only appends rows to
@@ -42,8 +53,17 @@ class IoError : public Error {
 // under any name), or an existing file that is not HDF5 (it would be lost).  Throws soadyn::Error.
 void check_output_path(const std::string& path, const std::vector<std::string>& inputs);
 
+// The groups of series a run logs (`soadyn run --log state,energy`); /time is always logged.
+struct LogGroups {
+  bool state = true, energy = true, momentum = true, bodies = true;
+  // "state,energy,momentum,bodies" (any subset, any order; "all"); throws soadyn::Error naming
+  // the bad item
+  static LogGroups parse(const std::string& text);
+  std::string str() const;  // "state,energy,momentum,bodies"
+};
+
 // Bytes one logged row takes (W doubles), for the projected size of a run.
-std::uint64_t row_bytes(const Model& model);
+std::uint64_t row_bytes(const Model& model, const LogGroups& groups = {});
 
 // An exclusive lock on an output path, held for a run's lifetime (flock on "<path>.lock", which
 // holds the owner's pid).  Throws soadyn::Error naming the path and the owner when another run
@@ -67,7 +87,8 @@ class H5Log : public RunObserver {
  public:
   // Builds the whole file under a temporary name next to `path`; throws soadyn::Error (IoError for
   // a write failure) and then leaves nothing behind.
-  H5Log(const std::string& path, const Scenario& sc, const SimulationSettings& settings, const std::string& version);
+  H5Log(const std::string& path, const Scenario& sc, const SimulationSettings& settings, const std::string& version,
+        const LogGroups& groups = {});
   // A log that never reached its first flush removes its temporary file.
   ~H5Log() override;
   H5Log(const H5Log&) = delete;

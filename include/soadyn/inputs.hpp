@@ -40,6 +40,15 @@ struct Inputs {
   void evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const;
   // the inputs' potential energy (springs), so E = T + V_gravity + V_springs is conserved
   double spring_energy(const VecX& q) const;
+  // The power of the inputs that are not in the potential: P = (τ_torques + τ_dampers) · q̇ (each
+  // input acts on a 1-DOF joint, where q̇ = v), and the dampers' share of it as the power they
+  // dissipate, D = Σ c q̇² ≥ 0.  Along a run, dE/dt = P: E(t) − E(0) = W(t) = ∫ P dt.
+  struct Power {
+    double inputs = 0.0, dissipated = 0.0;
+  };
+  Power power(double t, const VecX& v) const;
+  // torques or dampers: the energy balance has a work term
+  bool does_work() const { return !torques.empty() || !dampers.empty(); }
 };
 
 }  // namespace soadyn

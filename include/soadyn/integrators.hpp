@@ -32,19 +32,25 @@ class SimulationError : public Error {
   double t;
 };
 
-// ẏ = f(t, y) for the model with its inputs.
+// ẏ = f(t, y) for the model with its inputs.  The state is y = [q; v], followed, when the inputs
+// do work (torques or dampers), by two quadratures the integrator advances with the rest:
+// W = ∫ P dt, the work of the inputs, and D = ∫ Σ c q̇² dt ≥ 0, the part the dampers dissipated
+// (Inputs::power).  Nothing feeds back from them into q and v.
 class System {
  public:
   System(const Model& model, const Inputs& inputs, FdMethod method);
-  int size() const { return model.nq + model.nv; }
-  // ẏ = [q̇(q, v); q̈]; counts evaluations
+  int size() const { return model.nq + model.nv + nquad; }
+  // [q; v; 0 …]: the state at the start of a run (the quadratures start at zero)
+  VecX state(const VecX& q0, const VecX& v0) const;
+  // ẏ = [q̇(q, v); q̈; P; D]; counts evaluations
   void rhs(double t, const double* y, double* ydot);
-  // the name of component k of y ("theta2 (q)", "bus.wz (v)")
+  // the name of component k of y ("theta2 (q)", "bus.wz (v)", "the inputs' work W")
   std::string component_name(int k) const;
 
   const Model& model;
   const Inputs& inputs;
   FdMethod method;
+  int nquad;  // 2 (W, D) when the inputs do work, else 0
   Data data;
   VecX q, v, tau, qd;
   long rhs_evals = 0;

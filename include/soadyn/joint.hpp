@@ -43,6 +43,8 @@ struct JointTraits {
   bool root_only;                           // free joints hang only from the world
   std::vector<std::string_view> q_labels;   // one suffix per q ("" for a 1-DOF joint)
   std::vector<std::string_view> v_labels;   // one suffix per v
+  std::vector<std::string_view> q_units;    // SI unit of each q: "m", "rad", or "1" (quaternion parts)
+  std::vector<std::string_view> v_units;    // of each v: "m/s" or "rad/s"
 };
 
 const JointTraits& joint_traits(JointType t);

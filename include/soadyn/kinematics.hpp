@@ -20,6 +20,10 @@ Mat6 M_matrix(const Data& data, int i);  // M_i = S_iᵀ M̄_i S_i   (eq. 12)
 Mat6G G_matrix(const Model& model, const Data& data, int i);  // G_i, 6×nv_i
 Mat3 inertia_cm(const Data& data, int i);  // I_i about the cm, inertial: I_η + m s̃_i s̃_i
 
+// A rotation (body → inertial, C_i) as the unit quaternion [w x y z] with w ≥ 0, as logs and
+// `soadyn inspect` report a body's attitude.
+Eigen::Vector4d attitude_quaternion(const Mat3& R);
+
 // J = S Ψ_D G (eq. 7): 6N×nv, rows 6i..6i+5 give v̄_i = [ω_i; ṙ_i].  Needs [kin].
 void jacobian(const Model& model, const Data& data, MatX& J);
 

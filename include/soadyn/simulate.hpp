@@ -16,7 +16,15 @@ struct Sample {
   double t = 0.0;
   VecX q, qd, qdd;
   double kinetic = 0.0, potential = 0.0, total = 0.0;  // potential includes joint springs
+  // W(t): the work of the inputs (torques, dampers; springs are in the potential) since t = 0, and
+  // D(t) ≥ 0 the dampers' share, dissipated; both integrated by the integrator (System), so
+  // E(t) − E(0) = W(t) up to its error
+  double work_inputs = 0.0, dissipated = 0.0;
   Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
+  // each body's frame origin η_i and centre of mass r_i (inertial, 3×N), and its attitude as a unit
+  // quaternion [w x y z], body → inertial, with w ≥ 0 (4×N); N bodies after fixed joints are merged
+  Mat3X body_position, body_com;
+  Eigen::Matrix<double, 4, Eigen::Dynamic> body_orientation;
 };
 
 struct RunSummary {
@@ -28,8 +36,10 @@ struct RunSummary {
   std::string status = "running";     // "completed", "interrupted by SIGINT at t = …", or the error
   double t_reached = 0.0;
   bool completed = false;
-  double max_relative_energy_error = 0.0;   // max |E(t) − E(0)| / max(|E(0)|, peak T)
-  double final_relative_energy_error = 0.0;
+  // the energy-balance error |E(t) − E(0) − W(t)| / max(|E(0)|, peak T): its maximum over the
+  // samples and its value at the last one (W ≡ 0 without torques or dampers: the energy error)
+  double max_energy_balance_error = 0.0;
+  double final_energy_balance_error = 0.0;
 };
 
 // Receives samples and the run's state as it goes (the HDF5 log implements it).
@@ -41,8 +51,8 @@ class RunObserver {
   virtual void on_finish(const RunSummary& summary) = 0;
 };
 
-// Evaluates the logged quantities at (t, q, v).
-Sample observe(System& system, double t, const VecX& q, const VecX& v);
+// Evaluates the logged quantities at (t, y), y the integrator's state [q; v; W; D] (System).
+Sample observe(System& system, double t, const VecX& y);
 
 // Throws soadyn::Error if sc cannot be run with settings: t_end, output_dt, dt or atol not positive
 // and finite, rtol outside (0, 1), more steps or rows than 2^53 (time would no longer count

@@ -1,7 +1,7 @@
 // The subcommands of the soadyn executable.
 #pragma once
 
-#include "soadyn/types.hpp"
+#include "soadyn/model.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -20,9 +20,22 @@ std::string join(const std::vector<std::string>& items, const std::string& separ
 // "a,b,c" → numbers; throws soadyn::Error naming the option and the bad item.
 std::vector<double> parse_list(const std::string& option, const std::string& text);
 
+// --q, --qd, --gravity: a state and a gravity other than the scenario's (inspect and run)
+struct StateOptions {
+  std::string q, qd, gravity;
+};
+// adds the three options; `what` says what the state is for ("the state", "the initial state")
+void add_state_options(CLI::App* command, StateOptions& o, const std::string& what);
+// --gravity as a vector (nullopt: the scenario's), for load_scenario
+std::optional<Vec3> gravity_option(const StateOptions& o);
+// q (unit quaternions checked, then normalized) and v from --q and --qd, else `q0`, `v0`; throws
+// soadyn::Error naming the option, what was expected and what was got
+void state_from_options(const Model& model, const StateOptions& o, VecX& q, VecX& v);
+
 struct InspectOptions {
   std::string model;
-  std::string q, qd, tau, gravity;
+  StateOptions state;
+  std::string tau;
   bool free_root = false;
   bool json = false;
   std::string method = "on";
@@ -35,6 +48,8 @@ struct RunOptions {
   std::string output;
   std::optional<std::string> method;
   std::optional<double> rtol, atol, dt, t_end, output_dt;
+  StateOptions state;
+  std::string log = "all";             // the groups logged: state, energy, momentum, bodies
   std::string max_output_size = "1G";  // refuse a run whose projected file is larger
   double flush_interval = 0.5;         // s of wall time between flushes
   bool quiet = false;

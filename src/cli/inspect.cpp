@@ -59,10 +59,8 @@ void add_inspect(CLI::App& app, InspectOptions& o) {
       "Print the system mass matrix M(q) (eq. 14), bias(q, qd), qdd for --tau, energy and momentum at one state.\n"
       "MODEL is a .yaml scenario or a .urdf; without --q/--qd the scenario's initial state (zeros for a URDF).");
   c->add_option("MODEL", o.model, "scenario (.yaml) or robot (.urdf)")->required();
-  c->add_option("--q", o.q, "configuration, comma-separated, nq numbers (free root: x,y,z,qw,qx,qy,qz first)");
-  c->add_option("--qd", o.qd, "velocities, comma-separated, nv numbers (free root: wx,wy,wz,vx,vy,vz first)");
+  add_state_options(c, o.state, "the state");
   c->add_option("--tau", o.tau, "joint forces for qdd, comma-separated, nv numbers (default zero)");
-  c->add_option("--gravity", o.gravity, "gravity gx,gy,gz in m/s^2 (default: the scenario's; 0,0,-9.81 for a URDF)");
   c->add_flag("--free-root", o.free_root, "give a URDF's root link a free joint instead of welding it to the world");
   c->add_flag("--json", o.json, "print one JSON object on stdout");
   c->add_option("--method", o.method, "forward-dynamics route for qdd: " + join(fd_method_names(), " | ") + " (default on)")
@@ -84,6 +82,33 @@ std::string num(double x) {
   std::snprintf(buf, sizeof buf, "%.17g", x);
   return buf;
 }
+
+}  // namespace
+
+void add_state_options(CLI::App* c, StateOptions& o, const std::string& what) {
+  c->add_option("--q", o.q, "configuration of " + what + ", comma-separated, nq numbers (free root: x,y,z,qw,qx,qy,qz first)");
+  c->add_option("--qd", o.qd, "velocities of " + what + ", comma-separated, nv numbers (free root: wx,wy,wz,vx,vy,vz first)");
+  c->add_option("--gravity", o.gravity, "gravity gx,gy,gz in m/s^2 (default: the scenario's; 0,0,-9.81 for a URDF)");
+}
+
+std::optional<Vec3> gravity_option(const StateOptions& o) {
+  if (o.gravity.empty()) return std::nullopt;
+  return Vec3(vector_option("--gravity", o.gravity, 3, Vec3::Zero()));
+}
+
+void state_from_options(const Model& m, const StateOptions& o, VecX& q, VecX& v) {
+  q = vector_option("--q", o.q, m.nq, q);
+  for (int i = 0; i < m.nbodies; ++i)
+    if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
+      const double norm = q.segment<4>(m.idx_q[i] + k).norm();
+      if (std::abs(norm - 1.0) > 1e-6)
+        throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + num(norm));
+    }
+  m.normalize(q);
+  v = vector_option("--qd", o.qd, m.nv, v);
+}
+
+namespace {
 
 std::string json_string(const std::string& s) {
   std::string o = "\"";
@@ -107,7 +132,7 @@ std::string json_array(const V& v) {
 
 void print_vector(const std::string& title, const std::vector<std::string>& labels, const VecX& v) {
   std::printf("%s\n", title.c_str());
-  for (Eigen::Index k = 0; k < v.size(); ++k) std::printf("  %-24s % .10e\n", labels[k].c_str(), v(k));
+  for (Eigen::Index k = 0; k < v.size(); ++k) std::printf("  %-24s % .17g\n", labels[k].c_str(), v(k));
 }
 
 
@@ -117,21 +142,17 @@ struct Inspection {
   MatX M;
   double T = 0.0, V = 0.0;
   Momentum h;
+  Mat3X position, com;                            // η_i and r_i, inertial
+  Eigen::Matrix<double, 4, Eigen::Dynamic> orientation;  // [w x y z], body → inertial, w ≥ 0
 };
 
 // q (unit quaternions checked, then normalized), v and τ from the options, then 𝓜, bias and q̈.
 Inspection inspect(const Scenario& sc, const InspectOptions& o) {
   const Model& m = sc.model;
   Inspection r;
-  r.q = vector_option("--q", o.q, m.nq, sc.q0);
-  for (int i = 0; i < m.nbodies; ++i)
-    if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
-      const double norm = r.q.segment<4>(m.idx_q[i] + k).norm();
-      if (std::abs(norm - 1.0) > 1e-6)
-        throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + num(norm));
-    }
-  m.normalize(r.q);
-  r.v = vector_option("--qd", o.qd, m.nv, sc.v0);
+  r.q = sc.q0;
+  r.v = sc.v0;
+  state_from_options(m, o.state, r.q, r.v);
   r.tau = vector_option("--tau", o.tau, m.nv, VecX::Zero(m.nv));
 
   Data d(m);
@@ -146,6 +167,13 @@ Inspection inspect(const Scenario& sc, const InspectOptions& o) {
   r.T = kinetic_energy(m, d);
   r.V = potential_energy(m, d);
   r.h = momentum(m, d);
+  // body poses as soadyn run logs them
+  r.position = d.eta;
+  r.com = d.r;
+  r.orientation.resize(4, m.nbodies);
+  for (int i = 0; i < m.nbodies; ++i) {
+    r.orientation.col(i) = attitude_quaternion(d.R[i]);
+  }
   return r;
 }
 
@@ -159,7 +187,12 @@ void print_json(const Model& m, const Inspection& r, const std::string& method) 
   out += "], \"bias\": " + json_array(r.bias) + ", \"tau\": " + json_array(r.tau) + ", \"qdd\": " + json_array(r.qdd);
   out += ", \"kinetic_energy\": " + num(r.T) + ", \"potential_energy\": " + num(r.V);
   out += ", \"momentum\": {\"linear\": " + json_array(r.h.linear) + ", \"angular\": " + json_array(r.h.angular) + "}";
-  out += ", \"method\": " + json_string(method) + "}";
+  out += ", \"bodies\": [";
+  for (int i = 0; i < m.nbodies; ++i)
+    out += std::string(i ? ", " : "") + "{\"name\": " + json_string(m.body_names[i]) +
+           ", \"position\": " + json_array(r.position.col(i)) + ", \"orientation\": " + json_array(r.orientation.col(i)) +
+           ", \"com\": " + json_array(r.com.col(i)) + "}";
+  out += "], \"method\": " + json_string(method) + "}";
   std::cout << out << std::endl;
 }
 
@@ -178,24 +211,29 @@ void print_tables(const Scenario& sc, const Inspection& r, const std::string& me
   std::printf("mass matrix M(q) (%d x %d)\n", m.nv, m.nv);
   for (int k = 0; k < m.nv; ++k) {
     std::printf("  %-24s", vlab[k].c_str());
-    for (int c = 0; c < m.nv; ++c) std::printf(" % .6e", r.M(k, c));
+    for (int c = 0; c < m.nv; ++c) std::printf(" % 14.9g", r.M(k, c));
     std::printf("\n");
   }
   print_vector("bias(q, qd) (Coriolis, centrifugal, gyroscopic, gravity)", vlab, r.bias);
   print_vector("tau", vlab, r.tau);
   print_vector("qdd = M^-1 (tau - bias)  [" + method + "]", vlab, r.qdd);
-  std::printf("energy     kinetic % .10e   potential % .10e   total % .10e J\n", r.T, r.V, r.T + r.V);
-  std::printf("momentum   linear  [% .6e, % .6e, % .6e]\n", r.h.linear.x(), r.h.linear.y(), r.h.linear.z());
-  std::printf("           angular [% .6e, % .6e, % .6e] (about the inertial origin)\n", r.h.angular.x(),
+  std::printf("energy     kinetic % .17g   potential % .17g   total % .17g J\n", r.T, r.V, r.T + r.V);
+  std::printf("bodies     frame origin (m), attitude [w x y z] body -> inertial, centre of mass (m); inertial\n");
+  for (int i = 0; i < m.nbodies; ++i) {
+    const Vec3 p = r.position.col(i), c = r.com.col(i);
+    const Eigen::Vector4d u = r.orientation.col(i);
+    std::printf("  %-20s [% .12g, % .12g, % .12g]  [% .12g, % .12g, % .12g, % .12g]  [% .12g, % .12g, % .12g]\n",
+                m.body_names[i].c_str(), p(0), p(1), p(2), u(0), u(1), u(2), u(3), c(0), c(1), c(2));
+  }
+  std::printf("momentum   linear  [% .10g, % .10g, % .10g]\n", r.h.linear.x(), r.h.linear.y(), r.h.linear.z());
+  std::printf("           angular [% .10g, % .10g, % .10g] (about the inertial origin)\n", r.h.angular.x(),
               r.h.angular.y(), r.h.angular.z());
 }
 
 }  // namespace
 
 int run_inspect(const InspectOptions& o) {
-  std::optional<Vec3> gravity;
-  if (!o.gravity.empty()) gravity = vector_option("--gravity", o.gravity, 3, Vec3::Zero());
-  const Scenario sc = load_scenario(o.model, o.free_root, gravity);
+  const Scenario sc = load_scenario(o.model, o.free_root, gravity_option(o.state));
   const Inspection r = inspect(sc, o);
   if (o.json) print_json(sc.model, r, o.method);
   else print_tables(sc, r, o.method);

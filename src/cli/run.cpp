@@ -60,12 +60,13 @@ std::string human_size(double bytes) {
 void add_run(CLI::App& app, RunOptions& o) {
   CLI::App* c = app.add_subcommand(
       "run",
-      "Simulate a scenario and log states, energy and momentum to HDF5.\n"
-      "Command-line values override the scenario's 'simulation' section.\n"
+      "Simulate a scenario and log states, energy, momentum and body poses to HDF5.\n"
+      "MODEL is a scenario (.yaml) or a robot (.urdf: zero initial state, default settings, 0,0,-9.81 gravity).\n"
+      "Command-line values override the scenario's 'simulation' section and initial state.\n"
       "Exit status: 0 completed, 2 bad input or output refused (in use, an input, too large), 3 the run\n"
       "failed (the file keeps what was logged), 4 writing the output failed (the file keeps its last\n"
       "flushed rows), 128+N interrupted by signal N (130 SIGINT, 143 SIGTERM, 129 SIGHUP).");
-  c->add_option("SCENARIO", o.scenario, "scenario file (.yaml)")->required();
+  c->add_option("MODEL", o.scenario, "scenario (.yaml) or robot (.urdf)")->required();
   c->add_option("-o,--output", o.output, "HDF5 output file (default out/<scenario name>.h5)");
   c->add_option("--method", o.method, join(integrator_names(), " | "))->check(CLI::IsMember(integrator_names()));
   c->add_option("--rtol", o.rtol, "CVODE relative tolerance, in (0, 1)")->check(kPositive);
@@ -77,6 +78,10 @@ void add_run(CLI::App& app, RunOptions& o) {
       ->check(kSize);
   c->add_option("--flush-interval", o.flush_interval, "wall-clock seconds between writes to the file (default 0.5)")
       ->check(kPositive);
+  add_state_options(c, o.state, "the initial state");
+  c->add_option("--log", o.log,
+                "groups of series to log, comma-separated: state (q, qd, qdd), energy, momentum, bodies (poses); "
+                "default all; /time is always logged");
   c->add_flag("-q,--quiet", o.quiet, "no summary on stdout");
 }
 
@@ -146,7 +151,9 @@ void warn(const std::string& what) { std::fprintf(stderr, "soadyn: warning: %s\n
 
 int run_simulation(const RunOptions& o) {
   // everything is checked before any file is touched
-  const Scenario sc = load_scenario(o.scenario);
+  const LogGroups groups = LogGroups::parse(o.log);
+  Scenario sc = load_scenario(o.scenario, false, gravity_option(o.state));
+  state_from_options(sc.model, o.state, sc.q0, sc.v0);
   SimulationSettings s = sc.simulation;
   if (o.method) s.method = *o.method;
   if (o.rtol) s.rtol = *o.rtol;
@@ -160,10 +167,11 @@ int run_simulation(const RunOptions& o) {
   if (is_fixed_step(s.method) && (o.rtol || o.atol))
     warn(std::string(o.rtol ? "--rtol" : "--atol") + " has no effect with " + s.method + " (a fixed-step method; see --dt)");
   if (!is_fixed_step(s.method) && o.dt) warn("--dt has no effect with " + s.method + " (it chooses its own steps; see --rtol)");
-  const double rows = output_rows(s), bytes = rows * double(row_bytes(sc.model)), limit = parse_size(o.max_output_size);
+  const double rows = output_rows(s), bytes = rows * double(row_bytes(sc.model, groups)), limit = parse_size(o.max_output_size);
   if (bytes > limit) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "%.6g rows of %llu bytes", rows, static_cast<unsigned long long>(row_bytes(sc.model)));
+    std::snprintf(buf, sizeof buf, "%.6g rows of %llu bytes", rows,
+                  static_cast<unsigned long long>(row_bytes(sc.model, groups)));
     throw Error(out + ": the output would take " + human_size(bytes) + " (" + buf + "), more than --max-output-size " +
                 o.max_output_size + ": raise --output-dt, lower --t-end, or allow it with --max-output-size");
   }
@@ -174,7 +182,7 @@ int run_simulation(const RunOptions& o) {
   std::unique_ptr<H5Log> log;
   RunSummary r;
   try {
-    log = std::make_unique<H5Log>(out, sc, s, SOADYN_VERSION);
+    log = std::make_unique<H5Log>(out, sc, s, SOADYN_VERSION, groups);
     log->set_flush_interval(o.flush_interval);
     Progress progress(log.get(), s.t_end);
     r = simulate(sc, s, &progress, nullptr, &g_stop);
@@ -191,15 +199,16 @@ int run_simulation(const RunOptions& o) {
       std::printf("method                 %s (rtol %g, atol %g)\n", s.method.c_str(), s.rtol, s.atol);
     std::printf("quaternion             %s\n", r.quaternion_handling.c_str());
     std::printf("status                 %s\n", r.status.c_str());
-    std::printf("t reached              %.6g s\n", r.t_reached);
+    std::printf("t reached              %.9g s\n", r.t_reached);
     std::printf("steps                  %ld\n", r.stats.steps);
     std::printf("RHS evaluations        %ld\n", r.stats.rhs_evals);
     std::printf("Jacobian evaluations   %ld\n", r.stats.jac_evals);
     std::printf("error-test failures    %ld\n", r.stats.error_test_failures);
     std::printf("nonlinear iterations   %ld\n", r.stats.nonlinear_iterations);
-    std::printf("CPU time               %.4f s\n", r.cpu_seconds);
-    std::printf("energy error (final)   %.3e (relative to max(|E0|, peak T); max over the run %.3e)\n",
-                r.final_relative_energy_error, r.max_relative_energy_error);
+    std::printf("CPU time               %.4g s\n", r.cpu_seconds);
+    std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t)| / max(|E0|, peak T),\n"
+                "                       W the work of torques and dampers\n",
+                r.final_energy_balance_error, r.max_energy_balance_error);
     if (log->published())
       std::printf("output                 %s (%ld flushes, %.3g ms each)\n", out.c_str(), log->flushes(),
                   1e3 * log->flush_seconds() / double(std::max(1L, log->flushes())));

@@ -195,6 +195,7 @@ int run_view(const ViewOptions& o) {
     run.q.conservativeResize(finite, Eigen::NoChange);
     if (run.kinetic.size()) run.kinetic.conservativeResize(finite);
     if (run.total.size()) run.total.conservativeResize(finite);
+    if (run.work.size()) run.work.conservativeResize(finite);
   }
   const view::RunModel rm = view::rebuild_model(run);
   const Model& m = rm.model;
@@ -237,15 +238,17 @@ int run_view(const ViewOptions& o) {
     for (int c = 0; c < m.nq; ++c) qs[f * size_t(m.nq) + c] = float(run.q(k, c));
   }
 
-  // energy error relative to max(|E0|, peak T), as soadyn run reports it
+  // the energy-balance error (E − E0 − W) / max(|E0|, peak T), as soadyn run reports it (files
+  // before layout 3 hold no W: the energy error)
   std::string energy = "null";
   if (run.total.size()) {
     const double E0 = run.total(0);
     const double scale = std::max({std::abs(E0), run.kinetic.size() ? run.kinetic.maxCoeff() : 0.0, 1e-300});
+    const bool balance = run.work.size() > 0;
     std::vector<float> err(K);
-    for (size_t f = 0; f < K; ++f) err[f] = float((run.total(keep[f]) - E0) / scale);
+    for (size_t f = 0; f < K; ++f) err[f] = float((run.total(keep[f]) - E0 - (balance ? run.work(keep[f]) : 0.0)) / scale);
     energy = "{\"error\":" + base64(err) + ",\"E0\":" + num(E0) + ",\"scale\":" + num(scale) +
-             ",\"work_inputs\":" + (rm.has_work_inputs ? "true" : "false") + "}";
+             ",\"work_inputs\":" + (rm.has_work_inputs ? "true" : "false") + ",\"balance\":" + (balance ? "true" : "false") + "}";
   }
 
   // the scene: bodies as the model knows them
@@ -303,7 +306,7 @@ int run_view(const ViewOptions& o) {
     std::printf("run                    %s (%s)\n", o.run.c_str(), run.status.empty() ? "status unknown" : run.status.c_str());
     std::printf("bodies                 %zu\n", N);
     std::printf("frames                 %s\n", rule);
-    std::printf("page                   %s (%.2f MB)\n", out.c_str(), double(page.size()) / 1e6);
+    std::printf("page                   %s (%.3g MB)\n", out.c_str(), double(page.size()) / 1e6);
   }
   return 0;
 }

@@ -21,6 +21,7 @@ struct RunFile {
   VecX time;                             // T
   MatX q;                                // T × nq
   VecX kinetic, total;                   // T (empty if absent)
+  VecX work;                             // T: the inputs' work W(t) (empty in files before layout 3)
 };
 
 // Reads `path`; throws soadyn::Error naming the file and what is missing or malformed.

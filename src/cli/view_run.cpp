@@ -126,25 +126,45 @@ RunFile read_run(const std::string& path) {
     r.status = read_string(d, false, path + ": /solver/status");
   }
   for (const char* name : {"/time", "/q"})
-    if (!exists(file, name)) throw Error(path + ": dataset " + name + " is missing (not a run file from soadyn run?)");
+    if (!exists(file, name)) throw Error(path + ": dataset " + name + " is missing (a run logged without the state group, --log, or not a run file from soadyn run)");
   r.time = read_matrix(file, "/time", path).col(0);
   r.q = read_matrix(file, "/q", path);
   if (exists(file, "/energy/kinetic")) r.kinetic = read_matrix(file, "/energy/kinetic", path).col(0);
   if (exists(file, "/energy/total")) r.total = read_matrix(file, "/energy/total", path).col(0);
+  if (exists(file, "/energy/work_inputs")) r.work = read_matrix(file, "/energy/work_inputs", path).col(0);
 
   // rows: as many as every series has (a run stopped mid-write keeps whole rows only)
   Eigen::Index rows = std::min(r.time.size(), r.q.rows());
   if (r.kinetic.size()) rows = std::min(rows, r.kinetic.size());
   if (r.total.size()) rows = std::min(rows, r.total.size());
+  if (r.work.size()) rows = std::min(rows, r.work.size());
   if (rows == 0) throw Error(path + ": the run logged no samples");
   r.time.conservativeResize(rows);
   r.q.conservativeResize(rows, Eigen::NoChange);
   if (r.kinetic.size()) r.kinetic.conservativeResize(rows);
   if (r.total.size()) r.total.conservativeResize(rows);
+  if (r.work.size()) r.work.conservativeResize(rows);
   for (Eigen::Index k = 1; k < rows; ++k)
     if (!(r.time(k) >= r.time(k - 1))) throw Error(path + ": /time decreases at row " + std::to_string(k));
 
-  if (exists(file, "/model/joint_names")) {
+  if (exists(file, "/model") && H5Aexists_by_name(file, "/model", "joint_names", H5P_DEFAULT) > 0) {
+    // layout 3: an attribute of variable-length strings
+    Id a(H5Aopen_by_name(file, "/model", "joint_names", H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+    Id type(H5Aget_type(a), H5Tclose);
+    Id space(H5Aget_space(a), H5Sclose);
+    const hssize_t n = H5Sget_simple_extent_npoints(space);
+    if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0 && n > 0) {
+      Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
+      H5Tset_size(mem, H5T_VARIABLE);
+      H5Tset_cset(mem, H5Tget_cset(type));
+      std::vector<char*> names(size_t(n), nullptr);
+      if (H5Aread(a, mem, names.data()) >= 0)
+        for (char* p : names) {
+          r.joint_names.push_back(p ? p : "");
+          H5free_memory(p);
+        }
+    }
+  } else if (exists(file, "/model/joint_names")) {  // layout 2: a dataset of fixed-length strings
     Id d(H5Dopen2(file, "/model/joint_names", H5P_DEFAULT), H5Dclose);
     Id type(H5Dget_type(d), H5Tclose);
     Id space(H5Dget_space(d), H5Sclose);

@@ -30,6 +30,11 @@ class Recorder : public RunObserver {
     kinetic.push_back(s.kinetic);
     potential.push_back(s.potential);
     total.push_back(s.total);
+    work.push_back(s.work_inputs);
+    dissipated.push_back(s.dissipated);
+    position.insert(position.end(), s.body_position.data(), s.body_position.data() + s.body_position.size());
+    orientation.insert(orientation.end(), s.body_orientation.data(), s.body_orientation.data() + s.body_orientation.size());
+    com.insert(com.end(), s.body_com.data(), s.body_com.data() + s.body_com.size());
     linear.insert(linear.end(), s.linear.data(), s.linear.data() + 3);
     angular.insert(angular.end(), s.angular.data(), s.angular.data() + 3);
     if (next_) next_->on_sample(s);
@@ -40,7 +45,7 @@ class Recorder : public RunObserver {
   void on_finish(const RunSummary& r) override {
     if (next_) next_->on_finish(r);
   }
-  std::vector<double> t, q, v, qdd, kinetic, potential, total, linear, angular;
+  std::vector<double> t, q, v, qdd, kinetic, potential, total, work, dissipated, linear, angular, position, orientation, com;
 
  private:
   RunObserver* next_;
@@ -52,8 +57,8 @@ py::dict summary_dict(const RunSummary& r) {
                   "error_test_failures"_a = r.stats.error_test_failures,
                   "nonlinear_iterations"_a = r.stats.nonlinear_iterations, "cpu_seconds"_a = r.cpu_seconds,
                   "quaternion_handling"_a = r.quaternion_handling, "output_dt"_a = r.output_dt,
-                  "max_relative_energy_error"_a = r.max_relative_energy_error,
-                  "final_relative_energy_error"_a = r.final_relative_energy_error);
+                  "max_energy_balance_error"_a = r.max_energy_balance_error,
+                  "final_energy_balance_error"_a = r.final_energy_balance_error);
 }
 
 // (arrays, summary, exception raised by a signal handler or None, warnings)
@@ -62,8 +67,7 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   const std::vector<std::string> warnings = check_run(sc, settings);
   {
     System probe(sc.model, sc.inputs, parse_fd_method(settings.dynamics));
-    VecX y0(probe.size());
-    y0 << sc.q0, sc.v0;
+    const VecX y0 = probe.state(sc.q0, sc.v0);
     make_integrator(settings.method, probe, settings, 0.0, y0);
   }
   std::unique_ptr<OutputLock> lock;  // declared first: held until the log is closed
@@ -119,12 +123,16 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   log.reset();  // closes the file before Python may read it
   lock.reset();
 
-  const py::ssize_t T = py::ssize_t(rec.t.size()), nq = sc.model.nq, nv = sc.model.nv;
+  const py::ssize_t T = py::ssize_t(rec.t.size()), nq = sc.model.nq, nv = sc.model.nv, nb = sc.model.nbodies;
   py::dict arrays("t"_a = owned(std::move(rec.t), {T}), "q"_a = owned(std::move(rec.q), {T, nq}),
                   "v"_a = owned(std::move(rec.v), {T, nv}), "qdd"_a = owned(std::move(rec.qdd), {T, nv}),
                   "kinetic_energy"_a = owned(std::move(rec.kinetic), {T}),
                   "potential_energy"_a = owned(std::move(rec.potential), {T}),
                   "total_energy"_a = owned(std::move(rec.total), {T}),
+                  "work_inputs"_a = owned(std::move(rec.work), {T}), "dissipated"_a = owned(std::move(rec.dissipated), {T}),
+                  "body_position"_a = owned(std::move(rec.position), {T, nb, 3}),
+                  "body_orientation"_a = owned(std::move(rec.orientation), {T, nb, 4}),
+                  "body_com"_a = owned(std::move(rec.com), {T, nb, 3}),
                   "linear_momentum"_a = owned(std::move(rec.linear), {T, 3}),
                   "angular_momentum"_a = owned(std::move(rec.angular), {T, 3}));
   return py::make_tuple(arrays, summary_dict(summary), pending, warnings);

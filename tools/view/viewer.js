@@ -357,8 +357,9 @@
   const plots = [plotEnergy, plotJoint];
   if (RUN.energy) {
     plotEnergy.y = decode(RUN.energy.error, Float32Array);
-    document.getElementById('energy-title').textContent =
-      'energy error (E \u2212 E\u2080) / max(|E\u2080|, peak T)' + (RUN.energy.work_inputs ? ': inputs do work, E is not conserved' : '');
+    document.getElementById('energy-title').textContent = RUN.energy.balance
+      ? 'energy-balance error (E \u2212 E\u2080 \u2212 W) / max(|E\u2080|, peak T), W the work of torques and dampers'
+      : 'energy error (E \u2212 E\u2080) / max(|E\u2080|, peak T)' + (RUN.energy.work_inputs ? ': inputs do work, E is not conserved' : '');
   } else {
     document.getElementById('energy-title').textContent = 'energy: not in this run file';
   }

@@ -114,8 +114,8 @@ class RunSummary:
     cpu_seconds: float
     quaternion_handling: str
     output_dt: float
-    max_relative_energy_error: float
-    final_relative_energy_error: float
+    max_energy_balance_error: float
+    final_energy_balance_error: float
 
 class Trajectory:
     t: Vector
@@ -125,8 +125,13 @@ class Trajectory:
     kinetic_energy: Vector
     potential_energy: Vector
     total_energy: Vector
+    work_inputs: Vector
+    dissipated: Vector
     linear_momentum: Vector
     angular_momentum: Vector
+    body_position: Vector
+    body_orientation: Vector
+    body_com: Vector
     summary: RunSummary
     joint_names: List[str]
     parents: List[int]
@@ -135,6 +140,8 @@ class Trajectory:
     def __len__(self) -> int: ...
     @property
     def energy_error(self) -> Vector: ...
+    @property
+    def balance_error(self) -> Vector: ...
 
 def load(path: str, free_root: bool = False, gravity: Optional[ArrayLike] = None) -> Model: ...
 def load_scenario(path: str, free_root: bool = False, gravity: Optional[ArrayLike] = None) -> Scenario: ...

@@ -10,8 +10,9 @@ class RunSummary:
     """How a run went: its method, solver statistics, status and energy drift.
 
     status is "completed", "interrupted by SIGINT at t = …", or the error that ended the run
-    (completed is then False and t_reached the time of the last sample).  The energy errors are
-    max |E(t) − E(0)| / max(|E(0)|, peak T) over the samples, and that ratio at the last one.
+    (completed is then False and t_reached the time of the last sample).  The energy-balance errors
+    are max |E(t) − E(0) − W(t)| / max(|E(0)|, peak T) over the samples (W the work of the torques
+    and dampers, zero without them), and that ratio at the last one.
     """
     method: str
     status: str
@@ -25,8 +26,8 @@ class RunSummary:
     cpu_seconds: float
     quaternion_handling: str
     output_dt: float
-    max_relative_energy_error: float
-    final_relative_energy_error: float
+    max_energy_balance_error: float
+    final_energy_balance_error: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,9 +35,12 @@ class Trajectory:
     """A run's samples as numpy arrays, T samples at the output times.
 
     t (T,), q (T, nq), v (T, nv) (the note's q̇), qdd (T, nv), kinetic_energy, potential_energy
-    (joint springs included) and total_energy (T,), linear_momentum and angular_momentum (T, 3)
-    (about the inertial origin); joint_names and parents of the model, the scenario's text, and
-    the run's summary (a RunSummary).
+    (joint springs included) and total_energy (T,), work_inputs (the work of torques and dampers
+    since t = 0) and dissipated (the dampers' share, ≥ 0) (T,), linear_momentum and
+    angular_momentum (T, 3) (about the inertial origin), body_position and body_com (T, N, 3) and
+    body_orientation (T, N, 4, [w x y z], body → inertial); joint_names and parents of the model,
+    the scenario's text, and the run's summary (a RunSummary).  A log written without a group
+    (`soadyn run --log`) gives NaN for its series.
     """
     t: np.ndarray
     q: np.ndarray
@@ -45,15 +49,20 @@ class Trajectory:
     kinetic_energy: np.ndarray
     potential_energy: np.ndarray
     total_energy: np.ndarray
+    work_inputs: np.ndarray
+    dissipated: np.ndarray
     linear_momentum: np.ndarray
     angular_momentum: np.ndarray
+    body_position: np.ndarray
+    body_orientation: np.ndarray
+    body_com: np.ndarray
     summary: RunSummary
     joint_names: List[str] = field(default_factory=list)
     parents: List[int] = field(default_factory=list)
     scenario: str = ""
 
-    ARRAYS = ("t", "q", "v", "qdd", "kinetic_energy", "potential_energy", "total_energy", "linear_momentum",
-              "angular_momentum")
+    ARRAYS = ("t", "q", "v", "qdd", "kinetic_energy", "potential_energy", "total_energy", "work_inputs", "dissipated",
+              "linear_momentum", "angular_momentum", "body_position", "body_orientation", "body_com")
 
     def __len__(self) -> int:
         return len(self.t)
@@ -68,6 +77,16 @@ class Trajectory:
         scale = np.maximum(np.maximum(abs(E[0]), np.maximum.accumulate(T)), 1e-300)
         return (E - E[0]) / scale
 
+    @property
+    def balance_error(self) -> np.ndarray:
+        """(E(t) − E(0) − W(t)) / max(|E(0)|, peak T so far), shape (T,): W the inputs' work; the
+        summary's figures are taken from it (equal to energy_error without torques or dampers)."""
+        E, T = self.total_energy, self.kinetic_energy
+        if len(E) == 0:
+            return E.copy()
+        scale = np.maximum(np.maximum(abs(E[0]), np.maximum.accumulate(T)), 1e-300)
+        return (E - E[0] - self.work_inputs) / scale
+
     def __repr__(self) -> str:
         s = self.summary
         span = f"t = {self.t[0]:g} … {self.t[-1]:g} s" if len(self.t) else "no samples"
@@ -79,14 +98,14 @@ def summary_from_dict(d: dict) -> RunSummary:
     return RunSummary(**{f.name: d[f.name] for f in fields(RunSummary)})
 
 
-def energy_errors(total: np.ndarray, kinetic: np.ndarray):
-    """(max, final) relative energy error, as simulate() accumulates them sample by sample"""
+def balance_errors(total: np.ndarray, kinetic: np.ndarray, work: np.ndarray):
+    """(max, final) relative energy-balance error, as simulate() accumulates them sample by sample"""
     if len(total) == 0:
         return 0.0, 0.0
     E0, peak, worst, last = float(total[0]), 0.0, 0.0, 0.0
-    for E, T in zip(total.tolist(), kinetic.tolist()):
+    for E, T, W in zip(total.tolist(), kinetic.tolist(), work.tolist()):
         peak = max(peak, T)
-        last = abs(E - E0) / max(abs(E0), peak, 1e-300)
+        last = abs(E - E0 - W) / max(abs(E0), peak, 1e-300)
         worst = max(worst, last)
     return worst, last
 
@@ -95,8 +114,8 @@ def read_log(path: str) -> Trajectory:
     """The Trajectory of a soadyn HDF5 run file (soadyn.simulate(output=…) or `soadyn run`).
 
     The same arrays as the run returned (float64 round-trips exactly); a run still being written
-    or cut short gives what was flushed.  The energy errors, not stored in the file, are
-    recomputed from the logged energies the way simulate() computes them.  Needs h5py.
+    or cut short gives what was flushed.  The energy-balance errors are recomputed from the logged
+    energies the way simulate() computes them.  Needs h5py.
     Raises soadyn.Error when the file is missing or is not a soadyn run.
     """
     import h5py  # only here: the rest of soadyn does not need it
@@ -111,15 +130,19 @@ def read_log(path: str) -> Trajectory:
     except (OSError, ValueError) as e:
         raise Error(f"{path}: cannot read the run file: {e}") from None
     with f:
-        missing = [k for k in ("time", "q", "qd", "solver") if k not in f]
+        missing = [k for k in ("time", "solver") if k not in f]
         if missing:
             raise Error(f"{path}: not a soadyn run file (no {', '.join(missing)})")
 
-        def series(name, cols=None):
+        model = f["model"] if "model" in f else None
+        nq = int(model.attrs["nq"]) if model is not None and "nq" in model.attrs else 0
+        nv = int(model.attrs["nv"]) if model is not None and "nv" in model.attrs else 0
+        nb = len(model.attrs["body_names"]) if model is not None and "body_names" in model.attrs else 0
+
+        def series(name, *shape):
             if name in f:
                 return np.asarray(f[name][...], dtype=np.float64)
-            n = f["time"].shape[0]
-            return np.full((n, cols) if cols else (n,), np.nan)
+            return np.full((f["time"].shape[0],) + shape, np.nan)
 
         def text(v):
             return v.decode() if isinstance(v, bytes) else str(v)
@@ -132,15 +155,21 @@ def read_log(path: str) -> Trajectory:
                 return solver[k][()]
             return solver.attrs[k] if k in solver.attrs else default
 
-        t, q, v = series("time"), series("q"), series("qd")
-        T = min(len(t), len(q), len(v))  # a file cut between two datasets' writes
+        t, q, v = series("time"), series("q", nq), series("qd", nv)
+        T = min(len(t), len(q), len(v))  # a file cut between two datasets' writes (layout 1)
+        # files from before the energy balance (layout 2) hold the energies but no work: W = D = 0
+        old = "energy/total" in f and "energy/work_inputs" not in f
+        work = np.zeros(len(t)) if old else series("energy/work_inputs")
         arrays = dict(t=t, q=q, v=v, qdd=series("qdd", v.shape[1]),
                       kinetic_energy=series("energy/kinetic"), potential_energy=series("energy/potential"),
-                      total_energy=series("energy/total"), linear_momentum=series("momentum/linear", 3),
-                      angular_momentum=series("momentum/angular", 3))
+                      total_energy=series("energy/total"), work_inputs=work,
+                      dissipated=np.zeros(len(t)) if old else series("energy/dissipated"),
+                      linear_momentum=series("momentum/linear", 3), angular_momentum=series("momentum/angular", 3),
+                      body_position=series("bodies/position", nb, 3), body_orientation=series("bodies/orientation", nb, 4),
+                      body_com=series("bodies/com", nb, 3))
         arrays = {k: x[:T] for k, x in arrays.items()}
         status = text(get("status", "unknown"))
-        worst, last = energy_errors(arrays["total_energy"], arrays["kinetic_energy"])
+        worst, last = balance_errors(arrays["total_energy"], arrays["kinetic_energy"], arrays["work_inputs"])
         summary = RunSummary(
             method=text(get("method", "")), status=status, completed=status == "completed",
             t_reached=float(get("t_reached", t[T - 1] if T else 0.0)), steps=int(get("steps", 0)),
@@ -148,9 +177,13 @@ def read_log(path: str) -> Trajectory:
             error_test_failures=int(get("error_test_failures", 0)),
             nonlinear_iterations=int(get("nonlinear_iterations", 0)), cpu_seconds=float(get("cpu_seconds", 0.0)),
             quaternion_handling=text(get("quaternion_handling", "")), output_dt=float(get("output_dt", 0.0)),
-            max_relative_energy_error=worst, final_relative_energy_error=last)
-        model = f["model"] if "model" in f else {}
-        names = [text(n) for n in model["joint_names"][...]] if "joint_names" in model else []
-        parents = [int(p) for p in model["parents"][...]] if "parents" in model else []
+            max_energy_balance_error=worst, final_energy_balance_error=last)
+        if model is not None and "joint_names" in model.attrs:  # layout 3: str attributes
+            names = [text(n) for n in model.attrs["joint_names"]]
+        elif model is not None and "joint_names" in model:  # earlier layouts: a dataset
+            names = [text(n) for n in model["joint_names"][...]]
+        else:
+            names = []
+        parents = [int(p) for p in model["parents"][...]] if model is not None and "parents" in model else []
         scenario = text(f["scenario"][()]) if "scenario" in f else text(f.attrs.get("scenario", ""))
         return Trajectory(**arrays, summary=summary, joint_names=names, parents=parents, scenario=scenario)

@@ -39,7 +39,7 @@ from . import _soadyn
 from ._soadyn import Error, parse_scenario
 
 RESULT_COLUMNS = ("status", "completed", "initial_energy", "t_reached", "steps", "rhs_evals", "cpu_seconds",
-                  "max_energy_error", "final_energy_error", "state_error", "final_state_error", "reference_status")
+                  "max_energy_balance_error", "final_energy_balance_error", "state_error", "final_state_error", "reference_status")
 DISTRIBUTIONS = ("values", "grid", "uniform", "normal", "log_uniform")
 
 
@@ -462,7 +462,7 @@ def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any]
     from . import simulate
     row: Dict[str, Any] = {"status": "", "completed": False, "initial_energy": math.nan, "t_reached": math.nan,
                            "steps": 0, "rhs_evals": 0,
-                           "cpu_seconds": math.nan, "max_energy_error": math.nan, "final_energy_error": math.nan,
+                           "cpu_seconds": math.nan, "max_energy_balance_error": math.nan, "final_energy_balance_error": math.nan,
                            "state_error": math.nan, "final_state_error": math.nan, "reference_status": ""}
     try:
         tree = apply(sweep_tree, model, values)
@@ -474,8 +474,8 @@ def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any]
     s = traj.summary
     row.update(status=s.status, completed=bool(s.completed), t_reached=s.t_reached,
                initial_energy=float(traj.total_energy[0]) if len(traj.t) else math.nan, steps=s.steps,
-               rhs_evals=s.rhs_evals, cpu_seconds=s.cpu_seconds, max_energy_error=s.max_relative_energy_error,
-               final_energy_error=s.final_relative_energy_error)
+               rhs_evals=s.rhs_evals, cpu_seconds=s.cpu_seconds, max_energy_balance_error=s.max_energy_balance_error,
+               final_energy_balance_error=s.final_energy_balance_error)
     if reference:
         rtree = _Copy(tree)
         rtree.child(rtree.root, "simulation", {}).update(reference)

@@ -1,0 +1,90 @@
+#include "log_layout.hpp"
+
+namespace soadyn::log {
+
+namespace {
+
+std::vector<std::string> units_of(const Model& m, bool of_q) {
+  std::vector<std::string> out;
+  for (int i = 0; i < m.nbodies; ++i) {
+    const JointTraits& tr = joint_traits(m.joint_type[i]);
+    for (const auto& u : of_q ? tr.q_units : tr.v_units) out.emplace_back(u);
+  }
+  return out;
+}
+
+// "rad/s" → "rad/s^2"
+std::string per_second(const std::string& rate) { return rate + "^2"; }
+
+// a view of the next `cols` (× bodies) columns, named prefix + name [+ "." + suffix]
+struct Builder {
+  Layout out;
+  void view(const std::string& path, const std::vector<Column>& cols, int view_cols, int bodies = 0) {
+    View v;
+    v.path = path;
+    v.first = int(out.columns.size());
+    v.cols = view_cols;
+    v.bodies = bodies;
+    const int last = std::max(1, view_cols);
+    for (int c = 0; c < last; ++c) v.units.push_back(cols[size_t(c)].unit);
+    out.columns.insert(out.columns.end(), cols.begin(), cols.end());
+    out.views.push_back(std::move(v));
+  }
+};
+
+}  // namespace
+
+std::vector<std::string> q_units(const Model& model) { return units_of(model, true); }
+std::vector<std::string> v_units(const Model& model) { return units_of(model, false); }
+
+Layout layout(const Model& m, const LogGroups& g) {
+  Builder b;
+  b.view("/time", {{"time", "s"}}, 0);
+  if (g.state) {
+    const std::vector<std::string> qn = m.q_names(), vn = m.v_names(), qu = q_units(m), vu = v_units(m);
+    std::vector<Column> q, qd, qdd;
+    for (int k = 0; k < m.nq; ++k) q.push_back({"q." + qn[size_t(k)], qu[size_t(k)]});
+    for (int k = 0; k < m.nv; ++k) qd.push_back({"qd." + vn[size_t(k)], vu[size_t(k)]});
+    for (int k = 0; k < m.nv; ++k) qdd.push_back({"qdd." + vn[size_t(k)], per_second(vu[size_t(k)])});
+    b.view("/q", q, m.nq);
+    b.view("/qd", qd, m.nv);
+    b.view("/qdd", qdd, m.nv);
+  }
+  if (g.energy) {
+    b.out.groups.push_back("/energy");
+    for (const char* e : {"kinetic", "potential", "total", "work_inputs", "dissipated"})
+      b.view(std::string("/energy/") + e, {{std::string("energy.") + e, "J"}}, 0);
+  }
+  if (g.momentum) {
+    b.out.groups.push_back("/momentum");
+    for (const auto& [kind, unit] : {std::pair{"linear", "kg m/s"}, std::pair{"angular", "kg m^2/s"}}) {
+      std::vector<Column> c;
+      for (const char* x : {"x", "y", "z"}) c.push_back({std::string("momentum.") + kind + "." + x, unit});
+      b.view(std::string("/momentum/") + kind, c, 3);
+    }
+  }
+  if (g.bodies) {
+    b.out.groups.push_back("/bodies");
+    const std::pair<const char*, std::vector<const char*>> series[] = {
+        {"position", {"x", "y", "z"}}, {"orientation", {"w", "x", "y", "z"}}, {"com", {"x", "y", "z"}}};
+    for (const auto& [kind, parts] : series) {
+      const std::string unit = std::string(kind) == "orientation" ? "1" : "m";
+      std::vector<Column> c;
+      for (int i = 0; i < m.nbodies; ++i)
+        for (const char* x : parts) c.push_back({std::string("bodies.") + kind + "." + m.body_names[size_t(i)] + "." + x, unit});
+      b.view(std::string("/bodies/") + kind, c, int(parts.size()), m.nbodies);
+    }
+  }
+  return std::move(b.out);
+}
+
+void append_row(const LogGroups& g, const Sample& s, std::vector<double>& b) {
+  auto put = [&b](const auto& x) { b.insert(b.end(), x.data(), x.data() + x.size()); };
+  b.push_back(s.t);
+  if (g.state) put(s.q), put(s.qd), put(s.qdd);
+  if (g.energy) b.insert(b.end(), {s.kinetic, s.potential, s.total, s.work_inputs, s.dissipated});
+  if (g.momentum) put(s.linear), put(s.angular);
+  if (g.bodies) put(s.body_position), put(s.body_orientation), put(s.body_com);  // column-major: body by body
+}
+
+}  // namespace soadyn::log
