@@ -23,6 +23,12 @@ Inputs::Power Inputs::power(double t, const VecX& v) const {
   return p;
 }
 
+void Inputs::add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const {
+  // τ = −k (q − rest) − c q̇
+  for (const auto& s : springs) dq(s.dof, s.dof) -= s.stiffness;
+  for (const auto& d : dampers) dv(d.dof, d.dof) -= d.damping;
+}
+
 double Inputs::spring_energy(const VecX& q) const {
   double V = 0.0;
   for (const auto& s : springs) V += 0.5 * s.stiffness * (q(s.coord) - s.rest) * (q(s.coord) - s.rest);

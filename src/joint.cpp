@@ -188,3 +188,71 @@ void joint_neutral(JointType t, double* q) {
 }
 
 }  // namespace soadyn
+
+namespace soadyn {
+
+bool joint_carries(JointType t, int k, int m) {
+  switch (t) {
+    case JointType::Ball: return true;                   // all three turn with the child
+    case JointType::Planar: return k < 2 && m == 2;      // x, y carry the axis of θ
+    case JointType::Free: return k >= 3 && m < 3;        // η̇ carries the rotations' moment arm
+    default: return false;                               // G × G = 0
+  }
+}
+
+void joint_tangent_map(JointType t, const double* q, Eigen::Ref<MatX> T) {
+  T.setZero();
+  // rows of 2 vec(Q* ⊗ dQ) (ball) or 2 vec(dQ ⊗ Q*) (free), divided by |Q|²
+  auto quaternion = [](const double* Q, bool right, auto&& block) {
+    const double w = Q[0], x = Q[1], y = Q[2], z = Q[3];
+    const double s = 2.0 / (w * w + x * x + y * y + z * z);
+    if (right)
+      block << -x, w, -z, y, -y, z, w, -x, -z, -y, x, w;
+    else
+      block << -x, w, z, -y, -y, -z, w, x, -z, y, -x, w;
+    block *= s;
+  };
+  switch (t) {
+    case JointType::Ball: {
+      auto b = T.block<3, 4>(0, 0);
+      quaternion(q, false, b);
+      return;
+    }
+    case JointType::Free: {
+      auto b = T.block<3, 4>(0, 3);
+      quaternion(q + 3, true, b);
+      T.block<3, 3>(3, 0).setIdentity();
+      return;
+    }
+    default: T.setIdentity(); return;
+  }
+}
+
+void joint_qdot_jacobian(JointType t, const double* q, const double* v, Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) {
+  dq.setZero();
+  dv.setZero();
+  switch (t) {
+    case JointType::Ball: {
+      // quaṫ = ½ Q ⊗ [0; ω]: linear in Q and in ω
+      const double w = q[0], x = q[1], y = q[2], z = q[3], a = v[0], b = v[1], c = v[2];
+      dq.block<4, 4>(0, 0) << 0, -a, -b, -c, a, 0, c, -b, b, -c, 0, a, c, b, -a, 0;
+      dv.block<4, 3>(0, 0) << -x, -y, -z, w, -z, y, z, w, -x, -y, x, w;
+      break;
+    }
+    case JointType::Free: {
+      // ṗ = η̇;  quaṫ = ½ [0; ω] ⊗ Q
+      const double w = q[3], x = q[4], y = q[5], z = q[6], a = v[0], b = v[1], c = v[2];
+      dq.block<4, 4>(3, 3) << 0, -a, -b, -c, a, 0, -c, b, b, c, 0, -a, c, -b, a, 0;
+      dv.block<4, 3>(3, 0) << -x, -y, -z, w, z, -y, -z, w, x, y, -x, w;
+      dq *= 0.5;
+      dv *= 0.5;
+      dv.block<3, 3>(0, 3).setIdentity();
+      return;
+    }
+    default: dv.setIdentity(); return;
+  }
+  dq *= 0.5;
+  dv *= 0.5;
+}
+
+}  // namespace soadyn

@@ -2,6 +2,8 @@
 // (malloc, calloc, realloc and the aligned variants, forwarding to glibc's __libc_* entry points),
 // so every heap allocation is counted: operator new (which calls malloc) and Eigen's own
 // aligned_malloc alike, in Release (NDEBUG) builds too, where Eigen's malloc guard is compiled out.
+#include "soadyn/derivatives.hpp"
+
 #include "test_util.hpp"
 
 #include <atomic>
@@ -91,6 +93,31 @@ TEST(NoAllocation, AlgorithmsAllocateNothingPerCall) {
     const Momentum h = momentum(model, data);
     EXPECT_EQ(region.end(), 0) << "free root " << free_root;
     EXPECT_TRUE(std::isfinite(e + h.linear.sum()));
+  }
+}
+
+TEST(NoAllocation, DerivativesAllocateNothingPerCall) {
+  for (const bool chain : {false, true}) {
+    Rng rng(5);
+    const Model model = random_model(rng, {.n = 60, .branching = chain ? 0.0 : 0.5, .prismatic = 0.2, .ball = 0.2,
+                                           .planar = 0.1, .free_root = true});
+    Data data(model);
+    DerivativeData dd(model);
+    Inputs in;
+    for (int i = 0; i < model.nbodies; ++i)
+      if (model.nv_i[i] == 1) {
+        in.springs.push_back({model.joint_names[i], model.idx_v[i], model.idx_q[i], 10.0, 0.0});
+        in.dampers.push_back({model.joint_names[i], model.idx_v[i], 1.0});
+      }
+    const VecX q = random_q(rng, model), v = random_v(rng, model), tau = random_v(rng, model), qdd = random_v(rng, model);
+
+    Forbidden region;
+    update_kinematics(model, data, q);
+    update_velocities(model, data, v);
+    inverse_dynamics_derivatives(model, data, v, qdd, dd);
+    forward_dynamics_derivatives(model, data, v, tau, dd, &in, true);
+    EXPECT_EQ(region.end(), 0) << "chain " << chain;
+    EXPECT_TRUE(dd.dqdd_dq.allFinite() && dd.Minv.allFinite());
   }
 }
 

@@ -38,6 +38,9 @@ struct Inputs {
   bool empty() const { return torques.empty() && springs.empty() && dampers.empty(); }
   // τ(t, q, v): the generalized force the inputs apply
   void evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const;
+  // dq += ∂τ/∂q (along the tangent, derivatives.hpp; springs act on 1-DOF joints, where the
+  // coordinate is the tangent) and dv += ∂τ/∂v: both nv×nv, constant (torques depend on t only)
+  void add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const;
   // the inputs' potential energy (springs), so E = T + V_gravity + V_springs is conserved
   double spring_energy(const VecX& q) const;
   // The power of the inputs that are not in the potential: P = (τ_torques + τ_dampers) · q̇ (each

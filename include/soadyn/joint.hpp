@@ -79,6 +79,26 @@ void joint_velocity(JointType t, const double* q, const double* qdot, double* v)
 // inertial axes for the free joint, body axes for the ball) and the free joint's position moves by h η̇.
 void joint_integrate(JointType t, const double* q, const double* v, double h, double* q_out);
 
+// Derivatives along the tangent space (derivatives.hpp).  A joint's configuration moves by the
+// increment δ (nv numbers) as q ⊕ δ = joint_integrate(q, δ, 1): δ is in the frame its velocity is,
+// so a perturbation δ moves the child like the velocity δ would, and the increment of a free
+// joint's attitude is about inertial axes, of a ball's about the child's axes.
+//
+// Whether column k of G_i carries column m: ∂G_m/∂δ_k = G_k × G_m (true) or 0 (false), with ×
+// the motion cross product.  Ball: every column carries every other (they turn with the child);
+// planar: the translations carry the rotation's axis (it moves with the body's origin); free:
+// the translations carry the rotations; 1-DOF joints: nothing (G × G = 0).
+bool joint_carries(JointType t, int k, int m);
+
+// dδ = T dq (T: nv×nq, column-major at T): the tangent increment a change dq of the coordinates
+// makes.  The identity where q has no quaternion; for a quaternion Q, dθ = 2 vec(Q* ⊗ dQ) / |Q|²
+// (ball) or 2 vec(dQ ⊗ Q*) / |Q|² (free): a change of Q along itself gives none, since
+// joint_motion normalizes.
+void joint_tangent_map(JointType t, const double* q, Eigen::Ref<MatX> T);
+
+// ∂q̇/∂q (nq×nq) and ∂q̇/∂v (nq×nv) of joint_qdot.
+void joint_qdot_jacobian(JointType t, const double* q, const double* v, Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv);
+
 // the neutral configuration (zero coordinates, identity quaternion)
 void joint_neutral(JointType t, double* q);
 

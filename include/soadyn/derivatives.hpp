@@ -1,0 +1,71 @@
+// Analytic partial derivatives of inverse and forward dynamics, O(N·depth), in the spirit of
+// Carpentier & Mansard, "Analytical derivatives of rigid body dynamics algorithms" (RSS 2018),
+// written in the note's inertial frame.
+//
+// Frame.  Every spatial vector here is [ω; u] in inertial coordinates with its moment point at the
+// inertial origin (the note's v_i = [ω_i; η̇_i] moved there by D_{i:0}: u = η̇_i + η_i × ω_i), so a
+// perturbation of joint j moves every quantity of the subtree below j rigidly, by the twist
+// ξ = S_j δ_j, and the derivative of anything rigidly attached is a cross product with ξ.
+//   S_i      G_i moved to the origin: [a; b + η_i × a] for G_i's column [a; b]
+//   v_i      v_p + S_i q̇_i,    a_i = a_p + S_i q̈_i + Σ_c q̇_c μ_c × S_c   (a at the ground: [0; −g])
+//   f_i      Y_i a_i + v_i ×* Y_i v_i,   F_i = Σ_{k ⪰ i} f_k,   τ_i = S_iᵀ F_i
+// with m × m' = [ω × ω'; ω × u' + u × ω'] and m ×* f = [ω × n + u × f; ω × f].
+//
+// Tangent-space convention (free and ball joints).  ∂/∂q means the derivative along the increment
+// δ (nv numbers) with q ⊕ δ = Model::integrate(q, δ, 1) (joint_integrate): the increment lives in the
+// frame the joint's velocity does.
+//   free  [x y z, Q]: δ = [δθ; δp]; p + δp, and Q turned about inertial axes: exp(δθ) ⊗ Q
+//   ball  Q:          δ = δθ in the child's frame: Q ⊗ exp(δθ)
+//   planar, revolute, prismatic: δ is the coordinate's own increment.
+// So ∂q̈/∂q is nv×nv; joint_tangent_map (joint.hpp) gives the chain rule to the coordinates.
+//
+// Forward dynamics: ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x |_q̈) at the q̈ of the state, with 𝓜 by the
+// composite sweep, factored along the tree (LᵀDL, no fill-in off ancestor chains), and the 2·nv
+// columns solved with that factor.  ∂q̈/∂τ = 𝓜⁻¹ on request, by the same factor.
+#pragma once
+
+#include "soadyn/data.hpp"
+#include "soadyn/inputs.hpp"
+#include "soadyn/model.hpp"
+
+#include <vector>
+
+namespace soadyn {
+
+// Per-state arrays of the derivative algorithms, sized once from a Model (Data holds the rest).
+// No derivative algorithm allocates once a DerivativeData exists.
+struct DerivativeData {
+  explicit DerivativeData(const Model& model);
+
+  // world-frame sweep (see the header comment), all about the inertial origin
+  Mat6X S;                          // 6×nv: S_i, column per DOF
+  Mat6X v, a;                       // 6×N: v_i, a_i (a includes −g)
+  Mat6X F;                          // 6×N: F_i, subtree sums of f_i
+  std::vector<SpatialInertia> Y;    // composite inertia of the subtree of i, about the origin
+  std::vector<Mat6> B;              // composite of B_k β = Y_k (β × v_k) + β ×* Y_k v_k + v_k ×* Y_k β
+  VecX tau;                         // τ = S_iᵀ F_i (equals inverse_dynamics)
+  // per DOF column c (joint j): the vectors its derivative column is made of (see derivatives.cpp)
+  Eigen::Matrix<double, 12, Eigen::Dynamic> row;   // [Y_i S_r; B_iᵀ S_r] for row r of body i
+  Eigen::Matrix<double, 12, Eigen::Dynamic> colq;  // [κ_c; β_c]
+  Eigen::Matrix<double, 12, Eigen::Dynamic> colv;  // [−λ_c; S_c]
+  Mat6X psi, rho, phi;                             // ψ_c, ρ_c (rows of ancestors), φ_c = ξ ×* F_j
+
+  // results
+  MatX dtau_dq, dtau_dv;            // ∂τ/∂q (tangent), ∂τ/∂v of inverse dynamics, nv×nv
+  MatX dqdd_dq, dqdd_dv;            // ∂q̈/∂q (tangent), ∂q̈/∂v of forward dynamics, nv×nv
+  MatX Minv;                        // ∂q̈/∂τ = 𝓜⁻¹ (when asked for)
+};
+
+// ∂τ/∂q and ∂τ/∂v of τ = 𝓜(q) q̈ + bias(q, v) at (q, v, q̈), q̈ held fixed.  Needs [kin] at q; v and
+// q̈ have size nv.  Fills dd.dtau_dq, dd.dtau_dv and dd.tau.  O(N·depth).
+void inverse_dynamics_derivatives(const Model& model, const Data& data, const VecX& v, const VecX& qdd,
+                                  DerivativeData& dd);
+
+// ∂q̈/∂q and ∂q̈/∂v of q̈ = 𝓜⁻¹ (τ − bias) at (q, v), where τ is the generalized force at this state
+// and `inputs` (may be null) says how it changes with q and v (springs, dampers).  Needs [kin] and
+// [vel] at (q, v).  Fills data.qdd, data.Mass and its factor data.L, dd.dqdd_dq, dd.dqdd_dv (and the
+// inverse-dynamics derivatives at that q̈); with `minv`, also dd.Minv = 𝓜⁻¹ = ∂q̈/∂τ.
+void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
+                                  const Inputs* inputs = nullptr, bool minv = false);
+
+}  // namespace soadyn

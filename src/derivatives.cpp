@@ -1,0 +1,229 @@
+// Derivatives of inverse and forward dynamics (derivatives.hpp has the frame and the conventions).
+//
+// Perturb column c of joint j by δ (ξ = S_c).  Everything in the subtree of j moves rigidly by ξ,
+// so for i ⪰ j:  ∂S_i = ξ × S_i (i ≻ j),  ∂Y_i = ξ ×* Y_i − Y_i ξ×,  and with ν_c the part of v_j
+// that the perturbation does not carry (ν_c = v_p + Σ_{m not carried by c} S_m q̇_m):
+//   ∂v_i = ξ × v_i + β,                         β = −ξ × ν_c
+//   ∂a_i = ξ × a_i + γ + β × (v_i − v_j),        γ = ∂a_j − ξ × a_j (the joint's own term)
+//   ∂f_i = ξ ×* f_i + Y_i (γ − β × v_j) + B_i β, B_i β = Y_i (β × v_i) + β ×* Y_i v_i + v_i ×* Y_i β
+// Summed over subtrees, and since (ξ × S)ᵀ F = −Sᵀ (ξ ×* F):
+//   row i ≻ j:  ∂τ_i = S_iᵀ (Y_i κ_c + B_i β_c),  κ_c = γ − β × v_j      (Y_i, B_i composite)
+//   row j:      the same, plus S_mᵀ φ_c for the columns m that c does not carry, φ_c = ξ ×* F_j
+//   row i ≺ j:  ∂τ_i = S_iᵀ ψ_c,  ψ_c = Y_j κ_c + B_j β_c + φ_c
+// The rates: ∂v_i/∂q̇_c = S_c and ∂a_i/∂q̇_c = S_c × v_i − λ_c for i ⪰ j, λ_c = S_c × (ν_c + μ_c)
+// (μ_c: the velocity of the frame column c is fixed in, Ṡ_c = μ_c × S_c), so
+//   row i ⪰ j:  ∂τ_i/∂q̇_c = S_iᵀ (B_i S_c − Y_i λ_c);   row i ≺ j:  S_iᵀ ρ_c,  ρ_c = B_j S_c − Y_j λ_c.
+// Every (row, column) pair on an ancestor chain is one 12-term dot product: O(N·depth).
+#include "soadyn/derivatives.hpp"
+
+#include "soadyn/algorithms.hpp"
+
+namespace soadyn {
+
+DerivativeData::DerivativeData(const Model& m)
+    : S(Mat6X::Zero(6, m.nv)),
+      v(Mat6X::Zero(6, m.nbodies)),
+      a(Mat6X::Zero(6, m.nbodies)),
+      F(Mat6X::Zero(6, m.nbodies)),
+      Y(m.nbodies),
+      B(m.nbodies, Mat6::Zero()),
+      tau(VecX::Zero(m.nv)),
+      row(Eigen::Matrix<double, 12, Eigen::Dynamic>::Zero(12, m.nv)),
+      colq(Eigen::Matrix<double, 12, Eigen::Dynamic>::Zero(12, m.nv)),
+      colv(Eigen::Matrix<double, 12, Eigen::Dynamic>::Zero(12, m.nv)),
+      psi(Mat6X::Zero(6, m.nv)),
+      rho(Mat6X::Zero(6, m.nv)),
+      phi(Mat6X::Zero(6, m.nv)),
+      dtau_dq(MatX::Zero(m.nv, m.nv)),
+      dtau_dv(MatX::Zero(m.nv, m.nv)),
+      dqdd_dq(MatX::Zero(m.nv, m.nv)),
+      dqdd_dv(MatX::Zero(m.nv, m.nv)),
+      Minv(MatX::Zero(m.nv, m.nv)) {}
+
+namespace {
+
+// m × x = [ω × ω'; ω × u' + u × ω']   (motion cross product)
+Vec6 mcross(const Vec6& m, const Vec6& x) {
+  const Vec3 w = m.head<3>(), u = m.tail<3>(), w2 = x.head<3>(), u2 = x.tail<3>();
+  Vec6 out;
+  out << w.cross(w2), w.cross(u2) + u.cross(w2);
+  return out;
+}
+
+// m ×* f = [ω × n + u × f; ω × f]   (force cross product)
+Vec6 fcross(const Vec6& m, const Vec6& f) {
+  const Vec3 w = m.head<3>(), u = m.tail<3>(), n = f.head<3>(), fl = f.tail<3>();
+  Vec6 out;
+  out << w.cross(n) + u.cross(fl), w.cross(fl);
+  return out;
+}
+
+// B β = Y (β × v) + β ×* h + v ×* (Y β) with h = Y v:  B = −Y [v×] + H(h) + [v×*] Y,
+// [v×] = [ω̃ 0; ũ ω̃], [v×*] = [ω̃ ũ; 0 ω̃], H(h) = [−ñ −f̃; −f̃ 0]
+Mat6 b_matrix(const SpatialInertia& Y, const Vec6& v, const Vec6& h) {
+  const Mat6 Ym = Y.matrix();
+  const Mat3 W = skew(v.head<3>()), U = skew(v.tail<3>());
+  Mat6 Xs, Xm;  // [v×*], [v×]
+  Xs << W, U, Mat3::Zero(), W;
+  Xm << W, Mat3::Zero(), U, W;
+  Mat6 out;
+  out.noalias() = Xs * Ym;
+  out.noalias() -= Ym * Xm;
+  const Mat3 N = skew(h.head<3>()), Fs = skew(h.tail<3>());
+  out.topLeftCorner<3, 3>() -= N;
+  out.topRightCorner<3, 3>() -= Fs;
+  out.bottomLeftCorner<3, 3>() -= Fs;
+  return out;
+}
+
+void add(SpatialInertia& to, const SpatialInertia& K) {
+  to.m += K.m;
+  to.h += K.h;
+  to.I += K.I;
+}
+
+}  // namespace
+
+void inverse_dynamics_derivatives(const Model& model, const Data& data, const VecX& qd, const VecX& qdd,
+                                  DerivativeData& dd) {
+  data.check(model, "inverse_dynamics_derivatives", "v", qd.size(), model.nv);
+  data.check(model, "inverse_dynamics_derivatives", "qdd", qdd.size(), model.nv);
+  if (dd.S.cols() != model.nv || int(dd.Y.size()) != model.nbodies)
+    throw Error("inverse_dynamics_derivatives: this DerivativeData was built for another model");
+  const int N = model.nbodies;
+  Vec6 gravity_acc;
+  gravity_acc << Vec3::Zero(), -model.gravity;
+
+  // base to tip: S_i, v_i = v_p + S_i q̇_i, a_i = a_p + S_i q̈_i + Σ_c q̇_c μ_c × S_c, f_i, B_i
+  for (int i = 0; i < N; ++i) {
+    const int p = model.parent[i], vi = model.idx_v[i], ni = model.nv_i[i];
+    const JointType t = model.joint_type[i];
+    const Vec3 eta = data.eta.col(i);
+    const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
+    Vec6 vel = vp, acc = p < 0 ? gravity_acc : Vec6(dd.a.col(p));
+    for (int c = vi; c < vi + ni; ++c) {
+      const Vec6 g = data.G.col(c);
+      dd.S.col(c) << g.head<3>(), g.tail<3>() + eta.cross(g.head<3>());  // G_c moved to the origin
+      vel += dd.S.col(c) * qd(c);
+      acc += dd.S.col(c) * qdd(c);
+    }
+    for (int m = 0; m < ni; ++m) {
+      Vec6 mu = vp;  // μ_m = v_p + Σ_k [k carries m] S_k q̇_k
+      for (int k = 0; k < ni; ++k)
+        if (joint_carries(t, k, m)) mu += dd.S.col(vi + k) * qd(vi + k);
+      acc += qd(vi + m) * mcross(mu, dd.S.col(vi + m));
+    }
+    dd.v.col(i) = vel;
+    dd.a.col(i) = acc;
+    SpatialInertia Yi;  // M_i moved from η_i to the origin
+    Yi.add_transformed(data.M[i], eta);
+    const Vec6 h = Yi * vel;
+    dd.F.col(i) = Yi * acc + fcross(vel, h);  // f_i = Y_i a_i + v_i ×* Y_i v_i
+    dd.Y[i] = Yi;
+    dd.B[i] = b_matrix(Yi, vel, h);
+  }
+  // tip to base: F_p += F_i, Y_p += Y_i, B_p += B_i (all about one point: plain sums); τ_i = S_iᵀ F_i
+  for (int i = N - 1; i >= 0; --i) {
+    const int p = model.parent[i], vi = model.idx_v[i], ni = model.nv_i[i];
+    for (int c = vi; c < vi + ni; ++c) {
+      dd.tau(c) = dd.S.col(c).dot(dd.F.col(i));
+      dd.row.col(c).head<6>() = dd.Y[i] * dd.S.col(c);
+      dd.row.col(c).tail<6>().noalias() = dd.B[i].transpose() * dd.S.col(c);
+    }
+    if (p >= 0) {
+      dd.F.col(p) += dd.F.col(i);
+      add(dd.Y[p], dd.Y[i]);
+      dd.B[p] += dd.B[i];
+    }
+  }
+
+  // per column c of joint j: κ_c, β_c, λ_c, φ_c, ψ_c, ρ_c
+  for (int j = 0; j < N; ++j) {
+    const int p = model.parent[j], vj = model.idx_v[j], nj = model.nv_i[j];
+    const JointType t = model.joint_type[j];
+    const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
+    const Vec6 vel = dd.v.col(j), acc = dd.a.col(j), Fj = dd.F.col(j);
+    for (int k = 0; k < nj; ++k) {
+      const int c = vj + k;
+      const Vec6 xi = dd.S.col(c);
+      Vec6 nu = vp, mu = vp;  // ν_c: not carried by c;  μ_c: carries c
+      for (int m = 0; m < nj; ++m) {
+        if (!joint_carries(t, k, m)) nu += dd.S.col(vj + m) * qd(vj + m);
+        if (joint_carries(t, m, k)) mu += dd.S.col(vj + m) * qd(vj + m);
+      }
+      // the joint's own term ∂a_j: ∂(S_m q̈_m) = [c carries m] ξ × S_m q̈_m, and
+      // ∂(μ_m × S_m) = ∂μ_m × S_m + [c carries m] μ_m × (ξ × S_m), ∂μ_m = ξ × Σ_l [l carries m][c carries l] S_l q̇_l
+      Vec6 da = Vec6::Zero();
+      for (int m = 0; m < nj; ++m) {
+        const Vec6 Sm = dd.S.col(vj + m);
+        Vec6 dmu = Vec6::Zero(), mu_m = vp;
+        for (int l = 0; l < nj; ++l) {
+          if (joint_carries(t, l, m)) mu_m += dd.S.col(vj + l) * qd(vj + l);
+          if (joint_carries(t, l, m) && joint_carries(t, k, l)) dmu += dd.S.col(vj + l) * qd(vj + l);
+        }
+        if (joint_carries(t, k, m)) {
+          const Vec6 xS = mcross(xi, Sm);
+          da += qdd(vj + m) * xS + qd(vj + m) * mcross(mu_m, xS);
+        }
+        if (!dmu.isZero(0)) da += qd(vj + m) * mcross(mcross(xi, dmu), Sm);
+      }
+      const Vec6 beta = -mcross(xi, nu);
+      const Vec6 kappa = da - mcross(xi, acc) - mcross(beta, vel);
+      const Vec6 lambda = mcross(xi, nu + mu);
+      dd.phi.col(c) = fcross(xi, Fj);
+      dd.psi.col(c) = dd.Y[j] * kappa + dd.B[j] * beta + dd.phi.col(c);
+      dd.rho.col(c) = dd.B[j] * xi - dd.Y[j] * lambda;
+      dd.colq.col(c).head<6>() = kappa;
+      dd.colq.col(c).tail<6>() = beta;
+      dd.colv.col(c).head<6>() = -lambda;
+      dd.colv.col(c).tail<6>() = xi;
+    }
+  }
+
+  // fill: the joint's own block, then every (body, ancestor) pair both ways; the rest is zero
+  dd.dtau_dq.setZero();
+  dd.dtau_dv.setZero();
+  for (int i = 0; i < N; ++i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i];
+    const JointType t = model.joint_type[i];
+    for (int r = vi; r < vi + ni; ++r)
+      for (int c = vi; c < vi + ni; ++c) {
+        double dq = dd.row.col(r).dot(dd.colq.col(c));
+        if (!joint_carries(t, c - vi, r - vi)) dq += dd.S.col(r).dot(dd.phi.col(c));
+        dd.dtau_dq(r, c) = dq;
+        dd.dtau_dv(r, c) = dd.row.col(r).dot(dd.colv.col(c));
+      }
+    for (int j = model.parent[i]; j >= 0; j = model.parent[j]) {
+      const int vj = model.idx_v[j], nj = model.nv_i[j];
+      for (int r = vi; r < vi + ni; ++r)
+        for (int c = vj; c < vj + nj; ++c) {
+          // row r of the descendant i, column c of its ancestor j; and the mirror pair
+          dd.dtau_dq(r, c) = dd.row.col(r).dot(dd.colq.col(c));
+          dd.dtau_dv(r, c) = dd.row.col(r).dot(dd.colv.col(c));
+          dd.dtau_dq(c, r) = dd.S.col(c).dot(dd.psi.col(r));
+          dd.dtau_dv(c, r) = dd.S.col(c).dot(dd.rho.col(r));
+        }
+    }
+  }
+}
+
+void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
+                                  const Inputs* inputs, bool minv) {
+  // q̈, 𝓜 and its tree factor LᵀDL
+  forward_dynamics(model, data, tau, FdMethod::Sparse);
+  // ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x) at that q̈
+  inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
+  dd.dqdd_dq = -dd.dtau_dq;
+  dd.dqdd_dv = -dd.dtau_dv;
+  if (inputs) inputs->add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
+  for (int c = 0; c < model.nv; ++c) {
+    ltdl_solve(model, data, dd.dqdd_dq.col(c));
+    ltdl_solve(model, data, dd.dqdd_dv.col(c));
+  }
+  if (minv) {
+    dd.Minv.setIdentity();
+    for (int c = 0; c < model.nv; ++c) ltdl_solve(model, data, dd.Minv.col(c));
+  }
+}
+
+}  // namespace soadyn
