@@ -78,11 +78,13 @@ class Cvode : public Integrator {
     check(CVodeSStolerances(mem, s.rtol, s.atol), "CVodeSStolerances");
     if (s.max_step > 0) check(CVodeSetMaxStep(mem, s.max_step), "CVodeSetMaxStep");
     if (bdf) {
-      // stiff: Newton iterations with a dense direct solver; Jacobian by difference quotients
+      // stiff: Newton iterations with a dense direct solver; the Jacobian analytic (System::jacobian)
+      // or by CVODE's difference quotients
       A_.reset(SUNDenseMatrix(sys.size(), sys.size(), ctx_.get()));
       ls_.reset(SUNLinSol_Dense(y_.get(), A_.get(), ctx_.get()));
       if (!A_ || !ls_) throw Error("CVODE: could not allocate the dense linear solver");
       check(CVodeSetLinearSolver(mem, ls_.get(), A_.get()), "CVodeSetLinearSolver");
+      if (analytic_jacobian(s.jacobian)) check(CVodeSetJacFn(mem, &Cvode::jacobian), "CVodeSetJacFn");
     } else {
       // non-stiff: fixed-point (functional) iterations, no Jacobian
       nls_.reset(SUNNonlinSol_FixedPoint(y_.get(), 0, ctx_.get()));
@@ -173,6 +175,20 @@ class Cvode : public Integrator {
       self->sys_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
       // a non-finite derivative is recoverable: CVODE retries with a smaller step
       return map(ydot).allFinite() ? 0 : 1;
+    } catch (...) {
+      self->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  // J = ∂f/∂y into CVODE's dense (column-major) matrix
+  static int jacobian(double t, N_Vector y, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
+    auto* self = static_cast<Cvode*>(user);
+    try {
+      const sunindextype n = SUNDenseMatrix_Rows(J);
+      Eigen::Map<MatX> out(SUNDenseMatrix_Data(J), n, n);
+      self->sys_.jacobian(t, N_VGetArrayPointer(y), out);
+      return out.allFinite() ? 0 : 1;  // recoverable: CVODE retries with a smaller step
     } catch (...) {
       self->pending_ = std::current_exception();
       return -1;

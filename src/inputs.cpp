@@ -29,6 +29,18 @@ void Inputs::add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const {
   for (const auto& d : dampers) dv(d.dof, d.dof) -= d.damping;
 }
 
+void Inputs::power_derivatives(double t, const VecX& v, Eigen::Ref<VecX> dP, Eigen::Ref<VecX> dD) const {
+  // P = Σ τ_u(t) q̇_u − Σ c q̇²,  D = Σ c q̇²
+  dP.setZero();
+  dD.setZero();
+  for (const auto& u : torques)
+    dP(u.dof) += u.constant + u.amplitude * std::sin(2 * std::numbers::pi * u.frequency * t + u.phase);
+  for (const auto& d : dampers) {
+    dP(d.dof) -= 2.0 * d.damping * v(d.dof);
+    dD(d.dof) += 2.0 * d.damping * v(d.dof);
+  }
+}
+
 double Inputs::spring_energy(const VecX& q) const {
   double V = 0.0;
   for (const auto& s : springs) V += 0.5 * s.stiffness * (q(s.coord) - s.rest) * (q(s.coord) - s.rest);

@@ -5,12 +5,28 @@
 #include <Eigen/LU>
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace soadyn {
 
 System::System(const Model& m, const Inputs& in, FdMethod fd)
-    : model(m), inputs(in), method(fd), nquad(in.does_work() ? 2 : 0), data(m), q(m.nq), v(m.nv), tau(m.nv), qd(m.nq) {}
+    : model(m),
+      inputs(in),
+      method(fd),
+      nquad(in.does_work() ? 2 : 0),
+      data(m),
+      derivatives(m),
+      q(m.nq),
+      v(m.nv),
+      tau(m.nv),
+      qd(m.nq),
+      y_work(m.nq + m.nv + nquad),
+      f0(m.nq + m.nv + nquad),
+      f1(m.nq + m.nv + nquad),
+      T(MatX::Zero(6, 7)),
+      dP(m.nv),
+      dD(m.nv) {}
 
 VecX System::state(const VecX& q0, const VecX& v0) const {
   VecX y = VecX::Zero(size());
@@ -36,6 +52,69 @@ void System::rhs(double t, const double* y, double* ydot) {
     ydot[model.nq + model.nv] = p.inputs;
     ydot[model.nq + model.nv + 1] = p.dissipated;
   }
+}
+
+void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
+  ++jac_evals;
+  const int nq = model.nq, nv = model.nv;
+  q = Eigen::Map<const VecX>(y, nq);
+  v = Eigen::Map<const VecX>(y + nq, nv);
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  inputs.evaluate(t, q, v, tau);
+  forward_dynamics_derivatives(model, data, v, tau, derivatives, &inputs);
+  const MatX& dq = derivatives.dqdd_dq;
+  J.setZero();
+  for (int i = 0; i < model.nbodies; ++i) {
+    const JointType type = model.joint_type[i];
+    const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
+    // ∂q̇/∂q and ∂q̇/∂v: block diagonal, joint by joint
+    joint_qdot_jacobian(type, q.data() + iq, v.data() + iv, J.block(iq, iq, mi, mi), J.block(iq, nq + iv, mi, ni));
+    // ∂q̈/∂q_coords = ∂q̈/∂δ · ∂δ/∂q_coords (T = 1 without a quaternion)
+    if (joint_traits(type).quaternion < 0) {
+      J.block(nq, iq, nv, ni) = dq.middleCols(iv, ni);
+      continue;
+    }
+    auto Ti = T.topLeftCorner(ni, mi);
+    joint_tangent_map(type, q.data() + iq, Ti);
+    for (int c = 0; c < mi; ++c)
+      for (int k = 0; k < ni; ++k)
+        if (Ti(k, c) != 0.0) J.block(nq, iq + c, nv, 1) += Ti(k, c) * dq.col(iv + k);
+  }
+  J.block(nq, nq, nv, nv) = derivatives.dqdd_dv;
+  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v); nothing depends on W or D
+  if (nquad > 0) {
+    inputs.power_derivatives(t, v, dP, dD);
+    J.row(nq + nv).segment(nq, nv) = dP.transpose();
+    J.row(nq + nv + 1).segment(nq, nv) = dD.transpose();
+  }
+}
+
+void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {
+  ++jac_evals;
+  const int n = size();
+  y_work = Eigen::Map<const VecX>(y, n);
+  rhs(t, y_work.data(), f0.data());
+  for (int c = 0; c < n; ++c) {
+    const double e = 1e-7 * std::max(1.0, std::abs(y_work(c)));
+    const double keep = y_work(c);
+    y_work(c) += e;
+    rhs(t, y_work.data(), f1.data());
+    J.col(c) = (f1 - f0) / e;
+    y_work(c) = keep;
+  }
+}
+
+bool analytic_jacobian(const std::string& jacobian) {
+  if (jacobian == "analytic") return true;
+  if (jacobian == "dq") return false;
+  throw Error("jacobian: expected analytic or dq; got '" + jacobian + "'");
+}
+
+bool full_newton(const std::string& newton) {
+  if (newton == "full") return true;
+  if (newton == "simplified") return false;
+  throw Error("newton: expected full or simplified; got '" + newton + "'");
 }
 
 std::string System::component_name(int k) const {
@@ -142,44 +221,71 @@ class RK4 : public FixedStep {
 
 class ImplicitMidpoint : public FixedStep {
  public:
-  ImplicitMidpoint(System& s, double dt) : FixedStep(s, dt), J_(s.size(), s.size()), lu_(s.size()) {}
+  ImplicitMidpoint(System& s, const SimulationSettings& settings)
+      : FixedStep(s, settings.dt),
+        analytic_(analytic_jacobian(settings.jacobian)),
+        full_(full_newton(settings.newton)),
+        J_(s.size(), s.size()),
+        lu_(s.size()),
+        delta_(s.size()) {}
 
  private:
-  // y⁺ = y + h f(t + h/2, (y + y⁺)/2): Newton on G(Y) = Y − y − h f(t + h/2, (y + Y)/2), with the
-  // Jacobian of f by forward differences once per step (simplified Newton)
+  // y⁺ = y + h f(t + h/2, (y + y⁺)/2): Newton on G(Y) = Y − y − h f(t + h/2, (y + Y)/2), with
+  // G'(Y) = e − h/2 ∂f/∂y at the midpoint.  Full Newton: G' at every iterate, starting from Y = y
+  // (its first iterate is the linearly implicit midpoint step, itself A-stable).  Simplified: G'
+  // once per step, at the explicit-Euler predictor.
   void step(double t, double h, VecX& y) override {
-    const int n = sys_.size();
     const double tm = t + 0.5 * h;
-    f(t, y, k1_);
     VecX& Y = k2_;
-    Y = y + h * k1_;  // explicit Euler predictor
-    tmp_ = 0.5 * (y + Y);
-    f(tm, tmp_, k3_);
-    for (int c = 0; c < n; ++c) {
-      const double e = 1e-7 * std::max(1.0, std::abs(tmp_(c)));
-      const double keep = tmp_(c);
-      tmp_(c) += e;
-      f(tm, tmp_, k4_);
-      J_.col(c) = (k4_ - k3_) / e;
-      tmp_(c) = keep;
+    if (full_) {
+      Y = y;
+    } else {
+      f(t, y, k1_);
+      Y = y + h * k1_;  // explicit Euler predictor
+      tmp_ = 0.5 * (y + Y);
+      factor(tm, h);
     }
-    ++stats_.jac_evals;
-    J_ = MatX::Identity(n, n) - 0.5 * h * J_;
-    lu_.compute(J_);
+    double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 50; ++it) {
       ++stats_.nonlinear_iterations;
       tmp_ = 0.5 * (y + Y);
+      if (full_) factor(tm, h);
       f(tm, tmp_, k3_);
       k4_ = -(Y - y - h * k3_);
-      const VecX delta = lu_.solve(k4_);
-      Y += delta;
-      if (!delta.allFinite()) break;
-      if (delta.norm() <= 1e-13 * std::max(1.0, Y.norm())) break;
+      delta_ = lu_.solve(k4_);
+      Y += delta_;
+      if (!delta_.allFinite()) break;
+      const double size = delta_.norm(), scale = std::max(1.0, Y.norm());
+      if (size <= 1e-13 * scale) break;
+      // full Newton converges quadratically: once it stops shrinking it has reached rounding
+      if (full_ && size <= 1e-9 * scale && size >= 0.5 * previous) break;
+      if (full_ && it == 49) {
+        std::ostringstream os;
+        os << "implicit midpoint: full Newton did not converge at t = " << t << " s with a step of " << h
+           << " s (last correction " << size << ")";
+        throw SimulationError(os.str(), t);
+      }
+      previous = size;
     }
     y = Y;
   }
+
+  // J_ = e − h/2 ∂f/∂y at tmp_ (the midpoint), factored
+  void factor(double tm, double h) {
+    if (analytic_)
+      sys_.jacobian(tm, tmp_.data(), J_);
+    else
+      sys_.jacobian_dq(tm, tmp_.data(), J_);
+    ++stats_.jac_evals;
+    J_ *= -0.5 * h;
+    J_.diagonal().array() += 1.0;
+    lu_.compute(J_);
+  }
+
+  bool analytic_, full_;
   MatX J_;
   Eigen::PartialPivLU<MatX> lu_;
+  VecX delta_;
 };
 
 }  // namespace
@@ -201,7 +307,7 @@ const std::vector<IntegratorInfo>& integrators() {
        [](System& sys, S s, double, const VecX&) -> std::unique_ptr<Integrator> { return std::make_unique<RK4>(sys, s.dt); }},
       {"implicit-midpoint", "implicit midpoint rule by Newton, order 2, symplectic and A-stable", true,
        [](System& sys, S s, double, const VecX&) -> std::unique_ptr<Integrator> {
-         return std::make_unique<ImplicitMidpoint>(sys, s.dt);
+         return std::make_unique<ImplicitMidpoint>(sys, s);
        }},
   };
   return table;

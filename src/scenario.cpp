@@ -329,7 +329,7 @@ void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q
 }
 
 void read_simulation(const Reader& rd, const YAML::Node& n, SimulationSettings& s) {
-  rd.keys(n, "simulation", {"t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics"});
+  rd.keys(n, "simulation", {"t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian", "newton"});
   if (n["t_end"]) s.t_end = rd.positive(n["t_end"], "simulation.t_end");
   if (n["output_dt"]) s.output_dt = rd.positive(n["output_dt"], "simulation.output_dt");
   if (n["rtol"]) s.rtol = rd.positive(n["rtol"], "simulation.rtol");
@@ -354,6 +354,16 @@ void read_simulation(const Reader& rd, const YAML::Node& n, SimulationSettings& 
       rd.fail(n["dynamics"], "simulation.dynamics",
               "unknown route '" + s.dynamics + "'" + did_you_mean(s.dynamics, routes));
   }
+  // one of a few words, said with the ones allowed
+  auto word = [&](const char* key, std::string& out, const std::vector<std::string>& allowed) {
+    if (!n[key]) return;
+    const std::string field = std::string("simulation.") + key;
+    out = rd.string(n[key], field);
+    if (std::find(allowed.begin(), allowed.end(), out) == allowed.end())
+      rd.fail(n[key], field, "expected " + allowed[0] + " or " + allowed[1] + ", got '" + out + "'" + did_you_mean(out, allowed));
+  };
+  word("jacobian", s.jacobian, {"analytic", "dq"});
+  word("newton", s.newton, {"full", "simplified"});
 }
 
 void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, Inputs& in) {

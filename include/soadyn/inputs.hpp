@@ -41,6 +41,8 @@ struct Inputs {
   // dq += ∂τ/∂q (along the tangent, derivatives.hpp; springs act on 1-DOF joints, where the
   // coordinate is the tangent) and dv += ∂τ/∂v: both nv×nv, constant (torques depend on t only)
   void add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const;
+  // ∂P/∂v and ∂D/∂v of power(t, v) (the quadratures' rates; neither depends on q): nv each
+  void power_derivatives(double t, const VecX& v, Eigen::Ref<VecX> dP, Eigen::Ref<VecX> dD) const;
   // the inputs' potential energy (springs), so E = T + V_gravity + V_springs is conserved
   double spring_energy(const VecX& q) const;
   // The power of the inputs that are not in the potential: P = (τ_torques + τ_dampers) · q̇ (each

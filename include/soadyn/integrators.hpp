@@ -2,18 +2,21 @@
 //
 // One interface, several methods:
 //   cvode-adams        SUNDIALS CVODE, Adams–Moulton, fixed-point iteration (non-stiff)
-//   cvode-bdf          SUNDIALS CVODE, BDF, Newton with a dense direct solver, difference-quotient
-//                      Jacobian (stiff)
+//   cvode-bdf          SUNDIALS CVODE, BDF, Newton with a dense direct solver; the Jacobian of f
+//                      analytic (System::jacobian) or by CVODE's difference quotients (stiff)
 //   euler              explicit Euler (order 1)
 //   symplectic-euler   semi-implicit Euler: v ← v + h q̈(q, v), then q ← q ⊕ h v (order 1, symplectic)
 //   rk4                classical Runge–Kutta (order 4)
 //   implicit-midpoint  y ← y + h f((y + y⁺)/2), Newton iterations (order 2, symplectic, A-stable):
-//                      the one fixed-step baseline that stays stable on stiff scenes
+//                      the one fixed-step baseline that stays stable on stiff scenes.  Full Newton
+//                      (the Jacobian at every iterate, from y) or simplified (once per step, at the
+//                      explicit-Euler predictor)
 // Free roots keep a unit quaternion: CVODE projects it (CVodeSetProjFn); fixed-step methods
 // renormalize after each step.
 #pragma once
 
 #include "soadyn/algorithms.hpp"
+#include "soadyn/derivatives.hpp"
 #include "soadyn/inputs.hpp"
 #include "soadyn/settings.hpp"
 
@@ -44,6 +47,12 @@ class System {
   VecX state(const VecX& q0, const VecX& v0) const;
   // ẏ = [q̇(q, v); q̈; P; D]; counts evaluations
   void rhs(double t, const double* y, double* ydot);
+  // ∂f/∂y (size()×size()) by the analytic derivatives: ∂q̈/∂q along the tangent, chained to the
+  // coordinates y holds (joint_tangent_map), ∂q̈/∂v, and the Jacobian of q̇(q, v) (joint_qdot_jacobian);
+  // the inputs' springs and dampers included.  Counts evaluations.
+  void jacobian(double t, const double* y, Eigen::Ref<MatX> J);
+  // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
+  void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
   // the name of component k of y ("theta2 (q)", "bus.wz (v)", "the inputs' work W")
   std::string component_name(int k) const;
 
@@ -52,8 +61,13 @@ class System {
   FdMethod method;
   int nquad;  // 2 (W, D) when the inputs do work, else 0
   Data data;
+  DerivativeData derivatives;
   VecX q, v, tau, qd;
+  VecX y_work, f0, f1;             // jacobian_dq's scratch
+  MatX T;                          // one joint's tangent map (≤ 6×7)
+  VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
   long rhs_evals = 0;
+  long jac_evals = 0;
 };
 
 struct IntegratorStats {
@@ -102,6 +116,11 @@ std::unique_ptr<Integrator> make_integrator(const std::string& method, System& s
 // The CVODE integrators (cvode.cpp)
 std::unique_ptr<Integrator> make_cvode(bool bdf, System& system, const SimulationSettings& settings, double t0,
                                        const VecX& y0);
+
+// Whether `jacobian` names analytic derivatives ("analytic") or difference quotients ("dq"); throws
+// soadyn::Error for another word.  Likewise `newton`: full or simplified.
+bool analytic_jacobian(const std::string& jacobian);
+bool full_newton(const std::string& newton);
 
 // "where it failed": the first non-finite component, or -1
 int first_non_finite(const VecX& y);

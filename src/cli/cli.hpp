@@ -50,6 +50,7 @@ struct RunOptions {
   std::optional<double> rtol, atol, dt, t_end, output_dt;
   StateOptions state;
   std::string log = "all";             // the groups logged: state, energy, momentum, bodies
+  std::optional<std::string> jacobian, newton;  // --jacobian analytic|dq, --newton full|simplified
   std::string max_output_size = "1G";  // refuse a run whose projected file is larger
   double flush_interval = 0.5;         // s of wall time between flushes
   bool quiet = false;

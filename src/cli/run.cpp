@@ -72,6 +72,10 @@ void add_run(CLI::App& app, RunOptions& o) {
   c->add_option("--rtol", o.rtol, "CVODE relative tolerance, in (0, 1)")->check(kPositive);
   c->add_option("--atol", o.atol, "CVODE absolute tolerance")->check(kPositive);
   c->add_option("--dt", o.dt, "fixed-step methods' step, s")->check(kPositive);
+  c->add_option("--jacobian", o.jacobian, "cvode-bdf and implicit-midpoint: analytic (default) | dq (difference quotients)")
+      ->check(CLI::IsMember({"analytic", "dq"}));
+  c->add_option("--newton", o.newton, "implicit-midpoint: full (default) | simplified Newton iterations")
+      ->check(CLI::IsMember({"full", "simplified"}));
   c->add_option("--t-end", o.t_end, "end time, s")->check(kPositive);
   c->add_option("--output-dt", o.output_dt, "time between logged samples, s")->check(kPositive);
   c->add_option("--max-output-size", o.max_output_size, "refuse a run whose file would be larger (default 1G)")
@@ -159,6 +163,8 @@ int run_simulation(const RunOptions& o) {
   if (o.rtol) s.rtol = *o.rtol;
   if (o.atol) s.atol = *o.atol;
   if (o.dt) s.dt = *o.dt;
+  if (o.jacobian) s.jacobian = *o.jacobian;
+  if (o.newton) s.newton = *o.newton;
   if (o.t_end) s.t_end = *o.t_end;
   if (o.output_dt) s.output_dt = *o.output_dt;
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
@@ -193,8 +199,14 @@ int run_simulation(const RunOptions& o) {
 
   if (!o.quiet) {
     std::printf("scenario               %s\n", sc.path.c_str());
-    if (is_fixed_step(s.method))
+    if (s.method == "implicit-midpoint")
+      std::printf("method                 %s (dt %g s, %s Newton, %s Jacobian)\n", s.method.c_str(), s.dt,
+                  s.newton.c_str(), s.jacobian.c_str());
+    else if (is_fixed_step(s.method))
       std::printf("method                 %s (dt %g s)\n", s.method.c_str(), s.dt);
+    else if (s.method == "cvode-bdf")
+      std::printf("method                 %s (rtol %g, atol %g, %s Jacobian)\n", s.method.c_str(), s.rtol, s.atol,
+                  s.jacobian.c_str());
     else
       std::printf("method                 %s (rtol %g, atol %g)\n", s.method.c_str(), s.rtol, s.atol);
     std::printf("quaternion             %s\n", r.quaternion_handling.c_str());
