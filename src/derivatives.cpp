@@ -38,7 +38,8 @@ DerivativeData::DerivativeData(const Model& m)
       dtau_dv(MatX::Zero(m.nv, m.nv)),
       dqdd_dq(MatX::Zero(m.nv, m.nv)),
       dqdd_dv(MatX::Zero(m.nv, m.nv)),
-      Minv(MatX::Zero(m.nv, m.nv)) {}
+      Minv(MatX::Zero(m.nv, m.nv)),
+      solve(MatX::Zero(2 * m.nv, m.nv)) {}
 
 namespace {
 
@@ -207,22 +208,42 @@ void inverse_dynamics_derivatives(const Model& model, const Data& data, const Ve
   }
 }
 
+namespace {
+
+// X ← 𝓜⁻¹ X with the tree factor 𝓜 = Lᵀ D L (data.L, ltdl_factor) for many right-hand sides at once,
+// held transposed (Xt = Xᵀ, so each of ltdl_solve's row operations is one contiguous axpy)
+void ltdl_solve_transposed(const Model& model, const Data& data, MatX& Xt) {
+  const auto& H = data.L;
+  const auto& lambda = model.dof_parent;
+  // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip)
+  for (int k = model.nv - 1; k >= 0; --k)
+    for (int i = lambda[k]; i >= 0; i = lambda[i]) Xt.col(i) -= H(k, i) * Xt.col(k);
+  for (int k = 0; k < model.nv; ++k) Xt.col(k) /= H(k, k);
+  for (int k = 0; k < model.nv; ++k)
+    for (int i = lambda[k]; i >= 0; i = lambda[i]) Xt.col(k) -= H(k, i) * Xt.col(i);
+}
+
+}  // namespace
+
 void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
                                   const Inputs* inputs, bool minv) {
+  const int nv = model.nv;
   // q̈, 𝓜 and its tree factor LᵀDL
   forward_dynamics(model, data, tau, FdMethod::Sparse);
-  // ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x) at that q̈
+  // ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x) at that q̈: both sets in one solve
   inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
   dd.dqdd_dq = -dd.dtau_dq;
   dd.dqdd_dv = -dd.dtau_dv;
   if (inputs) inputs->add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
-  for (int c = 0; c < model.nv; ++c) {
-    ltdl_solve(model, data, dd.dqdd_dq.col(c));
-    ltdl_solve(model, data, dd.dqdd_dv.col(c));
-  }
+  dd.solve.topRows(nv) = dd.dqdd_dq.transpose();
+  dd.solve.bottomRows(nv) = dd.dqdd_dv.transpose();
+  ltdl_solve_transposed(model, data, dd.solve);
+  dd.dqdd_dq = dd.solve.topRows(nv).transpose();
+  dd.dqdd_dv = dd.solve.bottomRows(nv).transpose();
   if (minv) {
+    // 𝓜⁻¹ is symmetric: solving with the identity's rows gives it directly
     dd.Minv.setIdentity();
-    for (int c = 0; c < model.nv; ++c) ltdl_solve(model, data, dd.Minv.col(c));
+    ltdl_solve_transposed(model, data, dd.Minv);
   }
 }
 

@@ -21,7 +21,7 @@
 //
 // Forward dynamics: ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x |_q̈) at the q̈ of the state, with 𝓜 by the
 // composite sweep, factored along the tree (LᵀDL, no fill-in off ancestor chains), and the 2·nv
-// columns solved with that factor.  ∂q̈/∂τ = 𝓜⁻¹ on request, by the same factor.
+// columns solved with that factor all at once.  ∂q̈/∂τ = 𝓜⁻¹ on request, by the same factor.
 #pragma once
 
 #include "soadyn/data.hpp"
@@ -54,6 +54,7 @@ struct DerivativeData {
   MatX dtau_dq, dtau_dv;            // ∂τ/∂q (tangent), ∂τ/∂v of inverse dynamics, nv×nv
   MatX dqdd_dq, dqdd_dv;            // ∂q̈/∂q (tangent), ∂q̈/∂v of forward dynamics, nv×nv
   MatX Minv;                        // ∂q̈/∂τ = 𝓜⁻¹ (when asked for)
+  MatX solve;                       // 2nv×nv: [∂q̈/∂q, ∂q̈/∂v]ᵀ while 𝓜⁻¹ is applied
 };
 
 // ∂τ/∂q and ∂τ/∂v of τ = 𝓜(q) q̈ + bias(q, v) at (q, v, q̈), q̈ held fixed.  Needs [kin] at q; v and
