@@ -6,6 +6,8 @@
 // nanoseconds to the C++ time (tools/bench/python_overhead.py).
 #include "common.hpp"
 
+#include "soadyn/derivatives.hpp"
+
 #include <array>
 #include <chrono>
 
@@ -152,6 +154,44 @@ q: (nq,), v: (nv,), tau: (nv,).  Returns data.qdd, shape (nv,), a read-only view
   }
 };
 
+struct IdDerivatives {
+  static constexpr const char* name = "id_derivatives";
+  static constexpr std::array<const char*, 3> params{"q", "v", "qdd"};
+  static constexpr const char* doc = R"(id_derivatives(model, data, q, v, qdd)
+--
+
+(∂τ/∂q, ∂τ/∂v) of τ = 𝓜(q) q̈ + bias(q, q̇), analytic, O(N·depth).
+
+∂/∂q is along the tangent increment δ (nv,) with q ⊕ δ = joint_integrate(q, δ, 1): a free joint's
+δ = [δθ (inertial axes); δp], a ball's δθ in the child's frame.  q: (nq,), v: (nv,), qdd: (nv,).
+Returns two new arrays of shape (nv, nv).)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    read_vector(m, *d.data, name, "qdd", a[2], m.nv, d.x);
+    kin_vel(m, d, name, a[0], a[1]);
+    DerivativeData dd(m);
+    inverse_dynamics_derivatives(m, *d.data, d.v, d.x, dd);
+    return py::make_tuple(owned(std::move(dd.dtau_dq)), owned(std::move(dd.dtau_dv)));
+  }
+};
+
+struct FdDerivatives {
+  static constexpr const char* name = "fd_derivatives";
+  static constexpr std::array<const char*, 3> params{"q", "v", "tau"};
+  static constexpr const char* doc = R"(fd_derivatives(model, data, q, v, tau)
+--
+
+(∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = 𝓜⁻¹) of q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)), τ held fixed; ∂/∂q along the
+tangent as in id_derivatives.  q: (nq,), v: (nv,), tau: (nv,).  Returns three new arrays of shape
+(nv, nv); also fills data.qdd and data.M.)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    read_vector(m, *d.data, name, "tau", a[2], m.nv, d.x);
+    kin_vel(m, d, name, a[0], a[1]);
+    DerivativeData dd(m);
+    forward_dynamics_derivatives(m, *d.data, d.v, d.x, dd, nullptr, true);
+    return py::make_tuple(owned(std::move(dd.dqdd_dq)), owned(std::move(dd.dqdd_dv)), owned(std::move(dd.Minv)));
+  }
+};
+
 struct Jacobian {
   static constexpr const char* name = "jacobian";
   static constexpr std::array<const char*, 1> params{"q"};
@@ -281,7 +321,8 @@ void bind_algorithms(py::module_& m) {
   // CPython keeps pointers to these definitions for the life of the functions
   static PyMethodDef defs[] = {method<UpdateKinematics>(), method<UpdateVelocities>(), method<MassMatrix>(),
                                method<MassMatrixLiteral>(), method<Bias>(), method<InverseDynamics>(),
-                               method<ForwardDynamics>(), method<Jacobian>(), method<KineticEnergy>(),
+                               method<ForwardDynamics>(), method<Jacobian>(),
+                               method<IdDerivatives>(), method<FdDerivatives>(), method<KineticEnergy>(),
                                method<PotentialEnergy>(), method<MomentumFn>()};
   py::object module_name = m.attr("__name__");
   m.def("body_poses", [](const Model& model, const ArrayIn& qs) {

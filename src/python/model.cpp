@@ -149,6 +149,8 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
       .def_readwrite("max_step", &SimulationSettings::max_step, "CVODE's largest step, s (0: none)")
       .def_readwrite("max_steps", &SimulationSettings::max_steps, "CVODE steps allowed in the whole run")
       .def_readwrite("dynamics", &SimulationSettings::dynamics, "forward-dynamics route: dense | sparse | on")
+      .def_readwrite("jacobian", &SimulationSettings::jacobian, "cvode-bdf and implicit-midpoint: analytic | dq")
+      .def_readwrite("newton", &SimulationSettings::newton, "implicit-midpoint: full | simplified")
       .def("__repr__", [](const SimulationSettings& s) {
         return "SimulationSettings(method='" + s.method + "', t_end=" + py::repr(py::float_(s.t_end)).cast<std::string>() +
                ", output_dt=" + py::repr(py::float_(s.output_dt)).cast<std::string>() +

@@ -373,3 +373,27 @@ def test_version_is_the_libraries():
     from conftest import cli
     assert re.fullmatch(r"\d+\.\d+\.\d+", soadyn.__version__)
     assert soadyn.__version__ in cli("--version").stdout
+
+
+def test_derivatives_against_differences_and_each_other(rng):
+    """id_derivatives and fd_derivatives along the tangent (Model.integrate with h = 1) against
+    central differences, and ∂q̈/∂x = −𝓜⁻¹ ∂τ/∂x at q̈"""
+    model = soadyn.load(f"{SCENARIOS}/satellite_two_arrays.yaml")
+    data = model.create_data()
+    q, v, tau = random_state(rng, model)
+    dqdd_dq, dqdd_dv, Minv = soadyn.fd_derivatives(model, data, q, v, tau)
+    qdd = soadyn.forward_dynamics(model, data, q, v, tau).copy()
+    dtau_dq, dtau_dv = soadyn.id_derivatives(model, data, q, v, qdd)
+    assert_close(Minv, np.linalg.inv(soadyn.mass_matrix(model, data, q)), 1e-10)
+    assert_close(dqdd_dq, -Minv @ dtau_dq, 1e-9)
+    assert_close(dqdd_dv, -Minv @ dtau_dv, 1e-9)
+    h = 1e-6
+    for c in range(model.nv):
+        e = np.zeros(model.nv)
+        e[c] = h
+        fp = soadyn.forward_dynamics(model, data, model.integrate(q, e, 1.0), v, tau).copy()
+        fm = soadyn.forward_dynamics(model, data, model.integrate(q, -e, 1.0), v, tau).copy()
+        assert_close(dqdd_dq[:, c], (fp - fm) / (2 * h), 1e-6)
+        tp = soadyn.inverse_dynamics(model, data, q, v + e, qdd).copy()
+        tm = soadyn.inverse_dynamics(model, data, q, v - e, qdd).copy()
+        assert_close(dtau_dv[:, c], (tp - tm) / (2 * h), 1e-6)

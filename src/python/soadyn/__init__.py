@@ -51,7 +51,8 @@ import warnings as _warnings
 from typing import Optional, Union
 
 from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model, Scenario, SimulationSettings,
-                      __version__, bias, body_poses, forward_dynamics, inverse_dynamics, jacobian, kinetic_energy, load,
+                      __version__, bias, body_poses, fd_derivatives, forward_dynamics, id_derivatives, inverse_dynamics,
+                      jacobian, kinetic_energy, load,
                       load_scenario, mass_matrix, mass_matrix_literal, momentum, parse_scenario, potential_energy,
                       update_kinematics, update_velocities)
 from . import _soadyn
@@ -61,7 +62,7 @@ from .ensemble import Sweep, load_sweep
 
 __all__ = [
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
-    "bias", "body_poses", "forward_dynamics", "inverse_dynamics", "jacobian",
+    "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
     "potential_energy", "read_log", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
@@ -92,7 +93,8 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     if isinstance(scene, str):
         scene = load_scenario(scene)
     s = SimulationSettings()
-    for k in ("t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics"):
+    for k in ("t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian",
+              "newton"):
         setattr(s, k, getattr(scene.settings, k))
     for k, value in dict(method=method, rtol=rtol, atol=atol, dt=dt, t_end=t_end, output_dt=output_dt,
                          dynamics=dynamics).items():
