@@ -45,7 +45,7 @@ FUZZ_URDF = {"build": [], "fuzz": True,
                      " ASAN_OPTIONS=detect_leaks=0 build-fuzz/fuzz_urdf build-fuzz/negative_mass.urdf"],
              "test": "fuzz_urdf on the seed with <mass value=\"-4\"/>", "expect": "fuzz: accepted model"}
 
-# (item of issue 17, name, file, text, replacement, what the mutant breaks, test)
+# (item of issue 17 — or 14 for issue 14's derivatives and Jacobian —, name, file, text, replacement, what the mutant breaks, test)
 MUTATIONS = [
     (1, "dense-route-allocates", "src/dynamics.cpp",
      "data.llt.compute(data.Mass);", "data.llt = Eigen::LLT<MatX>(data.Mass);",
@@ -95,6 +95,22 @@ MUTATIONS = [
      "BOUND = 0.05", "BOUND = 0.5",
      "stability.py calls a run with 50 % energy error bounded",
      tool("tool_stability")),
+    (14, "ball-columns-not-carried", "src/joint.cpp",
+     "case JointType::Ball: return true;", "case JointType::Ball: return false;",
+     "the derivatives treat a ball's G columns as fixed in the parent (issue 14)",
+     gtest("test_derivatives", "RandomTrees/Derivatives.*ball*")),
+    (14, "derivative-phi-term", "src/derivatives.cpp",
+     "dq += dd.S.col(r).dot(dd.phi.col(c));", "dq += 0.0 * dd.S.col(r).dot(dd.phi.col(c));",
+     "∂τ/∂q of a multi-DOF joint loses S_mᵀ (ξ ×* F_j) on its own rows (issue 14)",
+     gtest("test_derivatives", "RandomTrees/Derivatives.*")),
+    (14, "jacobian-free-tangent-map", "src/joint.cpp",
+     "quaternion(q + 3, true, b);", "quaternion(q + 3, false, b);",
+     "the ODE Jacobian chains a free joint's quaternion as a ball's (issue 14)",
+     gtest("test_implicit", "SystemJacobian.*")),
+    (14, "midpoint-newton-once", "src/integrators.cpp",
+     "if (full_) factor(tm, h);", "if (full_ && it == 0) factor(tm, h);",
+     "full Newton keeps its first Jacobian (issue 14)",
+     gtest("test_implicit", "MidpointNewton.*")),
 ]
 
 
