@@ -54,8 +54,9 @@ TEST(SystemJacobian, AgainstCentralDifferencesOfTheRightHandSide) {
         in.torques.push_back({model.joint_names[i], model.idx_v[i], 0.3, 1.0, 2.0, 0.1});
       }
     System sys(model, in, FdMethod::ArticulatedBody);
-    VecX y(sys.size());
-    y << random_q(rng, model), random_v(rng, model, 2.0);
+    VecX y = sys.state(random_q(rng, model), random_v(rng, model, 2.0));
+    for (int k = model.nq + model.nv; k < sys.size(); ++k) y(k) = rng.uniform();  // W, D: the inputs do work
+    EXPECT_EQ(sys.nquad, 2);
     // quaternions a little off unit, as in an integrator's state between projections
     for (int i = 0; i < model.nbodies; ++i)
       if (const int qo = joint_traits(model.joint_type[i]).quaternion; qo >= 0) y.segment<4>(model.idx_q[i] + qo) *= 1.03;
@@ -111,8 +112,7 @@ TEST(BdfJacobian, CvodeUsesTheJacobianAsked) {
   const Scenario sc = load_scenario(kDir + "stiff_arm.yaml");
   for (const char* jacobian : {"analytic", "dq"}) {
     System sys(sc.model, sc.inputs, FdMethod::ArticulatedBody);
-    VecX y(sys.size());
-    y << sc.q0, sc.v0;
+    VecX y = sys.state(sc.q0, sc.v0);
     double t = 0;
     auto integrator = make_cvode(true, sys, bdf(sc, jacobian, 1e-8, 1.0), t, y);
     integrator->advance(1.0, t, y);

@@ -71,8 +71,7 @@ template <bool B, bool Analytic> void Jacobian(benchmark::State& st) {
   const Model model = bench::make_tree(int(st.range(0)), B);
   const Inputs none;
   System sys(model, none, FdMethod::ArticulatedBody);
-  VecX y(sys.size());
-  y << bench::random_vector(model.nq, 1, 3.0), bench::random_vector(model.nv, 2);
+  const VecX y = sys.state(bench::random_vector(model.nq, 1, 3.0), bench::random_vector(model.nv, 2));
   MatX J(sys.size(), sys.size());
   for (auto _ : st) {
     if (Analytic)
