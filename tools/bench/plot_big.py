@@ -120,15 +120,20 @@ def main():
     # the file's pages are read once first, so the timing is the plot's, not the disk's
     subprocess.run(["cat", path], stdout=subprocess.DEVNULL, check=True)
     png = os.path.join(tmp, "big.png")
+    usage0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu0 = usage0.ru_utime + usage0.ru_stime
     t0 = time.perf_counter()
     p = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "plot.py"), path, "-o", png],
                        env=dict(os.environ, MPLBACKEND="Agg"))
     wall = time.perf_counter() - t0
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024  # KiB → MiB (the largest child)
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    peak = usage.ru_maxrss / 1024  # KiB → MiB (the largest child)
+    cpu = usage.ru_utime + usage.ru_stime - cpu0
     if p.returncode:
         sys.exit(f"plot.py failed with status {p.returncode}")
     print(f"plot.py on {rows} rows x {width} columns ({rows * width * 8 / 1e9:.2f} GB of samples): "
-          f"{wall:.2f} s wall, peak RSS {peak:.0f} MiB -> {png}")
+          f"{wall:.2f} s wall, {cpu:.2f} s CPU, peak RSS {peak:.0f} MiB (load average {os.getloadavg()[0]:.1f} on "
+          f"{os.cpu_count()} cores) -> {png}")
     if not args.keep and not args.file:
         os.remove(path)
 
