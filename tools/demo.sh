@@ -16,14 +16,14 @@ done
 
 echo
 echo "== simulations (CVODE, the scenario's own settings)"
-printf "%-22s %-12s %8s %10s %10s %13s  %s\n" scenario method t_end steps "CPU [s]" "rel. E error" output
+printf "%-22s %-12s %8s %10s %10s %13s  %s\n" scenario method t_end steps "CPU [s]" "E balance" output
 mkdir -p out
 for s in "${scenarios[@]}"; do
   summary=$(build/soadyn run "scenarios/$s.yaml" -o "out/$s.h5")
   field() { grep "^$1" <<<"$summary" | sed "s/^$1 *//"; }
   printf "%-22s %-12s %8s %10s %10s %13s  %s\n" "$s" "$(field method | cut -d' ' -f1)" \
     "$(field 't reached' | cut -d' ' -f1)" "$(field steps)" "$(field 'CPU time' | cut -d' ' -f1)" \
-    "$(field 'energy error (final)' | cut -d' ' -f1)" "out/$s.h5"
+    "$(field 'energy balance error' | cut -d' ' -f1)" "out/$s.h5"
 done
 
 echo
