@@ -1,6 +1,7 @@
 #include "h5_util.hpp"
 
 #include "soadyn/simulate.hpp"
+#include "soadyn/text.hpp"
 
 #include <algorithm>
 #include <cstdlib>
