@@ -260,8 +260,8 @@ def main():
                  fontsize=10)
     col = 0
     for ax, (label, cs, log) in zip(axes, panels):
-        for c in cs:
-            ax.plot(x, y[:, col], label=c.label, lw=0.8)
+        for i, c in enumerate(cs):  # past the 10 colours of the cycle, dashed then dotted
+            ax.plot(x, y[:, col], label=c.label, lw=0.8, ls=("-", "--", ":")[i // 10 % 3])
             col += 1
         if log:  # from just below the bulk of the curve, not from the floor of an exact zero at t = 0
             ax.set_yscale("log")
