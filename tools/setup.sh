@@ -1,19 +1,32 @@
 #!/usr/bin/env bash
 # Set-up shared by tools/demo.sh and tools/test.sh: install the Debian packages soadyn needs
-# (when missing), then configure and build in build/.  Extra arguments go to cmake's configure.
+# (when missing), then configure and build in build/.
+#   tools/setup.sh [--demo] [cmake configure arguments…]
+# --demo: only what the demo needs (the packages to build and run soadyn and tools/plot.py; the
+# soadyn executable alone is built).  Otherwise everything: tests, benchmarks, Python module.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+demo=0
+if [[ ${1:-} == --demo ]]; then
+  demo=1
+  shift
+fi
 packages=(
   cmake gcc g++ make pkg-config
-  libeigen3-dev googletest libgtest-dev libgmock-dev libbenchmark-dev
-  libsundials-dev libhdf5-dev libyaml-cpp-dev liburdfdom-dev libtinyxml2-dev libcli11-dev
-  python3-numpy python3-h5py python3-matplotlib
-  libjs-three chromium python3-pil   # soadyn view: three.js inlined in the page; its browser tests
-  pybind11-dev python3-pybind11 python3-pytest   # the Python module and its tests
-  python3-yaml python3-distributed   # soadyn sweep: sweep files, Dask
-  clang libclang-rt-14-dev   # the libFuzzer targets (tools/fuzz.sh)
+  libeigen3-dev libsundials-dev libhdf5-dev libyaml-cpp-dev liburdfdom-dev libtinyxml2-dev libcli11-dev
+  libjs-three                                       # soadyn view: three.js inlined in the page
+  python3-numpy python3-h5py python3-matplotlib     # tools/plot.py
 )
+if ((!demo)); then
+  packages+=(
+    googletest libgtest-dev libgmock-dev libbenchmark-dev
+    chromium python3-pil                            # soadyn view's browser tests
+    pybind11-dev python3-pybind11 python3-pytest    # the Python module and its tests
+    python3-yaml python3-distributed                # soadyn sweep: sweep files, Dask
+    clang libclang-rt-14-dev                        # the libFuzzer targets (tools/fuzz.sh)
+  )
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -31,5 +44,15 @@ if ((${#missing[@]})); then
 fi
 
 echo "== configuring and building (Release) in build/"
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@"
-cmake --build build -j "$(nproc)"
+if ((demo)); then
+  # an existing build/ keeps its options (a later tools/test.sh sets them all again)
+  if [[ -f build/CMakeCache.txt ]]; then
+    cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@"
+  else
+    cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_BUILD_TESTS=OFF -DSOADYN_BUILD_BENCH=OFF -DSOADYN_PYTHON=OFF "$@"
+  fi
+  cmake --build build -j "$(nproc)" --target soadyn_cli
+else
+  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_BUILD_TESTS=ON -DSOADYN_BUILD_BENCH=ON -DSOADYN_PYTHON=ON "$@"
+  cmake --build build -j "$(nproc)"
+fi

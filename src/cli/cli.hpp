@@ -67,6 +67,17 @@ struct ViewOptions {
 };
 void add_view(CLI::App& app, ViewOptions& o);
 int run_view(const ViewOptions& o);
+struct ExportOptions {
+  std::string run;
+  std::string csv, json;  // outputs ("-": stdout)
+  std::string columns;    // comma-separated names, groups or joint/body names (empty: all)
+  long every = 1;         // keep every K-th row
+  bool list = false;      // print the columns instead
+  bool quiet = false;
+};
+void add_export(CLI::App& app, ExportOptions& o);
+int run_export(const ExportOptions& o);
+
 // soadyn sweep …: replaces this process with python3 -m soadyn sweep … (returns only on failure)
 void add_sweep(CLI::App& app);
 int exec_sweep(int argc, char** argv);

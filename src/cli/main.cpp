@@ -2,6 +2,7 @@
 //   soadyn inspect MODEL ...   𝓜(q), bias, q̈, energy and momentum at one state
 //   soadyn run SCENARIO ...    simulate, log to HDF5
 //   soadyn view RUN.h5 ...     one self-contained web page that plays the run in 3D
+//   soadyn export RUN.h5 ...   the run's samples as CSV or JSON, with names and units
 //   soadyn help [COMMAND]      what a command takes
 //   soadyn sweep SWEEP ...     an ensemble of runs on Dask (python3 -m soadyn sweep)
 #include "cli.hpp"
@@ -33,6 +34,8 @@ int main(int argc, char** argv) {
   soadyn::cli::add_run(app, run);
   soadyn::cli::ViewOptions view;
   soadyn::cli::add_view(app, view);
+  soadyn::cli::ExportOptions export_options;
+  soadyn::cli::add_export(app, export_options);
   soadyn::cli::add_sweep(app);
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend() - 1);
@@ -64,6 +67,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("inspect")) return soadyn::cli::run_inspect(inspect);
     if (app.got_subcommand("run")) return soadyn::cli::run_simulation(run);
     if (app.got_subcommand("view")) return soadyn::cli::run_view(view);
+    if (app.got_subcommand("export")) return soadyn::cli::run_export(export_options);
   } catch (const soadyn::Error& e) {
     std::cerr << "soadyn: error: " << e.what() << "\n";
     return 2;

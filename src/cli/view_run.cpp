@@ -1,4 +1,5 @@
 // soadyn view: a run file read back, and the model rebuilt from the scenario stored in it.
+#include "h5id.hpp"
 #include "view.hpp"
 
 #include "soadyn/scenario.hpp"
@@ -13,24 +14,7 @@ namespace soadyn::cli::view {
 
 namespace {
 
-// A move-only owner of one HDF5 id, closed with the function for its kind.
-class Id {
- public:
-  Id(hid_t id, herr_t (*close)(hid_t)) : id_(id), close_(close) {}
-  Id(Id&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
-  Id& operator=(Id&&) = delete;
-  Id(const Id&) = delete;
-  Id& operator=(const Id&) = delete;
-  ~Id() {
-    if (id_ >= 0) close_(id_);
-  }
-  operator hid_t() const { return id_; }
-  bool ok() const { return id_ >= 0; }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
+using h5::Id;
 
 bool exists(hid_t file, const std::string& name) {
   // each link of the path must exist before the next is asked about

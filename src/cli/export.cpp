@@ -1,0 +1,362 @@
+// soadyn export RUN.h5 --csv out.csv [--json out.json] [--columns a,b] [--every K]: a run's
+// /samples as text, each column headed by its name and unit.
+//
+// Reads only /samples and its attributes column_names and column_units (W strings each), in
+// single-writer/multiple-reader mode so a run that is still going (or was killed) exports the rows
+// it has flushed so far.  Rows are read in blocks, so a file of any length exports in bounded
+// memory.  Outputs are written under a temporary name and renamed into place.
+#include "cli.hpp"
+#include "h5id.hpp"
+
+#include "soadyn/h5log.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+
+namespace soadyn::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using h5::Id;
+
+struct Samples {
+  Id file{-1, H5Fclose}, dset{-1, H5Dclose};
+  hsize_t rows = 0, width = 0;
+  std::vector<std::string> names, units;
+};
+
+// an attribute holding an array of strings (variable- or fixed-length)
+std::vector<std::string> string_array(hid_t obj, const char* name, const std::string& where) {
+  if (H5Aexists(obj, name) <= 0) throw Error(where + ": attribute '" + name + "' is missing (written by a soadyn older than this one? run it again)");
+  Id a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
+  Id type(H5Aget_type(a), H5Tclose), space(H5Aget_space(a), H5Sclose);
+  if (!a.ok() || !type.ok() || H5Tget_class(type) != H5T_STRING)
+    throw Error(where + ": attribute '" + name + "': expected an array of strings");
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  std::vector<std::string> out;
+  if (n <= 0) return out;
+  if (H5Tis_variable_str(type) > 0) {
+    Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(mem, H5T_VARIABLE);
+    H5Tset_cset(mem, H5Tget_cset(type));  // HDF5 converts no string between character sets
+    std::vector<char*> ptrs(size_t(n), nullptr);
+    if (H5Aread(a, mem, ptrs.data()) < 0) throw Error(where + ": attribute '" + name + "' cannot be read");
+    for (char* p : ptrs) {
+      out.emplace_back(p ? p : "");
+      H5free_memory(p);
+    }
+  } else {
+    const size_t w = H5Tget_size(type);
+    std::vector<char> buf(w * size_t(n));
+    if (H5Aread(a, type, buf.data()) < 0) throw Error(where + ": attribute '" + name + "' cannot be read");
+    for (hssize_t i = 0; i < n; ++i) {
+      std::string s(buf.data() + size_t(i) * w, w);
+      out.push_back(s.substr(0, s.find('\0')));
+    }
+  }
+  return out;
+}
+
+Samples open_samples(const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error(path + ": no such file");
+  if (!fs::is_regular_file(path, ec)) throw Error(path + ": not a file (expected a run file from soadyn run)");
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected a run file from soadyn run)");
+  Samples s;
+  // a running or killed run's file opens only in SWMR-read mode; a file made without SWMR, plainly
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
+  if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (f < 0) throw Error(path + ": cannot open the HDF5 file");
+  s.file = Id(f, H5Fclose);
+  if (H5Lexists(s.file, "samples", H5P_DEFAULT) <= 0) throw Error(path + ": no /samples (not a run file from soadyn run?)");
+  s.dset = Id(H5Dopen2(s.file, "samples", H5P_DEFAULT), H5Dclose);
+  if (!s.dset.ok()) throw Error(path + ": /samples cannot be opened");
+  Id space(H5Dget_space(s.dset), H5Sclose);
+  hsize_t dims[2] = {0, 0};
+  if (H5Sget_simple_extent_ndims(space) != 2) throw Error(path + ": /samples: expected a T×W table");
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  s.rows = dims[0], s.width = dims[1];
+  s.names = string_array(s.dset, "column_names", path + ": /samples");
+  s.units = string_array(s.dset, "column_units", path + ": /samples");
+  for (const auto* v : {&s.names, &s.units})
+    if (v->size() != s.width)
+      throw Error(path + ": /samples has " + std::to_string(s.width) + " columns but " +
+                  std::to_string(v->size()) + (v == &s.names ? " column_names" : " column_units"));
+  return s;
+}
+
+// the joint or body a column belongs to: q.<joint>[.<part>], qd.…, qdd.…, bodies.<what>.<body>.<axis>
+bool belongs_to(const std::string& column, const std::string& name) {
+  for (const char* g : {"q.", "qd.", "qdd."}) {
+    const size_t n = std::strlen(g);
+    if (column.compare(0, n, g) == 0) {
+      const std::string rest = column.substr(n);
+      return rest == name || rest.compare(0, name.size() + 1, name + ".") == 0;
+    }
+  }
+  if (column.compare(0, 7, "bodies.") == 0) {
+    const size_t a = column.find('.', 7), b = column.rfind('.');
+    return a != std::string::npos && b > a && column.compare(a + 1, b - a - 1, name) == 0;
+  }
+  return false;
+}
+
+// --columns: each item a column name, a group prefix (q, bodies.position) or a joint or body name
+std::vector<size_t> select_columns(const Samples& s, const std::string& list, const std::string& path) {
+  std::vector<size_t> cols;
+  auto add = [&](size_t c) {
+    if (std::find(cols.begin(), cols.end(), c) == cols.end()) cols.push_back(c);
+  };
+  for (size_t c = 0; c < s.width; ++c)
+    if (s.names[c] == "time") add(c);  // time always first
+  if (list.empty()) {
+    for (size_t c = 0; c < s.width; ++c) add(c);
+    return cols;
+  }
+  size_t from = 0;
+  while (from <= list.size()) {
+    const size_t comma = std::min(list.find(',', from), list.size());
+    const std::string item = list.substr(from, comma - from);
+    from = comma + 1;
+    if (item.empty()) throw Error("--columns: an empty name in '" + list + "'");
+    std::vector<size_t> found;
+    for (size_t c = 0; c < s.width; ++c)
+      if (s.names[c] == item) found.push_back(c);
+    if (found.empty())
+      for (size_t c = 0; c < s.width; ++c)
+        if (s.names[c].compare(0, item.size() + 1, item + ".") == 0) found.push_back(c);
+    if (found.empty())
+      for (size_t c = 0; c < s.width; ++c)
+        if (belongs_to(s.names[c], item)) found.push_back(c);
+    if (found.empty())
+      throw Error(path + ": --columns: no column, group, joint or body named '" + item +
+                  "' (soadyn export " + path + " --list shows the columns)");
+    for (size_t c : found) add(c);
+  }
+  return cols;
+}
+
+// the shortest text that reads back as the same double (as Python's repr): "nan", "inf", "-inf";
+// "-0.0", not "-0", which JSON readers take for the integer 0
+void number(std::string& out, double x) {
+  if (x == 0 && std::signbit(x)) {
+    out += "-0.0";
+    return;
+  }
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, x);
+  out.append(buf, r.ptr);
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+std::string json_string(const std::string& s) {
+  std::string out = "\"";
+  for (const unsigned char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\', out += char(c);
+    } else if (c < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", c);
+      out += buf;
+    } else {
+      out += char(c);
+    }
+  }
+  return out + "\"";
+}
+
+// One text output: "-" is stdout; a file is written as "<path>.<pid>.tmp", renamed at commit().
+class Output {
+ public:
+  Output(std::string path, bool json) : path_(std::move(path)), json_(json) {
+    if (path_ == "-") {
+      f_ = stdout;
+      return;
+    }
+    tmp_ = path_ + "." + std::to_string(getpid()) + ".tmp";
+    f_ = std::fopen(tmp_.c_str(), "wb");
+    if (!f_) throw Error(path_ + ": cannot create " + tmp_ + " (" + std::strerror(errno) + "; is the directory writable?)");
+  }
+  ~Output() {
+    if (f_ && f_ != stdout) {
+      std::fclose(f_);
+      std::remove(tmp_.c_str());
+    }
+  }
+  Output(const Output&) = delete;
+  Output& operator=(const Output&) = delete;
+
+  bool json() const { return json_; }
+  const std::string& path() const { return path_; }
+  void write(const std::string& text) {
+    if (std::fwrite(text.data(), 1, text.size(), f_) != text.size()) fail();
+  }
+  void commit() {
+    if (std::fflush(f_) != 0) fail();
+    if (f_ == stdout) return;
+    FILE* f = f_;
+    f_ = nullptr;
+    if (std::fclose(f) != 0) {
+      const int err = errno;
+      std::remove(tmp_.c_str());
+      throw IoError(std::string(std::strerror(err)) + " while writing " + path_ + " (nothing written)");
+    }
+    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+      const int err = errno;
+      std::remove(tmp_.c_str());
+      throw IoError(std::string(std::strerror(err)) + " while renaming " + tmp_ + " to " + path_);
+    }
+  }
+
+ private:
+  [[noreturn]] void fail() {
+    throw IoError(std::string(std::strerror(errno)) + " while writing " + (f_ == stdout ? std::string("stdout") : path_) +
+                  (f_ == stdout ? "" : " (nothing written; an existing file there is unchanged)"));
+  }
+  std::string path_, tmp_;
+  bool json_;
+  FILE* f_ = nullptr;
+};
+
+// refuses an output that is the input, another output, a directory or an existing HDF5 file
+void check_output(const std::string& out, const std::string& input, const std::string& other) {
+  if (out.empty() || out == "-") return;
+  std::error_code ec;
+  if (fs::is_directory(out, ec)) throw Error(out + ": is a directory, expected an output file");
+  if (!fs::exists(out, ec)) return;
+  if (fs::equivalent(out, input, ec)) throw Error(out + ": the output is the input file " + input + "; choose another name");
+  if (!other.empty() && other != "-" && fs::exists(other, ec) && fs::equivalent(out, other, ec))
+    throw Error(out + ": named for both --csv and --json");
+  if (H5Fis_hdf5(out.c_str()) > 0)
+    throw Error(out + ": exists and is an HDF5 file (a run?); refusing to replace it with text (remove it or choose another name)");
+}
+
+}  // namespace
+
+void add_export(CLI::App& app, ExportOptions& o) {
+  CLI::App* c = app.add_subcommand(
+      "export",
+      "Write a run's samples as CSV (or JSON), each column headed by its name and unit, every number\n"
+      "to full precision.  Works on a run that is still going: the rows flushed so far.\n"
+      "Exit status: 0 written, 2 bad input (no such file or column), 4 writing failed.");
+  c->add_option("RUN", o.run, "HDF5 run file from soadyn run")->required();
+  c->add_option("--csv", o.csv, "CSV file to write ('-': stdout); header 'time [s],q.left [rad],...'");
+  c->add_option("--json", o.json,
+                "JSON file to write ('-': stdout): {\"file\", \"columns\", \"units\", \"rows\": [[...], ...]}, "
+                "non-finite numbers as null");
+  c->add_option("--columns", o.columns,
+                "comma-separated: column names (q.left), groups (q, energy, bodies.position) or joint/body "
+                "names (left: q.left, qd.left, qdd.left); time always comes first (default: every column)");
+  c->add_option("--every", o.every, "keep every K-th row, the first included (default 1)")->check(CLI::Validator(
+      [](std::string& v) {
+        const bool whole = !v.empty() && v.find_first_not_of("0123456789") == std::string::npos;
+        return whole && v.find_first_not_of('0') != std::string::npos ? std::string()
+                                                                       : "expected a whole number K >= 1, got '" + v + "'";
+      },
+      "K >= 1"));
+  c->add_flag("--list", o.list, "print the columns (name, unit) and the row count, write nothing");
+  c->add_flag("-q,--quiet", o.quiet, "no summary on stderr");
+}
+
+int run_export(const ExportOptions& o) {
+  Samples s = open_samples(o.run);
+  if (o.list) {
+    std::printf("%s: %llu rows, %llu columns\n", o.run.c_str(), static_cast<unsigned long long>(s.rows),
+                static_cast<unsigned long long>(s.width));
+    for (size_t c = 0; c < s.width; ++c) std::printf("%s [%s]\n", s.names[c].c_str(), s.units[c].c_str());
+    return 0;
+  }
+  if (o.csv.empty() && o.json.empty()) throw Error("export: give --csv FILE or --json FILE (or --list)");
+  if (o.csv == "-" && o.json == "-") throw Error("export: only one of --csv and --json can be stdout");
+  const std::vector<size_t> cols = select_columns(s, o.columns, o.run);
+  check_output(o.csv, o.run, o.json);
+  check_output(o.json, o.run, o.csv);
+
+  std::vector<std::unique_ptr<Output>> outs;
+  try {
+    for (const auto& [path, json] : {std::pair{o.csv, false}, std::pair{o.json, true}})
+      if (!path.empty()) outs.push_back(std::make_unique<Output>(path, json));
+    // headers
+    for (auto& out : outs) {
+      std::string h;
+      if (!out->json()) {
+        for (size_t k = 0; k < cols.size(); ++k)
+          h += (k ? "," : "") + csv_field(s.names[cols[k]] + " [" + s.units[cols[k]] + "]");
+        h += "\n";
+      } else {
+        h = "{\"file\": " + json_string(o.run) + ",\n \"columns\": [";
+        for (size_t k = 0; k < cols.size(); ++k) h += (k ? ", " : "") + json_string(s.names[cols[k]]);
+        h += "],\n \"units\": [";
+        for (size_t k = 0; k < cols.size(); ++k) h += (k ? ", " : "") + json_string(s.units[cols[k]]);
+        h += "],\n \"rows\": [";
+      }
+      out->write(h);
+    }
+    // rows, read in blocks of about 4 MB: rows 0, K, 2K, … of the extent seen at opening
+    const hsize_t K = hsize_t(o.every), block = std::max<hsize_t>(1, (hsize_t(1) << 19) / std::max<hsize_t>(1, s.width));
+    std::vector<double> buf;
+    std::string csv_text, json_text;
+    hsize_t written = 0;
+    double t_first = 0, t_last = 0;
+    for (hsize_t r0 = 0; r0 < s.rows; r0 += block) {
+      const hsize_t n = std::min(block, s.rows - r0);
+      buf.resize(size_t(n * s.width));
+      Id file_space(H5Dget_space(s.dset), H5Sclose);
+      hsize_t start[2] = {r0, 0}, count[2] = {n, s.width};
+      Id mem_space(H5Screate_simple(2, count, nullptr), H5Sclose);
+      if (H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
+          H5Dread(s.dset, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, buf.data()) < 0)
+        throw Error(o.run + ": /samples: rows " + std::to_string(r0) + " to " + std::to_string(r0 + n - 1) + " cannot be read");
+      csv_text.clear(), json_text.clear();
+      for (hsize_t r = (K - r0 % K) % K; r < n; r += K) {
+        const double* row = buf.data() + r * s.width;
+        for (size_t k = 0; k < cols.size(); ++k) {
+          const double x = row[cols[k]];
+          if (k) csv_text += ',';
+          number(csv_text, x);
+          json_text += k ? ", " : (written ? ",\n  [" : "\n  [");
+          if (std::isfinite(x)) number(json_text, x);
+          else json_text += "null";
+        }
+        csv_text += '\n', json_text += ']';
+        if (written == 0) t_first = row[cols[0]];
+        t_last = row[cols[0]];
+        ++written;
+      }
+      for (auto& out : outs) out->write(out->json() ? json_text : csv_text);
+    }
+    for (auto& out : outs) {
+      if (out->json()) out->write("]}\n");
+      out->commit();
+    }
+    char time_range[80] = "";
+    if (written && s.names[cols[0]] == "time") std::snprintf(time_range, sizeof time_range, " (t = %g to %g s)", t_first, t_last);
+    if (!o.quiet)
+      for (auto& out : outs)
+        if (out->path() != "-")
+          std::fprintf(stderr, "wrote %s: %llu rows x %zu columns%s\n", out->path().c_str(),
+                       static_cast<unsigned long long>(written), cols.size(), time_range);
+  } catch (const IoError& e) {
+    std::fprintf(stderr, "soadyn: error: %s\n", e.what());
+    return 4;
+  }
+  return 0;
+}
+
+}  // namespace soadyn::cli
