@@ -13,8 +13,24 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SOADYN = os.environ.get("SOADYN", os.path.join(ROOT, "build", "soadyn"))
 SCENARIOS = os.path.join(ROOT, "scenarios")
-FIXED = ["euler", "symplectic-euler", "rk4", "implicit-midpoint"]
-CVODE = ["cvode-adams", "cvode-bdf"]
+FIXED = ["euler", "symplectic-euler", "rk4", "implicit-midpoint", "implicit-midpoint/simplified"]
+CVODE = ["cvode-adams", "cvode-bdf", "cvode-bdf/dq"]
+# A method name with a variant: the settings it changes (the defaults are the analytic Jacobian and,
+# for the implicit midpoint rule, full Newton)
+VARIANTS = {"cvode-bdf/dq": ("cvode-bdf", {"jacobian": "dq"}),
+            "implicit-midpoint/simplified": ("implicit-midpoint", {"newton": "simplified"})}
+LABELS = {"cvode-bdf": "cvode-bdf (analytic J)", "cvode-bdf/dq": "cvode-bdf (DQ J)",
+          "implicit-midpoint": "implicit-midpoint (full Newton)",
+          "implicit-midpoint/simplified": "implicit-midpoint (simplified Newton)"}
+
+
+def split(spec):
+    """'cvode-bdf/dq' -> ('cvode-bdf', {'jacobian': 'dq'}); a plain method name -> (name, {})"""
+    return VARIANTS.get(spec, (spec, {}))
+
+
+def label(spec):
+    return LABELS.get(spec, spec)
 
 try:
     if os.environ.get("SOADYN_RUNS_CLI"):
@@ -41,8 +57,9 @@ def run_in_process(scenario, method, t_end=None, rtol=None, dt=None, output_dt=N
     """the same run as `soadyn run`, by soadyn.simulate (the GIL is released while it integrates)"""
     if scenario not in _scenes:
         _scenes[scenario] = soadyn.load_scenario(os.path.join(SCENARIOS, scenario + ".yaml"))
-    tr = soadyn.simulate(_scenes[scenario], method, rtol=rtol, atol=None if rtol is None else rtol * 1e-2, dt=dt,
-                         t_end=t_end, output_dt=output_dt)
+    name, options = split(method)
+    tr = soadyn.simulate(_scenes[scenario], name, rtol=rtol, atol=None if rtol is None else rtol * 1e-2, dt=dt,
+                         t_end=t_end, output_dt=output_dt, **options)
     s = tr.summary
     r = {"scenario": scenario, "method": method, "rtol": rtol, "dt": dt, "ok": s.completed, "status": s.status,
          "cpu": s.cpu_seconds, "rhs": s.rhs_evals, "steps": s.steps, "t_reached": s.t_reached,
@@ -56,7 +73,10 @@ def run(scenario, method, t_end=None, rtol=None, dt=None, output_dt=None, timeou
         return run_in_process(scenario, method, t_end, rtol, dt, output_dt)
     with tempfile.TemporaryDirectory() as d:
         out = os.path.join(d, "run.h5")
-        cmd = [SOADYN, "run", os.path.join(SCENARIOS, scenario + ".yaml"), "--method", method, "-q", "-o", out]
+        name, options = split(method)
+        cmd = [SOADYN, "run", os.path.join(SCENARIOS, scenario + ".yaml"), "--method", name, "-q", "-o", out]
+        for k, v in options.items():
+            cmd += [f"--{k}", v]
         if rtol is not None:
             cmd += ["--rtol", repr(rtol), "--atol", repr(rtol * 1e-2)]
         if dt is not None:

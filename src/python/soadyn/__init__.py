@@ -73,19 +73,20 @@ for _cls in (Data, Error, Inputs, Model, Scenario, SimulationSettings, RunSummar
 
 def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol: Optional[float] = None,
              atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
-             output_dt: Optional[float] = None, dynamics: Optional[str] = None,
-             output: Optional[str] = None) -> Trajectory:
+             output_dt: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
+             newton: Optional[str] = None, output: Optional[str] = None) -> Trajectory:
     """Simulate a scenario and return its Trajectory: 𝓜(q) q̈ = τ(t, q, q̇) − bias(q, q̇) from (q0, v0).
 
     scene: a Scenario or the path of a scenario file.  Each keyword left None keeps the scene's
     own setting (scene.settings): method (cvode-adams | cvode-bdf | rk4 | euler | symplectic-euler |
     implicit-midpoint), rtol, atol (CVODE), dt (fixed-step methods' step, s), t_end (s),
-    output_dt (s between samples), dynamics (forward-dynamics route: on | dense | sparse).
+    output_dt (s between samples), dynamics (forward-dynamics route: on | dense | sparse),
+    jacobian (CVODE BDF's Jacobian: analytic | dq), newton (implicit midpoint: full | simplified).
     output: an HDF5 file to log to as well (the layout of `soadyn run`; read_log reads it back).
 
     The integration runs without the GIL.  A run that fails midway does not raise: the summary
     says how it ended and the trajectory holds every sample up to then.  Ctrl-C (or any Python
-    signal handler that raises) ends the run at its next output sample, finishes the file
+    signal handler that raises) ends the run before its next integrator step, finishes the file
     (status "interrupted by SIGINT at t = …") and re-raises: the KeyboardInterrupt carries the
     partial Trajectory as .trajectory.  Raises soadyn.Error for bad settings before any file is
     written; the library's warnings about the settings become RuntimeWarnings.
@@ -97,7 +98,7 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
               "newton"):
         setattr(s, k, getattr(scene.settings, k))
     for k, value in dict(method=method, rtol=rtol, atol=atol, dt=dt, t_end=t_end, output_dt=output_dt,
-                         dynamics=dynamics).items():
+                         dynamics=dynamics, jacobian=jacobian, newton=newton).items():
         if value is not None:
             setattr(s, k, value)
     arrays, summary, interrupt, warns = _soadyn._simulate(scene, s, None if output is None else str(output))
