@@ -1,6 +1,5 @@
 #include "h5_util.hpp"
 
-#include "soadyn/simulate.hpp"
 #include "soadyn/text.hpp"
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 // soadyn: the command-line front end.
 //   soadyn inspect MODEL ...   𝓜(q), bias, q̈, energy and momentum at one state
-//   soadyn run SCENARIO ...    simulate, log to HDF5
+//   soadyn run MODEL ...       simulate, log to HDF5
 //   soadyn view RUN.h5 ...     one self-contained web page that plays the run in 3D
 //   soadyn export RUN.h5 ...   the run's samples as CSV or JSON, with names and units
 //   soadyn help [COMMAND]      what a command takes
