@@ -11,7 +11,8 @@ tools/bench/run.sh
 tools/work_precision.py
 tools/stability.py
 mkdir -p out
-for s in pendulum_on_cart double_pendulum satellite_two_arrays three_link_arm stiff_arm spherical_pendulum heavy_top; do
+for s in pendulum_on_cart double_pendulum satellite_two_arrays three_link_arm stiff_arm spherical_pendulum heavy_top \
+  driven_pendulum tumbling_t_handle flexible_satellite; do
   build/soadyn run "scenarios/$s.yaml" -q -o "out/$s.h5"
   tools/plot.py "out/$s.h5" -o "tools/results/run_$s.png"
 done
