@@ -220,7 +220,7 @@ TEST(EnergyBalance, ClosesToTheToleranceOnTheDampedStiffArm) {
   // W = −D here (no torques) and D never decreases
   for (size_t k = 1; k < loose.x.size(); ++k) {
     EXPECT_NEAR(loose.x[k].work_inputs, -loose.x[k].dissipated, 1e-6 * std::abs(E0));
-    EXPECT_GE(loose.x[k].dissipated, loose.x[k - 1].dissipated - 1e-9);
+    EXPECT_GE(loose.x[k].dissipated, loose.x[k - 1].dissipated - 1e-9 * std::abs(E0));  // rounding of ~1e3 J
   }
 }
 
