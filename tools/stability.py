@@ -6,7 +6,8 @@ scenario (the note's examples, the tumbling T-handle in place of the satellite, 
 the flexible satellite), bisect (in log dt) the largest step that keeps the energy balance bounded
 over a long run -- completed, and E(t) - E(0) - W(t) within ±5 % of max(|E0|, peak T) (W: the work
 of torques and dampers) -- then classify what happens at
-twice that step: blow-up (non-finite state), energy growth, numerical damping.
+twice that step: blow-up (non-finite state), Newton fails (an implicit step does not converge),
+energy growth, numerical damping.
 For CVODE, the energy-balance error and work as rtol loosens.  Writes tools/results/stability.{md,csv,png}.
 
     tools/stability.py [--t-end T] [--out tools/results]
@@ -42,8 +43,8 @@ def bounded(r, scene):
 
 
 def mode(r, scene):
-    if not r["ok"]:
-        return "blow-up"
+    if not r["ok"]:  # an implicit method's Newton iteration may fail before anything blows up
+        return "Newton fails" if "did not converge" in r["status"] else "blow-up"
     e = r["E_rel"]
     if e.max() > BOUND:
         return f"energy growth ({e.max():+.0%})"
@@ -84,7 +85,8 @@ def main():
     cvode = runs.run_many([dict(scenario=s, method=m, t_end=min(args.t_end, T_END_CAP.get(s, args.t_end)), rtol=rt)
                            for s in SCENES for m in runs.CVODE for rt in (1e-2, 1e-4, 1e-6, 1e-8, 1e-10)])
 
-    lines = [f"# Stability study (runs of {args.t_end:g} s; bounded: |E(t) - E(0) - W(t)| <= {BOUND:.0%} of max(|E0|, peak T), W the work of dampers)", "",
+    capped = ", ".join(f"{k} {min(v, args.t_end):g} s" for k, v in T_END_CAP.items())
+    lines = [f"# Stability study (runs of {args.t_end:g} s, {capped}; bounded: |E(t) - E(0) - W(t)| <= {BOUND:.0%} of max(|E0|, peak T), W the work of dampers)", "",
              "Largest step that keeps the energy bounded, and what happens at twice that step:", "",
              "| scenario | " + " | ".join(runs.label(m) for m in runs.FIXED) + " |", "|---" * (len(runs.FIXED) + 1) + "|"]
     for s in SCENES:
@@ -118,7 +120,7 @@ def main():
     ax.set_xticks(x, SCENES, fontsize=8)
     ax.set_ylabel("largest step with bounded energy [s]")
     ax.axhline(DT_HI, color="gray", lw=0.5)
-    ax.set_title(f"Where fixed-step methods fail ({args.t_end:g} s runs; bars at {DT_HI:g} s: stable at every step tried)")
+    ax.set_title(f"Where fixed-step methods fail ({args.t_end:g} s runs, {capped}; bars at {DT_HI:g} s: stable at every step tried)")
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, axis="y", which="both")
     fig.tight_layout()
