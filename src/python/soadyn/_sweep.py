@@ -231,6 +231,10 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
     return SweepResult(table, results, len(todo), skipped, failed, time.monotonic() - t0)
 
 
+QUIET_CLUSTER = {"distributed.worker.profile.enabled": False, "distributed.admin.system-monitor.interval": "2s",
+                 "distributed.worker.memory.monitor-interval": "1s"}
+
+
 def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say):
     try:
         from distributed import Client, LocalCluster, as_completed
@@ -241,8 +245,12 @@ def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say):
     cluster = None
     if scheduler is None:
         n = workers or os.cpu_count() or 1
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                               silence_logs=logging.ERROR)
+        # the embedded cluster shares this machine's cores with the runs: no statistical profiler
+        # sampling every worker's stack each 10 ms, and system/memory monitors at 1-2 s, not 0.1-0.5 s
+        import dask
+        with dask.config.set(QUIET_CLUSTER):
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                   silence_logs=logging.ERROR)
         client = Client(cluster)
     elif isinstance(scheduler, str):
         try:
