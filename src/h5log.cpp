@@ -223,6 +223,8 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
     attribute(g_solver, "output_dt", output_interval(settings));
     attribute(g_solver, "t_end", settings.t_end);
     attribute(g_solver, "dynamics", settings.dynamics);
+    attribute(g_solver, "jacobian", settings.jacobian);  // cvode-bdf and implicit-midpoint
+    attribute(g_solver, "newton", settings.newton);      // implicit-midpoint
     im.status = h5::string_scalar(g_solver, "status", 1024);
     im.quaternion = h5::string_scalar(g_solver, "quaternion_handling", 256);
     im.t_reached = Scalar(g_solver, "t_reached", H5T_NATIVE_DOUBLE);

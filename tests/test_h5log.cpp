@@ -197,6 +197,8 @@ void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& 
   c.object("/solver");
   c.text("/solver", "method", s.method);
   c.text("/solver", "dynamics", s.dynamics);
+  c.text("/solver", "jacobian", s.jacobian);
+  c.text("/solver", "newton", s.newton);
   c.number("/solver", "rtol", s.rtol, H5T_FLOAT);
   c.number("/solver", "atol", s.atol, H5T_FLOAT);
   c.number("/solver", "dt", s.dt, H5T_FLOAT);

@@ -14,7 +14,8 @@
 //   /model: attributes nq, nv, q_names, v_names, q_units, v_units, joint_names, joint_types,
 //           body_names, gravity, units, free_joint, ball_joint, planar_joint (conventions);
 //           datasets parents, joint_q_index, joint_v_index (ints, −1 = world)
-//   /solver: attributes method, rtol, atol, dt, output_dt, t_end, dynamics (fixed at the start);
+//   /solver: attributes method, rtol, atol, dt, output_dt, t_end, dynamics, jacobian, newton (fixed
+//            at the start);
 //            scalar datasets status, t_reached, steps, rhs_evals, jac_evals, error_test_failures,
 //            nonlinear_iterations, cpu_seconds, quaternion_handling, max_energy_balance_error,
 //            final_energy_balance_error (rewritten at every flush)
