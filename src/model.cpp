@@ -117,8 +117,6 @@ struct Target {
   Placement X;  // spec body frame in the target body frame
 };
 
-Placement compose(const Placement& a, const Placement& b) { return {a.R * b.R, a.p + a.R * b.p}; }
-
 // mass properties of two bodies about their common centre of mass, in one frame
 void merge_mass(double& m, Vec3& c, Mat3& I, double m2, const Vec3& c2, const Mat3& I2) {
   const double mt = m + m2;

@@ -7,6 +7,7 @@
 // all but the above: none of it changes rigid-body dynamics.
 #include "soadyn/scenario.hpp"
 
+#include "urdf_pose.hpp"
 #include "urdf_xml.hpp"
 
 #include <console_bridge/console.h>
@@ -82,13 +83,6 @@ std::vector<std::string> parent_first(const urdf::ModelInterface& robot, const u
     order.insert(order.end(), below.begin(), below.end());  // a joint follows its parent link's joint
   }
   return order;
-}
-
-Placement to_placement(const urdf::Pose& p) {
-  Placement X;
-  X.p = Vec3(p.position.x, p.position.y, p.position.z);
-  X.R = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
-  return X;
 }
 
 // <inertial>: mass, centre of mass and inertia about it, turned from the inertial frame (origin

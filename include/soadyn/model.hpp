@@ -19,6 +19,9 @@ struct Placement {
   Vec3 p = Vec3::Zero();
 };
 
+// a then b: the frame b places in a's frame, placed in a's parent frame
+inline Placement compose(const Placement& a, const Placement& b) { return {a.R * b.R, a.p + a.R * b.p}; }
+
 // One body as a user describes it.
 struct BodySpec {
   std::string name;

@@ -4,6 +4,8 @@
 // of the body they were welded into.
 #include "view.hpp"
 
+#include "../urdf_pose.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
@@ -34,15 +36,6 @@ Shape inertia_box(double mass, const Vec3& com, const Mat3& I) {
   s.R = Eigen::Quaterniond(V).normalized();
   return s;
 }
-
-Placement to_placement(const urdf::Pose& p) {
-  Placement X;
-  X.p = Vec3(p.position.x, p.position.y, p.position.z);
-  X.R = Eigen::Quaterniond(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z).normalized().toRotationMatrix();
-  return X;
-}
-
-Placement compose(const Placement& a, const Placement& b) { return {a.R * b.R, a.p + a.R * b.p}; }
 
 // urdfdom's console messages are dropped: the model was already read from this URDF
 class QuietConsole : public console_bridge::OutputHandler {
