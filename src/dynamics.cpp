@@ -6,20 +6,28 @@ namespace soadyn {
 
 namespace {
 
-// the note's A = Ψ_D (G q̈ + 𝔞), then F = Ψ_Dᵀ (M A + 𝔟), projected: τ = Gᵀ F
+// the note's A = Ψ_D (G q̈ + 𝔞), then F = Ψ_Dᵀ (M A + 𝔟), projected: τ = Gᵀ F.  Each Ψ is one
+// sweep: base to tip A_i = D_i A_p + G_i q̈_i + 𝔞_i with F_i = M_i A_i + 𝔟_i formed at once; tip
+// to base τ_i = G_iᵀ F_i as soon as F_i is complete, then F_p += D_iᵀ F_i.
 void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
   const DOperator D{data.d};
-  data.A = data.coriolis;
-  if (qdd)
-    for (int i = 0; i < model.nbodies; ++i)
-      data.A.col(i).noalias() += data.G.middleCols(model.idx_v[i], model.nv_i[i]) *
-                                 qdd->segment(model.idx_v[i], model.nv_i[i]);
-  psi_base_to_tip(model.parent, D, [&](int i) { return data.A.col(i); });
-  for (int i = 0; i < model.nbodies; ++i) data.F.col(i) = data.M[i] * data.A.col(i) + data.gyroscopic.col(i);
-  psi_tip_to_base(model.parent, D, [&](int i) { return data.F.col(i); });
-  for (int i = 0; i < model.nbodies; ++i)
-    out.segment(model.idx_v[i], model.nv_i[i]).noalias() =
-        data.G.middleCols(model.idx_v[i], model.nv_i[i]).transpose() * data.F.col(i);
+  for (int i = 0; i < model.nbodies; ++i) {
+    const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
+    Vec6 Ai = data.coriolis.col(i);
+    if (qdd) {
+      if (n == 1) Ai += data.G.col(iv) * (*qdd)(iv);
+      else Ai.noalias() += data.G.middleCols(iv, n) * qdd->segment(iv, n);
+    }
+    if (p >= 0) D.add_apply(i, data.A.col(p), Ai);
+    data.A.col(i) = Ai;
+    data.F.col(i) = data.M[i] * Ai + data.gyroscopic.col(i);
+  }
+  for (int i = model.nbodies - 1; i >= 0; --i) {
+    const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
+    if (n == 1) out(iv) = data.G.col(iv).dot(data.F.col(i));
+    else out.segment(iv, n).noalias() = data.G.middleCols(iv, n).transpose() * data.F.col(i);
+    if (p >= 0) D.add_apply_transpose(i, data.F.col(i), data.F.col(p));
+  }
 }
 
 // Dᵀ P D for a symmetric 6×6 P = [A B; Bᵀ C] and D = [e 0; −d̃ e]:
@@ -139,14 +147,21 @@ FdMethod parse_fd_method(std::string_view s) {
 }
 
 void ltdl_factor(const Model& model, Data& data) {
-  // 𝓜 = Lᵀ D L along the DOF tree λ (Featherstone's LTDL): entries off ancestor chains stay zero
+  // 𝓜 = Lᵀ D L along the DOF tree λ (Featherstone's LTDL): entries off ancestor chains stay zero.
+  // Row i of the update H(i, j) −= a H(k, j), j over i and its ancestors, runs over the few
+  // stretches of consecutive DOFs the chain is made of (one stretch on a chain): each is one
+  // vectorized row-segment operation.
   auto& H = data.L;
   H = data.Mass.transpose();  // 𝓜 is symmetric: a straight copy into row-major storage
   const auto& lambda = model.dof_parent;
   for (int k = model.nv - 1; k >= 0; --k) {
     for (int i = lambda[k]; i >= 0; i = lambda[i]) {
       const double a = H(k, i) / H(k, k);
-      for (int j = i; j >= 0; j = lambda[j]) H(i, j) -= a * H(k, j);
+      for (int j = i; j >= 0;) {
+        const int m = model.dof_run[j];
+        H.row(i).segment(m, j - m + 1) -= a * H.row(k).segment(m, j - m + 1);
+        j = lambda[m];
+      }
       H(k, i) = a;
     }
   }

@@ -2,10 +2,78 @@
 
 #include "soadyn/operators.hpp"
 
+#include <cmath>
+
 namespace soadyn {
+
+namespace {
+
+// C M Cᵀ for a symmetric M: the upper triangle from T = C M, mirrored
+inline void rotate_symmetric(const Mat3& C, const Mat3& M, Mat3& out) {
+  Mat3 T;
+  T.noalias() = C * M;
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b) out(a, b) = out(b, a) = T.row(a).dot(C.row(b));
+}
+
+const Mat3 kIdentity = Mat3::Identity();
+
+}  // namespace
 
 void update_kinematics(const Model& model, Data& data, const VecX& q) {
   data.check(model, "update_kinematics", "q", q.size(), model.nq);
+  for (int i = 0; i < model.nbodies; ++i) {
+    const int p = model.parent[i];
+    const Mat3& Rp = p < 0 ? kIdentity : data.R[p];
+    const Placement& X = model.placement[i];
+    const int iv = model.idx_v[i];
+    // joint frame: C_j = C_p X.R at η_p + C_p X.p
+    Mat3 Rj;
+    if (model.placement_turns[i]) Rj.noalias() = Rp * X.R;
+    else Rj = Rp;
+    Vec3 eta = Rp * X.p;
+    if (p >= 0) eta += data.eta.col(p);
+    Mat3& R = data.R[i];
+    const int unit = model.unit_axis[i];
+    if (unit != 0) {
+      // a revolute or prismatic joint along ±e_k of its joint frame: g_i = ±C_j e_k, and a turn
+      // by θ about it mixes only the other two columns of C_j (one sincos, no 3×3 product)
+      const int k = std::abs(unit) - 1, a = (k + 1) % 3, b = (k + 2) % 3;
+      const double sign = unit > 0 ? 1.0 : -1.0, x = q(model.idx_q[i]);
+      const Vec3 g = sign * Rj.col(k);
+      if (model.joint_type[i] == JointType::Revolute) {
+        const double c = std::cos(x), s = sign * std::sin(x);
+        R.col(k) = Rj.col(k);
+        R.col(a) = c * Rj.col(a) + s * Rj.col(b);
+        R.col(b) = c * Rj.col(b) - s * Rj.col(a);
+        data.G.col(iv) << g, Vec3::Zero();
+      } else {
+        R = Rj;
+        eta += x * g;
+        data.G.col(iv) << Vec3::Zero(), g;
+      }
+    } else {
+      Mat3 Rm;
+      Vec3 pm;
+      joint_motion(model.joint_type[i], model.axis[i], q.data() + model.idx_q[i], Rm, pm);
+      R.noalias() = Rj * Rm;
+      eta.noalias() += Rj * pm;
+      joint_subspace(model.joint_type[i], model.axis[i], Rj, R, data.G.middleCols(iv, model.nv_i[i]));
+    }
+    // d_i = η_i − η_p;  s_i = C_i com_i;  r_i = η_i + s_i;  M_i = (m_i, m_i s_i, C_i I_η C_iᵀ) (eq. 12)
+    data.eta.col(i) = eta;
+    data.d.col(i) = p < 0 ? eta : Vec3(eta - data.eta.col(p));
+    const Vec3 s = R * model.com[i];
+    data.s.col(i) = s;
+    data.r.col(i) = eta + s;
+    data.M[i].m = model.mass[i];
+    data.M[i].h = model.mass[i] * s;
+    rotate_symmetric(R, model.inertia_origin[i], data.M[i].I);
+  }
+}
+
+void update_kinematics_reference(const Model& model, Data& data, const VecX& q) {
+  data.check(model, "update_kinematics_reference", "q", q.size(), model.nq);
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i];
     const Mat3 Rp = p < 0 ? Mat3::Identity() : data.R[p];
@@ -32,29 +100,29 @@ void update_kinematics(const Model& model, Data& data, const VecX& q) {
 
 void update_velocities(const Model& model, Data& data, const VecX& v) {
   data.check(model, "update_velocities", "v", v.size(), model.nv);
-  // (3)-(4) v = Φ_D v + G q̇  ⇒  v = Ψ_D G q̇
-  for (int i = 0; i < model.nbodies; ++i)
-    data.V.col(i).noalias() = data.G.middleCols(model.idx_v[i], model.nv_i[i]) *
-                              v.segment(model.idx_v[i], model.nv_i[i]);
-  data.coriolis = data.V;  // keep G_i q̇_i for the velocity-product terms below
-  psi_base_to_tip(model.parent, DOperator{data.d}, [&](int i) { return data.V.col(i); });
-
+  // one base-to-tip sweep: (3)-(4) v_i = D_i v_p + G_i q̇_i, i.e. v = Ψ_D G q̇, with what the
+  // dynamics needs of body i formed as soon as v_i is known
   for (int i = 0; i < model.nbodies; ++i) {
-    const int p = model.parent[i];
-    const Vec3 w = data.V.col(i).head<3>();
-    const Vec3 s = data.s.col(i);
+    const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
+    Vec6 Gv;
+    if (n == 1) Gv = data.G.col(iv) * v(iv);
+    else Gv.noalias() = data.G.middleCols(iv, n) * v.segment(iv, n);
+    Vec6 Vi = Gv;
+    if (p >= 0) DOperator{data.d}.add_apply(i, data.V.col(p), Vi);
+    data.V.col(i) = Vi;
+    const Vec3 w = Vi.head<3>();
     // (5) v̄_i = S_i v_i: ṙ_i = η̇_i + ω_i × s_i
-    data.Vbar.col(i) << w, data.V.col(i).tail<3>() + w.cross(s);
+    data.Vbar.col(i) << w, Vi.tail<3>() + w.cross(Vec3(data.s.col(i)));
     // 𝔞_i = Ḋ_i v_p + Ġ_i q̇_i with Ḋ_i v_p = [0; ω_p × ḋ_i], ḋ_i = η̇_i − η̇_p, and
     //   Ġ_i q̇_i = ω_p × (G_i q̇_i) (joint.hpp); gravity enters as a base acceleration −g
     if (p < 0) {
       data.coriolis.col(i) << Vec3::Zero(), -model.gravity;
     } else {
       const Vec3 wp = data.V.col(p).head<3>();
-      const Vec3 ddot = data.V.col(i).tail<3>() - data.V.col(p).tail<3>();
-      const Vec6 Gv = data.coriolis.col(i);
-      data.coriolis.col(i) = joint_velocity_product(wp, Gv);
-      data.coriolis.col(i).tail<3>() += wp.cross(ddot);
+      const Vec3 ddot = Vi.tail<3>() - data.V.col(p).tail<3>();
+      Vec6 a = joint_velocity_product(wp, Gv);
+      a.tail<3>() += wp.cross(ddot);
+      data.coriolis.col(i) = a;
     }
     // gyroscopic force about η_i: f = m ω × (ω × s), n = ω × I ω + s × f = ω × (I − m s̃ s̃) ω
     const Vec3& h = data.M[i].h;

@@ -21,24 +21,25 @@ void mass_matrix_literal(const Model& model, const Data& data, MatX& M_out) {
 }
 
 void mass_matrix(const Model& model, Data& data) {
-  // K_i = M_i + Σ_children D_cᵀ K_c D_c   (tip to base)
-  for (int i = 0; i < model.nbodies; ++i) data.K[i] = data.M[i];
-  for (int i = model.nbodies - 1; i >= 0; --i)
-    if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(data.K[i], data.d.col(i));
-
+  // K_i = M_i + Σ_children D_cᵀ K_c D_c   (tip to base); K_i is complete when the sweep reaches i.
+  //
   // 𝓜_jk = G_jᵀ D_{i:j}ᵀ K_i G_k for DOF j on the chain of DOF k (body i), and the note's
   // D_{i:j} = D_i ⋯ = [e 0; −(η_i − η_j)~ e] telescopes: with every column moved once to the
   // inertial origin, F0_k = [n + η_i × f; f] for K_i G_k = [n; f] and S0_j = [a; b + η × a] for
   // G_j = [a; b], each entry is one dot product 𝓜_jk = S0_jᵀ F0_k.
-  for (int i = 0; i < model.nbodies; ++i) {
+  for (int i = 0; i < model.nbodies; ++i) data.K[i] = data.M[i];
+  for (int i = model.nbodies - 1; i >= 0; --i) {
+    const SpatialInertia& K = data.K[i];
     const Vec3 eta = data.eta.col(i);
-    for (int c = 0; c < model.nv_i[i]; ++c) {
-      const int k = model.idx_v[i] + c;
-      const Vec6 g = data.G.col(k);
-      const Vec6 F = data.K[i] * g;
-      data.F0.col(k) << F.head<3>() + eta.cross(F.tail<3>()), F.tail<3>();
-      data.S0.col(k) << g.head<3>(), g.tail<3>() + eta.cross(g.head<3>());
+    for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k) {
+      const Vec3 a = data.G.col(k).head<3>(), b = data.G.col(k).tail<3>();
+      // K G_k = [I a + h × b; m b − h × a]
+      const Vec3 f = K.m * b - K.h.cross(a);
+      const Vec3 n = K.I * a + K.h.cross(b);
+      data.F0.col(k) << n + eta.cross(f), f;
+      data.S0.col(k) << a, b + eta.cross(a);
     }
+    if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(K, data.d.col(i));
   }
   if (model.chain && model.nv >= 32) {
     // every DOF is an ancestor of the later ones: 𝓜_jk = S0_jᵀ F0_k above the diagonal and, by
@@ -46,9 +47,12 @@ void mass_matrix(const Model& model, Data& data) {
     data.Mass.noalias() = data.F0.transpose() * data.S0;
     data.Mass.triangularView<Eigen::Upper>() = data.S0.transpose() * data.F0;
   } else {
-    for (int k = 0; k < model.nv; ++k)
-      for (int j = k; j >= 0; j = model.dof_parent[j]) data.Mass(j, k) = data.S0.col(j).dot(data.F0.col(k));
-    data.Mass.triangularView<Eigen::StrictlyLower>() = data.Mass.transpose();
+    double* M = data.Mass.data();
+    const Eigen::Index n = data.Mass.rows();
+    for (int k = 0; k < model.nv; ++k) {
+      const Vec6 F0 = data.F0.col(k);
+      for (int j = k; j >= 0; j = model.dof_parent[j]) M[j + k * n] = M[k + j * n] = data.S0.col(j).dot(F0);
+    }
   }
 }
 

@@ -269,9 +269,21 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
   }
   for (int k = 0; k < m.nbodies; ++k) {
     m.inertia_origin.push_back(m.inertia[k] + parallel_axis(m.mass[k], m.com[k]));  // I_η = I_cm − m c̃ c̃
+    int unit = 0;
+    const JointType t = m.joint_type[k];
+    if (t == JointType::Revolute || t == JointType::Prismatic)
+      for (int a = 0; a < 3; ++a) {
+        if (m.axis[k] == Vec3::Unit(a)) unit = a + 1;
+        if (m.axis[k] == -Vec3::Unit(a)) unit = -(a + 1);
+      }
+    m.unit_axis.push_back(unit);
+    m.placement_turns.push_back(m.placement[k].R != Mat3::Identity());
   }
   m.chain = true;
-  for (int k = 0; k < m.nv; ++k) m.chain = m.chain && m.dof_parent[k] == k - 1;
+  for (int k = 0; k < m.nv; ++k) {
+    m.chain = m.chain && m.dof_parent[k] == k - 1;
+    m.dof_run.push_back(k > 0 && m.dof_parent[k] == k - 1 ? m.dof_run[k - 1] : k);
+  }
   check_mass_matrix(m, specs, spec_of);
   return m;
 }

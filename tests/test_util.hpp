@@ -53,6 +53,8 @@ struct TreeOptions {
   double planar = 0.0;           // fraction of planar joints
   bool free_root = false;
   int fixed = 0;                 // extra bodies attached by fixed joints
+  double unit_axis = 0.0;        // fraction of axes along ±x, ±y or ±z (half of them with an
+                                 // unturned placement): the specialized kinematics' path
   Vec3 gravity = Vec3(0, 0, -9.81);
 };
 
@@ -79,6 +81,10 @@ inline std::vector<BodySpec> random_specs(Rng& rng, const TreeOptions& o) {
     }
     b.axis = rng.vec3().normalized() * rng.uniform(0.5, 2.0);
     if (b.joint != JointType::Free) b.placement = {rng.rotation(), rng.vec3(-0.6, 0.6)};
+    if (o.unit_axis > 0.0 && rng.uniform(0, 1) < o.unit_axis) {
+      b.axis = (rng.uniform(0, 1) < 0.5 ? 1.0 : -1.0) * rng.uniform(0.5, 2.0) * Vec3::Unit(rng.integer(0, 2));
+      if (b.joint != JointType::Free && rng.uniform(0, 1) < 0.5) b.placement.R.setIdentity();
+    }
     b.mass = rng.uniform(0.2, 3.0);
     b.com = rng.vec3(-0.4, 0.4);
     b.inertia = rng.inertia();

@@ -7,7 +7,11 @@
 namespace soadyn {
 
 // [kin] R_i, η_i, d_i, s_i, r_i, G_i, I_i and M_i at configuration q (size nq).
+// Joints along a unit axis of their frame take a specialized path (one sincos, no 3×3 product).
 void update_kinematics(const Model& model, Data& data, const VecX& q);
+// The same by the generic joint interface (joint_motion, joint_subspace) for every joint: the
+// reference the specialized path is tested against.
+void update_kinematics_reference(const Model& model, Data& data, const VecX& q);
 
 // [vel] v = Ψ_D G q̇ (eq. 4), v̄ = S v (eq. 5), and the velocity-product terms a_i, b_i used by the
 // dynamics.  Needs [kin].  v has size nv.

@@ -59,8 +59,15 @@ class Model {
   std::vector<std::vector<std::string>> merged_names;  // bodies welded into body i by fixed joints
   std::vector<int> dof_parent;             // λ(k): parent DOF of DOF k, -1 at a root (for LᵀDL)
   std::vector<int> dof_body;               // body owning DOF k
+  std::vector<int> dof_run;                // lowest m ≤ k with λ(x) = x − 1 for m < x ≤ k: the
+                                           // ancestors m..k of k are consecutive (LᵀDL's inner loop)
   int depth = 0;                           // longest chain from the ground (nilpotency of Φ_D)
   bool chain = false;                      // every DOF's parent DOF is the one before it
+  // for the specialized kinematics (kinematics.cpp), set by build: a revolute or prismatic axis
+  // along ±e_k of its joint frame is stored as ±(k + 1), any other axis or joint as 0; and
+  // whether the placement turns the frame (a rotation other than the identity)
+  std::vector<int> unit_axis;
+  std::vector<char> placement_turns;
 
   double world_mass = 0.0;                 // bodies welded to the world: mass and first moment,
   Vec3 world_first_moment = Vec3::Zero();  // kept for the potential energy only
