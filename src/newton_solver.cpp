@@ -33,6 +33,8 @@ NewtonSolver::NewtonSolver(const Model& m, int nquad)
     blocks_[i].nv = m.nv_i[i];
     for (int k = 0; k < m.nq_i[i]; ++k) joint_of_q_[m.idx_q[i] + k] = i;
   }
+  unit_.reserve(m.nq);
+  general_.reserve(m.nbodies);
 }
 
 // J has the structure of the header, entry by entry: in the q rows only the joint's own columns
@@ -51,7 +53,16 @@ bool NewtonSolver::has_structure() const {
 bool NewtonSolver::set_jacobian(const Eigen::Ref<const MatX>& J) {
   J_ = J;
   structured_ = has_structure();
-  for (Block& b : blocks_) b.identity = J_.block(b.iq, b.iq, b.mq, b.mq).isZero(0.0);
+  unit_.clear();
+  general_.clear();
+  for (int i = 0; i < int(blocks_.size()); ++i) {
+    Block& b = blocks_[i];
+    b.identity = J_.block(b.iq, b.iq, b.mq, b.mq).isZero(0.0);
+    if (b.identity && b.mq == b.nv && J_.block(b.iq, nq_ + b.iv, b.mq, b.nv).isIdentity(0.0))
+      for (int k = 0; k < b.mq; ++k) unit_.emplace_back(b.iq + k, b.iv + k);
+    else
+      general_.push_back(i);
+  }
   return structured_;
 }
 
@@ -69,7 +80,9 @@ bool NewtonSolver::factor(double gamma) {
   auto S = S_.topLeftCorner(nv_, nv_);
   S = -gamma * J_.block(nq_, nq_, nv_, nv_);
   S.diagonal().array() += 1.0;
-  for (Block& b : blocks_) {
+  for (const auto& [iq, iv] : unit_) S.col(iv).noalias() -= (gamma * gamma) * Jvq.col(iq);
+  for (const int i : general_) {
+    Block& b = blocks_[i];
     auto Gi = G_.block(b.iq, b.iv, b.mq, b.nv);
     const auto Jqv = J_.block(b.iq, nq_ + b.iv, b.mq, b.nv);
     if (b.identity) {
@@ -94,19 +107,20 @@ void NewtonSolver::solve(const Eigen::Ref<const VecX>& b, Eigen::Ref<VecX> x) {
     return;
   }
   const double g = gamma_;
-  // y = P⁻¹ b_q, joint by joint
-  for (const Block& blk : blocks_) {
-    if (blk.identity)
-      y_.segment(blk.iq, blk.mq) = b.segment(blk.iq, blk.mq);
-    else
-      y_.segment(blk.iq, blk.mq) = blk.lu.solve(b.segment(blk.iq, blk.mq));
+  // y = P⁻¹ b_q, joint by joint (P_i = I but where a quaternion turns)
+  y_ = b.head(nq_);
+  for (const int i : general_) {
+    const Block& blk = blocks_[i];
+    if (!blk.identity) y_.segment(blk.iq, blk.mq) = blk.lu.solve(b.segment(blk.iq, blk.mq));
   }
   // S x_v = b_v + γ J_vq y
   r_ = b.segment(nq_, nv_);
   r_.noalias() += g * (J_.block(nq_, 0, nv_, nq_) * y_);
   x_.segment(nq_, nv_) = lu_s_.solve(r_);
   // x_q = y + γ G x_v (G block-diagonal)
-  for (const Block& blk : blocks_) {
+  for (const auto& [iq, iv] : unit_) x_(iq) = y_(iq) + g * x_(nq_ + iv);
+  for (const int i : general_) {
+    const Block& blk = blocks_[i];
     x_.segment(blk.iq, blk.mq) = y_.segment(blk.iq, blk.mq);
     x_.segment(blk.iq, blk.mq).noalias() += g * (G_.block(blk.iq, blk.iv, blk.mq, blk.nv) * x_.segment(nq_ + blk.iv, blk.nv));
   }

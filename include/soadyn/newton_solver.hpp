@@ -19,6 +19,7 @@
 
 #include <Eigen/LU>
 
+#include <utility>
 #include <vector>
 
 namespace soadyn {
@@ -49,6 +50,10 @@ class NewtonSolver {
   int nq_, nv_, nw_, n_;
   std::vector<Block> blocks_;
   std::vector<int> joint_of_q_;
+  // where G is the identity (joints without a quaternion): the (q, v) index pairs, x_q = y + γ x_v;
+  // the other blocks by their product
+  std::vector<std::pair<int, int>> unit_;
+  std::vector<int> general_;
   bool structured_ = false;
   double gamma_ = 0.0;
   MatX J_;                              // the Jacobian
