@@ -1,4 +1,4 @@
-// The Newton matrix of the implicit methods, solved by its structure.
+// BDF's Newton matrix I − γ ∂f/∂y, solved by its structure.
 //
 // For ẏ = f(y), y = [q; v; W, D] (System), BDF's Newton iterations solve (I − γJ) x = b with
 // J = ∂f/∂y, and System::jacobian gives J a fixed block structure:
