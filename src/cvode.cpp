@@ -2,6 +2,7 @@
 // exception crosses a C callback (it is stored and rethrown after CVode returns); SUNDIALS error
 // messages become soadyn errors.
 #include "soadyn/integrators.hpp"
+#include "soadyn/newton_solver.hpp"
 
 #include <cvode/cvode.h>
 #include <cvode/cvode_proj.h>
@@ -59,6 +60,47 @@ using CvodePtr = std::unique_ptr<void, CvodeDeleter>;
 
 Eigen::Map<VecX> map(N_Vector v) { return {N_VGetArrayPointer(v), N_VGetLength(v)}; }
 
+// CVODE's linear solver for the analytic Jacobian: a direct SUNLinearSolver (SUNDIALS' generic
+// API) around NewtonSolver, its content (deleted by its free).  CVODE's matrix holds J itself:
+// the linear-system function (Cvode::linear_system) evaluates it when CVODE asks for a new one and
+// records γ; setup factors I − γJ by its structure, solve applies the factors.
+namespace linsol {
+struct Content {
+  NewtonSolver solver;
+  double gamma = 0.0;
+};
+Content& content(SUNLinearSolver S) { return *static_cast<Content*>(S->content); }
+SUNLinearSolver_Type type(SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; }
+SUNLinearSolver_ID id(SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; }
+int setup(SUNLinearSolver S, SUNMatrix) {
+  // a singular I − γJ is recoverable: CVODE retries with a smaller step
+  return content(S).solver.factor(content(S).gamma) ? SUNLS_SUCCESS : SUNLS_LUFACT_FAIL;
+}
+int solve(SUNLinearSolver S, SUNMatrix, N_Vector x, N_Vector b, realtype) {
+  content(S).solver.solve(map(b), map(x));
+  return SUNLS_SUCCESS;
+}
+int free(SUNLinearSolver S) {
+  if (!S) return SUNLS_SUCCESS;
+  delete static_cast<Content*>(S->content);
+  S->content = nullptr;
+  SUNLinSolFreeEmpty(S);
+  return SUNLS_SUCCESS;
+}
+SUNLinearSolver make(const System& sys, SUNContext ctx) {
+  auto c = std::make_unique<Content>(Content{NewtonSolver(sys.model, sys.nquad)});
+  SUNLinearSolver S = SUNLinSolNewEmpty(ctx);
+  if (!S) return nullptr;
+  S->ops->gettype = type;
+  S->ops->getid = id;
+  S->ops->setup = setup;
+  S->ops->solve = solve;
+  S->ops->free = free;
+  S->content = c.release();
+  return S;
+}
+}  // namespace linsol
+
 class Cvode : public Integrator {
  public:
   Cvode(bool bdf, System& sys, const SimulationSettings& s, double t0, const VecX& y0)
@@ -78,13 +120,15 @@ class Cvode : public Integrator {
     check(CVodeSStolerances(mem, s.rtol, s.atol), "CVodeSStolerances");
     if (s.max_step > 0) check(CVodeSetMaxStep(mem, s.max_step), "CVodeSetMaxStep");
     if (bdf) {
-      // stiff: Newton iterations with a dense direct solver; the Jacobian analytic (System::jacobian)
-      // or by CVODE's difference quotients
+      // stiff: Newton iterations with a direct solver.  Analytic: the Jacobian from System::jacobian
+      // and M = I − γJ solved by its structure (NewtonSolver: an nv×nv LU).  DQ: CVODE's
+      // difference-quotient Jacobian and its dense LU of M
+      const bool analytic = analytic_jacobian(s.jacobian);
       A_.reset(SUNDenseMatrix(sys.size(), sys.size(), ctx_.get()));
-      ls_.reset(SUNLinSol_Dense(y_.get(), A_.get(), ctx_.get()));
-      if (!A_ || !ls_) throw Error("CVODE: could not allocate the dense linear solver");
+      if (A_) ls_.reset(analytic ? linsol::make(sys, ctx_.get()) : SUNLinSol_Dense(y_.get(), A_.get(), ctx_.get()));
+      if (!A_ || !ls_) throw Error("CVODE: could not allocate the linear solver");
       check(CVodeSetLinearSolver(mem, ls_.get(), A_.get()), "CVodeSetLinearSolver");
-      if (analytic_jacobian(s.jacobian)) check(CVodeSetJacFn(mem, &Cvode::jacobian), "CVodeSetJacFn");
+      if (analytic) check(CVodeSetLinSysFn(mem, &Cvode::linear_system), "CVodeSetLinSysFn");
     } else {
       // non-stiff: fixed-point (functional) iterations, no Jacobian
       nls_.reset(SUNNonlinSol_FixedPoint(y_.get(), 0, ctx_.get()));
@@ -181,14 +225,23 @@ class Cvode : public Integrator {
     }
   }
 
-  // J = ∂f/∂y into CVODE's dense (column-major) matrix
-  static int jacobian(double t, N_Vector y, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
+  // CVODE's linear system I − γJ for the analytic Jacobian: J = ∂f/∂y (System::jacobian) into
+  // CVODE's dense (column-major) matrix and the solver when CVODE asks for a new one (jok false),
+  // else the one it holds; γ for the solver's setup
+  static int linear_system(double t, N_Vector y, N_Vector, SUNMatrix A, sunbooleantype jok, sunbooleantype* jcur,
+                           double gamma, void* user, N_Vector, N_Vector, N_Vector) {
     auto* self = static_cast<Cvode*>(user);
     try {
-      const sunindextype n = SUNDenseMatrix_Rows(J);
-      Eigen::Map<MatX> out(SUNDenseMatrix_Data(J), n, n);
-      self->sys_.jacobian(t, N_VGetArrayPointer(y), out);
-      return out.allFinite() ? 0 : 1;  // recoverable: CVODE retries with a smaller step
+      linsol::Content& ls = linsol::content(self->ls_.get());
+      ls.gamma = gamma;
+      *jcur = jok ? SUNFALSE : SUNTRUE;
+      if (jok) return 0;
+      const sunindextype n = SUNDenseMatrix_Rows(A);
+      Eigen::Map<MatX> J(SUNDenseMatrix_Data(A), n, n);
+      self->sys_.jacobian(t, N_VGetArrayPointer(y), J);
+      if (!J.allFinite()) return 1;  // recoverable: CVODE retries with a smaller step
+      ls.solver.set_jacobian(J);
+      return 0;
     } catch (...) {
       self->pending_ = std::current_exception();
       return -1;

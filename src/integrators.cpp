@@ -295,7 +295,7 @@ const std::vector<IntegratorInfo>& integrators() {
   static const std::vector<IntegratorInfo> table = {
       {"cvode-adams", "SUNDIALS CVODE, Adams–Moulton with fixed-point iterations (non-stiff)", false,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(false, sys, s, t0, y0); }},
-      {"cvode-bdf", "SUNDIALS CVODE, BDF with Newton and a dense direct solver (stiff)", false,
+      {"cvode-bdf", "SUNDIALS CVODE, BDF with Newton and a direct solver (stiff)", false,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(true, sys, s, t0, y0); }},
       {"euler", "explicit Euler, order 1", true,
        [](System& sys, S s, double, const VecX&) -> std::unique_ptr<Integrator> { return std::make_unique<Euler>(sys, s.dt); }},

@@ -3,6 +3,8 @@
 // so every heap allocation is counted: operator new (which calls malloc) and Eigen's own
 // aligned_malloc alike, in Release (NDEBUG) builds too, where Eigen's malloc guard is compiled out.
 #include "soadyn/derivatives.hpp"
+#include "soadyn/integrators.hpp"
+#include "soadyn/newton_solver.hpp"
 
 #include "test_util.hpp"
 
@@ -119,6 +121,28 @@ TEST(NoAllocation, DerivativesAllocateNothingPerCall) {
     EXPECT_EQ(region.end(), 0) << "chain " << chain;
     EXPECT_TRUE(dd.dqdd_dq.allFinite() && dd.Minv.allFinite());
   }
+}
+
+// The Newton matrix's structured factorization and solves (CVODE BDF with the analytic Jacobian)
+TEST(NoAllocation, NewtonSolverAllocatesNothingPerCall) {
+  Rng rng(13);
+  const Model model = random_model(rng, {.n = 40, .branching = 0.5, .prismatic = 0.2, .ball = 0.2, .free_root = true});
+  Inputs in;
+  for (int i = 0; i < model.nbodies; ++i)
+    if (model.nv_i[i] == 1) in.dampers.push_back({model.joint_names[i], model.idx_v[i], 1.0});
+  System sys(model, in, FdMethod::ArticulatedBody);
+  NewtonSolver solver(model, sys.nquad);
+  const VecX y = sys.state(random_q(rng, model), random_v(rng, model));
+  MatX J(sys.size(), sys.size());
+  VecX b = VecX::Random(sys.size()), x(sys.size());
+
+  Forbidden region;
+  sys.jacobian(0.0, y.data(), J);
+  const bool structured = solver.set_jacobian(J);
+  const bool ok = solver.factor(0.01);
+  solver.solve(b, x);
+  EXPECT_EQ(region.end(), 0);
+  EXPECT_TRUE(structured && ok && x.allFinite());
 }
 
 volatile int g_size = 7;  // sizes the optimizer cannot see, so the allocations below cannot be elided

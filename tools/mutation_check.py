@@ -121,6 +121,10 @@ MUTATIONS = [
      "if (full_) factor(tm, h);", "if (full_ && it == 0) factor(tm, h);",
      "full Newton keeps its first Jacobian (issue 14)",
      gtest("test_implicit", "MidpointNewton.*")),
+    (14, "newton-schur-quaternion-block", "src/newton_solver.cpp",
+     "Gi = b.lu.solve(Jqv);", "Gi = Jqv;",
+     "BDF's structured Newton solve forgets P⁻¹ = (I − γ ∂q̇/∂q)⁻¹ on a quaternion's rows (issue 14)",
+     gtest("test_newton_solver", "NewtonSolver.*")),
 ]
 
 

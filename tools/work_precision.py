@@ -5,7 +5,7 @@ inside to two decades past their stability limit), error at t_end against a refe
 (CVODE Adams, rtol 1e-13) and energy-balance error, against CPU time.  One PNG per scenario in
 tools/results/, the data as CSV beside it.
 
-    tools/work_precision.py [--t-end T] [--out tools/results]
+    tools/work_precision.py [--t-end T] [--out tools/results] [--scenes NAME ...]
 """
 import argparse
 import csv
@@ -57,9 +57,10 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--t-end", type=float, default=5.0, help="horizon of every run, s (default 5)")
     ap.add_argument("--out", default=os.path.join(runs.ROOT, "tools", "results"))
+    ap.add_argument("--scenes", nargs="+", choices=SCENES, default=SCENES, help="redo only these scenes' charts")
     args = ap.parse_args()
     os.makedirs(args.out, exist_ok=True)
-    for scene in SCENES:
+    for scene in args.scenes:
         ref = runs.run(scene, "cvode-adams", t_end=args.t_end, rtol=1e-13, output_dt=args.t_end)
         jobs = [dict(scenario=scene, method=m, t_end=args.t_end, rtol=rt, output_dt=args.t_end)
                 for m in runs.CVODE for rt in RTOLS]

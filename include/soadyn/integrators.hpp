@@ -2,8 +2,10 @@
 //
 // One interface, several methods:
 //   cvode-adams        SUNDIALS CVODE, Adams–Moulton, fixed-point iteration (non-stiff)
-//   cvode-bdf          SUNDIALS CVODE, BDF, Newton with a dense direct solver; the Jacobian of f
-//                      analytic (System::jacobian) or by CVODE's difference quotients (stiff)
+//   cvode-bdf          SUNDIALS CVODE, BDF, Newton with a direct solver (stiff): the Jacobian of f
+//                      analytic (System::jacobian) with I − γJ solved by its structure through an
+//                      nv×nv Schur complement (NewtonSolver), or CVODE's difference quotients and
+//                      its dense LU
 //   euler              explicit Euler (order 1)
 //   symplectic-euler   semi-implicit Euler: v ← v + h q̈(q, v), then q ← q ⊕ h v (order 1, symplectic)
 //   rk4                classical Runge–Kutta (order 4)
