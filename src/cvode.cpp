@@ -155,7 +155,9 @@ class Cvode : public Integrator {
         if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
         return;
       }
-      if (stats().steps >= max_steps_) fail(tn, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
+      long steps = 0;  // one counter, not the whole stats() set, on every step
+      check(CVodeGetNumSteps(mem, &steps), "CVodeGetNumSteps");
+      if (steps >= max_steps_) fail(tn, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
       flag = CVode(mem, t_out, y_.get(), &tn, CV_ONE_STEP);
       if (pending_) {
         auto e = pending_;

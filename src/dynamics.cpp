@@ -146,12 +146,31 @@ FdMethod parse_fd_method(std::string_view s) {
   throw Error("forward-dynamics method: expected one of " + all + "; got '" + std::string(s) + "'");
 }
 
+// from this many DOFs on, a chain's LᵀDL is the blocked dense factorization (below)
+constexpr int kChainBlocked = 16;
+
 void ltdl_factor(const Model& model, Data& data) {
   // 𝓜 = Lᵀ D L along the DOF tree λ (Featherstone's LTDL): entries off ancestor chains stay zero.
   // Row i of the update H(i, j) −= a H(k, j), j over i and its ancestors, runs over the few
   // stretches of consecutive DOFs the chain is made of (one stretch on a chain): each is one
   // vectorized row-segment operation.
   auto& H = data.L;
+  const int n = model.nv;
+  if (model.chain && n >= kChainBlocked) {
+    // A chain has no sparsity to use: 𝓜 = Lᵀ D L is then the dense factorization of the reversed
+    // matrix, done by Eigen's blocked Cholesky.  With J the reversal, J 𝓜 J = C Cᵀ (C lower), so
+    // 𝓜 = U Uᵀ with U = J C J upper, and Lᵀ = U diag(U)⁻¹, D = diag(U)²:
+    //   L(k, i) = C(n−1−i, n−1−k) / C(n−1−k, n−1−k),  D(k) = C(n−1−k, n−1−k)²
+    data.llt.compute(data.Mass.reverse());
+    if (data.llt.info() != Eigen::Success) throw Error("forward dynamics: the mass matrix is not positive definite");
+    const MatX& C = data.llt.matrixLLT();
+    for (int k = 0; k < n; ++k) {
+      const double ckk = C(n - 1 - k, n - 1 - k), inv = 1.0 / ckk;
+      for (int i = 0; i < k; ++i) H(k, i) = C(n - 1 - i, n - 1 - k) * inv;
+      H(k, k) = ckk * ckk;
+    }
+    return;
+  }
   H = data.Mass.transpose();  // 𝓜 is symmetric: a straight copy into row-major storage
   const auto& lambda = model.dof_parent;
   for (int k = model.nv - 1; k >= 0; --k) {
@@ -170,12 +189,21 @@ void ltdl_factor(const Model& model, Data& data) {
 void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x) {
   const auto& H = data.L;
   const auto& lambda = model.dof_parent;
-  // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip)
+  // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip); each over the stretches of
+  // consecutive ancestors (dof_run), as one vectorized segment operation each
   for (int k = model.nv - 1; k >= 0; --k)
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) x(i) -= H(k, i) * x(k);
+    for (int j = lambda[k]; j >= 0;) {
+      const int m = model.dof_run[j];
+      x.segment(m, j - m + 1) -= x(k) * H.row(k).segment(m, j - m + 1).transpose();
+      j = lambda[m];
+    }
   for (int k = 0; k < model.nv; ++k) x(k) /= H(k, k);
   for (int k = 0; k < model.nv; ++k)
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) x(k) -= H(k, i) * x(i);
+    for (int j = lambda[k]; j >= 0;) {
+      const int m = model.dof_run[j];
+      x(k) -= H.row(k).segment(m, j - m + 1).dot(x.segment(m, j - m + 1));
+      j = lambda[m];
+    }
 }
 
 void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method) {
