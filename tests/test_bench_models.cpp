@@ -38,3 +38,30 @@ TEST(BenchModels, CppAndUrdfAreTheSameMechanisms) {
   }
   std::filesystem::remove_all(dir);
 }
+
+// Every route on the benchmark's largest mechanisms, against each other: the literal 𝓜 (the
+// note's Jᵀ M J, dense matrix products of 6N × nv blocks, the library's biggest) against the
+// composite one, and the three forward-dynamics routes.  Large products pack their operands into
+// buffers the vectorized kernels expect aligned to the full AVX width; with plain malloc's 16 bytes
+// they crashed here (chain of 128, binary tree of 63 and up).
+TEST(BenchModels, LargeMechanismsEveryRouteAgrees) {
+  Rng rng(10);
+  for (auto [n, binary] : {std::pair{128, false}, std::pair{256, false}, std::pair{63, true}, std::pair{255, true}}) {
+    const Model model = bench::make_tree(n, binary);
+    Data data(model);
+    update_kinematics(model, data, random_q(rng, model));
+    update_velocities(model, data, random_v(rng, model));
+    MatX literal;
+    mass_matrix_literal(model, data, literal);
+    mass_matrix(model, data);
+    EXPECT_TRUE(near_rel(literal, data.Mass, 1e-12)) << n;
+    const VecX tau = random_v(rng, model);
+    std::vector<VecX> qdd;
+    for (FdMethod m : {FdMethod::Dense, FdMethod::Sparse, FdMethod::ArticulatedBody}) {
+      forward_dynamics(model, data, tau, m);
+      qdd.push_back(data.qdd);
+    }
+    EXPECT_TRUE(near_rel(qdd[1], qdd[0], 1e-8)) << n;
+    EXPECT_TRUE(near_rel(qdd[2], qdd[0], 1e-8)) << n;
+  }
+}

@@ -234,7 +234,7 @@ TEST(ClosedForm, PendulumOnCart) {
     const double th = rng.uniform(-3, 3), xd = rng.uniform(-2, 2), thd = rng.uniform(-3, 3);
     const double m1 = cart.mass, m2 = pend.mass, I = pend.inertia(2, 2);
     const VecX q = Eigen::Vector2d(rng.uniform(-1, 1), th), v = Eigen::Vector2d(xd, thd);
-    MatX M(2, 2);
+    Eigen::Matrix2d M;
     M << m1 + m2, m2 * L * std::cos(th), m2 * L * std::cos(th), I + m2 * L * L;
     const VecX bias = Eigen::Vector2d(-m2 * L * std::sin(th) * thd * thd, m2 * g * L * std::sin(th));
     EXPECT_TRUE(near_rel(bias_at(model, q, v), bias, 1e-12));
@@ -243,7 +243,7 @@ TEST(ClosedForm, PendulumOnCart) {
     update_kinematics(model, d, q);
     update_velocities(model, d, v);
     forward_dynamics(model, d, tau, FdMethod::ArticulatedBody);
-    EXPECT_TRUE(near_rel(d.qdd, M.llt().solve(tau - bias), 1e-12));
+    EXPECT_TRUE(near_rel(d.qdd, M.llt().solve(Eigen::Vector2d(tau - bias)), 1e-12));
   }
 }
 
