@@ -69,7 +69,8 @@ def peer_lines(series, counters, skipped, ctx):
     """bench.md's section: soadyn against the fastest peer at each N, per quantity and shape"""
     peers = sorted({k.split("/")[3] for k in series if k.startswith("peer/") and k.count("/") == 3} - {"soadyn"})
     if not peers:
-        return ["## Peers", "", f"No peer timed ({ctx.get('peers_left_out', 'none built')}).", ""]
+        return (["## Peers", "", f"No peer timed. Left out: {ctx.get('peers_left_out', 'none built')}."] +
+                [f"Not timed: {msg}." for msg in sorted(set(skipped))] + [""])
     lines = ["## soadyn against the fastest peer (same run, same URDF models, same state)", "",
              "Peers: " + ", ".join(ctx.get(f"peer_{p}", p) for p in peers) + "."]
     if ctx.get("peers_left_out"):
