@@ -38,24 +38,26 @@ namespace soadyn::bench {
 namespace {
 
 using Factory = Peer* (*)(const PeerProblem&, std::string&);
-using Version = const char* (*)();
+using Text = const char* (*)();
 
 // A loaded plugin; RAII around the dlopen handle.
 struct Plugin {
   std::string name;
   void* handle = nullptr;
   Factory make = nullptr;
-  std::string version;
+  std::string version, variants;
   Plugin(std::string n, const std::string& path) : name(std::move(n)) {
     handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle) throw std::runtime_error(dlerror());
     make = reinterpret_cast<Factory>(dlsym(handle, "soadyn_bench_make_peer"));
-    const auto v = reinterpret_cast<Version>(dlsym(handle, "soadyn_bench_peer_version"));
-    if (!make || !v) {
+    const auto v = reinterpret_cast<Text>(dlsym(handle, "soadyn_bench_peer_version"));
+    const auto w = reinterpret_cast<Text>(dlsym(handle, "soadyn_bench_peer_variants"));
+    if (!make || !v || !w) {
       dlclose(handle);
       throw std::runtime_error(path + " is not a soadyn_bench peer");
     }
     version = v();
+    variants = w();
   }
   Plugin(const Plugin&) = delete;
   Plugin& operator=(const Plugin&) = delete;
@@ -66,6 +68,12 @@ std::vector<std::unique_ptr<Plugin>>& plugins() {
   static std::vector<std::unique_ptr<Plugin>> p;
   return p;
 }
+
+// One timed peer: a plugin and one of its variants, named "lib" or "lib-variant".
+struct Entry {
+  const Plugin* plugin;
+  std::string variant, name;
+};
 
 std::string models_dir() {
   const char* d = std::getenv("SOADYN_BENCH_MODELS");
@@ -156,10 +164,10 @@ std::string disagreement(Setup& s, Peer& p, benchmark::State& st) {
   return os.str();
 }
 
-void run(benchmark::State& st, const std::string& shape, Quantity quantity, const Plugin* plugin) {
+void run(benchmark::State& st, const std::string& shape, Quantity quantity, const Entry* entry) {
   Setup s(shape, int(st.range(0)));
   st.counters["N"] = double(st.range(0));
-  if (!plugin) {
+  if (!entry) {
     for (auto _ : st) {
       if (quantity == kMass) s.mass();
       else if (quantity == kBias) s.bias();
@@ -169,13 +177,14 @@ void run(benchmark::State& st, const std::string& shape, Quantity quantity, cons
     return;
   }
   std::string error;
-  std::unique_ptr<Peer> peer(plugin->make(s.problem, error));
+  s.problem.variant = entry->variant;
+  std::unique_ptr<Peer> peer(entry->plugin->make(s.problem, error));
   if (!peer) {
-    st.SkipWithError((plugin->name + " cannot load " + s.file + ": " + error).c_str());
+    st.SkipWithError((entry->name + " cannot load " + s.file + ": " + error).c_str());
     return;
   }
   if (const std::string why = disagreement(s, *peer, st); !why.empty()) {
-    st.SkipWithError((plugin->name + " disagrees with soadyn on " + s.file + ":" + why + " (limit 1e-9)").c_str());
+    st.SkipWithError((entry->name + " disagrees with soadyn on " + s.file + ":" + why + " (limit 1e-9)").c_str());
     return;
   }
   const std::function<void()>& call = quantity == kMass ? peer->mass : quantity == kBias ? peer->bias : peer->forward;
@@ -206,15 +215,25 @@ void register_peers() {
     benchmark::AddCustomContext("peers_left_out", missing);
   }
   if (plugins().empty()) return;  // nothing to compare soadyn with
-  for (const auto& p : plugins()) benchmark::AddCustomContext("peer_" + p->name, p->version);
+  static std::vector<Entry> entries;
+  for (const auto& p : plugins()) {
+    benchmark::AddCustomContext("peer_" + p->name, p->version);
+    entries.push_back({p.get(), "", p->name});
+    std::stringstream variants(p->variants);
+    for (std::string v; std::getline(variants, v, ',');)
+      if (!v.empty()) {
+        entries.push_back({p.get(), v, p->name + "-" + v});
+        benchmark::AddCustomContext("peer_" + entries.back().name, p->version + ", variant " + v);
+      }
+  }
   const std::vector<int> chain{1, 2, 4, 8, 16, 32, 64, 128, 256}, tree{1, 3, 7, 15, 31, 63, 127, 255};
   for (const std::string shape : {"chain", "tree"}) {
     for (int n : shape == "chain" ? chain : tree) {
       for (Quantity quantity : {kMass, kBias, kRhs}) {
         const std::string base = "peer/" + shape + "/" + kQuantity[quantity] + "/";
         benchmark::RegisterBenchmark((base + "soadyn").c_str(), run, shape, quantity, nullptr)->Arg(n);
-        for (const auto& p : plugins())
-          benchmark::RegisterBenchmark((base + p->name).c_str(), run, shape, quantity, p.get())->Arg(n);
+        for (const Entry& e : entries)
+          benchmark::RegisterBenchmark((base + e.name).c_str(), run, shape, quantity, &e)->Arg(n);
       }
     }
   }

@@ -23,6 +23,7 @@ struct PeerProblem {
   std::vector<std::string> joints, links;
   std::vector<double> q, v, tau;
   std::array<double, 3> gravity{0, 0, -9.81};
+  std::string variant;  // one of the plugin's soadyn_bench_peer_variants(), "" for its default
 };
 
 // The three timed calls; each recomputes everything it needs from (q, v, tau), as soadyn's do.
@@ -37,10 +38,12 @@ struct Peer {
 
 }  // namespace soadyn::bench
 
-// The two symbols a plugin exports.  The first returns a new Peer for the problem (the caller owns
-// it), or nullptr with a one-line reason in `error`; the second the library's name, version and
-// compiler, e.g. "Pinocchio 3.7.0 (GNU 12.2.0)".
+// The symbols a plugin exports: a new Peer for the problem (the caller owns it), or nullptr with a
+// one-line reason in `error`; the library's name, version and compiler, e.g. "Pinocchio 3.7.0
+// (Clang 14.0.6)"; and its variants beside the default, comma-separated (e.g. Pinocchio's "world"
+// convention), each timed as a peer of its own.
 #define SOADYN_BENCH_PEER_API extern "C" __attribute__((visibility("default")))
 SOADYN_BENCH_PEER_API soadyn::bench::Peer* soadyn_bench_make_peer(const soadyn::bench::PeerProblem& problem,
                                                                   std::string& error);
 SOADYN_BENCH_PEER_API const char* soadyn_bench_peer_version();
+SOADYN_BENCH_PEER_API const char* soadyn_bench_peer_variants();

@@ -93,6 +93,7 @@ struct MuJoCo : soadyn::bench::Peer {
 
 soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
   try {
+    if (!problem.variant.empty()) throw std::runtime_error("no variant " + problem.variant);
     return new MuJoCo(problem);
   } catch (const std::exception& e) {
     error = e.what();
@@ -104,3 +105,5 @@ const char* soadyn_bench_peer_version() {
   static const std::string v = std::string("MuJoCo ") + mj_versionString();
   return v.c_str();
 }
+
+const char* soadyn_bench_peer_variants() { return ""; }

@@ -3,7 +3,8 @@
 //                                        untimed, for the check)
 //   bias     nonLinearEffects(q, v)
 //   forward  aba(q, v, tau)             (the articulated-body algorithm)
-// Pinocchio's default convention (LOCAL) for crba and aba.  The URDF is read by Pinocchio's own
+// crba and aba in Pinocchio's default convention (LOCAL), or in the variant "world" in its WORLD
+// convention (the faster on long chains).  The URDF is read by Pinocchio's own
 // parser with a fixed base; a `continuous` joint has q = (cos θ, sin θ).
 #include "peer.hpp"
 
@@ -59,9 +60,11 @@ struct Pinocchio : soadyn::bench::Peer {
       tau[iv] = p.tau[k];
       idx.push_back(iv);
     }
-    mass = [this] { pin::crba(model, data, q); };
+    if (p.variant != "" && p.variant != "world") throw std::runtime_error("no variant " + p.variant);
+    const auto c = p.variant == "world" ? pin::Convention::WORLD : pin::Convention::LOCAL;
+    mass = [this, c] { pin::crba(model, data, q, c); };
     bias = [this] { pin::nonLinearEffects(model, data, q, v); };
-    forward = [this] { pin::aba(model, data, q, v, tau); };
+    forward = [this, c] { pin::aba(model, data, q, v, tau, c); };
     mass_out = [this] {
       Eigen::MatrixXd M = data.M;
       M.triangularView<Eigen::StrictlyLower>() = M.transpose();
@@ -92,3 +95,5 @@ soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::str
 }
 
 const char* soadyn_bench_peer_version() { return "Pinocchio " PINOCCHIO_VERSION " (" SOADYN_PEER_COMPILER ")"; }
+
+const char* soadyn_bench_peer_variants() { return "world"; }

@@ -69,6 +69,7 @@ struct Rbdl : soadyn::bench::Peer {
 
 soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
   try {
+    if (!problem.variant.empty()) throw std::runtime_error("no variant " + problem.variant);
     return new Rbdl(problem);
   } catch (const std::exception& e) {
     error = e.what();
@@ -84,3 +85,5 @@ const char* soadyn_bench_peer_version() {
   }();
   return v.c_str();
 }
+
+const char* soadyn_bench_peer_variants() { return ""; }
