@@ -72,7 +72,7 @@ def peer_lines(series, counters, skipped, ctx):
         return (["## Peers", "", f"No peer timed. Left out: {ctx.get('peers_left_out', 'none built')}."] +
                 [f"Not timed: {msg}." for msg in sorted(set(skipped))] + [""])
     lines = ["## soadyn against the fastest peer (same run, same URDF models, same state)", "",
-             "Peers: " + ", ".join(ctx.get(f"peer_{p}", p) for p in peers) + "."]
+             "Peers: " + ", ".join(f"{p} = {ctx[f'peer_{p}']}" for p in peers if f"peer_{p}" in ctx) + "."]
     if ctx.get("peers_left_out"):
         lines.append(f"Left out: {ctx['peers_left_out']}.")
     worst = {}

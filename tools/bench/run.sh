@@ -5,7 +5,8 @@
 #   PEERS_PREFIX=/tmp/peerbuild/install tools/bench/run.sh   adds Pinocchio and RBDL as peers
 #   (../shared/peers/build_peers.sh builds them there; with CLANG=1 also Pinocchio compiled by clang
 #   in PREFIX-clang).  Without PEERS_PREFIX they are left out with a note.
-# BENCH_MIN_TIME (default 0.1 s) is Google Benchmark's minimum time per benchmark.
+# BENCH_MIN_TIME (default 0.1 s) is Google Benchmark's minimum time per benchmark; BENCH_FILTER, when
+# set, its --benchmark_filter (a leading '-' leaves the matches out).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 if ! dpkg-query -W -f='${Status}' libmujoco-dev 2>/dev/null | grep -q "install ok installed"; then
@@ -19,6 +20,6 @@ tools/setup.sh -DSOADYN_BUILD_BENCH=ON "-DSOADYN_PEERS_PREFIX=${PEERS_PREFIX:-}"
 out=tools/results
 mkdir -p "$out" build/bench_models
 tools/bench/make_models.py build/bench_models
-SOADYN_BENCH_MODELS=build/bench_models build/soadyn_bench --benchmark_min_time="${BENCH_MIN_TIME:-0.1}" \
+SOADYN_BENCH_MODELS=build/bench_models build/soadyn_bench --benchmark_min_time="${BENCH_MIN_TIME:-0.1}" ${BENCH_FILTER:+"--benchmark_filter=$BENCH_FILTER"} \
   --benchmark_format=console --benchmark_out_format=json --benchmark_out="$out/bench.json"
 tools/bench/report.py "$out/bench.json" -o "$out"
