@@ -46,7 +46,7 @@ cmake --build "$build" -j2 --target soadyn_cli
 echo "== harness: $harness -> $work/harness"
 rm -rf "$work/harness"
 mkdir -p "$work"
-cp -r "$harness" "$work/harness"
+cp -a "$harness" "$work/harness"  # -a: file times kept, so a rebuild is incremental
 if ! grep -Eq '^\s*ON\b' "$repo/include/soadyn/algorithms.hpp"; then
   sed -i 's/FdMethod::ON\b/FdMethod::ArticulatedBody/g' "$work/harness/same_run/adapter_soadyn.cc"
 fi
