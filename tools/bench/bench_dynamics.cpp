@@ -141,4 +141,15 @@ BENCHMARK(Forward<true, FdMethod::Dense>)->Name("tree/rhs_dense")->Apply(tree_si
 BENCHMARK(Forward<true, FdMethod::Sparse>)->Name("tree/rhs_sparse")->Apply(tree_sizes);
 BENCHMARK(Forward<true, FdMethod::ArticulatedBody>)->Name("tree/rhs_on")->Apply(tree_sizes);
 
-BENCHMARK_MAIN();
+namespace soadyn::bench {
+void register_peers();  // bench_peers.cpp
+}
+
+int main(int argc, char** argv) {
+  soadyn::bench::register_peers();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

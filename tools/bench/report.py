@@ -17,13 +17,19 @@ def load(path):
     with open(path) as f:
         data = json.load(f)
     series = collections.defaultdict(dict)  # "chain/bias" -> {N: ns}
+    counters = collections.defaultdict(dict)  # "peer/chain/mass/rbdl" -> {N: {"dM": ..}}
+    skipped = []  # error messages (a peer that disagreed or could not load a model)
     scale = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
     for b in data["benchmarks"]:
+        if b.get("error_occurred"):
+            skipped.append(b.get("error_message", b["name"]))
+            continue
         if b.get("run_type", "iteration") != "iteration":
             continue
         name, n = b["name"].rsplit("/", 1)
         series[name][int(n)] = b["real_time"] * scale[b.get("time_unit", "ns")]
-    return series, data.get("context", {})
+        counters[name][int(n)] = {k: b[k] for k in ("dM", "dC", "dqdd") if k in b}
+    return series, counters, skipped, data.get("context", {})
 
 
 def exponent(points, lo=16, hi=256):
@@ -43,12 +49,68 @@ def crossover(fast, slow):
     return None
 
 
+QUANTITIES = (("mass", "𝓜"), ("bias", "bias C(q, v)"), ("rhs", "O(N) forward dynamics (MuJoCo: mj_forward, dense)"))
+
+
+def peer_series(series, shape, q):
+    """{peer name: {N: ns}} for one shape and quantity, soadyn excluded"""
+    prefix = f"peer/{shape}/{q}/"
+    return {k[len(prefix):]: v for k, v in series.items() if k.startswith(prefix) and k != prefix + "soadyn"}
+
+
+def best_peer(series, shape, q):
+    """{N: (ns, peer name)}: the fastest peer at each N"""
+    peers = peer_series(series, shape, q)
+    ns = sorted(set().union(*(p.keys() for p in peers.values()))) if peers else []
+    return {n: min((p[n], name) for name, p in peers.items() if n in p) for n in ns}
+
+
+def peer_lines(series, counters, skipped, ctx):
+    """bench.md's section: soadyn against the fastest peer at each N, per quantity and shape"""
+    peers = sorted({k.split("/")[3] for k in series if k.startswith("peer/") and k.count("/") == 3} - {"soadyn"})
+    if not peers:
+        return (["## Peers", "", f"No peer timed. Left out: {ctx.get('peers_left_out', 'none built')}."] +
+                [f"Not timed: {msg}." for msg in sorted(set(skipped))] + [""])
+    lines = ["## soadyn against the fastest peer (same run, same URDF models, same state)", "",
+             "Peers: " + ", ".join(f"{p} = {ctx[f'peer_{p}']}" for p in peers if f"peer_{p}" in ctx) + "."]
+    if ctx.get("peers_left_out"):
+        lines.append(f"Left out: {ctx['peers_left_out']}.")
+    worst = {}
+    for name, per_n in counters.items():
+        lib = name.split("/")[-1]
+        for c in per_n.values():
+            for k, x in c.items():
+                worst[(lib, k)] = max(worst.get((lib, k), 0.0), x)
+    if worst:
+        lines.append("Checked against soadyn on every model before timing (largest relative 𝓜 and bias "
+                     "difference, q̈ backward error): " + "; ".join(
+                         f"{p} {worst.get((p, 'dM'), float('nan')):.0e}, {worst.get((p, 'dC'), float('nan')):.0e}, "
+                         f"{worst.get((p, 'dqdd'), float('nan')):.0e}" for p in peers) + ".")
+    for msg in sorted(set(skipped)):
+        lines.append(f"Not timed: {msg}.")
+    lines.append("")
+    for q, title in QUANTITIES:
+        lines += [f"### {title}: ns per call, soadyn / fastest peer", "",
+                  "| model | soadyn | fastest peer | peer | soadyn / fastest | " + " | ".join(peers) + " |",
+                  "|---" * (5 + len(peers)) + "|"]
+        for shape in ("chain", "tree"):
+            s = series.get(f"peer/{shape}/{q}/soadyn", {})
+            best = best_peer(series, shape, q)
+            for n in sorted(set(s) & set(best)):
+                b, who = best[n]
+                each = [series.get(f"peer/{shape}/{q}/{p}", {}).get(n) for p in peers]
+                lines.append(f"| {shape} N={n} | {s[n]:.0f} | {b:.0f} | {who} | {s[n] / b:.2f} | " +
+                             " | ".join("" if x is None else f"{x:.0f}" for x in each) + " |")
+        lines.append("")
+    return lines
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("json")
     ap.add_argument("-o", "--out", default=".")
     args = ap.parse_args()
-    series, ctx = load(args.json)
+    series, counters, skipped, ctx = load(args.json)
     os.makedirs(args.out, exist_ok=True)
 
     with open(os.path.join(args.out, "bench.csv"), "w") as f:
@@ -60,7 +122,7 @@ def main():
     lines = [f"# soadyn benchmarks ({ctx.get('date', '')}, {ctx.get('num_cpus', '?')} CPUs, "
              f"{ctx.get('mhz_per_cpu', '?')} MHz)", "",
              "## Time per call [ns] and growth exponent over N = 16..256", ""]
-    for group in ("chain", "tree", "peer/soadyn", "peer/mujoco"):
+    for group in ("chain", "tree"):
         names = sorted(n for n in series if n.startswith(group + "/") and n.count("/") == group.count("/") + 1)
         if not names:
             continue
@@ -72,15 +134,7 @@ def main():
             lines.append(f"| {name.split('/')[-1]} | " + " | ".join(row) + f" | {exponent(series[name], 15, 256):.2f} |")
         lines.append("")
 
-    if "peer/mujoco/mass" in series:
-        lines += ["## soadyn / MuJoCo (same run, same URDF chains)", ""]
-        ns = sorted(series["peer/mujoco/mass"])
-        lines.append("| quantity | " + " | ".join(f"N={n}" for n in ns) + " |")
-        lines.append("|---" * (len(ns) + 1) + "|")
-        for q in ("mass", "bias", "rhs"):
-            s, m = series[f"peer/soadyn/{q}"], series[f"peer/mujoco/{q}"]
-            lines.append(f"| {q} | " + " | ".join(f"{s[n] / m[n]:.2f}" for n in ns) + " |")
-        lines.append("")
+    lines += peer_lines(series, counters, skipped, ctx)
 
     lines += ["## Crossovers", ""]
     for group in ("chain", "tree"):
@@ -101,12 +155,12 @@ def main():
             if s:
                 ns = sorted(s)
                 a.loglog(ns, [s[n] for n in ns], "o-", color=c, ms=3, label=f"soadyn {q} (p={exponent(s, 15, 256):.2f})")
-        if group == "chain":
-            for q, c in (("mass", "C0"), ("bias", "C1"), ("rhs", "C2")):
-                s = series.get(f"peer/mujoco/{q}")
-                if s:
-                    ns = sorted(s)
-                    a.loglog(ns, [s[n] for n in ns], "x--", color=c, label=f"MuJoCo {q} (p={exponent(s):.2f})")
+        for q, c in (("mass", "C0"), ("bias", "C1"), ("rhs", "C2")):
+            best = best_peer(series, group, q)
+            if best:
+                ns = sorted(best)
+                a.loglog(ns, [best[n][0] for n in ns], "x--", color=c,
+                         label=f"fastest peer {q} ({', '.join(sorted({best[n][1] for n in ns}))})")
         a.set_title(f"{group}: time per call")
         a.set_xlabel("N bodies")
         a.set_ylabel("ns")

@@ -1,0 +1,49 @@
+// One peer library (MuJoCo, Pinocchio, RBDL) behind a plain interface for soadyn_bench.
+//
+// Each peer is a plugin, a shared object built from tools/bench/peer_<lib>.cpp with hidden symbols
+// and loaded with dlopen(RTLD_LOCAL) by bench_peers.cpp.  The peer's own Eigen build (its
+// alignment, its -march) then never meets soadyn's in one link: soadyn fixes
+// EIGEN_MAX_ALIGN_BYTES=16 for its users, Pinocchio's library is built with Eigen's default, and
+// the same inline Eigen function compiled both ways must not be merged.  Only this header's types
+// cross the boundary: no Eigen, standard containers only.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace soadyn::bench {
+
+// The model and the one state every library is given.  `joints` are the URDF joint names in the
+// order of q, v and tau (soadyn's body order), each with one dof, and `links` their child links;
+// every output uses the same order.
+struct PeerProblem {
+  std::string urdf;
+  std::vector<std::string> joints, links;
+  std::vector<double> q, v, tau;
+  std::array<double, 3> gravity{0, 0, -9.81};
+  std::string variant;  // one of the plugin's soadyn_bench_peer_variants(), "" for its default
+};
+
+// The three timed calls; each recomputes everything it needs from (q, v, tau), as soadyn's do.
+struct Peer {
+  virtual ~Peer() = default;
+  std::function<void()> mass;      // 𝓜(q)
+  std::function<void()> bias;      // C(q, v): Coriolis, centrifugal and gravity terms
+  std::function<void()> forward;   // q̈ from (q, v, tau) by the peer's O(N) recursion
+  // untimed, after the matching call: 𝓜 row-major with both triangles, C, q̈
+  std::function<std::vector<double>()> mass_out, bias_out, forward_out;
+};
+
+}  // namespace soadyn::bench
+
+// The symbols a plugin exports: a new Peer for the problem (the caller owns it), or nullptr with a
+// one-line reason in `error`; the library's name, version and compiler, e.g. "Pinocchio 3.7.0
+// (Clang 14.0.6)"; and its variants beside the default, comma-separated (e.g. Pinocchio's "world"
+// convention), each timed as a peer of its own.
+#define SOADYN_BENCH_PEER_API extern "C" __attribute__((visibility("default")))
+SOADYN_BENCH_PEER_API soadyn::bench::Peer* soadyn_bench_make_peer(const soadyn::bench::PeerProblem& problem,
+                                                                  std::string& error);
+SOADYN_BENCH_PEER_API const char* soadyn_bench_peer_version();
+SOADYN_BENCH_PEER_API const char* soadyn_bench_peer_variants();

@@ -1,0 +1,99 @@
+// Pinocchio 3 as a soadyn_bench peer (plugin; see peer.hpp):
+//   mass     crba(q)                    (fills the upper triangle; the lower one is mirrored after,
+//                                        untimed, for the check)
+//   bias     nonLinearEffects(q, v)
+//   forward  aba(q, v, tau)             (the articulated-body algorithm)
+// crba and aba in Pinocchio's default convention (LOCAL), or in the variant "world" in its WORLD
+// convention (the faster on long chains).  The URDF is read by Pinocchio's own
+// parser with a fixed base; a `continuous` joint has q = (cos θ, sin θ).
+#include "peer.hpp"
+
+#include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/rnea.hpp>
+#include <pinocchio/multibody/data.hpp>
+#include <pinocchio/multibody/model.hpp>
+#include <pinocchio/parsers/urdf.hpp>
+
+#include <cmath>
+#include <exception>
+#include <stdexcept>
+
+#ifndef SOADYN_PEER_COMPILER
+#define SOADYN_PEER_COMPILER "?"
+#endif
+
+namespace {
+namespace pin = pinocchio;
+using soadyn::bench::PeerProblem;
+
+pin::Model load(const PeerProblem& p) {
+  pin::Model m;
+  pin::urdf::buildModel(p.urdf, m);  // fixed base
+  m.gravity.linear(Eigen::Vector3d(p.gravity[0], p.gravity[1], p.gravity[2]));
+  return m;
+}
+
+struct Pinocchio : soadyn::bench::Peer {
+  pin::Model model;
+  pin::Data data;
+  Eigen::VectorXd q, v, tau;
+  std::vector<int> idx;  // problem order k -> Pinocchio v index
+
+  explicit Pinocchio(const PeerProblem& p) : model(load(p)), data(model) {
+    const int n = int(p.joints.size());
+    if (model.nv != n) throw std::runtime_error("nv = " + std::to_string(model.nv) + ", soadyn has " + std::to_string(n));
+    q = pin::neutral(model);
+    v = tau = Eigen::VectorXd::Zero(n);
+    for (int k = 0; k < n; ++k) {
+      if (!model.existJointName(p.joints[k])) throw std::runtime_error("no joint " + p.joints[k]);
+      const auto j = model.getJointId(p.joints[k]);
+      const int iq = model.idx_qs[j], iv = model.idx_vs[j];
+      if (model.nvs[j] != 1) throw std::runtime_error("joint " + p.joints[k] + " has nv != 1");
+      if (model.nqs[j] == 2) {  // continuous: unbounded revolute
+        q[iq] = std::cos(p.q[k]);
+        q[iq + 1] = std::sin(p.q[k]);
+      } else {
+        q[iq] = p.q[k];
+      }
+      v[iv] = p.v[k];
+      tau[iv] = p.tau[k];
+      idx.push_back(iv);
+    }
+    if (p.variant != "" && p.variant != "world") throw std::runtime_error("no variant " + p.variant);
+    const auto c = p.variant == "world" ? pin::Convention::WORLD : pin::Convention::LOCAL;
+    mass = [this, c] { pin::crba(model, data, q, c); };
+    bias = [this] { pin::nonLinearEffects(model, data, q, v); };
+    forward = [this, c] { pin::aba(model, data, q, v, tau, c); };
+    mass_out = [this] {
+      Eigen::MatrixXd M = data.M;
+      M.triangularView<Eigen::StrictlyLower>() = M.transpose();
+      std::vector<double> r(idx.size() * idx.size());
+      for (size_t i = 0; i < idx.size(); ++i)
+        for (size_t j = 0; j < idx.size(); ++j) r[i * idx.size() + j] = M(idx[i], idx[j]);
+      return r;
+    };
+    bias_out = [this] { return permuted(data.nle); };
+    forward_out = [this] { return permuted(data.ddq); };
+  }
+  std::vector<double> permuted(const Eigen::VectorXd& x) const {
+    std::vector<double> r(idx.size());
+    for (size_t k = 0; k < idx.size(); ++k) r[k] = x[idx[k]];
+    return r;
+  }
+};
+
+}  // namespace
+
+soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
+  try {
+    return new Pinocchio(problem);
+  } catch (const std::exception& e) {
+    error = e.what();
+    return nullptr;
+  }
+}
+
+const char* soadyn_bench_peer_version() { return "Pinocchio " PINOCCHIO_VERSION " (" SOADYN_PEER_COMPILER ")"; }
+
+const char* soadyn_bench_peer_variants() { return "world"; }

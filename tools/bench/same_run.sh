@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# soadyn against Pinocchio (g++ and clang), RBDL and MuJoCo in one process and one run, with the
+# same-run harness kept outside the repository (../shared/peers, its README says how it measures).
+#
+#   tools/bench/same_run.sh [SOADYN_BUILD_DIR]        (default: build/ of this repository)
+#
+# Builds soadyn's CLI target in SOADYN_BUILD_DIR (configured as a plain Release build when it is
+# not configured yet), copies the harness, builds its two executables (g++: soadyn, Pinocchio,
+# RBDL, MuJoCo; clang++: Pinocchio alone, run as the child "pinocchio-clang"), runs them on every
+# model of the harness and saves the whole output.  Environment:
+#   PEERS_HARNESS       the harness (default: <repository>/../shared/peers)
+#   PEERS_PREFIX        Pinocchio and RBDL built by g++ (default /tmp/peerbuild/install)
+#   PEERS_CLANG_PREFIX  Pinocchio built by clang++ (default PEERS_PREFIX-clang; left out if absent)
+#   SAME_RUN_DIR        where the harness copy is built (default /tmp/same_run)
+#   OUT                 the saved output (default SAME_RUN_DIR/same_run.txt)
+#   ROUNDS, BUDGET      the harness's --rounds (default 3) and --budget in seconds (default 0.2)
+#   STRICT=1            exit with the harness's status (non-zero when soadyn is slower than the
+#                       best peer somewhere); otherwise 0 after a complete measurement
+# Exits 0 with a note when the harness or the peers are missing (the peers are optional).
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/../.." && pwd)
+build=$(realpath -m "${1:-$repo/build}")
+harness=${PEERS_HARNESS:-$repo/../shared/peers}
+prefix=${PEERS_PREFIX:-/tmp/peerbuild/install}
+clang_prefix=${PEERS_CLANG_PREFIX:-$prefix-clang}
+work=${SAME_RUN_DIR:-/tmp/same_run}
+out=${OUT:-$work/same_run.txt}
+
+if [[ ! -f $harness/same_run/CMakeLists.txt ]]; then
+  echo "same_run: no harness at $harness (set PEERS_HARNESS to the directory holding same_run/); nothing measured"
+  exit 0
+fi
+if [[ ! -d $prefix/lib/cmake/pinocchio && ! -f $prefix/include/rbdl/rbdl.h ]]; then
+  echo "same_run: neither Pinocchio nor RBDL is installed at $prefix (PEERS_PREFIX; $harness/build_peers.sh builds them); nothing measured"
+  exit 0
+fi
+
+echo "== soadyn: $build"
+if [[ ! -f $build/CMakeCache.txt ]]; then
+  cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release
+fi
+cmake --build "$build" -j2 --target soadyn_cli
+
+# The harness is copied, and the copy measured: its soadyn adapter names the O(N) route
+# FdMethod::ON, which soadyn's API calls FdMethod::ArticulatedBody.
+echo "== harness: $harness -> $work/harness"
+rm -rf "$work/harness"
+mkdir -p "$work"
+cp -a "$harness" "$work/harness"  # -a: file times kept, so a rebuild is incremental
+if ! grep -Eq '^\s*ON\b' "$repo/include/soadyn/algorithms.hpp"; then
+  sed -i 's/FdMethod::ON\b/FdMethod::ArticulatedBody/g' "$work/harness/same_run/adapter_soadyn.cc"
+fi
+
+cmake -S "$work/harness/same_run" -B "$work/gcc" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=g++ \
+  -DSOADYN_BUILD_DIR="$build" -DSOADYN_SOURCE_DIR="$repo" -DPEERS_PREFIX="$prefix"
+cmake --build "$work/gcc" -j2
+child=()
+if [[ -d $clang_prefix/lib/cmake/pinocchio ]] && command -v clang++ >/dev/null; then
+  cmake -S "$work/harness/same_run" -B "$work/clang" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ \
+    -DSAME_RUN_PINOCCHIO_ONLY=ON -DPEERS_PREFIX="$clang_prefix"
+  cmake --build "$work/clang" -j2
+  child=(--child-exe "$work/clang/bench_same_run_pinocchio" --child-name pinocchio-clang)
+else
+  echo "same_run: no Pinocchio built by clang++ at $clang_prefix: the pinocchio-clang column is left out"
+fi
+
+echo "== running (output saved to $out)"
+mkdir -p "$(dirname "$out")"
+status=0
+cd "$work/harness"
+mapfile -t models < <(ls models/chain_*.urdf models/bintree_*.urdf | sort -V)
+"$work/gcc/bench_same_run" --rounds "${ROUNDS:-3}" --budget "${BUDGET:-0.2}" "${child[@]}" "${models[@]}" 2>&1 |
+  tee "$out" || status=$?
+echo "same_run: harness exit status $status (0: soadyn at most the best peer's time everywhere); output in $out"
+if [[ ${STRICT:-0} == 1 ]]; then exit "$status"; fi
