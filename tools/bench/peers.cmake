@@ -26,7 +26,7 @@ endfunction()
 function(soadyn_bench_peer_missing text)
   message(STATUS "Benchmark peer left out: ${text}")
   if(_soadyn_peers_note)
-    set(text "${_soadyn_peers_note}; ${text}")
+    set(text "${_soadyn_peers_note} / ${text}")  # not "; ": CMake would split the definition there
   endif()
   set(_soadyn_peers_note "${text}" PARENT_SCOPE)
 endfunction()
