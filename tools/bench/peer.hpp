@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <stdexcept>
 #include <functional>
 #include <string>
 #include <vector>
@@ -35,6 +36,25 @@ struct Peer {
   // untimed, after the matching call: 𝓜 row-major with both triangles, C, q̈
   std::function<std::vector<double>()> mass_out, bias_out, forward_out;
 };
+
+// x in the problem's order, from a peer's own: r[k] = x[idx[k]] (any indexable vector)
+template <class Vector>
+std::vector<double> permuted(const Vector& x, const std::vector<int>& idx) {
+  std::vector<double> r(idx.size());
+  for (size_t k = 0; k < idx.size(); ++k) r[k] = x[idx[k]];
+  return r;
+}
+
+// soadyn_bench_make_peer's body: a new P for the problem, or nullptr and the reason in `error`
+template <class P>
+Peer* make_peer(const PeerProblem& problem, std::string& error) {
+  try {
+    return new P(problem);
+  } catch (const std::exception& e) {
+    error = e.what();
+    return nullptr;
+  }
+}
 
 }  // namespace soadyn::bench
 

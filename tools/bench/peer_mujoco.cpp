@@ -79,26 +79,19 @@ struct MuJoCo : soadyn::bench::Peer {
         for (size_t j = 0; j < nv; ++j) r[i * nv + j] = full[size_t(idx[i]) * nv + size_t(idx[j])];
       return r;
     };
-    bias_out = [this] { return permuted(rne.data()); };
-    forward_out = [this] { return permuted(data.d->qacc); };
-  }
-  std::vector<double> permuted(const double* x) const {
-    std::vector<double> r(idx.size());
-    for (size_t k = 0; k < idx.size(); ++k) r[k] = x[idx[k]];
-    return r;
+    bias_out = [this] { return soadyn::bench::permuted(rne.data(), idx); };
+    forward_out = [this] { return soadyn::bench::permuted(data.d->qacc, idx); };
   }
 };
 
 }  // namespace
 
 soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
-  try {
-    if (!problem.variant.empty()) throw std::runtime_error("no variant " + problem.variant);
-    return new MuJoCo(problem);
-  } catch (const std::exception& e) {
-    error = e.what();
+  if (!problem.variant.empty()) {
+    error = "no variant " + problem.variant;
     return nullptr;
   }
+  return soadyn::bench::make_peer<MuJoCo>(problem, error);
 }
 
 const char* soadyn_bench_peer_version() {

@@ -73,25 +73,15 @@ struct Pinocchio : soadyn::bench::Peer {
         for (size_t j = 0; j < idx.size(); ++j) r[i * idx.size() + j] = M(idx[i], idx[j]);
       return r;
     };
-    bias_out = [this] { return permuted(data.nle); };
-    forward_out = [this] { return permuted(data.ddq); };
-  }
-  std::vector<double> permuted(const Eigen::VectorXd& x) const {
-    std::vector<double> r(idx.size());
-    for (size_t k = 0; k < idx.size(); ++k) r[k] = x[idx[k]];
-    return r;
+    bias_out = [this] { return soadyn::bench::permuted(data.nle, idx); };
+    forward_out = [this] { return soadyn::bench::permuted(data.ddq, idx); };
   }
 };
 
 }  // namespace
 
 soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
-  try {
-    return new Pinocchio(problem);
-  } catch (const std::exception& e) {
-    error = e.what();
-    return nullptr;
-  }
+  return soadyn::bench::make_peer<Pinocchio>(problem, error);
 }
 
 const char* soadyn_bench_peer_version() { return "Pinocchio " PINOCCHIO_VERSION " (" SOADYN_PEER_COMPILER ")"; }

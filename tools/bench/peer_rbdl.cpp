@@ -55,26 +55,19 @@ struct Rbdl : soadyn::bench::Peer {
         for (size_t j = 0; j < idx.size(); ++j) r[i * idx.size() + j] = H(idx[i], idx[j]);
       return r;
     };
-    bias_out = [this] { return permuted(nle); };
-    forward_out = [this] { return permuted(qdd); };
-  }
-  std::vector<double> permuted(const R::Math::VectorNd& x) const {
-    std::vector<double> r(idx.size());
-    for (size_t k = 0; k < idx.size(); ++k) r[k] = x[idx[k]];
-    return r;
+    bias_out = [this] { return soadyn::bench::permuted(nle, idx); };
+    forward_out = [this] { return soadyn::bench::permuted(qdd, idx); };
   }
 };
 
 }  // namespace
 
 soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
-  try {
-    if (!problem.variant.empty()) throw std::runtime_error("no variant " + problem.variant);
-    return new Rbdl(problem);
-  } catch (const std::exception& e) {
-    error = e.what();
+  if (!problem.variant.empty()) {
+    error = "no variant " + problem.variant;
     return nullptr;
   }
+  return soadyn::bench::make_peer<Rbdl>(problem, error);
 }
 
 const char* soadyn_bench_peer_version() {
