@@ -14,18 +14,14 @@ void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
     Vec6 Ai = data.coriolis.col(i);
-    if (qdd) {
-      if (n == 1) Ai += data.G.col(iv) * (*qdd)(iv);
-      else Ai.noalias() += data.G.middleCols(iv, n) * qdd->segment(iv, n);
-    }
+    if (qdd) Ai += subspace_apply(data.G, iv, n, *qdd);
     if (p >= 0) D.add_apply(i, data.A.col(p), Ai);
     data.A.col(i) = Ai;
     data.F.col(i) = data.M[i] * Ai + data.gyroscopic.col(i);
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
-    if (n == 1) out(iv) = data.G.col(iv).dot(data.F.col(i));
-    else out.segment(iv, n).noalias() = data.G.middleCols(iv, n).transpose() * data.F.col(i);
+    subspace_apply_transpose(data.G, iv, n, data.F.col(i), out);
     if (p >= 0) D.add_apply_transpose(i, data.F.col(i), data.F.col(p));
   }
 }
@@ -146,6 +142,17 @@ FdMethod parse_fd_method(std::string_view s) {
   throw Error("forward-dynamics method: expected one of " + all + "; got '" + std::string(s) + "'");
 }
 
+// f(m, len) for each stretch m..m+len−1 of consecutive DOFs making up DOF j and its ancestors
+// (Model::dof_run), from j down to the root
+template <class F>
+void for_each_ancestor_run(const Model& model, int j, F&& f) {
+  while (j >= 0) {
+    const int m = model.dof_run[j];
+    f(m, j - m + 1);
+    j = model.dof_parent[m];
+  }
+}
+
 // from this many DOFs on, a chain's LᵀDL is the blocked dense factorization (below)
 constexpr int kChainBlocked = 16;
 
@@ -176,11 +183,7 @@ void ltdl_factor(const Model& model, Data& data) {
   for (int k = model.nv - 1; k >= 0; --k) {
     for (int i = lambda[k]; i >= 0; i = lambda[i]) {
       const double a = H(k, i) / H(k, k);
-      for (int j = i; j >= 0;) {
-        const int m = model.dof_run[j];
-        H.row(i).segment(m, j - m + 1) -= a * H.row(k).segment(m, j - m + 1);
-        j = lambda[m];
-      }
+      for_each_ancestor_run(model, i, [&](int m, int len) { H.row(i).segment(m, len) -= a * H.row(k).segment(m, len); });
       H(k, i) = a;
     }
   }
@@ -192,18 +195,14 @@ void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x) {
   // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip); each over the stretches of
   // consecutive ancestors (dof_run), as one vectorized segment operation each
   for (int k = model.nv - 1; k >= 0; --k)
-    for (int j = lambda[k]; j >= 0;) {
-      const int m = model.dof_run[j];
-      x.segment(m, j - m + 1) -= x(k) * H.row(k).segment(m, j - m + 1).transpose();
-      j = lambda[m];
-    }
+    for_each_ancestor_run(model, lambda[k], [&](int m, int len) {
+      x.segment(m, len) -= x(k) * H.row(k).segment(m, len).transpose();
+    });
   for (int k = 0; k < model.nv; ++k) x(k) /= H(k, k);
   for (int k = 0; k < model.nv; ++k)
-    for (int j = lambda[k]; j >= 0;) {
-      const int m = model.dof_run[j];
-      x(k) -= H.row(k).segment(m, j - m + 1).dot(x.segment(m, j - m + 1));
-      j = lambda[m];
-    }
+    for_each_ancestor_run(model, lambda[k], [&](int m, int len) {
+      x(k) -= H.row(k).segment(m, len).dot(x.segment(m, len));
+    });
 }
 
 void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method) {

@@ -104,9 +104,7 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
   // dynamics needs of body i formed as soon as v_i is known
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
-    Vec6 Gv;
-    if (n == 1) Gv = data.G.col(iv) * v(iv);
-    else Gv.noalias() = data.G.middleCols(iv, n) * v.segment(iv, n);
+    const Vec6 Gv = subspace_apply(data.G, iv, n, v);
     Vec6 Vi = Gv;
     if (p >= 0) DOperator{data.d}.add_apply(i, data.V.col(p), Vi);
     data.V.col(i) = Vi;

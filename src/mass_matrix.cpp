@@ -33,10 +33,8 @@ void mass_matrix(const Model& model, Data& data) {
     const Vec3 eta = data.eta.col(i);
     for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k) {
       const Vec3 a = data.G.col(k).head<3>(), b = data.G.col(k).tail<3>();
-      // K G_k = [I a + h × b; m b − h × a]
-      const Vec3 f = K.m * b - K.h.cross(a);
-      const Vec3 n = K.I * a + K.h.cross(b);
-      data.F0.col(k) << n + eta.cross(f), f;
+      const Vec6 F = K * data.G.col(k);  // [n; f]
+      data.F0.col(k) << F.head<3>() + eta.cross(F.tail<3>()), F.tail<3>();
       data.S0.col(k) << a, b + eta.cross(a);
     }
     if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(K, data.d.col(i));

@@ -63,6 +63,19 @@ struct DOperator {
   }
 };
 
+// G_i x_i and G_iᵀ f for the joint whose columns of G are iv..iv+n−1; a 1-DOF joint as its one
+// column, kept off Eigen's dynamic-size matrix-vector product
+inline Vec6 subspace_apply(const Mat6X& G, int iv, int n, const VecX& x) {
+  if (n == 1) return G.col(iv) * x(iv);
+  Vec6 out;
+  out.noalias() = G.middleCols(iv, n) * x.segment(iv, n);
+  return out;
+}
+inline void subspace_apply_transpose(const Mat6X& G, int iv, int n, const Vec6& f, Eigen::Ref<VecX> out) {
+  if (n == 1) out(iv) = G.col(iv).dot(f);
+  else out.segment(iv, n).noalias() = G.middleCols(iv, n).transpose() * f;
+}
+
 // Any block-diagonal A = diag{A_i} of k×k blocks (A_i of a root is never used).
 struct BlockOperator {
   const std::vector<MatX>& A;
