@@ -122,7 +122,7 @@ std::string interrupted_status(int stop, double t) {
 }
 
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer,
-                    std::vector<Sample>* samples, const std::atomic<int>* stop) {
+                    std::vector<Sample>* samples, const std::atomic<int>* stop, std::function<void()> poll) {
   const Model& m = sc.model;
   check_run(sc, settings);
   System sys(m, sc.inputs, parse_fd_method(settings.dynamics));
@@ -160,7 +160,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   const long outputs = std::max<long>(1, std::lround(std::ceil(settings.t_end / output_dt * (1 - 1e-12))));
   try {
     bool interrupted = false;
-    integrator->set_stop(stop);
+    integrator->set_stop(stop, std::move(poll));
     for (long k = 1; k <= outputs; ++k) {
       if (stop && stop->load() != 0) {
         summary.status = interrupted_status(stop->load(), t);

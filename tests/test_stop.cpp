@@ -105,4 +105,34 @@ TEST(StopHook, EndsBetweenTwoStepsNotAtTheNextOutput) {
   }
 }
 
+// The poll runs before every integrator step, in the running thread (Python's signal check): on
+// both kinds of integrator a poll that sets the flag at its k-th call ends the run after k − 1 steps.
+TEST(StopHook, PollRunsBeforeEveryStepAndMaySetTheFlag) {
+  const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
+  for (const char* method : {"rk4", "cvode-bdf"}) {
+    SimulationSettings s = sc.simulation;
+    s.method = method;
+    s.t_end = s.output_dt = 10.0;
+    std::atomic<int> stop{0};
+    long calls = 0;
+    const std::thread::id runner = std::this_thread::get_id();
+    bool same_thread = true;
+    auto poll = [&] {
+      same_thread = same_thread && std::this_thread::get_id() == runner;
+      if (++calls == 250) stop = -1;
+    };
+    const RunSummary r = simulate(sc, s, nullptr, nullptr, &stop, poll);
+    EXPECT_TRUE(same_thread);
+    EXPECT_EQ(r.stats.steps, 249) << method;
+    EXPECT_EQ(calls, 250) << method << ": no call after the flag is set";
+    EXPECT_EQ(r.status, interrupted_status(-1, r.t_reached));
+    // without the flag, one call per step
+    calls = -1000000000;
+    stop = 0;
+    const RunSummary full = simulate(sc, s, nullptr, nullptr, &stop, poll);
+    EXPECT_TRUE(full.completed) << full.status;
+    EXPECT_EQ(calls + 1000000000, full.stats.steps) << method;
+  }
+}
+
 }  // namespace

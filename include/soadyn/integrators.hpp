@@ -23,6 +23,7 @@
 #include "soadyn/settings.hpp"
 
 #include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -87,15 +88,23 @@ class Integrator {
   // with t < t_out and y the state at t, when a stop was requested (set_stop) before a step.
   virtual void advance(double t_out, double& t, VecX& y) = 0;
   // `stop` (nullptr: none) is read before every step; a non-zero value ends advance() there.  Only
-  // read, so a signal handler may set it.
-  void set_stop(const std::atomic<int>* stop) { stop_ = stop; }
-  bool stop_requested() const { return stop_ && stop_->load(std::memory_order_relaxed) != 0; }
+  // read, so a signal handler may set it.  `poll` (empty: none) runs just before each read, for a
+  // caller whose signal handlers do not run by themselves (Python's run only when asked) to ask.
+  void set_stop(const std::atomic<int>* stop, std::function<void()> poll = {}) {
+    stop_ = stop;
+    poll_ = std::move(poll);
+  }
+  bool stop_requested() const {
+    if (poll_) poll_();
+    return stop_ && stop_->load(std::memory_order_relaxed) != 0;
+  }
   virtual IntegratorStats stats() const = 0;
   // how the quaternion of a free root is kept unit ("none" without a free joint)
   virtual std::string quaternion_handling() const = 0;
 
  private:
   const std::atomic<int>* stop_ = nullptr;
+  std::function<void()> poll_;
 };
 
 // The one registry of integration methods: the name users write, a line about it, whether it takes

@@ -77,9 +77,11 @@ bool is_fixed_step(const std::string& method);
 // `stop` (nullptr: none) ends the run before the next integrator step once it holds a non-zero value
 // (the last logged row is the state there, off the output grid): a
 // signal number gives the status "interrupted by SIG<NAME> at t = <t>", −1 "interrupted at t = <t>".
-// It is only read, so a signal handler may set it.
+// It is only read, so a signal handler may set it.  `poll` (empty: none) runs before every step and
+// may set `stop` (Integrator::set_stop).
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer = nullptr,
-                    std::vector<Sample>* samples = nullptr, const std::atomic<int>* stop = nullptr);
+                    std::vector<Sample>* samples = nullptr, const std::atomic<int>* stop = nullptr,
+                    std::function<void()> poll = {});
 
 // "interrupted by SIGINT at t = 1.25" (stop > 0: a signal number), "interrupted at t = 1.25" (stop = −1)
 std::string interrupted_status(int stop, double t);

@@ -1,6 +1,8 @@
-// soadyn._simulate: a run on a worker thread without the GIL, while the calling thread waits and
-// lets Python's signal handlers run every 10 ms; one that raises (Ctrl-C: KeyboardInterrupt) sets
-// the library's stop flag, the run ends before its next integrator step, and the log is finished.
+// soadyn._simulate: a run on the calling thread without the GIL.  On Python's main thread it stops
+// every 10 ms between integrator steps to let Python's signal handlers run; one that raises
+// (Ctrl-C: KeyboardInterrupt) sets the library's stop flag, the run ends before its next step, and
+// the log is finished.  (Elsewhere handlers cannot run: Python runs them on the main thread only.)
+// No thread of its own: a short run in a loop or a sweep pays no thread start and no hand-over.
 #include "common.hpp"
 
 #include "soadyn/h5log.hpp"
@@ -8,11 +10,8 @@
 #include "soadyn/version.hpp"
 
 #include <chrono>
-#include <condition_variable>
 #include <csignal>
 #include <exception>
-#include <mutex>
-#include <thread>
 
 namespace soadyn::python {
 
@@ -61,6 +60,12 @@ py::dict summary_dict(const RunSummary& r) {
                   "final_energy_balance_error"_a = r.final_energy_balance_error);
 }
 
+// Python's main thread (where signal handlers run), as threading.main_thread().ident
+unsigned long main_thread_ident() {
+  static const unsigned long ident = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+  return ident;
+}
+
 // (arrays, summary, exception raised by a signal handler or None, warnings)
 py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output) {
   // everything is checked before any file is touched, as `soadyn run` does
@@ -82,42 +87,34 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   RunSummary summary;
   std::exception_ptr failure;
   py::object pending = py::none();
+  std::function<void()> poll;
+  if (PyThread_get_thread_ident() == main_thread_ident()) {
+    auto last = std::chrono::steady_clock::now();
+    poll = [&] {
+      if (stop.load(std::memory_order_relaxed) != 0) return;  // already stopping
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last < std::chrono::milliseconds(10)) return;
+      last = now;
+      py::gil_scoped_acquire gil;
+      if (PyErr_CheckSignals() != 0) {  // a handler raised: keep its exception, stop the run
+        PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
+        PyErr_Fetch(&type, &value, &trace);
+        PyErr_NormalizeException(&type, &value, &trace);
+        if (trace) PyException_SetTraceback(value, trace);
+        pending = py::reinterpret_steal<py::object>(value);
+        Py_XDECREF(type);
+        Py_XDECREF(trace);
+        stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
+      }
+    };
+  }
   {
     py::gil_scoped_release nogil;
-    std::mutex mu;
-    std::condition_variable cv;
-    bool done = false;
-    std::thread worker([&] {
-      try {
-        summary = simulate(sc, settings, &rec, nullptr, &stop);
-      } catch (...) {
-        failure = std::current_exception();
-      }
-      std::lock_guard<std::mutex> lock(mu);
-      done = true;
-      cv.notify_all();
-    });
-    std::unique_lock<std::mutex> lock(mu);
-    while (!cv.wait_for(lock, std::chrono::milliseconds(10), [&] { return done; })) {
-      if (stop.load() != 0) continue;  // already stopping: wait for the run to end
-      lock.unlock();
-      {
-        py::gil_scoped_acquire gil;
-        if (PyErr_CheckSignals() != 0) {  // a handler raised: keep its exception, stop the run
-          PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
-          PyErr_Fetch(&type, &value, &trace);
-          PyErr_NormalizeException(&type, &value, &trace);
-          if (trace) PyException_SetTraceback(value, trace);
-          pending = py::reinterpret_steal<py::object>(value);
-          Py_XDECREF(type);
-          Py_XDECREF(trace);
-          stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
-        }
-      }
-      lock.lock();
+    try {
+      summary = simulate(sc, settings, &rec, nullptr, &stop, std::move(poll));
+    } catch (...) {
+      failure = std::current_exception();
     }
-    lock.unlock();
-    worker.join();
   }
   if (failure) std::rethrow_exception(failure);
   log.reset();  // closes the file before Python may read it

@@ -136,6 +136,8 @@ def read_results(path: str) -> Dict[str, np.ndarray]:
 
 def _batches(sw: Sweep, todo: List[int], size: int) -> List[List[int]]:
     """Cases that share a reference run (same values outside simulation.*) stay in one batch."""
+    if not sw.reference:
+        return [todo[k:k + size] for k in range(0, len(todo), size)]
     groups: Dict[str, List[int]] = {}
     for i in todo:
         key = json.dumps({p: v for p, v in sw.cases[i].items() if not p.startswith("simulation.")}, sort_keys=True)
@@ -231,6 +233,21 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
     return SweepResult(table, results, len(todo), skipped, failed, time.monotonic() - t0)
 
 
+class _Task:
+    """A batch's arguments in one object: Dask looks inside lists, tuples and dicts for futures,
+    which on 200 cases is tens of thousands of calls on the client per task; it does not look in here."""
+
+    def __init__(self, args):
+        self.args = args
+
+    def __call__(self):
+        return run_batch(*self.args)
+
+
+def _run_task(task: _Task) -> List[dict]:
+    return task()
+
+
 QUIET_CLUSTER = {"distributed.worker.profile.enabled": False, "distributed.admin.system-monitor.interval": "2s",
                  "distributed.worker.memory.monitor-interval": "1s"}
 
@@ -271,8 +288,9 @@ def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say):
         say(f"{len(batches)} tasks of up to {size} cases on {nworkers} worker(s)")
         fp = sw.fingerprint()
         # a task's key names its cases: a worker that dies has its tasks run again elsewhere
-        futures = [client.submit(run_batch, *payload(ids), key=f"soadyn-sweep-{fp}-{ids[0]}-{len(ids)}",
-                                 retries=2, pure=False) for ids in batches]
+        # one map, not a submit per task: Dask reads the caller's source for each call it is given
+        futures = client.map(_run_task, [_Task(payload(ids)) for ids in batches],
+                             key=[f"soadyn-sweep-{fp}-{ids[0]}-{len(ids)}" for ids in batches], retries=2, pure=False)
         for fut in as_completed(futures):
             try:
                 rows = fut.result()
