@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""Sweep throughput: many short runs, as a plain loop of soadyn.simulate, as `soadyn.sweep` in this
-process (the per-case overhead of building each case's scenario and its row), and on an embedded
-Dask LocalCluster of 1 and 2 worker processes (the scaling).
+"""Sweep throughput: many short runs, as a plain loop of soadyn.simulate, as `soadyn.sweep` in one
+fresh process (the per-case overhead of building each case's scenario and its row), and on an
+embedded Dask LocalCluster of 1 and 2 worker processes (the scaling); and the machine's own
+ceiling: the same cases in independent processes pinned to each CPU, alone and both at once.
 
-    PYTHONPATH=build/python /usr/bin/python3 tools/bench/sweep_throughput.py [--cases 10000]
+    PYTHONPATH=build/python /usr/bin/python3 tools/bench/sweep_throughput.py [--cases 10000] [--rounds 3]
 
 Each case: the double pendulum, rk4 at dt = 1e-2 for 0.2 s (20 steps) from a random initial state.
+Every configuration runs once per round, interleaved, and the best round counts (a shared machine).
 Prints a markdown table; the cluster's start (its processes up, soadyn imported in each worker) is
 timed apart and not in the walls: the walls are the throughput of a running cluster.
 """
@@ -35,30 +37,36 @@ def _warm():
     import soadyn  # noqa: F401  (numpy, yaml and the extension module come with it)
 
 
-# one process's share of the work without Dask: the sweep's own batches, in a loop, timed in-process
+# A fresh process (no Dask threads left from a cluster): with `out`, the whole serial sweep into
+# it; else the sweep's own batches in a loop (the runs without the sweep's files), pinned to `cpu`
 _ALONE = """
 import os, sys, time
-os.sched_setaffinity(0, {{{cpu}}})
+if {cpu!r} is not None:
+    os.sched_setaffinity(0, {{{cpu!r}}})
 sys.path.insert(0, {pythonpath!r})
 import soadyn
 from soadyn.ensemble import run_batch
 sw = soadyn.load_sweep({path!r})
 ids = list(range(len(sw.cases)))
 batches = [ids[k:k + 200] for k in range(0, len(ids), 200)]
+import h5py  # as the sweep's table needs it: not timed
 sys.stdout.write('ready\\n'); sys.stdout.flush(); sys.stdin.readline()
 t0 = time.perf_counter()
-for b in batches:
-    run_batch(sw.scenario_text, sw.scenario_path, sw.settings, [(i, sw.cases[i]) for i in b], sw.reference)
+if {out!r}:
+    soadyn.sweep(sw, {out!r}, scheduler="serial", quiet=True)
+else:
+    for b in batches:
+        run_batch(sw.scenario_text, sw.scenario_path, sw.settings, [(i, sw.cases[i]) for i in b], sw.reference)
 print(time.perf_counter() - t0)
 """
 
 
-def _alone(path: str, cpus) -> list:
-    """Wall times of independent processes, one pinned to each CPU in `cpus`, each running every
-    case (started together once each has imported soadyn): the machine's own ceiling."""
+def _alone(path: str, cpus, out: str = "") -> list:
+    """Wall times of independent processes, one pinned to each CPU in `cpus` (None: not pinned),
+    each running every case (started together once each has imported soadyn)."""
     import subprocess
     procs = [subprocess.Popen([sys.executable, "-c", _ALONE.format(cpu=c, pythonpath=os.path.join(ROOT, "build", "python"),
-                                                                   path=path)],
+                                                                   path=path, out=out)],
                               stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True) for c in cpus]
     for p in procs:
         assert p.stdout.readline().strip() == "ready"
@@ -97,9 +105,7 @@ def main():
             for s in scenes:
                 soadyn.simulate(s)
             keep("plain loop of simulate (scenarios prebuilt)", time.perf_counter() - t0)
-            t0 = time.perf_counter()
-            soadyn.sweep(sw, os.path.join(tmp, f"serial{r}"), scheduler="serial", quiet=True)
-            keep("soadyn.sweep, serial, this process", time.perf_counter() - t0)
+            keep("soadyn.sweep, serial, one process", _alone(path, [None], os.path.join(tmp, f"serial{r}"))[0])
             for w in (1, 2):
                 t0 = time.perf_counter()
                 with dask.config.set(QUIET_CLUSTER):
@@ -124,7 +130,7 @@ def main():
             w = 1 if name.startswith("LocalCluster, 1") else 2 if name.startswith("LocalCluster, 2") else None
             st = f"{min(starts[w]):.1f}" if w else ""
             print(f"| {name} | {wall:.2f} | {1e3 * wall / n:.3f} | {n / wall:.0f} | {st} |")
-        bare, serial = best["plain loop of simulate (scenarios prebuilt)"], best["soadyn.sweep, serial, this process"]
+        bare, serial = best["plain loop of simulate (scenarios prebuilt)"], best["soadyn.sweep, serial, one process"]
         one, two = best["LocalCluster, 1 worker(s)"], best["LocalCluster, 2 worker(s)"]
         # with tasks handed out as workers free up, two processes do at most the sum of their rates
         fastest = min(v for k, v in best.items() if k.startswith("1 process alone"))

@@ -5,7 +5,8 @@ Also the `soadyn sweep` command: python3 -m soadyn sweep SWEEP.yaml [-o DIR] [--
 
 Output directory:
     DIR/sweep.json       the sweep's fingerprint (sweep file, base scenario, soadyn version) and size
-    DIR/parts/*.json     one file per finished batch, its rows (written atomically by this process)
+    DIR/parts/*.json     one file per finished batch, its rows (written atomically, by the worker
+                         on an embedded cluster, else by this process)
     DIR/results.h5       the table, a row per case in case order (rebuilt at the end of each run)
     DIR/logs/case-N.h5   each case's run log, with --keep-logs (written by the worker)
 """
@@ -134,19 +135,28 @@ def read_results(path: str) -> Dict[str, np.ndarray]:
 
 # ---------------------------------------------------------------- batches and progress
 
-def _batches(sw: Sweep, todo: List[int], size: int) -> List[List[int]]:
-    """Cases that share a reference run (same values outside simulation.*) stay in one batch."""
-    if not sw.reference:
-        return [todo[k:k + size] for k in range(0, len(todo), size)]
-    groups: Dict[str, List[int]] = {}
-    for i in todo:
-        key = json.dumps({p: v for p, v in sw.cases[i].items() if not p.startswith("simulation.")}, sort_keys=True)
-        groups.setdefault(key, []).append(i)
-    batches, cur = [], []
-    for ids in groups.values():
+def _batches(sw: Sweep, todo: List[int], size: Optional[int], nworkers: int = 1) -> List[List[int]]:
+    """The cases in tasks of `size`, or with size None in guided sizes: each task a 1/(3 workers)
+    share of the cases not yet given out, between 20 and 1000 (few tasks for the scheduler while
+    much is left, small ones at the end so that no worker idles while another ends a long one).
+    Cases that share a reference run (same values outside simulation.*) stay in one task."""
+    def target(left: int) -> int:
+        return size or min(1000, max(20, math.ceil(left / (3 * nworkers))))
+
+    if sw.reference:
+        groups: Dict[str, List[int]] = {}
+        for i in todo:
+            key = json.dumps({p: v for p, v in sw.cases[i].items() if not p.startswith("simulation.")}, sort_keys=True)
+            groups.setdefault(key, []).append(i)
+        units = list(groups.values())
+    else:
+        units = [[i] for i in todo]
+    batches, cur, left = [], [], len(todo)
+    for ids in units:
         cur += ids
-        if len(cur) >= size:
+        if len(cur) >= target(left):
             batches.append(cur)
+            left -= len(cur)
             cur = []
     if cur:
         batches.append(cur)
@@ -193,8 +203,8 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
     already in it are skipped.  scheduler: None for an embedded Dask LocalCluster of `workers`
     processes (default: this machine's cores) with one thread each; an address such as
     'tcp://host:8786' or a distributed.Client for an existing cluster; 'serial' for a plain loop in
-    this process without Dask.  batch_size: cases per Dask task (default: about 8 tasks per worker,
-    at most 200 cases each).  keep_logs: each case's HDF5 log in out/logs/ (written by the worker:
+    this process without Dask.  batch_size: cases per Dask task (default: guided sizes, each a
+    third of a worker's share of what is left, from at most 1000 down to 20).  keep_logs: each case's HDF5 log in out/logs/ (written by the worker:
     a remote cluster needs out on a shared file system).  Results are the same, bit for bit
     (CPU times aside), whichever way the cases run."""
     sw = path if isinstance(path, Sweep) else Sweep(path)
@@ -210,8 +220,9 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
     say = (lambda msg: None) if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     say(f"sweep {sw.path}: {len(sw.cases)} cases, {skipped} already done in {out}, {len(todo)} to run")
 
-    def finish(rows):
-        _save_part(out, rows)
+    def finish(rows, saved=False):
+        if not saved:
+            _save_part(out, rows)
         for r in rows:
             done[r["case"]] = r
         progress.add(rows)
@@ -224,7 +235,7 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
         for ids in _batches(sw, todo, batch_size or max(1, min(200, math.ceil(len(todo) / 8)))):
             finish(run_batch(*payload(ids)))
     elif todo:
-        _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say)
+        _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say, out)
     table = _table(sw, done)
     results = os.path.join(out, "results.h5")
     write_results(sw, table, results)
@@ -235,16 +246,21 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
 
 class _Task:
     """A batch's arguments in one object: Dask looks inside lists, tuples and dicts for futures,
-    which on 200 cases is tens of thousands of calls on the client per task; it does not look in here."""
+    which on 200 cases is tens of thousands of calls on the client per task; it does not look in
+    here.  With `out` (a worker on this machine) the worker writes the batch's part file itself,
+    atomically, and the client only keeps the rows."""
 
-    def __init__(self, args):
-        self.args = args
+    def __init__(self, args, out: Optional[str] = None):
+        self.args, self.out = args, out
 
     def __call__(self):
-        return run_batch(*self.args)
+        rows = run_batch(*self.args)
+        if self.out:
+            _save_part(self.out, rows)
+        return rows, bool(self.out)
 
 
-def _run_task(task: _Task) -> List[dict]:
+def _run_task(task: _Task):
     return task()
 
 
@@ -252,7 +268,7 @@ QUIET_CLUSTER = {"distributed.worker.profile.enabled": False, "distributed.admin
                  "distributed.worker.memory.monitor-interval": "1s"}
 
 
-def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say):
+def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say, out):
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
@@ -283,21 +299,24 @@ def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say):
             say(f"dashboard: {client.dashboard_link}")
         except ImportError:
             say("dashboard: none (Dask's needs bokeh 2.4, not packaged in Debian 12: pip install 'bokeh<3')")
-        size = batch_size or max(1, min(200, math.ceil(len(todo) / (8 * nworkers))))
-        batches = _batches(sw, todo, size)
-        say(f"{len(batches)} tasks of up to {size} cases on {nworkers} worker(s)")
+        batches = _batches(sw, todo, batch_size, nworkers)
+        say(f"{len(batches)} tasks of {min(map(len, batches))} to {max(map(len, batches))} cases on {nworkers} worker(s)")
+        # the workers of a cluster on this machine (the embedded one, or a LocalCluster given as a
+        # Client) share this file system: each writes its own parts
+        same_machine = cluster is not None or isinstance(getattr(client, "cluster", None), LocalCluster)
+        local = os.path.abspath(out) if same_machine else None
         fp = sw.fingerprint()
         # a task's key names its cases: a worker that dies has its tasks run again elsewhere
         # one map, not a submit per task: Dask reads the caller's source for each call it is given
-        futures = client.map(_run_task, [_Task(payload(ids)) for ids in batches],
+        futures = client.map(_run_task, [_Task(payload(ids), local) for ids in batches],
                              key=[f"soadyn-sweep-{fp}-{ids[0]}-{len(ids)}" for ids in batches], retries=2, pure=False)
         for fut in as_completed(futures):
             try:
-                rows = fut.result()
+                rows, saved = fut.result()
             except Exception as e:  # e.g. a worker without soadyn: the finished batches are kept
                 raise Error(f"a sweep task failed on a worker ({type(e).__name__}: {e}); "
                             f"finished cases are kept, run again to resume") from None
-            finish(rows)
+            finish(rows, saved)
             fut.release()
     finally:
         if client is not scheduler:
@@ -312,7 +331,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("-o", "--output", help="results directory (default: SWEEP.results); finished cases in it are skipped")
     p.add_argument("--scheduler", help="a Dask scheduler's address (tcp://HOST:8786), or 'serial' for a plain loop; default: an embedded LocalCluster")
     p.add_argument("--workers", type=int, help="LocalCluster worker processes (default: this machine's cores)")
-    p.add_argument("--batch-size", type=int, help="cases per task (default: about 8 tasks per worker)")
+    p.add_argument("--batch-size", type=int, help="cases per task (default: guided, from a third of each worker's share down to 20, at most 1000)")
     p.add_argument("--keep-logs", action="store_true", help="keep each case's HDF5 log in DIR/logs/")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
     a = p.parse_args(argv)
