@@ -265,7 +265,7 @@ def _run_task(task: _Task):
 
 
 QUIET_CLUSTER = {"distributed.worker.profile.enabled": False, "distributed.admin.system-monitor.interval": "2s",
-                 "distributed.worker.memory.monitor-interval": "1s"}
+                 "distributed.worker.memory.monitor-interval": "1s", "distributed.admin.tick.interval": "1s"}
 
 
 def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say, out):
@@ -279,7 +279,9 @@ def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say, ou
     if scheduler is None:
         n = workers or os.cpu_count() or 1
         # the embedded cluster shares this machine's cores with the runs: no statistical profiler
-        # sampling every worker's stack each 10 ms, and system/memory monitors at 1-2 s, not 0.1-0.5 s
+        # sampling every worker's stack each 10 ms, system/memory monitors at 1-2 s, not 0.1-0.5 s,
+        # and the event loop's health tick each second, not each 20 ms (it takes the GIL from the
+        # runs: ~5 % of a worker's time on short runs)
         import dask
         with dask.config.set(QUIET_CLUSTER):
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
