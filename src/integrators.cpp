@@ -1,8 +1,7 @@
 #include "soadyn/integrators.hpp"
 
 #include "soadyn/kinematics.hpp"
-
-#include <Eigen/LU>
+#include "soadyn/newton_solver.hpp"
 
 #include <cmath>
 #include <limits>
@@ -226,7 +225,7 @@ class ImplicitMidpoint : public FixedStep {
         analytic_(analytic_jacobian(settings.jacobian)),
         full_(full_newton(settings.newton)),
         J_(s.size(), s.size()),
-        lu_(s.size()),
+        newton_(s.model, s.nquad),
         delta_(s.size()) {}
 
  private:
@@ -252,7 +251,8 @@ class ImplicitMidpoint : public FixedStep {
       if (full_) factor(tm, h);
       f(tm, tmp_, k3_);
       k4_ = -(Y - y - h * k3_);
-      delta_ = lu_.solve(k4_);
+      if (factored_) newton_.solve(k4_, delta_);
+      else delta_.setConstant(std::numeric_limits<double>::quiet_NaN());  // singular G': no step
       Y += delta_;
       if (!delta_.allFinite()) break;
       const double size = delta_.norm(), scale = std::max(1.0, Y.norm());
@@ -270,21 +270,23 @@ class ImplicitMidpoint : public FixedStep {
     y = Y;
   }
 
-  // J_ = e − h/2 ∂f/∂y at tmp_ (the midpoint), factored
+  // G' = e − (h/2) ∂f/∂y at tmp_ (the midpoint), factored by its structure as BDF's Newton matrix
+  // is (NewtonSolver: an nv×nv Schur complement; a difference-quotient J, whose q̇ = v rows are not
+  // exactly the identity, takes the dense LU of the whole matrix)
   void factor(double tm, double h) {
     if (analytic_)
       sys_.jacobian(tm, tmp_.data(), J_);
     else
       sys_.jacobian_dq(tm, tmp_.data(), J_);
     ++stats_.jac_evals;
-    J_ *= -0.5 * h;
-    J_.diagonal().array() += 1.0;
-    lu_.compute(J_);
+    newton_.set_jacobian(J_);
+    factored_ = newton_.factor(0.5 * h);
   }
 
   bool analytic_, full_;
   MatX J_;
-  Eigen::PartialPivLU<MatX> lu_;
+  NewtonSolver newton_;
+  bool factored_ = false;
   VecX delta_;
 };
 
