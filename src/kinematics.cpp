@@ -101,30 +101,45 @@ void update_kinematics_reference(const Model& model, Data& data, const VecX& q) 
 void update_velocities(const Model& model, Data& data, const VecX& v) {
   data.check(model, "update_velocities", "v", v.size(), model.nv);
   // one base-to-tip sweep: (3)-(4) v_i = D_i v_p + G_i q̇_i, i.e. v = Ψ_D G q̇, with what the
-  // dynamics needs of body i formed as soon as v_i is known
+  // dynamics needs of body i formed as soon as v_i is known.  6-vectors are read and written in
+  // their 3-vector halves only (see rnea in dynamics.cpp: whole reads of half-written columns
+  // stall the CPU's store forwarding)
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
-    const Vec6 Gv = subspace_apply(data.G, iv, n, v);
-    Vec6 Vi = Gv;
-    if (p >= 0) DOperator{data.d}.add_apply(i, data.V.col(p), Vi);
-    data.V.col(i) = Vi;
-    const Vec3 w = Vi.head<3>();
-    // (5) v̄_i = S_i v_i: ṙ_i = η̇_i + ω_i × s_i
-    data.Vbar.col(i) << w, Vi.tail<3>() + w.cross(Vec3(data.s.col(i)));
-    // 𝔞_i = Ḋ_i v_p + Ġ_i q̇_i with Ḋ_i v_p = [0; ω_p × ḋ_i], ḋ_i = η̇_i − η̇_p, and
-    //   Ġ_i q̇_i = ω_p × (G_i q̇_i) (joint.hpp); gravity enters as a base acceleration −g
-    if (p < 0) {
-      data.coriolis.col(i) << Vec3::Zero(), -model.gravity;
+    // G_i q̇_i = [gw; gu]
+    Vec3 gw, gu;
+    if (n == 1) {
+      gw = v(iv) * data.G.col(iv).head<3>();
+      gu = v(iv) * data.G.col(iv).tail<3>();
     } else {
-      const Vec3 wp = data.V.col(p).head<3>();
-      const Vec3 ddot = Vi.tail<3>() - data.V.col(p).tail<3>();
-      Vec6 a = joint_velocity_product(wp, Gv);
-      a.tail<3>() += wp.cross(ddot);
-      data.coriolis.col(i) = a;
+      const Vec6 Gv = subspace_apply(data.G, iv, n, v);
+      gw = Gv.head<3>();
+      gu = Gv.tail<3>();
     }
+    Vec3 w = gw, u = gu;
+    if (p < 0) {
+      // gravity enters as a base acceleration −g
+      data.coriolis.col(i).head<3>().setZero();
+      data.coriolis.col(i).tail<3>() = -model.gravity;
+    } else {
+      // D_i v_p = [ω_p; η̇_p + ω_p × d_i]
+      const Vec3 wp = data.V.col(p).head<3>(), up = data.V.col(p).tail<3>();
+      w += wp;
+      u += up + wp.cross(Vec3(data.d.col(i)));
+      // 𝔞_i = Ḋ_i v_p + Ġ_i q̇_i with Ḋ_i v_p = [0; ω_p × ḋ_i], ḋ_i = η̇_i − η̇_p, and
+      //   Ġ_i q̇_i = [ω_p × (G_i q̇_i)_ω; ω_p × (G_i q̇_i)_v] for every joint type (joint.hpp)
+      data.coriolis.col(i).head<3>() = wp.cross(gw);
+      data.coriolis.col(i).tail<3>() = wp.cross(gu) + wp.cross(Vec3(u - up));
+    }
+    data.V.col(i).head<3>() = w;
+    data.V.col(i).tail<3>() = u;
+    // (5) v̄_i = S_i v_i: ṙ_i = η̇_i + ω_i × s_i
+    data.Vbar.col(i).head<3>() = w;
+    data.Vbar.col(i).tail<3>() = u + w.cross(Vec3(data.s.col(i)));
     // gyroscopic force about η_i: f = m ω × (ω × s), n = ω × I ω + s × f = ω × (I − m s̃ s̃) ω
     const Vec3& h = data.M[i].h;
-    data.gyroscopic.col(i) << w.cross(data.M[i].I * w), w.cross(w.cross(h));
+    data.gyroscopic.col(i).head<3>() = w.cross(data.M[i].I * w);
+    data.gyroscopic.col(i).tail<3>() = w.cross(w.cross(h));
   }
 }
 

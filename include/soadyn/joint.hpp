@@ -21,7 +21,7 @@
 //
 // The derivative term.  Every G_i is fixed in the parent's frame, except the ball's, which turns
 // with the child; in both cases the velocity-product term is Ġ_i q̇_i = ω_parent × (G_i q̇_i),
-// because for the ball Ġ_i q̇_i = ω_i × ω_rel = (ω_parent + ω_rel) × ω_rel (joint_velocity_product).
+// because for the ball Ġ_i q̇_i = ω_i × ω_rel = (ω_parent + ω_rel) × ω_rel (update_velocities forms it).
 #pragma once
 
 #include "soadyn/types.hpp"
@@ -60,13 +60,6 @@ void joint_motion(JointType t, const Vec3& axis, const double* q, Mat3& R, Vec3&
 // G_i in inertial coordinates, given the joint frame's orientation Rj (joint → inertial) and the
 // body's, Rb = Rj · R(q).
 void joint_subspace(JointType t, const Vec3& axis, const Mat3& Rj, const Mat3& Rb, Eigen::Ref<Mat6X> G);
-
-// Ġ_i q̇_i = [ω_p × (G_i q̇_i)_ω; ω_p × (G_i q̇_i)_v] for every joint type (see the header comment).
-inline Vec6 joint_velocity_product(const Vec3& w_parent, const Vec6& Gv) {
-  Vec6 out;
-  out << w_parent.cross(Gv.head<3>()), w_parent.cross(Gv.tail<3>());
-  return out;
-}
 
 // q̇ of the joint from its q and v (differs from v only where q holds a quaternion).
 void joint_qdot(JointType t, const double* q, const double* v, double* qdot);
