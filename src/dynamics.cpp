@@ -106,9 +106,12 @@ void aba(const Model& model, Data& data, const VecX& tau) {
       za.noalias() += P * data.coriolis.col(i);
       za.noalias() += UD * data.u.segment(vi, ni);
     }
-    // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺
+    // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f], added whole: z_p is read whole
+    // next (store forwarding, as in rnea)
     add_congruence_D(data.P[p], P, data.d.col(i));
-    D.add_apply_transpose(i, za, data.z.col(p));
+    Vec6 Dz = za;
+    Dz.head<3>() += Vec3(data.d.col(i)).cross(Vec3(za.tail<3>()));
+    data.z.col(p) += Dz;
   }
   // base to tip: A' = D_i A_p + a_i,  q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A'),  A_i = A' + G_i q̈_i
   for (int i = 0; i < model.nbodies; ++i) {
@@ -124,7 +127,9 @@ void aba(const Model& model, Data& data, const VecX& tau) {
       data.qdd.segment(vi, ni).noalias() = data.Dinv[i] * rhs;
       Ai.noalias() += data.G.middleCols(vi, ni) * data.qdd.segment(vi, ni);
     }
-    data.A.col(i) = Ai;
+    // in halves: D_i A_p reads A_p in halves
+    data.A.col(i).head<3>() = Ai.head<3>();
+    data.A.col(i).tail<3>() = Ai.tail<3>();
   }
 }
 
