@@ -13,6 +13,7 @@ namespace {
 // written in halves and read back at once in 16-byte pieces straddles two stores, which the CPU
 // cannot forward (each sweep reads what the step before it has just written).
 void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
+  const DOperator D{data.d};
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
     Vec3 w = data.coriolis.col(i).head<3>(), u = data.coriolis.col(i).tail<3>();
@@ -43,10 +44,7 @@ void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
     const Vec3 nf = data.F.col(i).head<3>(), f = data.F.col(i).tail<3>();
     if (n == 1) out(iv) = data.G.col(iv).head<3>().dot(nf) + data.G.col(iv).tail<3>().dot(f);
     else subspace_apply_transpose(data.G, iv, n, data.F.col(i), out);
-    if (p >= 0) {  // F_p += D_iᵀ F_i = [n + d_i × f; f]
-      data.F.col(p).head<3>() += nf + Vec3(data.d.col(i)).cross(f);
-      data.F.col(p).tail<3>() += f;
-    }
+    if (p >= 0) D.add_apply_transpose(i, data.F.col(i), data.F.col(p));  // F_p += D_iᵀ F_i, in halves
   }
 }
 

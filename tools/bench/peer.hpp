@@ -8,6 +8,11 @@
 // cross the boundary: no Eigen, standard containers only.
 #pragma once
 
+// the compiler that built the plugin, for its version line (peer_plugin.cmake defines it)
+#ifndef SOADYN_PEER_COMPILER
+#define SOADYN_PEER_COMPILER "?"
+#endif
+
 #include <array>
 #include <stdexcept>
 #include <functional>
@@ -46,8 +51,13 @@ std::vector<double> permuted(const Vector& x, const std::vector<int>& idx) {
 }
 
 // soadyn_bench_make_peer's body: a new P for the problem, or nullptr and the reason in `error`
+// (among them a variant that `variants`, the plugin's comma-separated list, does not name)
 template <class P>
-Peer* make_peer(const PeerProblem& problem, std::string& error) {
+Peer* make_peer(const PeerProblem& problem, std::string& error, const std::string& variants = "") {
+  if (!problem.variant.empty() && ("," + variants + ",").find("," + problem.variant + ",") == std::string::npos) {
+    error = "no variant " + problem.variant;
+    return nullptr;
+  }
   try {
     return new P(problem);
   } catch (const std::exception& e) {

@@ -87,10 +87,6 @@ struct MuJoCo : soadyn::bench::Peer {
 }  // namespace
 
 soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
-  if (!problem.variant.empty()) {
-    error = "no variant " + problem.variant;
-    return nullptr;
-  }
   return soadyn::bench::make_peer<MuJoCo>(problem, error);
 }
 

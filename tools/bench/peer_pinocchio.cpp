@@ -19,10 +19,6 @@
 #include <exception>
 #include <stdexcept>
 
-#ifndef SOADYN_PEER_COMPILER
-#define SOADYN_PEER_COMPILER "?"
-#endif
-
 namespace {
 namespace pin = pinocchio;
 using soadyn::bench::PeerProblem;
@@ -60,7 +56,6 @@ struct Pinocchio : soadyn::bench::Peer {
       tau[iv] = p.tau[k];
       idx.push_back(iv);
     }
-    if (p.variant != "" && p.variant != "world") throw std::runtime_error("no variant " + p.variant);
     const auto c = p.variant == "world" ? pin::Convention::WORLD : pin::Convention::LOCAL;
     mass = [this, c] { pin::crba(model, data, q, c); };
     bias = [this] { pin::nonLinearEffects(model, data, q, v); };
@@ -81,7 +76,7 @@ struct Pinocchio : soadyn::bench::Peer {
 }  // namespace
 
 soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
-  return soadyn::bench::make_peer<Pinocchio>(problem, error);
+  return soadyn::bench::make_peer<Pinocchio>(problem, error, soadyn_bench_peer_variants());
 }
 
 const char* soadyn_bench_peer_version() { return "Pinocchio " PINOCCHIO_VERSION " (" SOADYN_PEER_COMPILER ")"; }

@@ -13,10 +13,6 @@
 #include <limits>
 #include <stdexcept>
 
-#ifndef SOADYN_PEER_COMPILER
-#define SOADYN_PEER_COMPILER "?"
-#endif
-
 namespace {
 namespace R = RigidBodyDynamics;
 using soadyn::bench::PeerProblem;
@@ -63,10 +59,6 @@ struct Rbdl : soadyn::bench::Peer {
 }  // namespace
 
 soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::string& error) {
-  if (!problem.variant.empty()) {
-    error = "no variant " + problem.variant;
-    return nullptr;
-  }
   return soadyn::bench::make_peer<Rbdl>(problem, error);
 }
 
