@@ -62,6 +62,11 @@ def _open_store(sw: Sweep, out: str) -> Dict[int, dict]:
                         f"{old.get('fingerprint')}; this one is {info['fingerprint']}): give another -o or remove it")
     else:
         _write_atomic(manifest, json.dumps(info, indent=1))
+    return _read_parts(out)
+
+
+def _read_parts(out: str) -> Dict[int, dict]:
+    """The rows in DIR/parts, by case (a part that does not parse is removed: its cases run again)."""
     done: Dict[int, dict] = {}
     for part in sorted(glob.glob(os.path.join(out, "parts", "*.json"))):
         try:
@@ -169,12 +174,12 @@ class _Progress:
         self.start, self.ran, self.last, self.first = time.monotonic(), 0, 0.0, None
         self.tty = sys.stderr.isatty()
 
-    def add(self, rows: List[dict]):
-        self.done += len(rows)
-        self.ran += len(rows)
+    def add(self, ran: int, failed: int):
+        self.done += ran
+        self.ran += ran
         if self.first is None:
             self.first = (time.monotonic(), self.ran)
-        self.failed += sum(1 for r in rows if not r["completed"])
+        self.failed += failed
         now = time.monotonic()
         if not self.quiet and (self.tty or now - self.last >= 2.0 or self.done == self.total):
             self.last = now
@@ -220,12 +225,11 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
     say = (lambda msg: None) if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     say(f"sweep {sw.path}: {len(sw.cases)} cases, {skipped} already done in {out}, {len(todo)} to run")
 
-    def finish(rows, saved=False):
-        if not saved:
-            _save_part(out, rows)
+    def finish(rows):
+        _save_part(out, rows)
         for r in rows:
             done[r["case"]] = r
-        progress.add(rows)
+        progress.add(len(rows), sum(1 for r in rows if not r["completed"]))
 
     def payload(ids):
         return (sw.scenario_text, os.path.abspath(sw.scenario_path), sw.settings,
@@ -235,7 +239,8 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
         for ids in _batches(sw, todo, batch_size or max(1, min(200, math.ceil(len(todo) / 8)))):
             finish(run_batch(*payload(ids)))
     elif todo:
-        _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say, out)
+        if _run_dask(sw, todo, payload, finish, progress, scheduler, workers, batch_size, say, out):
+            done = _read_parts(out)  # the workers wrote the parts: the rows come from them
     table = _table(sw, done)
     results = os.path.join(out, "results.h5")
     write_results(sw, table, results)
@@ -248,16 +253,18 @@ class _Task:
     """A batch's arguments in one object: Dask looks inside lists, tuples and dicts for futures,
     which on 200 cases is tens of thousands of calls on the client per task; it does not look in
     here.  With `out` (a worker on this machine) the worker writes the batch's part file itself,
-    atomically, and the client only keeps the rows."""
+    atomically, and returns only its counts (cases, failed): the client neither receives nor
+    decodes rows while the workers run, and reads the parts once at the end."""
 
     def __init__(self, args, out: Optional[str] = None):
         self.args, self.out = args, out
 
     def __call__(self):
         rows = run_batch(*self.args)
-        if self.out:
-            _save_part(self.out, rows)
-        return rows, bool(self.out)
+        if not self.out:
+            return rows
+        _save_part(self.out, rows)
+        return len(rows), sum(1 for r in rows if not r["completed"])
 
 
 def _run_task(task: _Task):
@@ -268,7 +275,8 @@ QUIET_CLUSTER = {"distributed.worker.profile.enabled": False, "distributed.admin
                  "distributed.worker.memory.monitor-interval": "1s", "distributed.admin.tick.interval": "1s"}
 
 
-def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say, out):
+def _run_dask(sw, todo, payload, finish, progress, scheduler, workers, batch_size, say, out) -> bool:
+    """Run the batches on Dask; True if the workers wrote the parts themselves."""
     try:
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
@@ -312,13 +320,20 @@ def _run_dask(sw, todo, payload, finish, scheduler, workers, batch_size, say, ou
         # one map, not a submit per task: Dask reads the caller's source for each call it is given
         futures = client.map(_run_task, [_Task(payload(ids), local) for ids in batches],
                              key=[f"soadyn-sweep-{fp}-{ids[0]}-{len(ids)}" for ids in batches], retries=2, pure=False)
-        for fut in as_completed(futures):
+        # results gathered on the client's event loop as they come, not a round trip per future
+        results = as_completed(futures, with_results=True)
+        while True:
             try:
-                rows, saved = fut.result()
+                fut, result = next(results)
+            except StopIteration:
+                return local is not None
             except Exception as e:  # e.g. a worker without soadyn: the finished batches are kept
                 raise Error(f"a sweep task failed on a worker ({type(e).__name__}: {e}); "
                             f"finished cases are kept, run again to resume") from None
-            finish(rows, saved)
+            if local:
+                progress.add(*result)
+            else:
+                finish(result)
             fut.release()
     finally:
         if client is not scheduler:
