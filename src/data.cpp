@@ -9,6 +9,7 @@ Data::Data(const Model& m)
       s(Mat3X::Zero(3, m.nbodies)),
       r(Mat3X::Zero(3, m.nbodies)),
       G(Mat6X::Zero(6, m.nv)),
+      turn(Eigen::Matrix2Xd::Zero(2, m.nbodies)),
       M(m.nbodies),
       V(Mat6X::Zero(6, m.nbodies)),
       Vbar(Mat6X::Zero(6, m.nbodies)),

@@ -294,7 +294,11 @@ TEST(Kinematics, SpecializedPathEqualsReference) {
                                            .free_root = seed % 2 == 0, .fixed = 3, .unit_axis = 0.6});
     for (int i = 0; i < model.nbodies; ++i) specialized += model.unit_axis[i] != 0;
     Data fast(model), ref(model);
-    const VecX q = random_q(rng, model);
+    VecX q = random_q(rng, model);
+    // half the seeds turn the revolute joints far (the batched turns reduce large angles too)
+    if (seed >= 10)
+      for (int i = 0; i < model.nbodies; ++i)
+        if (model.joint_type[i] == JointType::Revolute) q(model.idx_q[i]) *= 1e3;
     update_kinematics(model, fast, q);
     update_kinematics_reference(model, ref, q);
     for (int i = 0; i < model.nbodies; ++i) {

@@ -28,6 +28,7 @@ struct Data {
   Mat3X s;                             // s_i = r_i − η_i, joint to cm
   Mat3X r;                             // r_i, centre of mass
   Mat6X G;                             // 6×nv: columns idx_v[i].. are G_i (g_i in [g;0] or [0;g])
+  Eigen::Matrix2Xd turn;               // (cos θ_i, sin θ_i) of each revolute joint along a unit axis
   std::vector<SpatialInertia> M;       // M_i about η_i   (eq. 12)
 
   // [vel] velocities and velocity-product terms
