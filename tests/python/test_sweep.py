@@ -296,3 +296,19 @@ def test_index_paths_into_a_ball_joint():
     # a quaternion component alone leaves it non-unit: the scenario parser refuses, as for a file
     with pytest.raises(soadyn.Error, match="unit quaternion"):
         soadyn.parse_scenario(ensemble._text(ensemble.apply(tree, base.model, {"initial.q[1]": 0.1})), top)
+
+
+@pytest.mark.skipif(not hasattr(os, "sched_setaffinity") or len(os.sched_getaffinity(0)) < 2,
+                    reason="needs CPU affinity and two CPUs")
+def test_embedded_cluster_workers_are_bound_to_their_own_cpus():
+    from distributed import Client, LocalCluster
+    from soadyn._sweep import _pin_workers
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            Client(cluster) as client:
+        before = client.run(os.sched_getaffinity, 0)
+        assert all(len(cpus) >= 2 for cpus in before.values())  # the OS's default: any CPU
+        _pin_workers(client)
+        after = client.run(os.sched_getaffinity, 0)
+    bound = sorted(next(iter(cpus)) for cpus in after.values())
+    assert all(len(cpus) == 1 for cpus in after.values())
+    assert bound == sorted(os.sched_getaffinity(0))[:2]  # one CPU each, not the same one

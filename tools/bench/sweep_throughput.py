@@ -91,7 +91,7 @@ def main():
         scenes = [sw.scenario(c) for c in sw.cases]
         import dask
         from distributed import Client, LocalCluster
-        from soadyn._sweep import QUIET_CLUSTER  # the embedded cluster's settings
+        from soadyn._sweep import QUIET_CLUSTER, _pin_workers  # the embedded cluster's settings
         best: dict = {}
         starts: dict = {}
 
@@ -111,6 +111,7 @@ def main():
                 with dask.config.set(QUIET_CLUSTER):
                     cluster = LocalCluster(n_workers=w, threads_per_worker=1, processes=True, dashboard_address=None)
                 client = Client(cluster)
+                _pin_workers(client)  # as the embedded cluster does
                 client.run(_warm)  # each worker imports soadyn once: part of the start, as on a long-lived cluster
                 starts.setdefault(w, []).append(time.perf_counter() - t0)
                 t0 = time.perf_counter()
