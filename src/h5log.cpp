@@ -8,7 +8,6 @@
 
 #include <unistd.h>
 
-#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -121,7 +120,6 @@ struct H5Log::Impl {
     else
       msg += " (the output was not written; an existing file there is unchanged)";
     if (!published) std::remove(tmp_path.c_str());
-    if (!msg.empty()) msg[0] = char(std::tolower(static_cast<unsigned char>(msg[0])));
     throw IoError(msg);
   }
 };
@@ -171,8 +169,7 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
       const std::string& cause = h5::last_cause;
       if (h5::last_errno == ENOSPC || h5::last_errno == EDQUOT || h5::last_errno == EIO || h5::last_errno == EFBIG) {
         std::remove(im.tmp_path.c_str());
-        throw IoError(std::string(1, char(std::tolower(static_cast<unsigned char>(cause[0])))) + cause.substr(1) +
-                      " while creating " + path + " (the output was not written; an existing file there is unchanged)");
+        throw IoError(cause + " while creating " + path + " (the output was not written; an existing file there is unchanged)");
       }
       throw Error(path + ": cannot create the output file " + im.tmp_path + (cause.empty() ? std::string() : " (" + cause + ")") +
                   "; is the directory writable?");

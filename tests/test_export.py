@@ -8,6 +8,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -243,6 +244,46 @@ class Running(Base):
         names, _, table = samples(run)  # the finished file has those rows and more
         self.assertGreater(len(data), 1)
         self.assertTrue(same(data, table[:len(data), [names.index(h.rsplit(" [", 1)[0]) for h in header]]))
+
+
+class FullDisk(Base):
+    """exit status 4 when the output cannot be written: one line, nothing half-written, an older
+    file at the path unchanged (a real 1 MiB tmpfs filled up, and stdout on /dev/full)"""
+
+    def setUp(self):
+        super().setUp()
+        self.run = self.path("run.h5")
+        plot_big.write_run(self.run, 20000, ("state", "energy"))  # ~3 MiB of CSV: more than the disk
+
+    def test_stdout_on_a_full_device(self):
+        with open("/dev/full", "w") as full:
+            p = subprocess.run([SOADYN, "export", self.run, "--csv", "-"], stdout=full, stderr=subprocess.PIPE,
+                               text=True, timeout=60)
+        self.assertEqual(p.returncode, 4, p.stderr)
+        self.assertEqual(p.stderr.strip().splitlines(), ["soadyn: error: no space left on device while writing stdout"])
+
+    def test_a_full_disk_leaves_the_older_file(self):
+        if os.geteuid() != 0:
+            self.skipTest("needs root to mount a 1 MiB tmpfs")
+        mnt = self.path("mnt")
+        os.mkdir(mnt)
+        m = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", mnt], capture_output=True, text=True)
+        if m.returncode != 0:
+            self.skipTest(f"cannot mount a tmpfs here: {m.stderr.strip()}")
+        try:
+            out = os.path.join(mnt, "x.csv")
+            self.ok(self.run, "--csv", out, "--columns", "time", "--every", "1000")  # a small older file
+            before = digest(out)
+            p = export(self.run, "--csv", out)
+            self.assertEqual(p.returncode, 4, p.stderr)
+            lines = p.stderr.strip().splitlines()
+            self.assertEqual(len(lines), 1, p.stderr)
+            self.assertRegex(lines[0], rf"^soadyn: error: no space left on device while writing {re.escape(out)} "
+                                       r"\(nothing written; an existing file there is unchanged\)$")
+            self.assertEqual(digest(out), before)
+            self.assertEqual(os.listdir(mnt), ["x.csv"])  # no temporary file left behind
+        finally:
+            subprocess.run(["umount", mnt])
 
 
 class RealRun(Base):

@@ -39,15 +39,23 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace soadyn {
 
 // Writing the output file failed (a full disk, a quota, an I/O error).  The message is one line
-// naming the cause, the file, the time reached and what the file keeps.
+// naming the cause, the file, the time reached and what the file keeps; it starts in lower case
+// (strerror's "No space left on device" reads "no space left on device" after "soadyn: error:").
 class IoError : public Error {
  public:
-  using Error::Error;
+  explicit IoError(std::string message) : Error(lower_first(std::move(message))) {}
+
+ private:
+  static std::string lower_first(std::string s) {
+    if (!s.empty() && s[0] >= 'A' && s[0] <= 'Z') s[0] = char(s[0] - 'A' + 'a');
+    return s;
+  }
 };
 
 // Refuses an output path before any file is touched: a directory, one of `inputs` (the same file
