@@ -133,6 +133,14 @@ def check_plot(run_file, exact_csv, binned_csv, joints_csv, joint, svg):
         labels += ["|linear momentum − initial| [kg m/s]", "|angular momentum − initial| [kg m^2/s]"]
     for label in labels:
         expect(label in text, f"plot {name}: no axis labelled '{label}' in {svg}")
+    # a change that is exactly 0 at every row is drawn at the floor and said so in the legend
+    if free:
+        for kind, h in (("angular", ang), ("linear", lin)):
+            for k, axis in enumerate("xyz"):
+                zero = bool(np.all(h[:, k] == h[0, k]))
+                said = f"{kind} momentum change {axis} (0 at every row)" in text
+                expect(said == zero, f"plot {name}: {kind} momentum {axis} is {'' if zero else 'not '}exactly "
+                                     f"conserved, but the legend says {'so' if said else 'nothing'}")
     axes = text.count('<g id="axes_')
     expect(axes == len(labels) - 1, f"plot {name}: {axes} axes in {svg}, expected {len(labels) - 1}")
 

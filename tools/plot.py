@@ -22,6 +22,7 @@ import numpy as np
 
 QUAT = ("qw", "qx", "qy", "qz")
 BLOCK = 1 << 16  # rows read at a time
+FLOOR = 1e-17  # log panels draw an exact zero here
 
 
 def fail(message):
@@ -132,7 +133,7 @@ def plan(names, units, model, chosen):
             f = lambda b, ctx: np.abs(b[:, e] - ctx["E0"])  # noqa: E731
             label = "energy error (no work logged)\n|E − E0| / max(|E0|, max T) [1]"
         # the scale needs the whole run's peak kinetic energy: applied after the reduction
-        panels.append((label, [Curve("energy error", f, lambda y, ctx: np.maximum(y / ctx["scale"], 1e-17))], True))
+        panels.append((label, [Curve("energy error", f, lambda y, ctx: np.maximum(y / ctx["scale"], FLOOR))], True))
 
     free = any(len([p for p, _ in parts if p in QUAT + ("x", "y", "z")]) == 7 for parts in joints_of(names, model).values())
     if free:
@@ -141,7 +142,7 @@ def plan(names, units, model, chosen):
             if None in ks:
                 continue
             curves = [Curve(f"{kind} momentum change {c}",
-                            lambda b, ctx, k=k: np.maximum(np.abs(b[:, k] - ctx["row0"][k]), 1e-17)) for c, k in zip("xyz", ks)]
+                            lambda b, ctx, k=k: np.maximum(np.abs(b[:, k] - ctx["row0"][k]), FLOOR)) for c, k in zip("xyz", ks)]
             panels.append((f"|{kind} momentum − initial| [{units[ks[0]]}]", curves, True))
     return panels
 
@@ -261,13 +262,16 @@ def main():
     col = 0
     for ax, (label, cs, log) in zip(axes, panels):
         for i, c in enumerate(cs):  # past the 10 colours of the cycle, dashed then dotted
-            ax.plot(x, y[:, col], label=c.label, lw=0.8, ls=("-", "--", ":")[i // 10 % 3])
+            # a log curve at the 1e-17 floor all along is an exact zero: the legend says so
+            zero = log and bool(np.all(y[:, col][np.isfinite(y[:, col])] <= FLOOR))
+            ax.plot(x, y[:, col], label=c.label + (" (0 at every row)" if zero else ""), lw=0.8,
+                    ls=("-", "--", ":")[i // 10 % 3])
             col += 1
-        if log:  # from just below the bulk of the curve, not from the floor of an exact zero at t = 0
-            ax.set_yscale("log")
+        if log:  # from just below the bulk of the curve, not from the floor of an exact zero at t = 0,
+            ax.set_yscale("log")  # and below the floor itself when that is all there is
             vals = y[:, col - len(cs):col]
             if np.isfinite(vals).any():
-                ax.set_ylim(bottom=max(1e-17, 0.3 * float(np.nanpercentile(vals, 1))))
+                ax.set_ylim(bottom=min(max(FLOOR, 0.3 * float(np.nanpercentile(vals, 1))), 0.3 * float(np.nanmax(vals))))
         ax.set_ylabel(label, fontsize=8)
         ax.grid(alpha=0.3, which="both")
         if len(cs) > 1:
