@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Sweep throughput: many short runs, as a plain loop of soadyn.simulate, as `soadyn.sweep` in one
 fresh process (the per-case overhead of building each case's scenario and its row), and on an
-embedded Dask LocalCluster of 1 and 2 worker processes (the scaling); and the machine's own
+embedded Dask LocalCluster of 1 and 2 worker processes, set up as soadyn.sweep's own (its quiet
+settings, each worker bound to its own CPU): the scaling; and the machine's own
 ceiling: the same cases in independent processes pinned to each CPU, alone and both at once.
 
     PYTHONPATH=build/python /usr/bin/python3 tools/bench/sweep_throughput.py [--cases 10000] [--rounds 3]
