@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """soadyn export: the CSV and JSON read back to the very doubles in /samples (written by soadyn run,
 and by h5py with awkward values), --columns and --every choose what the file has, bad input gets
-one line and exit status 2, the input is never touched, and a file still being written exports
-the rows flushed so far."""
+one line and exit status 2, a full disk one line and exit status 4 with nothing half-written, the
+input is never touched, and a file still being written exports the rows flushed so far."""
 import csv
 import hashlib
 import json
