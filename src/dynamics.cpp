@@ -81,7 +81,11 @@ void aba(const Model& model, Data& data, const VecX& tau) {
     if (ni == 1) {
       // U = P g,  𝒟 = gᵀ U,  u = τ − gᵀ z;  P⁺ = P − U Uᵀ / 𝒟;  z⁺ = z + P⁺ a + U u / 𝒟
       const Vec6 g = data.G.col(vi);
-      const Vec6 U = P * g;
+      // a revolute joint's g is [g_ω; 0] and a prismatic one's [0; g_v]: half of P is read
+      Vec6 U;
+      if (model.joint_type[i] == JointType::Revolute) U.noalias() = P.leftCols<3>() * g.head<3>();
+      else if (model.joint_type[i] == JointType::Prismatic) U.noalias() = P.rightCols<3>() * g.tail<3>();
+      else U.noalias() = P * g;
       const double Dinv = 1.0 / g.dot(U);
       const double u = tau(vi) - g.dot(data.z.col(i));
       data.U1.col(i) = U;
