@@ -17,15 +17,11 @@ void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
     Vec3 w = data.coriolis.col(i).head<3>(), u = data.coriolis.col(i).tail<3>();
-    if (qdd) {
-      if (n == 1) {
-        w += (*qdd)(iv) * data.G.col(iv).head<3>();
-        u += (*qdd)(iv) * data.G.col(iv).tail<3>();
-      } else {
-        const Vec6 Gx = subspace_apply(data.G, iv, n, *qdd);
-        w += Gx.head<3>();
-        u += Gx.tail<3>();
-      }
+    if (qdd) {  // + G_i q̈_i
+      Vec3 gw, gu;
+      subspace_apply(data.G, iv, n, *qdd, gw, gu);
+      w += gw;
+      u += gu;
     }
     if (p >= 0) {  // D_i A_p = [ω_p; u_p + ω_p × d_i]
       const Vec3 wp = data.A.col(p).head<3>();
@@ -41,9 +37,7 @@ void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
-    const Vec3 nf = data.F.col(i).head<3>(), f = data.F.col(i).tail<3>();
-    if (n == 1) out(iv) = data.G.col(iv).head<3>().dot(nf) + data.G.col(iv).tail<3>().dot(f);
-    else subspace_apply_transpose(data.G, iv, n, data.F.col(i), out);
+    subspace_apply_transpose(data.G, iv, n, data.F.col(i), out);
     if (p >= 0) D.add_apply_transpose(i, data.F.col(i), data.F.col(p));  // F_p += D_iᵀ F_i, in halves
   }
 }

@@ -159,14 +159,7 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
     // G_i q̇_i = [gw; gu]
     Vec3 gw, gu;
-    if (n == 1) {
-      gw = v(iv) * data.G.col(iv).head<3>();
-      gu = v(iv) * data.G.col(iv).tail<3>();
-    } else {
-      const Vec6 Gv = subspace_apply(data.G, iv, n, v);
-      gw = Gv.head<3>();
-      gu = Gv.tail<3>();
-    }
+    subspace_apply(data.G, iv, n, v, gw, gu);
     Vec3 w = gw, u = gu;
     if (p < 0) {
       // gravity enters as a base acceleration −g

@@ -20,7 +20,7 @@ import math
 import os
 import sys
 import time
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -168,6 +168,11 @@ def _batches(sw: Sweep, todo: List[int], size: Optional[int], nworkers: int = 1)
     return batches
 
 
+def _counts(rows: List[dict]) -> Tuple[int, int]:
+    """(cases, cases whose run did not complete): what the progress line counts of a batch."""
+    return len(rows), sum(1 for r in rows if not r["completed"])
+
+
 class _Progress:
     def __init__(self, total: int, skipped: int, quiet: bool):
         self.total, self.done, self.failed, self.quiet = total, skipped, 0, quiet
@@ -229,7 +234,7 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
         _save_part(out, rows)
         for r in rows:
             done[r["case"]] = r
-        progress.add(len(rows), sum(1 for r in rows if not r["completed"]))
+        progress.add(*_counts(rows))
 
     def payload(ids):
         return (sw.scenario_text, os.path.abspath(sw.scenario_path), sw.settings,
@@ -264,7 +269,7 @@ class _Task:
         if not self.out:
             return rows
         _save_part(self.out, rows)
-        return len(rows), sum(1 for r in rows if not r["completed"])
+        return _counts(rows)
 
 
 def _run_task(task: _Task):
