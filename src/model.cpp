@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace soadyn {
@@ -144,10 +145,25 @@ std::string dof_name(const Model& m, int k) {
 // D_k is the body's own inertia along g plus what its children's P⁺ add; each is a difference
 // whose terms are bounded by the body's mass moments and by the children's P before their
 // projections.  A pivot below 1e-12 of that size is round-off: the DOF carries no inertia.
+//
+// The library's composite sweep (mass_matrix.cpp) keeps K_i about the joint point η_i and moves
+// each column to the world origin once, so 𝓜_kk comes out of terms that cancel down to its size:
+// K_i's own, of size S = Σ_{j ⊆ subtree} tr I_j + m_j r_j² (r_j: the reach of body j's centre of
+// mass from η_i, under any revolute turn), and the world shift's, of size |η_i| |f| with
+// |f| ≤ T |g_ω| + U |g_v|, T = Σ m_j r_j, U = Σ m_j.  Their round-off
+//   e_k = 8 ε (S |g_ω|² + 2 T |g_ω| |g_v| + U |g_v|² + 2 ρ_i |g_ω| (T |g_ω| + U |g_v|)),
+// ρ_i the joint's reach from the world origin, must stay below 1e-6 𝓜_kk (each diagonal entry to
+// six digits), and their sum below 1e-9 of the largest (so that no eigenvalue of the computed 𝓜
+// strays below −1e-9 λ_max).  A model too spread out for a double (a 1 kg arm hung 1e30 m along
+// the axis it turns about) is refused, where its 𝓜 would come out indefinite.  𝓜_kk = gᵀ C_i g
+// here, C_i the composite inertia about η_i, whose entries are formed without that cancellation.
+// Prismatic travel and a free root's position are the configuration's, and not bounded here.
 void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const std::vector<int>& spec_of) {
   std::vector<Mat3> R(m.nbodies);
   std::vector<Vec3> eta(m.nbodies), s(m.nbodies);
   std::vector<Mat6> P(m.nbodies), below(m.nbodies, Mat6::Zero());  // below: Σ Φᵀ P_c Φ before projecting
+  std::vector<Mat6> C(m.nbodies);                                   // composite inertia about η_i
+  std::vector<double> reach(m.nbodies), S(m.nbodies), T(m.nbodies), U(m.nbodies);  // S, T, U about η_i
   for (int i = 0; i < m.nbodies; ++i) {
     const int p = m.parent[i];
     const Mat3 Rp = p < 0 ? Mat3::Identity() : R[p];
@@ -155,8 +171,14 @@ void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const
     eta[i] = (p < 0 ? Vec3::Zero() : eta[p]) + Rp * m.placement[i].p;
     s[i] = R[i] * m.com[i];
     P[i] = SpatialInertia::from_body(m.mass[i], s[i], R[i] * m.inertia[i] * R[i].transpose()).matrix();
+    C[i] = P[i];
+    reach[i] = (p < 0 ? 0.0 : reach[p]) + m.placement[i].p.norm();
+    const double r = m.com[i].norm();
+    S[i] = m.inertia[i].trace() + m.mass[i] * r * r, T[i] = m.mass[i] * r, U[i] = m.mass[i];
   }
   std::vector<int> singular;
+  int coarse = -1;  // the first DOF whose 𝓜_kk the world-coordinate round-off swamps
+  double coarse_diagonal = 0, coarse_error = 0, total_error = 0, largest = 0;
   for (int i = m.nbodies - 1; i >= 0; --i) {
     Mat6X G(6, m.nv_i[i]);
     joint_subspace(m.joint_type[i], m.axis[i], R[i], R[i], G);  // at the neutral configuration Rb = Rj
@@ -167,15 +189,39 @@ void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const
       const double gw = g.head<3>().norm(), gv = g.tail<3>().norm();
       const double size = rot * gw * gw + 2.0 * ms * gw * gv + mi * gv * gv + g.dot(below[i] * g);
       const double pivot = g.dot(Pg);
+      const double error = 8 * std::numeric_limits<double>::epsilon() *
+                           (S[i] * gw * gw + 2 * T[i] * gw * gv + U[i] * gv * gv +
+                            2 * reach[i] * gw * (T[i] * gw + U[i] * gv));
       if (pivot > 1e-12 * size) P[i] -= Pg * Pg.transpose() / pivot;
       else singular.push_back(m.idx_v[i] + j);
+      const double diagonal = g.dot(C[i] * g);
+      total_error += error, largest = std::max(largest, diagonal);
+      if (!(error <= 1e-6 * diagonal)) coarse = m.idx_v[i] + j, coarse_diagonal = diagonal, coarse_error = error;
     }
     if (const int p = m.parent[i]; p >= 0) {
       Mat6 Phi = Mat6::Identity();
       Phi.bottomLeftCorner<3, 3>() = -skew(eta[i] - eta[p]);
       P[p] += Phi.transpose() * P[i] * Phi;
       below[p] += Phi.transpose() * before * Phi;
+      C[p] += Phi.transpose() * C[i] * Phi;
+      // about η_p the subtree's bodies reach at most L = |placement| further: (r + L)² expanded
+      const double L = m.placement[i].p.norm();
+      S[p] += S[i] + 2 * L * T[i] + L * L * U[i], T[p] += T[i] + L * U[i], U[p] += U[i];
     }
+  }
+  if (singular.empty() && (coarse >= 0 || !(total_error <= 1e-9 * largest))) {
+    double far = 0;
+    for (int i = 0; i < m.nbodies; ++i) far = std::max(far, reach[i] + m.com[i].norm());
+    const std::string from = " from bodies up to " + fmt(far) + " m from the world origin";
+    if (coarse < 0)
+      refuse(specs[spec_of[0]], spec_of[0], "mass matrix",
+             "lengths a double resolves (round-off below 1e-9 of the largest diagonal entry)",
+             "round-off " + fmt(total_error) + " against " + fmt(largest) + from);
+    const int first = spec_of[m.dof_body[coarse]];
+    refuse(specs[first], first, "mass matrix",
+           "lengths a double resolves against each DOF's inertia (round-off below 1e-6 of it)",
+           dof_name(m, coarse) + " swamped by round-off " + fmt(coarse_error) + " (against " +
+               fmt(coarse_diagonal) + ")" + from);
   }
   if (singular.empty()) return;
   std::sort(singular.begin(), singular.end());

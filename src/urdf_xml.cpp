@@ -161,6 +161,15 @@ Index index(const std::string& xml, const std::string& path) {
     throw Error(path + ":" + std::to_string(1 + std::count(xml.begin(), xml.begin() + long(at), '\n')) +
                 ": XML: entity declarations (<!ENTITY ...>) are refused: a URDF needs none, and nested ones expand "
                 "without bound (an XML bomb)");
+  // UTF-8 only: urdfdom's TinyXML steps a multi-byte lead byte's whole length, past the end of
+  // the text when the sequence is cut short (a UTF-8 sequence never holds '\n': line by line)
+  for (size_t start = 0, line = 1; start < xml.size(); ++line) {
+    const size_t end = std::min(xml.find('\n', start), xml.size());
+    if (!is_valid_utf8(xml.substr(start, end - start)))
+      throw Error(line_of(path, int(line)) + ": XML: expected UTF-8 text, got bytes that are not UTF-8: " +
+                  printable(xml.substr(start, std::min<size_t>(end - start, 60))));
+    start = end + 1;
+  }
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS)
     throw Error(line_of(path, doc.ErrorLineNum()) + ": XML: " + doc.ErrorStr());

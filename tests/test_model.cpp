@@ -1,6 +1,8 @@
 // Building a model: what it refuses (with the message), and fixed-joint merging.
 #include "test_util.hpp"
 
+#include <cstdio>
+
 using namespace soadyn;
 using namespace soadyn::test;
 
@@ -217,6 +219,61 @@ TEST(ModelBuild, BodyWeldedToTheWorldKeepsItsPotentialEnergy) {
   update_kinematics(m, d, VecX::Zero(1));
   // plate cm at z = 2.5; body a: joint at z = 2, cm (0.1, 0, 0) → z = 2
   EXPECT_NEAR(potential_energy(m, d), 9.81 * (3.0 * 2.5 + 1.0 * 2.0), 1e-12);
+}
+
+// The sweeps run in world coordinates about the world origin, so a body far from it costs digits:
+// a model whose DOF inertia the round-off would swamp is refused; one within reach is accepted and
+// its 𝓜 equals that of the same model at the origin (𝓜 of revolute joints does not depend on where
+// the model stands) to the accuracy the check promises.
+TEST(ModelBuild, RefusesBodiesTooFarForADouble) {
+  // a puck turning about z with an arm hung far along that axis (the fuzzer's finding)
+  auto puck = [](double height) {
+    auto specs = std::vector{body("puck", -1), body("arm", 0)};
+    specs[1].placement.p = Vec3(0.1, 0, height);
+    return specs;
+  };
+  EXPECT_EQ(refusal(puck(10)), "(accepted)");
+  const std::string msg = refusal(puck(1e30));
+  EXPECT_THAT(msg, HasSubstr("body 'puck' (index 0): mass matrix: expected lengths a double resolves against "
+                             "each DOF's inertia (round-off below 1e-6 of it), got DOF 0 (joint 'puck') swamped"));
+  EXPECT_THAT(msg, HasSubstr("from bodies up to 1e+30 m from the world origin"));
+
+  // a small arm (10 g links 5 cm apart) placed far from the origin on a welded plate
+  auto arm = [](const Vec3& where) {
+    std::vector<BodySpec> specs{body("plate", -1)};
+    specs[0].joint = JointType::Fixed;
+    specs[0].placement.p = where;
+    for (int i = 1; i <= 3; ++i) {
+      specs.push_back(body("link" + std::to_string(i), i - 1));
+      specs[i].mass = 0.01;
+      specs[i].com = Vec3(0.025, 0, 0);
+      specs[i].inertia = Vec3(1e-7, 2e-6, 2e-6).asDiagonal();
+      specs[i].axis = i == 2 ? Vec3::UnitY() : Vec3::UnitZ();
+      if (i > 1) specs[i].placement.p = Vec3(0.05, 0, 0);
+    }
+    return specs;
+  };
+  EXPECT_THAT(refusal(arm(Vec3(3e6, -1e6, 0))),
+              HasSubstr("body 'link1' (index 1): mass matrix: expected lengths a double resolves (round-off "
+                        "below 1e-9 of the largest diagonal entry), got round-off"));
+  const Model near = Model::build(arm(Vec3::Zero())), far = Model::build(arm(Vec3(300, -100, 50)));
+  Data dn(near), df(far);
+  Rng rng(7);
+  double worst = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    const VecX q = random_q(rng, near);
+    update_kinematics(near, dn, q);
+    update_kinematics(far, df, q);
+    mass_matrix(near, dn);
+    mass_matrix(far, df);
+    // each entry to 1e-6 of its scale √(𝓜_ii 𝓜_jj) (entries are ~1e-5 kg m²)
+    const VecX root = dn.Mass.diagonal().cwiseSqrt();
+    const MatX scaled = (df.Mass - dn.Mass).cwiseQuotient(root * root.transpose());
+    EXPECT_LE(scaled.cwiseAbs().maxCoeff(), 1e-6) << "trial " << trial;
+    worst = std::max(worst, scaled.cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(worst, 0.0);  // the far model's round-off is there, and bounded
+  std::printf("worst relative difference %.3g\n", worst);
 }
 
 }  // namespace

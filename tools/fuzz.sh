@@ -4,7 +4,7 @@
 # tests/fuzz/seeds/ and tests/data/urdf/ (urdf).
 #   tools/fuzz.sh build
 #   tools/fuzz.sh run scenario|urdf SECONDS
-# Exits 77 (skipped) when clang with libFuzzer is not installed.
+# Exits 77 (skipped) only when clang with libFuzzer is not installed; a finding exits 1.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CLANG=$(command -v clang++ || command -v clang++-14 || true)
@@ -35,7 +35,8 @@ case "${1:-}" in
       echo "fuzz_$target found a problem (exit $status):"
       grep -A40 -E "==[0-9]+==ERROR|deadly signal|Test unit written" "$log" | head -80
     fi
-    exit "$status"
+    # libFuzzer exits 77 on a finding, which ctest would read as "skipped": any failure is 1 here
+    ((status == 0)) || exit 1
     ;;
   *) echo "usage: tools/fuzz.sh build | run scenario|urdf SECONDS" >&2; exit 2 ;;
 esac
