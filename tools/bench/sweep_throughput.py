@@ -6,8 +6,12 @@ settings, each worker bound to its own CPU): the scaling; and the machine's own
 ceiling: the same cases in independent processes pinned to each CPU, alone and both at once.
 
     PYTHONPATH=build/python /usr/bin/python3 tools/bench/sweep_throughput.py [--cases 10000] [--rounds 3]
+        [--steps 20 | --sweep FILE]
 
-Each case: the double pendulum, rk4 at dt = 1e-2 for 0.2 s (20 steps) from a random initial state.
+Each case: the double pendulum, rk4 at dt = 1e-2 for --steps steps (default 20: 0.2 s, ~0.06 ms of
+run, the shortest: the sweep's own per-case work weighs most) from a random initial state, samples
+every 0.1 s; or every case of a sweep file (--sweep scenarios/double_pendulum_stability.sweep.yaml:
+the stability map's 8000 runs of 50 to 2500 steps).
 Every configuration runs once per round, interleaved, and the best round counts (a shared machine).
 Prints a markdown table; the cluster's start (its processes up, soadyn imported in each worker) is
 timed apart and not in the walls: the walls are the throughput of a running cluster.
@@ -26,7 +30,7 @@ import soadyn  # noqa: E402
 SWEEP = """\
 scenario: {root}/scenarios/double_pendulum.yaml
 seed: 3
-set: {{simulation.method: rk4, simulation.dt: 1.0e-2, simulation.t_end: 0.2, simulation.output_dt: 0.1}}
+set: {{simulation.method: rk4, simulation.dt: 1.0e-2, simulation.t_end: {t_end}, simulation.output_dt: 0.1}}
 vary:
   - zip:
       - {{path: initial.q.theta1, uniform: [-2.0, 2.0], count: {n}}}
@@ -42,8 +46,9 @@ def _warm():
 # it; else the sweep's own batches in a loop (the runs without the sweep's files), pinned to `cpu`
 _ALONE = """
 import os, sys, time
-if {cpu!r} is not None:
-    os.sched_setaffinity(0, {{{cpu!r}}})
+cpu = {cpu!r}
+if cpu is not None:
+    os.sched_setaffinity(0, {{cpu}})
 sys.path.insert(0, {pythonpath!r})
 import soadyn
 from soadyn.ensemble import run_batch
@@ -81,12 +86,15 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cases", type=int, default=10000)
     ap.add_argument("--rounds", type=int, default=3, help="interleaved rounds; each figure is the best round's")
+    ap.add_argument("--steps", type=int, default=20, help="RK4 steps of 10 ms per case")
+    ap.add_argument("--sweep", help="time this sweep file's cases instead (--cases and --steps unused)")
     a = ap.parse_args()
     tmp = tempfile.mkdtemp(prefix="soadyn-sweep-bench-")
     try:
-        path = os.path.join(tmp, "bench.sweep.yaml")
-        with open(path, "w") as f:
-            f.write(SWEEP.format(root=ROOT, n=a.cases))
+        path = os.path.abspath(a.sweep) if a.sweep else os.path.join(tmp, "bench.sweep.yaml")
+        if not a.sweep:
+            with open(path, "w") as f:
+                f.write(SWEEP.format(root=ROOT, n=a.cases, t_end=round(a.steps * 1e-2, 10)))
         sw = soadyn.load_sweep(path)
         n = len(sw.cases)
         scenes = [sw.scenario(c) for c in sw.cases]
@@ -126,7 +134,8 @@ def main():
                 keep(f"1 process alone on CPU {c}, no Dask (every case)", _alone(path, [c])[0])
             for c, wall in zip(cpus, _alone(path, cpus)):
                 keep(f"{len(cpus)} processes at once, no Dask (every case): the one on CPU {c}", wall)
-        print(f"{n} cases on {os.cpu_count()} cores, best of {a.rounds} interleaved rounds\n")
+        what = f"the cases of {a.sweep}" if a.sweep else f"cases of {a.steps} RK4 steps"
+        print(f"{n} {what} on {os.cpu_count()} cores, best of {a.rounds} interleaved rounds\n")
         print("| how | wall, s | per case, ms | cases/s | cluster start, s |\n|---|---|---|---|---|")
         for name, wall in best.items():
             w = 1 if name.startswith("LocalCluster, 1") else 2 if name.startswith("LocalCluster, 2") else None
