@@ -134,7 +134,7 @@ def main():
                 keep(f"1 process alone on CPU {c}, no Dask (every case)", _alone(path, [c])[0])
             for c, wall in zip(cpus, _alone(path, cpus)):
                 keep(f"{len(cpus)} processes at once, no Dask (every case): the one on CPU {c}", wall)
-        what = f"the cases of {a.sweep}" if a.sweep else f"cases of {a.steps} RK4 steps"
+        what = f"cases of {a.sweep}" if a.sweep else f"cases of {a.steps} RK4 steps"
         print(f"{n} {what} on {os.cpu_count()} cores, best of {a.rounds} interleaved rounds\n")
         print("| how | wall, s | per case, ms | cases/s | cluster start, s |\n|---|---|---|---|---|")
         for name, wall in best.items():
