@@ -143,6 +143,39 @@ Named named(const Index& idx, const std::string& message) {
   return {};
 }
 
+// UTF-8 only: urdfdom's TinyXML steps a multi-byte lead byte's whole length, past the end of the
+// text when the sequence is cut short.  The first bad attribute, text or comment is named at its
+// line; any other bad byte (a declaration, a DOCTYPE) at its line of the text.
+void check_utf8(const tinyxml2::XMLDocument& doc, const std::string& xml, const std::string& path) {
+  for (const tinyxml2::XMLNode* n = doc.FirstChild(); n;) {
+    const std::string at = line_of(path, n->GetLineNum());
+    if (const tinyxml2::XMLElement* e = n->ToElement()) {
+      const char* name = e->Attribute("name");
+      const std::string what = std::string(e->Name()) + (name ? " '" + printable(name) + "'" : "");
+      if (!is_valid_utf8(e->Name())) throw Error(at + ": <" + printable(e->Name()) + ">: expected a UTF-8 tag");
+      for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
+        if (is_valid_utf8(a->Name()) && is_valid_utf8(a->Value())) continue;
+        const std::string field = printable(a->Name());
+        throw Error(at + ": " + what + ": " + field + ": expected a valid UTF-8 " +
+                    (field == "name" ? "name" : "value") + ", got '" + printable(a->Value()) + "'");
+      }
+    } else if (n->Value() && !is_valid_utf8(n->Value())) {
+      throw Error(at + ": XML: expected UTF-8 text, got '" + printable(std::string(n->Value()).substr(0, 60)) + "'");
+    }
+    // next node in document order, without recursion (the nesting is the file's)
+    if (n->FirstChild()) { n = n->FirstChild(); continue; }
+    while (n && !n->NextSibling()) n = n->Parent();
+    if (n) n = n->NextSibling();
+  }
+  for (size_t start = 0, line = 1; start < xml.size(); ++line) {  // a UTF-8 sequence never holds '\n'
+    const size_t end = std::min(xml.find('\n', start), xml.size());
+    if (!is_valid_utf8(xml.substr(start, end - start)))
+      throw Error(line_of(path, int(line)) + ": XML: expected UTF-8 text, got '" +
+                  printable(xml.substr(start, std::min<size_t>(end - start, 60))) + "'");
+    start = end + 1;
+  }
+}
+
 }  // namespace
 
 std::string Index::at_joint(const std::string& name) const {
@@ -161,18 +194,10 @@ Index index(const std::string& xml, const std::string& path) {
     throw Error(path + ":" + std::to_string(1 + std::count(xml.begin(), xml.begin() + long(at), '\n')) +
                 ": XML: entity declarations (<!ENTITY ...>) are refused: a URDF needs none, and nested ones expand "
                 "without bound (an XML bomb)");
-  // UTF-8 only: urdfdom's TinyXML steps a multi-byte lead byte's whole length, past the end of
-  // the text when the sequence is cut short (a UTF-8 sequence never holds '\n': line by line)
-  for (size_t start = 0, line = 1; start < xml.size(); ++line) {
-    const size_t end = std::min(xml.find('\n', start), xml.size());
-    if (!is_valid_utf8(xml.substr(start, end - start)))
-      throw Error(line_of(path, int(line)) + ": XML: expected UTF-8 text, got bytes that are not UTF-8: " +
-                  printable(xml.substr(start, std::min<size_t>(end - start, 60))));
-    start = end + 1;
-  }
   tinyxml2::XMLDocument doc;
   if (doc.Parse(xml.c_str(), xml.size()) != tinyxml2::XML_SUCCESS)
     throw Error(line_of(path, doc.ErrorLineNum()) + ": XML: " + doc.ErrorStr());
+  check_utf8(doc, xml, path);
   tinyxml2::XMLElement* robot = doc.FirstChildElement("robot");
   if (!robot) throw Error(path + ":1: URDF: expected a <robot> element at the top");
   Index idx;

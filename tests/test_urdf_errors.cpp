@@ -104,17 +104,22 @@ TEST(UrdfErrorLines, ModelRefusalsPointAtTheJointOrTheLink) {
 }
 
 // urdfdom's TinyXML steps over the end of a text cut short inside a UTF-8 sequence: such bytes
-// are refused at their line before it reads them (the fuzzer's heap overflow, here as a test)
+// are refused at their line, naming the attribute where one holds them, before urdfdom reads them
+// (the fuzzer's heap overflow, here as a test)
 TEST(UrdfErrorLines, BytesThatAreNotUtf8) {
   const std::string pc = "<parent link=\"a\"/><child link=\"b\"/>";
   std::string xml = two_links("<joint name=\"j\" type=\"continuous\">" + pc + "</joint>");
   xml.insert(xml.find("</robot>"), "<!-- caf\xe3&&& -->\n");
-  EXPECT_THAT(urdf_error(xml), HasSubstr("robot.urdf:5: XML: expected UTF-8 text, got bytes that are not UTF-8: "
-                                         "<!-- caf\\xe3&&& -->"));
+  EXPECT_THAT(urdf_error(xml), HasSubstr("robot.urdf:5: XML: expected UTF-8 text, got ' caf\\xe3&&& '"));
   xml.replace(xml.find("\xe3"), 1, "\xc3\xa9");  // é, well formed
   EXPECT_EQ(urdf_error(xml), "(accepted)");
   EXPECT_THAT(urdf_error("<robot name=\"r\xff\">\n<link name=\"a\"/>\n</robot>"),
-              HasSubstr("robot.urdf:1: XML: expected UTF-8 text"));
+              HasSubstr("robot.urdf:1: robot 'r\\xff': name: expected a valid UTF-8 name, got 'r\\xff'"));
+  EXPECT_THAT(urdf_error(two_links("<joint name=\"j\" type=\"continuous\">" + pc + "\n<axis xyz=\"1 0 \xe3\"/></joint>")),
+              HasSubstr("robot.urdf:5: axis: xyz: expected a valid UTF-8 value, got '1 0 \\xe3'"));
+  // a bad byte outside any node tinyxml2 keeps (here the XML declaration's encoding)
+  EXPECT_THAT(urdf_error("<?xml version=\"1.0\" encoding=\"\xe3\"?>\n<robot name=\"r\">\n<link name=\"a\"/>\n</robot>"),
+              HasSubstr("robot.urdf:1: XML: expected UTF-8 text, got"));
 }
 
 }  // namespace
