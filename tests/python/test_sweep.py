@@ -2,11 +2,13 @@
 multi-process) against a plain loop bit for bit, a worker killed mid-sweep, a killed sweep resumed."""
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
 import threading
 import time
+import urllib.request
 
 import numpy as np
 import pytest
@@ -145,6 +147,20 @@ def test_real_cluster_and_embedded_cluster_equal_the_serial_loop(sweep_file, ser
     again = soadyn.sweep(sweep_file, str(tmp_path / "embedded"), scheduler="serial", quiet=True)
     assert (again.ran, again.skipped) == (0, 48)
     same_tables(again.table, serial.table)
+
+
+def test_progress_and_the_dashboard_link(sweep_file, cluster, tmp_path, capsys):
+    """the progress line counts every case, and the printed link serves the scheduler's pages"""
+    soadyn.sweep(sweep_file, str(tmp_path / "out"), scheduler=cluster.address, batch_size=8)
+    err = capsys.readouterr().err
+    assert "48/48 cases, 0 failed" in err
+    link = re.search(r"^dashboard: (http://\S+)", err, re.M).group(1)
+    with urllib.request.urlopen(link, timeout=30) as page:
+        body = page.read().decode()
+    assert page.status == 200 and "Workers" in body
+    # the page lists both workers by address
+    for w in cluster.client.scheduler_info()["workers"]:
+        assert w.split("://")[1] in body or w in body, w
 
 
 def test_killed_sweep_resumes_with_only_the_missing_cases(sweep_file, serial, cluster, tmp_path):

@@ -300,6 +300,20 @@ QUIET_CLUSTER = {"distributed.worker.profile.enabled": False, "distributed.admin
                  "distributed.worker.memory.monitor-interval": "1s", "distributed.admin.tick.interval": "1s"}
 
 
+def _dashboard(client) -> str:
+    """The scheduler's web pages: Dask's live dashboard (/status) with bokeh 2.4 here, else its
+    worker and task pages, which need no bokeh (Debian 12 packages no bokeh)."""
+    if "dashboard" not in client.scheduler_info().get("services", {}):
+        return "none (the scheduler serves no web pages)"
+    link = client.dashboard_link
+    try:
+        import bokeh  # noqa: F401  (the live dashboard needs it)
+        return link
+    except ImportError:
+        return (link.rsplit("/status", 1)[0] + "/info/main/workers.html (workers, their tasks and logs; the "
+                "live charts need bokeh 2.4: pip install 'bokeh<3')")
+
+
 def _run_dask(sw, todo, payload, finish, progress, scheduler, workers, batch_size, say, out) -> bool:
     """Run the batches on Dask; True if the workers wrote the parts themselves."""
     try:
@@ -330,11 +344,7 @@ def _run_dask(sw, todo, payload, finish, progress, scheduler, workers, batch_siz
         client = scheduler
     try:
         nworkers = max(1, len(client.scheduler_info().get("workers", {})))
-        try:
-            import bokeh  # noqa: F401  (the dashboard needs it)
-            say(f"dashboard: {client.dashboard_link}")
-        except ImportError:
-            say("dashboard: none (Dask's needs bokeh 2.4, not packaged in Debian 12: pip install 'bokeh<3')")
+        say(f"dashboard: {_dashboard(client)}")
         batches = _batches(sw, todo, batch_size, nworkers)
         say(f"{len(batches)} tasks of {min(map(len, batches))} to {max(map(len, batches))} cases on {nworkers} worker(s)")
         # the workers of a cluster on this machine (the embedded one, or a LocalCluster given as a
