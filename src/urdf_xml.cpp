@@ -145,28 +145,31 @@ Named named(const Index& idx, const std::string& message) {
 
 // UTF-8 only: urdfdom's TinyXML steps a multi-byte lead byte's whole length, past the end of the
 // text when the sequence is cut short.  The first bad attribute, text or comment is named at its
-// line; any other bad byte (a declaration, a DOCTYPE) at its line of the text.
+// line (tinyxml2's values, entities decoded); any other bad byte (a declaration, a DOCTYPE) at its
+// line of the text.  Messages are formed only for a refusal.
 void check_utf8(const tinyxml2::XMLDocument& doc, const std::string& xml, const std::string& path) {
   for (const tinyxml2::XMLNode* n = doc.FirstChild(); n;) {
-    const std::string at = line_of(path, n->GetLineNum());
     if (const tinyxml2::XMLElement* e = n->ToElement()) {
-      const char* name = e->Attribute("name");
-      const std::string what = std::string(e->Name()) + (name ? " '" + printable(name) + "'" : "");
-      if (!is_valid_utf8(e->Name())) throw Error(at + ": <" + printable(e->Name()) + ">: expected a UTF-8 tag");
+      if (!is_valid_utf8(e->Name()))
+        throw Error(line_of(path, n->GetLineNum()) + ": <" + printable(e->Name()) + ">: expected a UTF-8 tag");
       for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
         if (is_valid_utf8(a->Name()) && is_valid_utf8(a->Value())) continue;
+        const char* name = e->Attribute("name");
         const std::string field = printable(a->Name());
-        throw Error(at + ": " + what + ": " + field + ": expected a valid UTF-8 " +
-                    (field == "name" ? "name" : "value") + ", got '" + printable(a->Value()) + "'");
+        throw Error(line_of(path, n->GetLineNum()) + ": " + e->Name() + (name ? " '" + printable(name) + "'" : "") +
+                    ": " + field + ": expected a valid UTF-8 " + (field == "name" ? "name" : "value") + ", got '" +
+                    printable(a->Value()) + "'");
       }
     } else if (n->Value() && !is_valid_utf8(n->Value())) {
-      throw Error(at + ": XML: expected UTF-8 text, got '" + printable(std::string(n->Value()).substr(0, 60)) + "'");
+      throw Error(line_of(path, n->GetLineNum()) + ": XML: expected UTF-8 text, got '" +
+                  printable(std::string(n->Value()).substr(0, 60)) + "'");
     }
     // next node in document order, without recursion (the nesting is the file's)
     if (n->FirstChild()) { n = n->FirstChild(); continue; }
     while (n && !n->NextSibling()) n = n->Parent();
     if (n) n = n->NextSibling();
   }
+  if (is_valid_utf8(xml)) return;  // the lines below only locate what the whole text holds
   for (size_t start = 0, line = 1; start < xml.size(); ++line) {  // a UTF-8 sequence never holds '\n'
     const size_t end = std::min(xml.find('\n', start), xml.size());
     if (!is_valid_utf8(xml.substr(start, end - start)))
