@@ -221,7 +221,7 @@ TEST(ModelBuild, BodyWeldedToTheWorldKeepsItsPotentialEnergy) {
   EXPECT_NEAR(potential_energy(m, d), 9.81 * (3.0 * 2.5 + 1.0 * 2.0), 1e-12);
 }
 
-// The sweeps run in world coordinates about the world origin, so a body far from it costs digits:
+// The sweeps work in world coordinates, so a body far from its joint or from the world origin costs digits:
 // a model whose DOF inertia the round-off would swamp is refused; one within reach is accepted and
 // its 𝓜 equals that of the same model at the origin (𝓜 of revolute joints does not depend on where
 // the model stands) to the accuracy the check promises.
