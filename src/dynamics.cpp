@@ -63,9 +63,17 @@ void aba(const Model& model, Data& data, const VecX& tau) {
   const DOperator D{data.d};
   // tip to base: articulated inertias P_i and bias forces z_i
   for (int i = 0; i < model.nbodies; ++i) {
-    const SpatialInertia& M = data.M[i];  // P_i = M_i = [I, h̃; h̃ᵀ, m e]
-    const Mat3 H = skew(M.h);
-    data.P[i] << M.I, H, H.transpose(), M.m * Mat3::Identity();
+    // P_i = M_i = [I, h̃; h̃ᵀ, m e], written in place entry by entry: a 6×6 assembled from 3×3
+    // temporaries goes through the stack in 8-byte pieces read back at once in 16-byte ones,
+    // which the CPU cannot forward (a tenth of this sweep's time)
+    const SpatialInertia& M = data.M[i];
+    Mat6& P = data.P[i];
+    const double h0 = M.h(0), h1 = M.h(1), h2 = M.h(2), m = M.m;
+    P.topLeftCorner<3, 3>() = M.I;
+    P.col(3) << 0.0, h2, -h1, m, 0.0, 0.0;
+    P.col(4) << -h2, 0.0, h0, 0.0, m, 0.0;
+    P.col(5) << h1, -h0, 0.0, 0.0, 0.0, m;
+    P.block<3, 3>(3, 0) << 0.0, h2, -h1, -h2, 0.0, h0, h1, -h0, 0.0;  // h̃ᵀ, row by row
     data.z.col(i) = data.gyroscopic.col(i);
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
@@ -105,20 +113,30 @@ void aba(const Model& model, Data& data, const VecX& tau) {
     // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f], added whole: z_p is read whole
     // next (store forwarding, as in rnea)
     add_congruence_D(data.P[p], P, data.d.col(i));
-    Vec6 Dz = za;
-    Dz.head<3>() += Vec3(data.d.col(i)).cross(Vec3(za.tail<3>()));
-    data.z.col(p) += Dz;
+    const Vec3 zf = za.tail<3>();
+    data.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
+    data.z.col(p).tail<3>() += zf;
   }
   // base to tip: A' = D_i A_p + a_i,  q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A'),  A_i = A' + G_i q̈_i
   for (int i = 0; i < model.nbodies; ++i) {
     const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    if (ni == 1) {
+      // in 3-vector halves, which stay in registers: A' = [ω; u], q̈ = 𝒟⁻¹ (u_i − U_ωᵀ ω − U_vᵀ u)
+      Vec3 w = data.coriolis.col(i).head<3>(), v = data.coriolis.col(i).tail<3>();
+      if (p >= 0) {
+        const Vec3 wp = data.A.col(p).head<3>();
+        w += wp;
+        v += data.A.col(p).tail<3>() + wp.cross(Vec3(data.d.col(i)));
+      }
+      const double qdd = data.Dinv1(i) * (data.u(vi) - data.U1.col(i).head<3>().dot(w) - data.U1.col(i).tail<3>().dot(v));
+      data.qdd(vi) = qdd;
+      data.A.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
+      data.A.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
+      continue;
+    }
     Vec6 Ai = data.coriolis.col(i);
     if (p >= 0) D.add_apply(i, data.A.col(p), Ai);
-    if (ni == 1) {
-      const double qdd = data.Dinv1(i) * (data.u(vi) - data.U1.col(i).dot(Ai));
-      data.qdd(vi) = qdd;
-      Ai += qdd * data.G.col(vi);
-    } else {
+    {
       const VecG rhs = data.u.segment(vi, ni) - data.U[i].transpose() * Ai;
       data.qdd.segment(vi, ni).noalias() = data.Dinv[i] * rhs;
       Ai.noalias() += data.G.middleCols(vi, ni) * data.qdd.segment(vi, ni);
