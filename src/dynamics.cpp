@@ -94,8 +94,9 @@ void aba(const Model& model, Data& data, const VecX& tau) {
       data.Dinv1(i) = Dinv;
       data.u(vi) = u;
       if (p < 0) continue;
-      P.noalias() -= (Dinv * U) * U.transpose();
-      za = data.z.col(i) + P * data.coriolis.col(i) + (u * Dinv) * U;
+      const Vec6 UD = Dinv * U;
+      for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
+      za = data.z.col(i) + P * data.coriolis.col(i) + u * UD;
     } else {
       // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
       const auto Gi = data.G.middleCols(vi, ni);
