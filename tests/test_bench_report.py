@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """tools/bench/report.py on a Google Benchmark JSON written here: with repetitions, every figure is
-the fastest repetition of its benchmark, and the ratio to the fastest peer is formed from those."""
+the fastest repetition of its benchmark, the ratio to the fastest peer is formed from those, and
+--keep writes exactly those entries."""
 import json
 import os
 import subprocess
@@ -30,16 +31,20 @@ def main():
         with open(path, "w") as f:
             json.dump({"context": {"date": "today", "num_cpus": 2, "mhz_per_cpu": 2000,
                                    "peer_rbdl": "RBDL", "peer_mujoco": "MuJoCo"}, "benchmarks": benchmarks}, f)
-        subprocess.run([sys.executable, REPORT, path, "-o", tmp], check=True, stdout=subprocess.DEVNULL,
-                       env=dict(os.environ, MPLBACKEND="Agg"))
+        keep = os.path.join(tmp, "kept.json")
+        subprocess.run([sys.executable, REPORT, path, "-o", tmp, "--keep", keep], check=True,
+                       stdout=subprocess.DEVNULL, env=dict(os.environ, MPLBACKEND="Agg"))
         md = open(os.path.join(tmp, "bench.md")).read()
         csv = open(os.path.join(tmp, "bench.csv")).read()
+        kept = {b["name"]: b["real_time"] for b in json.load(open(keep))["benchmarks"]}
     assert "fastest of 3 repetitions" in md, md
     assert "chain/mass_composite,1,80.0" in csv, csv
     # soadyn 40 against rbdl's 31 (mujoco's best, 35, is slower): 40 / 31 = 1.29
     row = next(line for line in md.splitlines() if line.startswith("| chain N=1 | "))
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert cells[1:5] == ["40", "31", "rbdl", "1.29"], row
+    # --keep: one entry per benchmark, its fastest repetition, no aggregates
+    assert kept == {name: min(ts) for name, ts in times.items()}, kept
     print("report.py keeps the fastest repetition:", row)
 
 

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Turn a Google Benchmark JSON of soadyn_bench into bench.csv, bench.md (exponents, ratios,
-crossovers) and bench.png (log-log time against N)."""
+crossovers) and bench.png (log-log time against N); with --keep, also a JSON of the figures used:
+each benchmark's fastest repetition."""
 import argparse
 import collections
 import json
@@ -19,6 +20,7 @@ def load(path):
     series = collections.defaultdict(dict)  # "chain/bias" -> {N: ns}
     counters = collections.defaultdict(dict)  # "peer/chain/mass/rbdl" -> {N: {"dM": ..}}
     skipped = []  # error messages (a peer that disagreed or could not load a model)
+    fastest = {}  # benchmark name -> its fastest repetition's entry
     scale = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
     repetitions = 1
     for b in data["benchmarks"]:
@@ -31,11 +33,15 @@ def load(path):
         # with --benchmark_repetitions each benchmark appears once per repetition (interleaved at
         # random with the others): keep the fastest, the one least disturbed by the shared machine
         t = b["real_time"] * scale[b.get("time_unit", "ns")]
-        series[name][int(n)] = min(t, series[name].get(int(n), t))
+        if t <= series[name].get(int(n), t):
+            series[name][int(n)] = t
+            fastest[b["name"]] = b
         counters[name][int(n)] = {k: b[k] for k in ("dM", "dC", "dqdd") if k in b}
         repetitions = max(repetitions, int(b.get("repetitions", 1)))
     context = dict(data.get("context", {}), repetitions=repetitions)
-    return series, counters, skipped, context
+    kept = {"context": context, "benchmarks": list(fastest.values()) +
+            [b for b in data["benchmarks"] if b.get("error_occurred")]}
+    return series, counters, skipped, context, kept
 
 
 def exponent(points, lo=16, hi=256):
@@ -115,9 +121,13 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("json")
     ap.add_argument("-o", "--out", default=".")
+    ap.add_argument("--keep", help="write the figures used (each benchmark's fastest repetition) to this JSON")
     args = ap.parse_args()
-    series, counters, skipped, ctx = load(args.json)
+    series, counters, skipped, ctx, kept = load(args.json)
     os.makedirs(args.out, exist_ok=True)
+    if args.keep:
+        with open(args.keep, "w") as f:
+            json.dump(kept, f, indent=1)
 
     with open(os.path.join(args.out, "bench.csv"), "w") as f:
         f.write("benchmark,N,ns_per_call\n")

@@ -26,5 +26,6 @@ tools/bench/make_models.py build/bench_models
 SOADYN_BENCH_MODELS=build/bench_models build/soadyn_bench --benchmark_min_time="${BENCH_MIN_TIME:-0.1}" ${BENCH_FILTER:+"--benchmark_filter=$BENCH_FILTER"} \
   --benchmark_repetitions="${BENCH_REPETITIONS:-3}" --benchmark_enable_random_interleaving=true \
   --benchmark_report_aggregates_only=false --benchmark_display_aggregates_only=true \
-  --benchmark_format=console --benchmark_out_format=json --benchmark_out="$out/bench.json"
-tools/bench/report.py "$out/bench.json" -o "$out"
+  --benchmark_format=console --benchmark_out_format=json --benchmark_out=build/bench_all.json
+# every repetition stays in build/bench_all.json; tools/results/bench.json keeps the figures used
+tools/bench/report.py build/bench_all.json -o "$out" --keep "$out/bench.json"
