@@ -111,8 +111,8 @@ void aba(const Model& model, Data& data, const VecX& tau) {
       za.noalias() += P * data.coriolis.col(i);
       za.noalias() += UD * data.u.segment(vi, ni);
     }
-    // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f], added whole: z_p is read whole
-    // next (store forwarding, as in rnea)
+    // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f], added in 3-vector halves (a
+    // 6-vector built whole went through the stack and was read back across two stores)
     add_congruence_D(data.P[p], P, data.d.col(i));
     const Vec3 zf = za.tail<3>();
     data.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
@@ -137,11 +137,9 @@ void aba(const Model& model, Data& data, const VecX& tau) {
     }
     Vec6 Ai = data.coriolis.col(i);
     if (p >= 0) D.add_apply(i, data.A.col(p), Ai);
-    {
-      const VecG rhs = data.u.segment(vi, ni) - data.U[i].transpose() * Ai;
-      data.qdd.segment(vi, ni).noalias() = data.Dinv[i] * rhs;
-      Ai.noalias() += data.G.middleCols(vi, ni) * data.qdd.segment(vi, ni);
-    }
+    const VecG rhs = data.u.segment(vi, ni) - data.U[i].transpose() * Ai;
+    data.qdd.segment(vi, ni).noalias() = data.Dinv[i] * rhs;
+    Ai.noalias() += data.G.middleCols(vi, ni) * data.qdd.segment(vi, ni);
     // in halves: D_i A_p reads A_p in halves
     data.A.col(i).head<3>() = Ai.head<3>();
     data.A.col(i).tail<3>() = Ai.tail<3>();
