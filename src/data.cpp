@@ -18,6 +18,8 @@ Data::Data(const Model& m)
       K(m.nbodies),
       S0(Mat6X::Zero(6, m.nv)),
       F0(Mat6X::Zero(6, m.nv)),
+      Kl(m.nbodies),
+      Fl(Mat6X::Zero(6, m.nv)),
       Mass(MatX::Zero(m.nv, m.nv)),
       A(Mat6X::Zero(6, m.nbodies)),
       F(Mat6X::Zero(6, m.nbodies)),

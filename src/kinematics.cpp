@@ -31,11 +31,15 @@ inline void rotate_symmetric(const Mat3& C, const Mat3& M, Mat3& out) {
 
 const Mat3 kIdentity = Mat3::Identity();
 
+}  // namespace
+
 // (cos θ, sin θ) of every revolute joint along a unit axis, four at a time through glibc's
 // vector math library where the library is built for AVX2 (chain N = 8: kinematics 290–307 →
 // 230–240 ns; a scalar sincos takes ~16 ns inside the sweep), else one sincos each
-void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn) {
-  auto wanted = [&](int i) { return model.unit_axis[i] != 0 && model.joint_type[i] == JointType::Revolute; };
+void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool roots) {
+  auto wanted = [&](int i) {
+    return model.unit_axis[i] != 0 && model.joint_type[i] == JointType::Revolute && (roots || model.parent[i] >= 0);
+  };
 #if SOADYN_HAVE_MVEC
   alignas(32) double x[4], c[4], s[4];
   int body[4], n = 0;
@@ -67,8 +71,6 @@ void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn) {
     }
 #endif
 }
-
-}  // namespace
 
 void update_kinematics(const Model& model, Data& data, const VecX& q) {
   data.check(model, "update_kinematics", "q", q.size(), model.nq);

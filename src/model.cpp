@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 namespace soadyn {
 
@@ -324,6 +325,28 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
       }
     m.unit_axis.push_back(unit);
     m.placement_turns.push_back(m.placement[k].R != Mat3::Identity());
+  }
+  // depth-first positions of the DOFs: children in index order, each subtree one run
+  {
+    std::vector<std::vector<int>> children(m.nbodies);
+    std::vector<int> roots;
+    for (int i = 0; i < m.nbodies; ++i) (m.parent[i] < 0 ? roots : children[m.parent[i]]).push_back(i);
+    m.dfs_begin.assign(m.nbodies, 0);
+    m.dfs_end.assign(m.nbodies, 0);
+    std::vector<std::pair<int, bool>> stack;  // (body, its subtree is done)
+    for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.push_back({*it, false});
+    while (!stack.empty()) {
+      const auto [i, done] = stack.back();
+      stack.pop_back();
+      if (done) {
+        m.dfs_end[i] = int(m.dfs_dof.size());
+        continue;
+      }
+      m.dfs_begin[i] = int(m.dfs_dof.size());
+      for (int j = 0; j < m.nv_i[i]; ++j) m.dfs_dof.push_back(m.idx_v[i] + j);
+      stack.push_back({i, true});
+      for (auto it = children[i].rbegin(); it != children[i].rend(); ++it) stack.push_back({*it, false});
+    }
   }
   m.chain = true;
   for (int k = 0; k < m.nv; ++k) {

@@ -13,6 +13,11 @@ void update_kinematics(const Model& model, Data& data, const VecX& q);
 // reference the specialized path is tested against.
 void update_kinematics_reference(const Model& model, Data& data, const VecX& q);
 
+// (cos θ, sin θ) into column i of turn for every revolute joint along a unit axis (unit_axis ≠ 0),
+// the one trigonometry update_kinematics and the local-frame 𝓜 route need; roots = false leaves
+// out the joints that hang from the ground (the local route never turns a root's inertia)
+void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool roots = true);
+
 // [vel] v = Ψ_D G q̇ (eq. 4), v̄ = S v (eq. 5), and the velocity-product terms a_i, b_i used by the
 // dynamics.  Needs [kin].  v has size nv.
 void update_velocities(const Model& model, Data& data, const VecX& v);

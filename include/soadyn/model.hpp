@@ -61,6 +61,10 @@ class Model {
   std::vector<int> dof_body;               // body owning DOF k
   std::vector<int> dof_run;                // lowest m ≤ k with λ(x) = x − 1 for m < x ≤ k: the
                                            // ancestors m..k of k are consecutive (LᵀDL's inner loop)
+  // the DOFs in depth-first (preorder) order, so that every subtree's DOFs are one contiguous
+  // run (the local-frame 𝓜 sweep, mass_matrix_local.cpp): DOF dfs_dof[x] sits at position x, and
+  // the DOFs of body i's subtree at positions dfs_begin[i] .. dfs_end[i] − 1, its own first
+  std::vector<int> dfs_dof, dfs_begin, dfs_end;
   int depth = 0;                           // longest chain from the ground (nilpotency of Φ_D)
   bool chain = false;                      // every DOF's parent DOF is the one before it
   // for the specialized kinematics (kinematics.cpp), set by build: a revolute or prismatic axis

@@ -1,6 +1,6 @@
 // soadyn against its peers in the same run, on the same URDF chains and binary trees
 // (tools/bench/make_models.py) and the same state, every call starting from q (and v, tau):
-//   peer/<shape>/mass/<lib>   soadyn update_kinematics + mass_matrix
+//   peer/<shape>/mass/<lib>   soadyn mass_matrix(q) (the local-frame route, from q alone)
 //   peer/<shape>/bias/<lib>   soadyn update_kinematics + update_velocities + bias_forces
 //   peer/<shape>/rhs/<lib>    soadyn update_kinematics + update_velocities + O(N) forward_dynamics
 // and each peer's calls for the same quantities (peer_<lib>.cpp says which).  The peers are
@@ -113,8 +113,7 @@ struct Setup {
     problem.q = qv, problem.v = vv, problem.tau = tv;
   }
   void mass() {
-    update_kinematics(model, data, q);
-    mass_matrix(model, data);
+    mass_matrix(model, data, q);
   }
   void bias() {
     update_kinematics(model, data, q);

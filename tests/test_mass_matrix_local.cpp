@@ -1,0 +1,149 @@
+// The local-frame route, mass_matrix(model, data, q), against the inertial composite sweep it sits
+// beside (update_kinematics + mass_matrix) and the note's literal procedure: every joint type,
+// axes along ±e_k and not, placements that turn the frame and ones that do not, bodies numbered
+// in an order that is not depth-first, several trees at once, and models past the depth where
+// the entry point takes the inertial route instead.
+#include "test_util.hpp"
+
+using namespace soadyn;
+using namespace soadyn::test;
+
+namespace {
+
+// 𝓜 by the inertial sweep and by the note's literal procedure
+struct Reference {
+  MatX composite, literal;
+};
+
+Reference reference(const Model& model, const VecX& q) {
+  Data data(model);
+  update_kinematics(model, data, q);
+  Reference r;
+  mass_matrix_literal(model, data, r.literal);
+  mass_matrix(model, data);
+  r.composite = data.Mass;
+  return r;
+}
+
+// true where the model's body order is not depth-first: some subtree's bodies are not one run
+bool not_depth_first(const Model& model) {
+  for (int i = 0; i < model.nbodies; ++i)
+    for (int j = i + 1; j < model.nbodies; ++j) {
+      int a = j;
+      while (a > i) a = model.parent[a];
+      if (a != i) {  // j is outside the subtree of i: no later body may be inside it
+        for (int k = j + 1; k < model.nbodies; ++k) {
+          int b = k;
+          while (b > i) b = model.parent[b];
+          if (b == i) return true;
+        }
+        break;
+      }
+    }
+  return false;
+}
+
+struct Case {
+  const char* name;
+  TreeOptions options;
+  friend void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+};
+
+class LocalRoute : public ::testing::TestWithParam<Case> {};
+
+TEST_P(LocalRoute, EqualsInertialSweepAndLiteral) {
+  const Case& c = GetParam();
+  int shuffled = 0;
+  for (int seed = 0; seed < 8; ++seed) {
+    Rng rng(900 + 31 * seed + c.options.n);
+    const Model model = random_model(rng, c.options);
+    shuffled += not_depth_first(model);
+    VecX q = random_q(rng, model);
+    if (seed % 2 == 1)  // far turns: the batched sincos reduces large angles too
+      for (int i = 0; i < model.nbodies; ++i)
+        if (model.joint_type[i] == JointType::Revolute) q(model.idx_q[i]) *= 1e3;
+    const Reference ref = reference(model, q);
+    Data data(model);  // fresh: the route needs no [kin]
+    mass_matrix(model, data, q);
+    ASSERT_TRUE(near_rel(data.Mass, ref.composite, 1e-12)) << c.name << " seed " << seed;
+    ASSERT_TRUE(near_rel(data.Mass, ref.literal, 1e-12)) << c.name << " seed " << seed;
+    ASSERT_TRUE(near_rel(data.Mass, data.Mass.transpose(), 0.0)) << "not symmetric";
+    // a second configuration on the same Data: nothing of the first one is left in 𝓜
+    const VecX q2 = random_q(rng, model);
+    mass_matrix(model, data, q2);
+    ASSERT_TRUE(near_rel(data.Mass, reference(model, q2).composite, 1e-12)) << c.name << " seed " << seed;
+  }
+  if (c.options.branching > 0.0) {
+    EXPECT_GT(shuffled, 0) << "no model had a body order that is not depth-first";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Trees, LocalRoute,
+    ::testing::Values(
+        Case{"unit_chain8", {.n = 8, .branching = 0.0, .unit_axis = 1.0}},
+        Case{"unit_tree40", {.n = 40, .branching = 0.6, .prismatic = 0.3, .unit_axis = 1.0}},
+        Case{"general_tree40", {.n = 40, .branching = 0.6, .prismatic = 0.3}},
+        Case{"every_joint30", {.n = 30, .branching = 0.5, .prismatic = 0.2, .ball = 0.15, .planar = 0.15,
+                               .free_root = true, .fixed = 4, .unit_axis = 0.5}},
+        Case{"free_unit20", {.n = 20, .branching = 0.4, .free_root = true, .unit_axis = 0.8}},
+        Case{"ball_planar25", {.n = 25, .branching = 0.5, .ball = 0.4, .planar = 0.4}},
+        Case{"unit_chain48", {.n = 48, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},
+        Case{"deep_chain120", {.n = 120, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}}),
+    [](const auto& info) { return std::string(info.param.name); });
+
+// Several trees hanging from the ground, numbered interleaved: each has its own depth-first run
+TEST(LocalRoute, SeveralTreesInterleaved) {
+  Rng rng(77);
+  std::vector<BodySpec> specs = random_specs(rng, {.n = 12, .branching = 0.5, .unit_axis = 0.6});
+  const std::vector<BodySpec> second = random_specs(rng, {.n = 12, .branching = 0.5, .prismatic = 0.3, .unit_axis = 0.6});
+  // interleave: body k of the second tree goes after body k of the first
+  std::vector<BodySpec> all;
+  std::vector<int> first_at(specs.size()), second_at(second.size());
+  for (size_t k = 0; k < specs.size(); ++k) {
+    first_at[k] = int(all.size());
+    all.push_back(specs[k]);
+    second_at[k] = int(all.size());
+    all.push_back(second[k]);
+    all.back().name += "_2";
+  }
+  for (size_t k = 0; k < specs.size(); ++k) {
+    if (specs[k].parent >= 0) all[size_t(first_at[k])].parent = first_at[size_t(specs[k].parent)];
+    if (second[k].parent >= 0) all[size_t(second_at[k])].parent = second_at[size_t(second[k].parent)];
+  }
+  const Model model = Model::build(all, Vec3(0, 0, -9.81));
+  ASSERT_TRUE(not_depth_first(model));
+  for (int trial = 0; trial < 5; ++trial) {
+    const VecX q = random_q(rng, model);
+    Data data(model);
+    mass_matrix(model, data, q);
+    ASSERT_TRUE(near_rel(data.Mass, reference(model, q).composite, 1e-12)) << "trial " << trial;
+  }
+}
+
+// The body order the route uses: every subtree's DOFs one run, the body's own first
+TEST(LocalRoute, DepthFirstRunsCoverEachSubtree) {
+  Rng rng(5);
+  const Model model = random_model(rng, {.n = 60, .branching = 0.7, .ball = 0.2, .free_root = true});
+  ASSERT_EQ(int(model.dfs_dof.size()), model.nv);
+  std::vector<int> seen(size_t(model.nv), 0);
+  for (int x : model.dfs_dof) ++seen[size_t(x)];
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), model.nv);  // a permutation
+  for (int i = 0; i < model.nbodies; ++i) {
+    EXPECT_EQ(model.dfs_dof[size_t(model.dfs_begin[i])], model.idx_v[i]);
+    int count = 0;  // DOFs in the subtree of i
+    for (int j = 0; j < model.nbodies; ++j) {
+      int a = j;
+      while (a > i) a = model.parent[a];
+      if (a == i) count += model.nv_i[j];
+    }
+    EXPECT_EQ(model.dfs_end[i] - model.dfs_begin[i], count) << "body " << i;
+    for (int x = model.dfs_begin[i]; x < model.dfs_end[i]; ++x) {
+      int a = model.dof_body[size_t(model.dfs_dof[size_t(x)])];
+      while (a > i) a = model.parent[a];
+      EXPECT_EQ(a, i) << "position " << x << " is not in the subtree of body " << i;
+    }
+  }
+}
+
+}  // namespace
