@@ -86,6 +86,7 @@ TEST(NoAllocation, AlgorithmsAllocateNothingPerCall) {
 
     Forbidden region;
     mass_matrix(model, data, q);  // from q alone: the local route on trees, the inertial on chains
+    bias_forces(model, data, q, v);
     update_kinematics(model, data, q);
     update_velocities(model, data, v);
     mass_matrix(model, data);

@@ -33,6 +33,14 @@ void mass_matrix(const Model& model, Data& data, const VecX& q);
 // Needs [kin] and [vel]; fills data.bias.
 void bias_forces(const Model& model, Data& data);
 
+// bias(q, q̇) straight from q (nq) and v (nv), as Pinocchio's nonLinearEffects: the same two
+// sweeps with every quantity in body axes (bias_local.cpp), so no inertial kinematics is formed.
+// Needs nothing; fills data.bias (and the body-axes scratch Vb, Ab, Fb, Xr, Xp, turn), the same
+// bias as update_kinematics + update_velocities + bias_forces to rounding.  A model with a planar
+// joint takes those three calls instead, so [kin] and [vel] afterwards hold either (q, v) or what
+// they held before: call update_kinematics and update_velocities before the stages that need them.
+void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v);
+
 // τ = 𝓜 q̈ + bias with the same two sweeps.  Needs [kin] and [vel]; fills data.tau.
 void inverse_dynamics(const Model& model, Data& data, const VecX& qdd);
 

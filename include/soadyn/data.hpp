@@ -51,6 +51,10 @@ struct Data {
   Mat6X A;                             // joint accelerations v̇_i
   Mat6X F;                             // joint force pairs about η_i
   VecX bias;                           // bias(q, q̇) incl. gravity, nv
+  // [rne] the body-axes route, bias_forces(model, data, q, v) (bias_local.cpp)
+  Mat6X Vb, Ab, Fb;                    // v̂_i, â_i, f̂_i of each body, its own axes, about η_i
+  std::vector<Mat3> Xr;                // (R, p) of body i: placement ∘ joint motion (joints off the
+  Mat3X Xp;                            //   ±e_k revolute path only)
   VecX tau;                            // inverse dynamics result, nv
   VecX qdd;                            // forward dynamics result, nv
   // 𝓜 factored in place as LᵀDL (tree-sparse route); row-major: the factorization walks rows

@@ -1,7 +1,7 @@
 // soadyn against its peers in the same run, on the same URDF chains and binary trees
 // (tools/bench/make_models.py) and the same state, every call starting from q (and v, tau):
 //   peer/<shape>/mass/<lib>   soadyn mass_matrix(q) (the local-frame route, from q alone)
-//   peer/<shape>/bias/<lib>   soadyn update_kinematics + update_velocities + bias_forces
+//   peer/<shape>/bias/<lib>   soadyn bias_forces(q, v) (the body-axes route, from q and v alone)
 //   peer/<shape>/rhs/<lib>    soadyn update_kinematics + update_velocities + O(N) forward_dynamics
 // and each peer's calls for the same quantities (peer_<lib>.cpp says which).  The peers are
 // plugins (peer.hpp) that CMake built when it found the library: MuJoCo always looked up,
@@ -116,9 +116,7 @@ struct Setup {
     mass_matrix(model, data, q);
   }
   void bias() {
-    update_kinematics(model, data, q);
-    update_velocities(model, data, v);
-    bias_forces(model, data);
+    bias_forces(model, data, q, v);
   }
   void rhs() {
     update_kinematics(model, data, q);
