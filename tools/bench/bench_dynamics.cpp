@@ -1,4 +1,5 @@
-// Time per call against N, chains and binary trees: 𝓜 literal and composite, bias, inverse
+// Time per call against N, chains and binary trees: 𝓜 literal, composite, and from q alone (the
+// local-frame route), bias after [kin] + [vel] and from (q, v) alone (the body-axes route), inverse
 // dynamics, each forward-dynamics route, one full right-hand side.
 #include "models.hpp"
 
@@ -65,6 +66,18 @@ template <bool B> void MassComposite(benchmark::State& st) {
     benchmark::DoNotOptimize(f.data.Mass.data());
   });
 }
+template <bool B> void MassFromQ(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    mass_matrix(f.model, f.data, f.q);
+    benchmark::DoNotOptimize(f.data.Mass.data());
+  });
+}
+template <bool B> void BiasFromQV(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    bias_forces(f.model, f.data, f.q, f.v);
+    benchmark::DoNotOptimize(f.data.bias.data());
+  });
+}
 template <bool B> void Bias(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
     update_kinematics(f.model, f.data, f.q);
@@ -124,6 +137,8 @@ BENCHMARK(Kinematics<false>)->Name("chain/kinematics")->Apply(sizes);
 BENCHMARK(Velocities<false>)->Name("chain/velocities")->Apply(sizes);
 BENCHMARK(MassLiteral<false>)->Name("chain/mass_literal")->Apply(sizes);
 BENCHMARK(MassComposite<false>)->Name("chain/mass_composite")->Apply(sizes);
+BENCHMARK(MassFromQ<false>)->Name("chain/mass_q")->Apply(sizes);
+BENCHMARK(BiasFromQV<false>)->Name("chain/bias_qv")->Apply(sizes);
 BENCHMARK(Bias<false>)->Name("chain/bias")->Apply(sizes);
 BENCHMARK(Inverse<false>)->Name("chain/inverse")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::Dense>)->Name("chain/rhs_dense")->Apply(sizes);
@@ -135,6 +150,8 @@ BENCHMARK_CAPTURE(Step, rk4, "rk4")->Name("chain/step_rk4")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, implicit_midpoint, "implicit-midpoint")->Name("chain/step_implicit_midpoint")->DenseRange(1, 1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32)->Arg(64);
 BENCHMARK(MassLiteral<true>)->Name("tree/mass_literal")->Apply(tree_sizes);
 BENCHMARK(MassComposite<true>)->Name("tree/mass_composite")->Apply(tree_sizes);
+BENCHMARK(MassFromQ<true>)->Name("tree/mass_q")->Apply(tree_sizes);
+BENCHMARK(BiasFromQV<true>)->Name("tree/bias_qv")->Apply(tree_sizes);
 BENCHMARK(Bias<true>)->Name("tree/bias")->Apply(tree_sizes);
 BENCHMARK(Inverse<true>)->Name("tree/inverse")->Apply(tree_sizes);
 BENCHMARK(Forward<true, FdMethod::Dense>)->Name("tree/rhs_dense")->Apply(tree_sizes);

@@ -61,7 +61,7 @@ def crossover(fast, slow):
     return None
 
 
-QUANTITIES = (("mass", "𝓜"), ("bias", "bias C(q, v)"), ("rhs", "O(N) forward dynamics (MuJoCo: mj_forward, dense)"))
+QUANTITIES = (("mass", "𝓜 (soadyn: mass_matrix(q), from q alone)"), ("bias", "bias C(q, v) (soadyn: bias_forces(q, v), from q and v alone)"), ("rhs", "O(N) forward dynamics (MuJoCo: mj_forward, dense)"))
 
 
 def peer_series(series, shape, q):
@@ -166,8 +166,8 @@ def main():
     print("\n".join(lines))
 
     fig, ax = plt.subplots(1, 2, figsize=(12, 4.8))
-    styles = {"mass_composite": "C0", "mass_literal": "C5", "bias": "C1", "rhs_on": "C2", "rhs_dense": "C3",
-              "rhs_sparse": "C4"}
+    styles = {"mass_composite": "C0", "mass_q": "C6", "mass_literal": "C5", "bias": "C1", "bias_qv": "C7",
+              "rhs_on": "C2", "rhs_dense": "C3", "rhs_sparse": "C4"}
     for a, group in zip(ax, ("chain", "tree")):
         for q, c in styles.items():
             s = series.get(f"{group}/{q}")
