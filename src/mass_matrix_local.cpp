@@ -26,9 +26,9 @@ namespace soadyn {
 
 namespace {
 
-// deepest model the local route takes (chain of 32: local 2.1 µs, inertial 3.1 µs; of 64: 7.4
-// against 6.0 µs)
-constexpr int kLocalDepth = 48;
+// deepest model the local route takes (interleaved on one core, chain of 32: local 2.09–2.13 µs,
+// inertial 2.21; of 64: local 6.9–7.3, inertial 4.9)
+constexpr int kLocalDepth = 40;
 
 // R M Rᵀ for a symmetric M, in place: the upper triangle from T = R M, mirrored
 inline void rotate_symmetric(const Mat3& R, Mat3& M) {
