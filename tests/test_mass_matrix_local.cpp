@@ -88,7 +88,7 @@ INSTANTIATE_TEST_SUITE_P(
                                .free_root = true, .fixed = 4, .unit_axis = 0.5}},
         Case{"free_unit20", {.n = 20, .branching = 0.4, .free_root = true, .unit_axis = 0.8}},
         Case{"ball_planar25", {.n = 25, .branching = 0.5, .ball = 0.4, .planar = 0.4}},
-        Case{"unit_chain48", {.n = 48, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},
+        Case{"unit_chain40", {.n = 40, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},
         Case{"deep_chain120", {.n = 120, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}}),
     [](const auto& info) { return std::string(info.param.name); });
 
