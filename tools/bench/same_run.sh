@@ -50,6 +50,19 @@ cp -a "$harness" "$work/harness"  # -a: file times kept, so a rebuild is increme
 if ! grep -Eq '^\s*ON\b' "$repo/include/soadyn/algorithms.hpp"; then
   sed -i 's/FdMethod::ON\b/FdMethod::ArticulatedBody/g' "$work/harness/same_run/adapter_soadyn.cc"
 fi
+# ... and it predates the entry points that start from the state alone, mass_matrix(model, data, q)
+# and bias_forces(model, data, q, v): the copy gains them as two more routes (the harness takes
+# each library's best route for 𝓜 and bias)
+if grep -q 'void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v);' \
+    "$repo/include/soadyn/algorithms.hpp" && ! grep -q 'mass_matrix(q)' "$work/harness/same_run/adapter_soadyn.cc"; then
+  sed -i 's|^\(\s*\)routes = {$|&\
+\1    {kMass, "mass_matrix(q)", false, [this] { soadyn::mass_matrix(model, data, q); },\
+\1     [this] { return permute_mat(data.Mass, vidx); }},\
+\1    {kBias, "bias_forces(q,v)", false, [this] { soadyn::bias_forces(model, data, q, v); },\
+\1     [this] { return permute_vec(data.bias, vidx); }},|' "$work/harness/same_run/adapter_soadyn.cc"
+  grep -q 'mass_matrix(q)' "$work/harness/same_run/adapter_soadyn.cc" ||
+    { echo "same_run: could not add the from-state routes to the adapter copy" >&2; exit 1; }
+fi
 
 cmake -S "$work/harness/same_run" -B "$work/gcc" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=g++ \
   -DSOADYN_BUILD_DIR="$build" -DSOADYN_SOURCE_DIR="$repo" -DPEERS_PREFIX="$prefix"
