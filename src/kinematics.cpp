@@ -72,8 +72,11 @@ void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool
 #endif
 }
 
-void update_kinematics(const Model& model, Data& data, const VecX& q) {
-  data.check(model, "update_kinematics", "q", q.size(), model.nq);
+namespace {
+
+// the kinematics sweep; kInertias = false stops at the frames (R, η, d, G)
+template <bool kInertias>
+void kinematics_sweep(const Model& model, Data& data, const VecX& q) {
   joint_turns(model, q, data.turn);
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i];
@@ -116,6 +119,7 @@ void update_kinematics(const Model& model, Data& data, const VecX& q) {
     // d_i = η_i − η_p;  s_i = C_i com_i;  r_i = η_i + s_i;  M_i = (m_i, m_i s_i, C_i I_η C_iᵀ) (eq. 12)
     data.eta.col(i) = eta;
     data.d.col(i) = p < 0 ? eta : Vec3(eta - data.eta.col(p));
+    if constexpr (!kInertias) continue;
     const Vec3 s = R * model.com[i];
     data.s.col(i) = s;
     data.r.col(i) = eta + s;
@@ -123,6 +127,18 @@ void update_kinematics(const Model& model, Data& data, const VecX& q) {
     data.M[i].h = model.mass[i] * s;
     rotate_symmetric(R, model.inertia_origin[i], data.M[i].I);
   }
+}
+
+}  // namespace
+
+void update_kinematics(const Model& model, Data& data, const VecX& q) {
+  data.check(model, "update_kinematics", "q", q.size(), model.nq);
+  kinematics_sweep<true>(model, data, q);
+}
+
+void update_frames(const Model& model, Data& data, const VecX& q) {
+  data.check(model, "update_frames", "q", q.size(), model.nq);
+  kinematics_sweep<false>(model, data, q);
 }
 
 void update_kinematics_reference(const Model& model, Data& data, const VecX& q) {

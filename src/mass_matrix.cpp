@@ -2,6 +2,8 @@
 #include "soadyn/kinematics.hpp"
 #include "soadyn/operators.hpp"
 
+#include "mass_matrix_entries.hpp"
+
 namespace soadyn {
 
 void mass_matrix_literal(const Model& model, const Data& data, MatX& M_out) {
@@ -39,6 +41,10 @@ void mass_matrix(const Model& model, Data& data) {
     }
     if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(K, data.d.col(i));
   }
+  mass_matrix_entries(model, data);
+}
+
+void mass_matrix_entries(const Model& model, Data& data) {
   if (model.chain && model.nv >= 32) {
     // every DOF is an ancestor of the later ones: 𝓜_jk = F0_jᵀ S0_k on and below the diagonal and
     // S0_jᵀ F0_k above it.  Below 128 DOFs the lower triangle alone, mirrored (chain of 64: 4.9

@@ -15,10 +15,13 @@
 //
 // A DOF's F̂ is moved once per ancestor: O(N·depth) 6-vector moves, against the inertial sweep's
 // O(N·depth) dot products of vectors moved once.  Past kLocalDepth the dot products win, and the
-// entry point takes the inertial route (update_kinematics + mass_matrix).  Columns are kept in
+// entry point keeps the composites in body axes but moves each K̂ Ĝ once to the inertial origin,
+// with the entries as the inertial sweep's dot products (mass_matrix_frames).  Columns are kept in
 // depth-first order so that a subtree's are one run whatever the body order.
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
+
+#include "mass_matrix_entries.hpp"
 
 #include <cmath>
 
@@ -128,13 +131,73 @@ void revolute_step(const Model& model, Data& data, int i, double sign) {
   add_turned<k>(K, c, s, offset, data.Kl[p]);
 }
 
+// Deeper models: the composites in body axes as above, but each K̂_i Ĝ_k moved once to the
+// inertial origin, F0_k = [R n̂ + η_i × R f̂; R f̂], and the entries as dot products with
+// S0_j = [a; b + η × a] (mass_matrix_entries), from the frames alone (update_frames: no inertia
+// turned into inertial axes)
+void mass_matrix_frames(const Model& model, Data& data, const VecX& q) {
+  update_frames(model, data, q);
+  const int N = model.nbodies;
+  for (int i = 0; i < N; ++i) {
+    data.Kl[i].m = model.mass[i];
+    data.Kl[i].h = model.mass[i] * model.com[i];
+    data.Kl[i].I = model.inertia_origin[i];
+  }
+  for (int i = N - 1; i >= 0; --i) {
+    const SpatialInertia& K = data.Kl[i];
+    const Mat3& R = data.R[i];
+    const Vec3 eta = data.eta.col(i);
+    const JointType type = model.joint_type[i];
+    const int p = model.parent[i], unit = model.unit_axis[i];
+    const int k = std::abs(unit) - 1;
+    const double sign = unit > 0 ? 1.0 : -1.0;
+    const bool turn_only = unit != 0 && type == JointType::Revolute && !model.placement_turns[i];
+    const Vec3 hw = R * K.h;  // h in inertial axes
+    for (int c = model.idx_v[i]; c < model.idx_v[i] + model.nv_i[i]; ++c) {
+      const Vec3 ga = data.G.col(c).head<3>(), gb = data.G.col(c).tail<3>();
+      // R K̂ Ĝ = R K̂ Rᵀ G: [R I Rᵀ a + h_w × b; m b − h_w × a], with R I Rᵀ a = ±R I e_k along a unit axis
+      Vec3 nw, fw;
+      if (unit != 0 && type == JointType::Revolute) {
+        nw.noalias() = sign * (R * K.I.col(k));
+        fw = ga.cross(hw);
+      } else {
+        nw.noalias() = R * (K.I * (R.transpose() * ga));
+        nw += hw.cross(gb);
+        fw = K.m * gb - hw.cross(ga);
+      }
+      nw += eta.cross(fw);
+      data.F0.col(c).head<3>() = nw;
+      data.F0.col(c).tail<3>() = fw;
+      data.S0.col(c).head<3>() = ga;
+      data.S0.col(c).tail<3>() = gb + eta.cross(ga);
+    }
+    if (p < 0) continue;
+    // K̂_p += X_i K̂_i X_iᵀ
+    if (turn_only) {
+      const double c = data.turn(0, i), s = sign * data.turn(1, i);
+      const Vec3& offset = model.placement[i].p;
+      switch (k) {
+        case 0: add_turned<0>(K, c, s, offset, data.Kl[p]); break;
+        case 1: add_turned<1>(K, c, s, offset, data.Kl[p]); break;
+        default: add_turned<2>(K, c, s, offset, data.Kl[p]); break;
+      }
+      continue;
+    }
+    const Mat3 Rrel = data.R[p].transpose() * R;
+    SpatialInertia Kr = K;
+    rotate_symmetric(Rrel, Kr.I);
+    Kr.h = Rrel * K.h;
+    data.Kl[p].add_transformed(Kr, data.R[p].transpose() * data.d.col(i));
+  }
+  mass_matrix_entries(model, data);
+}
+
 }  // namespace
 
 void mass_matrix(const Model& model, Data& data, const VecX& q) {
   data.check(model, "mass_matrix", "q", q.size(), model.nq);
   if (model.depth > kLocalDepth) {
-    update_kinematics(model, data, q);
-    mass_matrix(model, data);
+    mass_matrix_frames(model, data, q);
     return;
   }
   joint_turns(model, q, data.turn, false);

@@ -2,7 +2,7 @@
 // beside (update_kinematics + mass_matrix) and the note's literal procedure: every joint type,
 // axes along ±e_k and not, placements that turn the frame and ones that do not, bodies numbered
 // in an order that is not depth-first, several trees at once, and models past the depth where
-// the entry point takes the inertial route instead.
+// the entry point moves each column once to the inertial origin instead.
 #include "test_util.hpp"
 
 using namespace soadyn;
@@ -89,7 +89,9 @@ INSTANTIATE_TEST_SUITE_P(
         Case{"free_unit20", {.n = 20, .branching = 0.4, .free_root = true, .unit_axis = 0.8}},
         Case{"ball_planar25", {.n = 25, .branching = 0.5, .ball = 0.4, .planar = 0.4}},
         Case{"unit_chain40", {.n = 40, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},
-        Case{"deep_chain120", {.n = 120, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}}),
+        Case{"deep_chain120", {.n = 120, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},
+        Case{"deep_every_joint60", {.n = 60, .branching = 0.05, .prismatic = 0.2, .ball = 0.1, .planar = 0.1,
+                                    .free_root = true, .fixed = 3, .unit_axis = 0.5}}),
     [](const auto& info) { return std::string(info.param.name); });
 
 // Several trees hanging from the ground, numbered interleaved: each has its own depth-first run

@@ -9,6 +9,9 @@ namespace soadyn {
 // [kin] R_i, η_i, d_i, s_i, r_i, G_i, I_i and M_i at configuration q (size nq).
 // Joints along a unit axis of their frame take a specialized path (one sincos, no 3×3 product).
 void update_kinematics(const Model& model, Data& data, const VecX& q);
+// The frames alone: R_i, η_i, d_i and G_i of [kin] (not s_i, r_i, M_i), for the 𝓜 route that keeps
+// its inertias in body axes (mass_matrix_local.cpp)
+void update_frames(const Model& model, Data& data, const VecX& q);
 // The same by the generic joint interface (joint_motion, joint_subspace) for every joint: the
 // reference the specialized path is tested against.
 void update_kinematics_reference(const Model& model, Data& data, const VecX& q);
