@@ -91,13 +91,6 @@ MatX mass_at(const Model& model, const VecX& q) {
   return d.Mass;
 }
 
-VecX bias_at(const Model& model, const VecX& q, const VecX& v) {
-  Data d(model);
-  update_kinematics(model, d, q);
-  update_velocities(model, d, v);
-  bias_forces(model, d);
-  return d.bias;
-}
 
 double potential_at(const Model& model, const VecX& q) {
   Data d(model);

@@ -102,6 +102,15 @@ inline VecX random_q(Rng& rng, const Model& m) {
   return q;
 }
 
+// bias(q, q̇) by the staged inertial route: update_kinematics, update_velocities, bias_forces
+inline VecX bias_at(const Model& model, const VecX& q, const VecX& v) {
+  Data d(model);
+  update_kinematics(model, d, q);
+  update_velocities(model, d, v);
+  bias_forces(model, d);
+  return d.bias;
+}
+
 inline VecX random_v(Rng& rng, const Model& m, double scale = 1.0) {
   VecX v(m.nv);
   for (int i = 0; i < m.nv; ++i) v(i) = scale * rng.uniform();
