@@ -9,11 +9,7 @@ using namespace soadyn::test;
 
 namespace {
 
-struct Case {
-  const char* name;
-  TreeOptions options;
-  friend void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
-};
+using Case = TreeCase;
 
 class BodyAxesBias : public ::testing::TestWithParam<Case> {};
 

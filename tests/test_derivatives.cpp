@@ -13,11 +13,7 @@ using namespace soadyn::test;
 
 namespace {
 
-struct Case {
-  const char* name;
-  TreeOptions options;
-  friend void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
-};
+using Case = TreeCase;
 
 const Case kCases[] = {
     {"chain6", {.n = 6, .branching = 0.0}},

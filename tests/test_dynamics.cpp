@@ -7,11 +7,7 @@ using namespace soadyn::test;
 
 namespace {
 
-struct Case {
-  const char* name;
-  TreeOptions options;
-  friend void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
-};
+using Case = TreeCase;
 
 const Case kCases[] = {
     {"chain8", {.n = 8, .branching = 0.0}},

@@ -247,11 +247,6 @@ TEST(NoteExamples, Example4ThreeLinkArm) {
 }
 
 // literal procedure = composite algorithm on random trees
-struct TreeCase {
-  const char* name;
-  TreeOptions options;
-  friend void PrintTo(const TreeCase& c, std::ostream* os) { *os << c.name; }
-};
 
 class RandomTrees : public ::testing::TestWithParam<TreeCase> {};
 

@@ -43,11 +43,7 @@ bool not_depth_first(const Model& model) {
   return false;
 }
 
-struct Case {
-  const char* name;
-  TreeOptions options;
-  friend void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
-};
+using Case = TreeCase;
 
 class LocalRoute : public ::testing::TestWithParam<Case> {};
 

@@ -58,6 +58,13 @@ struct TreeOptions {
   Vec3 gravity = Vec3(0, 0, -9.81);
 };
 
+// a named set of tree options: one case of a parameterized test over random trees
+struct TreeCase {
+  const char* name;
+  TreeOptions options;
+  friend void PrintTo(const TreeCase& c, std::ostream* os) { *os << c.name; }
+};
+
 inline std::vector<BodySpec> random_specs(Rng& rng, const TreeOptions& o) {
   std::vector<BodySpec> specs;
   const int total = o.n + o.fixed;
