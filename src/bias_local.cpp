@@ -110,10 +110,8 @@ void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v) {
   for (int i = 0; i < N; ++i) {
     const JointType type = model.joint_type[i];
     const int p = model.parent[i], unit = model.unit_axis[i], iv = model.idx_v[i];
-    SpatialInertia K;  // M̂_i, constant in body axes
-    K.m = model.mass[i];
-    K.h = model.mass[i] * model.com[i];
-    K.I = model.inertia_origin[i];
+    // M̂_i, constant in body axes
+    const SpatialInertia K = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
     const double sign = unit > 0 ? 1.0 : -1.0;
     if (unit != 0 && type == JointType::Revolute && !model.placement_turns[i]) {
       switch (std::abs(unit) - 1) {

@@ -21,14 +21,6 @@ namespace soadyn {
 
 namespace {
 
-// C M Cᵀ for a symmetric M: the upper triangle from T = C M, mirrored
-inline void rotate_symmetric(const Mat3& C, const Mat3& M, Mat3& out) {
-  Mat3 T;
-  T.noalias() = C * M;
-  for (int a = 0; a < 3; ++a)
-    for (int b = a; b < 3; ++b) out(a, b) = out(b, a) = T.row(a).dot(C.row(b));
-}
-
 const Mat3 kIdentity = Mat3::Identity();
 
 }  // namespace

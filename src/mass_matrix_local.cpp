@@ -33,12 +33,10 @@ namespace {
 // inertial 2.21; of 64: local 6.9–7.3, inertial 4.9)
 constexpr int kLocalDepth = 40;
 
-// R M Rᵀ for a symmetric M, in place: the upper triangle from T = R M, mirrored
-inline void rotate_symmetric(const Mat3& R, Mat3& M) {
-  Mat3 T;
-  T.noalias() = R * M;
-  for (int a = 0; a < 3; ++a)
-    for (int b = a; b < 3; ++b) M(a, b) = M(b, a) = T.row(a).dot(R.row(b));
+// K̂_i = M̂_i for every body: its own inertia, constant in its axes
+void body_inertias(const Model& model, Data& data) {
+  for (int i = 0; i < model.nbodies; ++i)
+    data.Kl[i] = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
 }
 
 // Kp += X K Xᵀ for X = (Rot_k(θ), d): K turned by θ about e_k (Rot taking e_a → c e_a + s e_b,
@@ -138,11 +136,7 @@ void revolute_step(const Model& model, Data& data, int i, double sign) {
 void mass_matrix_frames(const Model& model, Data& data, const VecX& q) {
   update_frames(model, data, q);
   const int N = model.nbodies;
-  for (int i = 0; i < N; ++i) {
-    data.Kl[i].m = model.mass[i];
-    data.Kl[i].h = model.mass[i] * model.com[i];
-    data.Kl[i].I = model.inertia_origin[i];
-  }
+  body_inertias(model, data);
   for (int i = N - 1; i >= 0; --i) {
     const SpatialInertia& K = data.Kl[i];
     const Mat3& R = data.R[i];
@@ -185,7 +179,7 @@ void mass_matrix_frames(const Model& model, Data& data, const VecX& q) {
     }
     const Mat3 Rrel = data.R[p].transpose() * R;
     SpatialInertia Kr = K;
-    rotate_symmetric(Rrel, Kr.I);
+    rotate_symmetric(Rrel, Kr.I, Kr.I);
     Kr.h = Rrel * K.h;
     data.Kl[p].add_transformed(Kr, data.R[p].transpose() * data.d.col(i));
   }
@@ -205,12 +199,7 @@ void mass_matrix(const Model& model, Data& data, const VecX& q) {
   const Eigen::Index nv = data.Mass.rows();
   double* M = data.Mass.data();
   Mat6X& F = data.Fl;
-  // K̂_i = M̂_i: the body's own inertia, constant in its axes
-  for (int i = 0; i < N; ++i) {
-    data.Kl[i].m = model.mass[i];
-    data.Kl[i].h = model.mass[i] * model.com[i];
-    data.Kl[i].I = model.inertia_origin[i];
-  }
+  body_inertias(model, data);
   for (int i = N - 1; i >= 0; --i) {
     SpatialInertia& K = data.Kl[i];
     const JointType type = model.joint_type[i];
@@ -267,7 +256,7 @@ void mass_matrix(const Model& model, Data& data, const VecX& q) {
       // X_i = placement ∘ joint motion
       const Mat3 R = X.R * Rm;
       const Vec3 pr = X.p + X.R * pm;
-      rotate_symmetric(R, K.I);
+      rotate_symmetric(R, K.I, K.I);
       K.h = R * K.h;
       move_columns(F, begin, end, R, pr);
       data.Kl[p].add_transformed(K, pr);
@@ -285,7 +274,7 @@ void mass_matrix(const Model& model, Data& data, const VecX& q) {
       pr += (sign * q(model.idx_q[i])) * X.R.col(k);
     }
     if (model.placement_turns[i] || type == JointType::Revolute) {
-      rotate_symmetric(R, K.I);
+      rotate_symmetric(R, K.I, K.I);
       K.h = R * K.h;
     }
     move_columns(F, begin, end, R, pr);

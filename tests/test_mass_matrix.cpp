@@ -23,18 +23,6 @@ BodySpec random_body(Rng& rng, const std::string& name, int parent, JointType j,
   return b;
 }
 
-struct Computed {
-  MatX literal, composite;
-};
-
-Computed both(const Model& model, Data& data, const VecX& q) {
-  update_kinematics(model, data, q);
-  Computed c;
-  mass_matrix_literal(model, data, c.literal);
-  mass_matrix(model, data);
-  c.composite = data.Mass;
-  return c;
-}
 
 constexpr int kTrials = 200;
 

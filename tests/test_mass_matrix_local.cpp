@@ -10,19 +10,10 @@ using namespace soadyn::test;
 
 namespace {
 
-// 𝓜 by the inertial sweep and by the note's literal procedure
-struct Reference {
-  MatX composite, literal;
-};
-
-Reference reference(const Model& model, const VecX& q) {
+// 𝓜 by the inertial sweep and by the note's literal procedure, on a Data of its own
+Computed reference(const Model& model, const VecX& q) {
   Data data(model);
-  update_kinematics(model, data, q);
-  Reference r;
-  mass_matrix_literal(model, data, r.literal);
-  mass_matrix(model, data);
-  r.composite = data.Mass;
-  return r;
+  return both(model, data, q);
 }
 
 // true where the model's body order is not depth-first: some subtree's bodies are not one run
@@ -58,7 +49,7 @@ TEST_P(LocalRoute, EqualsInertialSweepAndLiteral) {
     if (seed % 2 == 1)  // far turns: the batched sincos reduces large angles too
       for (int i = 0; i < model.nbodies; ++i)
         if (model.joint_type[i] == JointType::Revolute) q(model.idx_q[i]) *= 1e3;
-    const Reference ref = reference(model, q);
+    const Computed ref = reference(model, q);
     Data data(model);  // fresh: the route needs no [kin]
     mass_matrix(model, data, q);
     ASSERT_TRUE(near_rel(data.Mass, ref.composite, 1e-12)) << c.name << " seed " << seed;

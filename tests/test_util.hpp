@@ -109,6 +109,20 @@ inline VecX random_q(Rng& rng, const Model& m) {
   return q;
 }
 
+// 𝓜 at q by the note's literal procedure and by the composite sweep, after update_kinematics
+struct Computed {
+  MatX literal, composite;
+};
+
+inline Computed both(const Model& model, Data& data, const VecX& q) {
+  update_kinematics(model, data, q);
+  Computed c;
+  mass_matrix_literal(model, data, c.literal);
+  mass_matrix(model, data);
+  c.composite = data.Mass;
+  return c;
+}
+
 // bias(q, q̇) by the staged inertial route: update_kinematics, update_velocities, bias_forces
 inline VecX bias_at(const Model& model, const VecX& q, const VecX& v) {
   Data d(model);

@@ -14,6 +14,14 @@ inline Mat3 parallel_axis(double m, const Vec3& c) {
   return m * (c.squaredNorm() * Mat3::Identity() - c * c.transpose());
 }
 
+// C M Cᵀ for a symmetric M: the upper triangle from T = C M, mirrored (out may be M itself)
+inline void rotate_symmetric(const Mat3& C, const Mat3& M, Mat3& out) {
+  Mat3 T;
+  T.noalias() = C * M;
+  for (int a = 0; a < 3; ++a)
+    for (int b = a; b < 3; ++b) out(a, b) = out(b, a) = T.row(a).dot(C.row(b));
+}
+
 struct SpatialInertia {
   double m = 0.0;           // mass
   Vec3 h = Vec3::Zero();    // first moment m c about the reference point
@@ -52,6 +60,15 @@ struct SpatialInertia {
     Mat6 M;
     M << I, skew(h), -skew(h), m * Mat3::Identity();
     return M;
+  }
+
+  // body of mass m, centre of mass at c and inertia I_o about the reference point: (m, m c, I_o)
+  static SpatialInertia from_origin(double mass, const Vec3& c, const Mat3& I_o) {
+    SpatialInertia K;
+    K.m = mass;
+    K.h = mass * c;
+    K.I = I_o;
+    return K;
   }
 
   // body of mass m, inertia I_cm about its centre of mass at offset s from the reference point:
