@@ -20,7 +20,6 @@
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
 
-#include <algorithm>
 #include <cmath>
 
 namespace soadyn {
@@ -99,7 +98,7 @@ inline void revolute_backward(const Model& model, Data& data, int i, double sign
 void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v) {
   data.check(model, "bias_forces", "q", q.size(), model.nq);
   data.check(model, "bias_forces", "v", v.size(), model.nv);
-  if (std::find(model.joint_type.begin(), model.joint_type.end(), JointType::Planar) != model.joint_type.end()) {
+  if (model.has_planar) {
     update_kinematics(model, data, q);
     update_velocities(model, data, v);
     bias_forces(model, data);

@@ -325,7 +325,15 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
       }
     m.unit_axis.push_back(unit);
     m.placement_turns.push_back(m.placement[k].R != Mat3::Identity());
+    m.has_planar = m.has_planar || t == JointType::Planar;
   }
+  for (const bool roots : {true, false})
+    for (int k = 0; k < m.nbodies; ++k)
+      if (m.unit_axis[k] != 0 && m.joint_type[k] == JointType::Revolute && (m.parent[k] < 0) == roots) {
+        m.turn_body.push_back(k);
+        m.turn_q.push_back(m.idx_q[k]);
+        m.turn_roots += roots;
+      }
   // depth-first positions of the DOFs: children in index order, each subtree one run
   {
     std::vector<std::vector<int>> children(m.nbodies);

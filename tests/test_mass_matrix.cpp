@@ -4,6 +4,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
+
 using namespace soadyn;
 using namespace soadyn::test;
 
@@ -294,6 +296,41 @@ TEST(Kinematics, SpecializedPathEqualsReference) {
     ASSERT_TRUE(near_rel(fast.G, ref.G, 1e-14)) << "seed " << seed;
   }
   EXPECT_GT(specialized, 100);  // the path under test was taken
+}
+
+// joint_turns against std::cos and std::sin: every revolute joint along a unit axis and nothing
+// else (Model::turn_body, roots first), for every count of turning joints modulo the batch of
+// four, with roots = false leaving the root joints' columns as they were
+TEST(Kinematics, JointTurnsAreEveryUnitRevoluteJointsCosSin) {
+  for (int n = 1; n <= 14; ++n) {
+    Rng rng(7100 + n);
+    // several roots (branching 1 draws parents among all earlier bodies, the first hangs from the ground)
+    std::vector<BodySpec> specs = random_specs(rng, {.n = n, .branching = 1.0, .prismatic = 0.2, .unit_axis = 0.8});
+    for (size_t k = 1; k < specs.size(); k += 3) specs[k].parent = -1;
+    const Model model = Model::build(specs);
+    std::vector<int> expected;
+    for (const bool roots : {true, false})
+      for (int i = 0; i < model.nbodies; ++i)
+        if (model.unit_axis[i] != 0 && model.joint_type[i] == JointType::Revolute && (model.parent[i] < 0) == roots)
+          expected.push_back(i);
+    ASSERT_EQ(model.turn_body, expected) << "n " << n;
+    VecX q = random_q(rng, model);
+    q *= 40.0;  // angles beyond ±π
+    for (const bool roots : {true, false}) {
+      Eigen::Matrix2Xd turn = Eigen::Matrix2Xd::Constant(2, model.nbodies, 7.0);
+      joint_turns(model, q, turn, roots);
+      for (int i = 0; i < model.nbodies; ++i) {
+        const bool listed = std::find(expected.begin(), expected.end(), i) != expected.end();
+        if (!listed || (!roots && model.parent[i] < 0)) {
+          EXPECT_EQ(turn(0, i), 7.0) << "n " << n << " body " << i << " was written";
+          continue;
+        }
+        const double x = q(model.idx_q[i]);
+        EXPECT_NEAR(turn(0, i), std::cos(x), 4e-16) << "n " << n << " body " << i;
+        EXPECT_NEAR(turn(1, i), std::sin(x), 4e-16) << "n " << n << " body " << i;
+      }
+    }
+  }
 }
 
 // T from eq. (9) with ω_i and ṙ_i by central differences of the body poses along q ⊕ h v —

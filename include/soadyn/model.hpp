@@ -72,6 +72,11 @@ class Model {
   // whether the placement turns the frame (a rotation other than the identity)
   std::vector<int> unit_axis;
   std::vector<char> placement_turns;
+  // the revolute joints along a unit axis, whose (cos θ, sin θ) joint_turns computes: their bodies
+  // and q indices, the turn_roots joints that hang from the ground first
+  std::vector<int> turn_body, turn_q;
+  int turn_roots = 0;
+  bool has_planar = false;                 // a planar joint (the body-axes bias takes the inertial route)
 
   double world_mass = 0.0;                 // bodies welded to the world: mass and first moment,
   Vec3 world_first_moment = Vec3::Zero();  // kept for the potential energy only
