@@ -16,7 +16,8 @@
 #   ROUNDS, BUDGET      the harness's --rounds (default 3) and --budget in seconds (default 0.2)
 #   STRICT=1            exit with the harness's status (non-zero when soadyn is slower than the
 #                       best peer somewhere); otherwise 0 after a complete measurement
-# Exits 0 with a note when the harness or the peers are missing (the peers are optional).
+# Exits 0 with a note when the harness, the peers or MuJoCo (installed when running as root) are
+# missing (the peers are optional).
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/../.." && pwd)
 build=$(realpath -m "${1:-$repo/build}")
@@ -33,6 +34,15 @@ fi
 if [[ ! -d $prefix/lib/cmake/pinocchio && ! -f $prefix/include/rbdl/rbdl.h ]]; then
   echo "same_run: neither Pinocchio nor RBDL is installed at $prefix (PEERS_PREFIX; $harness/build_peers.sh builds them); nothing measured"
   exit 0
+fi
+
+# the harness needs MuJoCo (Debian libmujoco-dev): installed here when missing, as run.sh does
+if ! dpkg-query -W -f='${Status}' libmujoco-dev 2>/dev/null | grep -q "install ok installed"; then
+  if [[ $(id -u) -ne 0 ]]; then
+    echo "same_run: the harness needs MuJoCo (sudo apt-get install -y libmujoco-dev); nothing measured"
+    exit 0
+  fi
+  apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y libmujoco-dev
 fi
 
 echo "== soadyn: $build"
