@@ -47,11 +47,13 @@ void mass_matrix(const Model& model, Data& data) {
 void mass_matrix_entries(const Model& model, Data& data) {
   if (model.chain && model.nv >= 32) {
     // every DOF is an ancestor of the later ones: 𝓜_jk = F0_jᵀ S0_k on and below the diagonal and
-    // S0_jᵀ F0_k above it.  Below 128 DOFs the lower triangle alone, mirrored (chain of 64: 4.9
-    // against 5.9 µs); from 128 the mirror's strided copy costs more than a second product
+    // S0_jᵀ F0_k above it.  Below 128 DOFs one product, its lower triangle mirrored (chain of 64:
+    // 4.9 against 5.9 µs for two products), and the whole product rather than Eigen's triangular
+    // one, which costs more than it saves at these sizes (𝓜 from q on a chain of 32: 1.52 against
+    // 1.69 µs; level at 64).  From 128 the mirror's strided copy costs more than a second product
     // (chain of 256: 65 against 44 µs), so both products, no copy
     if (model.nv < 128) {
-      data.Mass.triangularView<Eigen::Lower>() = data.F0.transpose() * data.S0;
+      data.Mass.noalias() = data.F0.transpose() * data.S0;
       data.Mass.triangularView<Eigen::StrictlyUpper>() = data.Mass.transpose();
     } else {
       data.Mass.noalias() = data.F0.transpose() * data.S0;

@@ -29,9 +29,10 @@ namespace soadyn {
 
 namespace {
 
-// deepest model the local route takes (interleaved on one core, chain of 32: local 2.09–2.13 µs,
-// inertial 2.21; of 64: local 6.9–7.3, inertial 4.9)
-constexpr int kLocalDepth = 40;
+// deepest model the local route takes (one run, chains, local against mixed: N = 16 0.57–0.59
+// against 0.63–0.65 µs, 20 0.80–0.86 against 0.88, 24 1.13–1.15 against 1.03–1.06, 32 1.70–1.75
+// against 1.54–1.63)
+constexpr int kLocalDepth = 22;
 
 // K̂_i = M̂_i for every body: its own inertia, constant in its axes
 void body_inertias(const Model& model, Data& data) {

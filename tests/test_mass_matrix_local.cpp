@@ -75,7 +75,9 @@ INSTANTIATE_TEST_SUITE_P(
                                .free_root = true, .fixed = 4, .unit_axis = 0.5}},
         Case{"free_unit20", {.n = 20, .branching = 0.4, .free_root = true, .unit_axis = 0.8}},
         Case{"ball_planar25", {.n = 25, .branching = 0.5, .ball = 0.4, .planar = 0.4}},
-        Case{"unit_chain40", {.n = 40, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},
+        Case{"unit_chain22", {.n = 22, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},  // deepest local
+        Case{"unit_chain26", {.n = 26, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},  // mixed, entry by entry
+        Case{"unit_chain40", {.n = 40, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},  // mixed, one product
         Case{"deep_chain120", {.n = 120, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},
         Case{"deep_every_joint60", {.n = 60, .branching = 0.05, .prismatic = 0.2, .ball = 0.1, .planar = 0.1,
                                     .free_root = true, .fixed = 3, .unit_axis = 0.5}}),

@@ -25,7 +25,7 @@ void mass_matrix(const Model& model, Data& data);
 // 𝓜(q) straight from q (size nq), as Pinocchio's crba(q): the same composite algorithm with every
 // quantity in body axes (mass_matrix_local.cpp), so no inertial kinematics is formed.  Needs
 // nothing; fills data.Mass, the same 𝓜 as update_kinematics + mass_matrix to rounding.  On
-// models deeper than 40 bodies it forms the frames of [kin] (R, η, d, G) and the inertial
+// models deeper than 22 bodies it forms the frames of [kin] (R, η, d, G) and the inertial
 // sweep's dot products (faster there), so [kin] afterwards is unspecified: call update_kinematics
 // before the stages that need it.
 void mass_matrix(const Model& model, Data& data, const VecX& q);
