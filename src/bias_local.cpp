@@ -122,12 +122,28 @@ void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v) {
     }
     // X_i = placement ∘ joint motion, kept for the tip-to-base sweep
     const Placement& X = model.placement[i];
-    Mat3 Rm;
-    Vec3 pm;
-    joint_motion(type, model.axis[i], q.data() + model.idx_q[i], Rm, pm);
     Mat3& R = data.Xr[i];
-    R.noalias() = X.R * Rm;
-    const Vec3 offset = X.p + X.R * pm;
+    Vec3 offset = X.p;
+    if (unit != 0) {
+      // along ±e_k of a placement that turns the frame (as URDFs' rpy mostly do): a revolute
+      // joint's turn mixes two columns of X.R with the batched (cos θ, sin θ), a prismatic one
+      // slides along X.R e_k
+      const int k = std::abs(unit) - 1, a = (k + 1) % 3, b = (k + 2) % 3;
+      R = X.R;
+      if (type == JointType::Revolute) {
+        const double c = data.turn(0, i), s = sign * data.turn(1, i);
+        R.col(a) = c * X.R.col(a) + s * X.R.col(b);
+        R.col(b) = c * X.R.col(b) - s * X.R.col(a);
+      } else {
+        offset += (sign * q(model.idx_q[i])) * X.R.col(k);
+      }
+    } else {
+      Mat3 Rm;
+      Vec3 pm;
+      joint_motion(type, model.axis[i], q.data() + model.idx_q[i], Rm, pm);
+      R.noalias() = X.R * Rm;
+      offset += X.R * pm;
+    }
     data.Xp.col(i) = offset;
     Vec3 w, u, aw, au;
     if (p < 0) {
