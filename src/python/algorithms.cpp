@@ -30,6 +30,15 @@ void kin_vel(const Model& model, PyData& d, const char* where, PyObject* q, PyOb
 
 py::object none() { return py::none(); }
 
+// the keyword kinematics=: True (the default when absent) or False, nothing else
+bool kinematics_wanted(const char* where, PyObject* flag) {
+  if (!flag) return true;
+  if (!PyBool_Check(flag))
+    throw py::type_error(std::string(where) + ": kinematics: expected True or False, got " +
+                         std::string(py::str(py::type::handle_of(flag).attr("__name__"))));
+  return flag == Py_True;
+}
+
 // Each algorithm: its name, parameters after (model, data), and the signature and docstring
 // CPython shows (the first line is its __text_signature__).
 struct UpdateKinematics {
@@ -63,17 +72,25 @@ q: (nq,), v: (nv,).)";
 
 struct MassMatrix {
   static constexpr const char* name = "mass_matrix";
-  static constexpr std::array<const char*, 1> params{"q"};
-  static constexpr const char* doc = R"(mass_matrix(model, data, q)
+  static constexpr std::array<const char*, 2> params{"q", "kinematics"};
+  static constexpr const char* doc = R"(mass_matrix(model, data, q, kinematics=True)
 --
 
 The system mass matrix 𝓜(q) = Gᵀ Ψ_Dᵀ M Ψ_D G (eq. 14), by composite inertias.
 
 q: (nq,).  Returns data.M, shape (nv, nv), symmetric positive definite: a read-only view, not a
-copy (the next call on this Data overwrites it; .copy() to keep it).)";
+copy (the next call on this Data overwrites it; .copy() to keep it).
+kinematics=False: 𝓜 from q alone in body axes (C++ mass_matrix(model, data, q)), the same 𝓜 to
+rounding in 0.55–0.9 of the C++ time at robot sizes, but data's kinematics views (R, eta, …) are
+left unspecified: update_kinematics before reading them.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
-    kin(m, d, name, a[0]);
-    mass_matrix(m, *d.data);
+    if (kinematics_wanted(name, a[1])) {
+      kin(m, d, name, a[0]);
+      mass_matrix(m, *d.data);
+    } else {
+      read_vector(m, *d.data, name, "q", a[0], m.nq, d.q);
+      mass_matrix(m, *d.data, d.q);
+    }
     return d.M;
   }
 };
@@ -97,16 +114,25 @@ O(N²), the readable reference for mass_matrix.  q: (nq,).  Returns a new array 
 
 struct Bias {
   static constexpr const char* name = "bias";
-  static constexpr std::array<const char*, 2> params{"q", "v"};
-  static constexpr const char* doc = R"(bias(model, data, q, v)
+  static constexpr std::array<const char*, 3> params{"q", "v", "kinematics"};
+  static constexpr const char* doc = R"(bias(model, data, q, v, kinematics=True)
 --
 
 bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D a + b): Coriolis, centrifugal, gyroscopic and gravity forces.
 
-𝓜(q) q̈ + bias(q, q̇) = τ.  q: (nq,), v: (nv,).  Returns data.bias, shape (nv,), a read-only view.)";
+𝓜(q) q̈ + bias(q, q̇) = τ.  q: (nq,), v: (nv,).  Returns data.bias, shape (nv,), a read-only view.
+kinematics=False: the recursive Newton–Euler from (q, v) alone in body axes (C++
+bias_forces(model, data, q, v)), the same bias to rounding in 0.6–0.85 of the C++ time, but
+data's kinematics and velocity views are left unspecified.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
-    kin_vel(m, d, name, a[0], a[1]);
-    bias_forces(m, *d.data);
+    if (kinematics_wanted(name, a[2])) {
+      kin_vel(m, d, name, a[0], a[1]);
+      bias_forces(m, *d.data);
+    } else {
+      read_vector(m, *d.data, name, "v", a[1], m.nv, d.v);  // both sizes checked before any work
+      read_vector(m, *d.data, name, "q", a[0], m.nq, d.q);
+      bias_forces(m, *d.data, d.q, d.v);
+    }
     return d.bias;
   }
 };
@@ -256,7 +282,8 @@ q: (nq,), v: (nv,).  Returns two new arrays of shape (3,).)";
 template <class Fn>
 bool parse(PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames, PyObject** slots) {
   constexpr int n = int(Fn::params.size()) + 2;
-  constexpr int required = std::string_view(Fn::params.back()) == "method" ? n - 1 : n;
+  constexpr std::string_view last = Fn::params.back();
+  constexpr int required = last == "method" || last == "kinematics" ? n - 1 : n;  // optional by keyword
   auto param = [](int i) { return i == 0 ? "model" : i == 1 ? "data" : Fn::params[size_t(i - 2)]; };
   if (nargs > n) {
     PyErr_Format(PyExc_TypeError, "%s() takes %d arguments (%zd given)", Fn::name, n, nargs);

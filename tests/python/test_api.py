@@ -85,6 +85,62 @@ def test_independent_routes_agree(tmp_path, rng):
         assert_close(data.r, data.eta + data.s, 1e-14)
 
 
+def _chain_urdf(n):
+    """n links in series, continuous joints about z, y, x in turn, each 0.3 along its parent's x"""
+    axes = ("0 0 1", "0 1 0", "1 0 0")
+    links = "".join(f'<link name="l{i}"><inertial><origin xyz="0.15 0 0"/><mass value="1"/>'
+                    f'<inertia ixx="0.01" iyy="0.02" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+                    for i in range(1, n + 1))
+    joints = "".join(f'<joint name="j{i}" type="continuous"><parent link="l{i - 1}"/><child link="l{i}"/>'
+                     f'<origin xyz="{0.3 if i > 1 else 0} 0 0"/><axis xyz="{axes[(i - 1) % 3]}"/></joint>'
+                     for i in range(1, n + 1))
+    return f'<robot name="chain{n}"><link name="l0"/>{links}{joints}</robot>'
+
+
+def test_state_only_routes_equal_the_staged_ones(tmp_path, rng):
+    """kinematics=False (the C++ entry points from the state alone, in body axes) against the default
+    staged calls: random trees of every joint type (a planar one makes the bias staged anyway), the
+    7-DOF arm's URDF (joints along unit axes: the turned fast path), and chains of 12 and 30 (the
+    all-local 𝓜 and, past depth 22, the mixed route)"""
+    models = [soadyn.load(os.path.join(ROOT, "tests", "data", "arm7.urdf"))]
+    for n in (12, 30):
+        path = tmp_path / f"chain{n}.urdf"
+        path.write_text(_chain_urdf(n))
+        models.append(soadyn.load(str(path)))
+    for trial in range(4):
+        path = tmp_path / f"tree{trial}.yaml"
+        path.write_text(random_tree_yaml(rng, int(rng.integers(2, 15)), free_root=trial % 2 == 1))
+        models.append(soadyn.load(str(path)))
+    for model in models:
+        data = model.create_data()
+        for _ in range(3):
+            q, v, _tau = random_state(rng, model)
+            M = soadyn.mass_matrix(model, data, q).copy()
+            b = soadyn.bias(model, data, q, v).copy()
+            assert_close(soadyn.mass_matrix(model, data, q, kinematics=False), M, 1e-12)
+            assert_close(soadyn.bias(model, data, q, v, kinematics=False), b, 1e-12)
+            assert_close(soadyn.mass_matrix(model, data, q, kinematics=True), M, 0)
+    # the route taken is the state-only one: on the arm (depth 7) it forms no inertial frame, so
+    # data.R still holds what update_kinematics left (unspecified by the API, but a staged call
+    # would have overwritten it)
+    data = models[0].create_data()
+    q = models[0].neutral()
+    soadyn.update_kinematics(models[0], data, q)
+    R0 = data.R.copy()
+    q1, v1, _ = random_state(rng, models[0])
+    soadyn.mass_matrix(models[0], data, q1, kinematics=False)
+    soadyn.bias(models[0], data, q1, v1, kinematics=False)
+    assert_close(data.R, R0, 0)
+    soadyn.mass_matrix(models[0], data, q1)
+    assert np.abs(data.R - R0).max() > 1e-3
+    with pytest.raises(TypeError, match="kinematics: expected True or False, got int"):
+        soadyn.mass_matrix(models[0], data, q, kinematics=0)
+    with pytest.raises(TypeError, match="missing required argument 'v'"):
+        soadyn.bias(models[0], data, q, kinematics=False)
+    with pytest.raises(soadyn.Error, match="v"):  # sizes checked as the staged call does
+        soadyn.bias(models[0], data, q, np.zeros(3), kinematics=False)
+
+
 # ---- the note's examples in closed form ------------------------------------------------------
 
 def test_pendulum_on_cart(rng):

@@ -142,7 +142,8 @@ def test_arguments_by_position_and_name():
     assert np.array_equal(got, ref)
     for call, message in [
             (lambda: soadyn.mass_matrix(model), "mass_matrix() missing required argument 'data'"),
-            (lambda: soadyn.mass_matrix(model, data, [0, 0], [0, 0]), "mass_matrix() takes 3 arguments (4 given)"),
+            (lambda: soadyn.mass_matrix(model, data, [0, 0], True, 1), "mass_matrix() takes 4 arguments (5 given)"),
+            (lambda: soadyn.mass_matrix(model, data, [0, 0], [0, 0]), "kinematics: expected True or False, got list"),
             (lambda: soadyn.mass_matrix(model, data, q=[0, 0], x=1), "unexpected keyword argument 'x'"),
             (lambda: soadyn.mass_matrix(model, data, [0, 0], q=[1, 1]), "multiple values for argument 'q'"),
             (lambda: soadyn.mass_matrix(data, model, [0, 0]), "mass_matrix: model: expected a soadyn.Model, got Data"),
@@ -153,3 +154,5 @@ def test_arguments_by_position_and_name():
         assert message in str(e.value), str(e.value)
     import inspect
     assert str(inspect.signature(soadyn.forward_dynamics)) == "(model, data, q, v, tau, method='on')"
+    assert str(inspect.signature(soadyn.mass_matrix)) == "(model, data, q, kinematics=True)"
+    assert str(inspect.signature(soadyn.bias)) == "(model, data, q, v, kinematics=True)"
