@@ -128,13 +128,11 @@ void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v) {
       // along ±e_k of a placement that turns the frame (as URDFs' rpy mostly do): a revolute
       // joint's turn mixes two columns of X.R with the batched (cos θ, sin θ), a prismatic one
       // slides along X.R e_k
-      const int k = std::abs(unit) - 1, a = (k + 1) % 3, b = (k + 2) % 3;
-      R = X.R;
+      const int k = std::abs(unit) - 1;
       if (type == JointType::Revolute) {
-        const double c = data.turn(0, i), s = sign * data.turn(1, i);
-        R.col(a) = c * X.R.col(a) + s * X.R.col(b);
-        R.col(b) = c * X.R.col(b) - s * X.R.col(a);
+        turn_frame(X.R, k, data.turn(0, i), sign * data.turn(1, i), R);
       } else {
+        R = X.R;
         offset += (sign * q(model.idx_q[i])) * X.R.col(k);
       }
     } else {

@@ -85,14 +85,11 @@ void kinematics_sweep(const Model& model, Data& data, const VecX& q) {
     if (unit != 0) {
       // a revolute or prismatic joint along ±e_k of its joint frame: g_i = ±C_j e_k, and a turn
       // by θ about it mixes only the other two columns of C_j (one sincos, no 3×3 product)
-      const int k = std::abs(unit) - 1, a = (k + 1) % 3, b = (k + 2) % 3;
+      const int k = std::abs(unit) - 1;
       const double sign = unit > 0 ? 1.0 : -1.0, x = q(model.idx_q[i]);
       const Vec3 g = sign * Rj.col(k);
       if (model.joint_type[i] == JointType::Revolute) {
-        const double c = data.turn(0, i), s = sign * data.turn(1, i);
-        R.col(k) = Rj.col(k);
-        R.col(a) = c * Rj.col(a) + s * Rj.col(b);
-        R.col(b) = c * Rj.col(b) - s * Rj.col(a);
+        turn_frame(Rj, k, data.turn(0, i), sign * data.turn(1, i), R);
         data.G.col(iv) << g, Vec3::Zero();
       } else {
         R = Rj;

@@ -267,10 +267,7 @@ void mass_matrix(const Model& model, Data& data, const VecX& q) {
     Mat3 R = X.R;
     Vec3 pr = X.p;
     if (type == JointType::Revolute) {
-      const int a = (k + 1) % 3, b = (k + 2) % 3;
-      const double c = data.turn(0, i), s = sign * data.turn(1, i);
-      R.col(a) = c * X.R.col(a) + s * X.R.col(b);
-      R.col(b) = c * X.R.col(b) - s * X.R.col(a);
+      turn_frame(X.R, k, data.turn(0, i), sign * data.turn(1, i), R);
     } else {
       pr += (sign * q(model.idx_q[i])) * X.R.col(k);
     }

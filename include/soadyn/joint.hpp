@@ -57,6 +57,16 @@ inline int joint_nv(JointType t) { return joint_traits(t).nv; }
 // The joint's motion: body frame = joint frame · (R, p)(q).  q points at joint_nq(t) numbers.
 void joint_motion(JointType t, const Vec3& axis, const double* q, Mat3& R, Vec3& p);
 
+// R = Rj Rot_k(θ) for a revolute joint along e_k, given (c, s) = (cos θ, sin θ): the turn mixes
+// the other two columns of Rj only (Rot_k takes e_a → c e_a + s e_b, e_b → −s e_a + c e_b, with
+// a = k + 1, b = k + 2); R must not be Rj
+inline void turn_frame(const Mat3& Rj, int k, double c, double s, Mat3& R) {
+  const int a = (k + 1) % 3, b = (k + 2) % 3;
+  R.col(k) = Rj.col(k);
+  R.col(a) = c * Rj.col(a) + s * Rj.col(b);
+  R.col(b) = c * Rj.col(b) - s * Rj.col(a);
+}
+
 // G_i in inertial coordinates, given the joint frame's orientation Rj (joint → inertial) and the
 // body's, Rb = Rj · R(q).
 void joint_subspace(JointType t, const Vec3& axis, const Mat3& Rj, const Mat3& Rb, Eigen::Ref<Mat6X> G);
