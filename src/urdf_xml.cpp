@@ -64,6 +64,21 @@ std::string dynamics_only(tinyxml2::XMLDocument& doc, tinyxml2::XMLElement* robo
   return printer.CStr();
 }
 
+// urdfdom 3.0 logs some malformed values (an <origin>'s xyz or rpy, a <mass> value) by handing
+// a message that quotes them to console_bridge as its printf format, so a '%' there is read as a
+// conversion ("%n" writes through a pointer that is not there: a crash).  No value urdfdom reads
+// holds a '%', names aside, which it always logs through "%s": any other attribute with one is
+// refused here, before urdfdom sees the document
+void check_no_percent(const tinyxml2::XMLElement* e, const std::string& path) {
+  for (const auto* a = e->FirstAttribute(); a; a = a->Next()) {
+    const std::string name = a->Name(), value = a->Value();
+    if (name == "name" || name == "link" || name == "joint" || value.find('%') == std::string::npos) continue;
+    throw Error(line_of(path, e->GetLineNum()) + ": <" + e->Name() + "> " + name + ": expected a URDF value, got '" +
+                value + "' (a '%' is part of no number, axis or type)");
+  }
+  for (const auto* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) check_no_percent(c, path);
+}
+
 // The link graph must be one tree before urdfdom sees it: urdfdom leaks the shared_ptr cycle it
 // builds for a cyclic graph, and its messages name no line.
 void check_tree(const tinyxml2::XMLElement* robot, const Index& idx) {
@@ -210,6 +225,7 @@ Index index(const std::string& xml, const std::string& path) {
   if (idx.links.empty()) throw Error(line_of(path, idx.robot_line) + ": URDF: expected at least one <link>");
   check_tree(robot, idx);
   idx.dynamics = dynamics_only(doc, robot);
+  check_no_percent(robot, path);  // what is left of it: what urdfdom reads
   return idx;
 }
 
