@@ -18,6 +18,7 @@ Data::Data(const Model& m)
       K(m.nbodies),
       S0(Mat6X::Zero(6, m.nv)),
       F0(Mat6X::Zero(6, m.nv)),
+      F0t(Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(m.nv, 6)),
       Kl(m.nbodies),
       Fl(Mat6X::Zero(6, m.nv)),
       Mass(MatX::Zero(m.nv, m.nv)),

@@ -41,6 +41,7 @@ struct Data {
   std::vector<SpatialInertia> K;       // composite inertia of the subtree of i, about η_i
   Mat6X S0;                            // G_k moved to the inertial origin, D_{i:0}⁻ᵀ-wise: [a; b + η_i × a]
   Mat6X F0;                            // K_i G_k moved to the inertial origin: [n + η_i × f; f]
+  Eigen::Matrix<double, Eigen::Dynamic, 6> F0t;  // F0ᵀ, nv×6: a chain's entries column by column
   // [crb] the local-frame route, mass_matrix(model, data, q) (mass_matrix_local.cpp)
   std::vector<SpatialInertia> Kl;      // composite inertia of the subtree of i, body i's axes, about η_i
   Mat6X Fl;                            // K_j S_k of every DOF k, column dfs position of k, moved to the
