@@ -39,8 +39,9 @@ bool kinematics_wanted(const char* where, PyObject* flag) {
   return flag == Py_True;
 }
 
-// Each algorithm: its name, parameters after (model, data), and the signature and docstring
-// CPython shows (the first line is its __text_signature__).
+// Each algorithm: its name, parameters after (model, data), how many of the last ones may be left
+// out (optional, 0 when not declared), and the signature and docstring CPython shows (the first
+// line is its __text_signature__).
 struct UpdateKinematics {
   static constexpr const char* name = "update_kinematics";
   static constexpr std::array<const char*, 1> params{"q"};
@@ -73,6 +74,7 @@ q: (nq,), v: (nv,).)";
 struct MassMatrix {
   static constexpr const char* name = "mass_matrix";
   static constexpr std::array<const char*, 2> params{"q", "kinematics"};
+  static constexpr int optional = 1;  // kinematics
   static constexpr const char* doc = R"(mass_matrix(model, data, q, kinematics=True)
 --
 
@@ -115,6 +117,7 @@ O(N²), the readable reference for mass_matrix.  q: (nq,).  Returns a new array 
 struct Bias {
   static constexpr const char* name = "bias";
   static constexpr std::array<const char*, 3> params{"q", "v", "kinematics"};
+  static constexpr int optional = 1;  // kinematics
   static constexpr const char* doc = R"(bias(model, data, q, v, kinematics=True)
 --
 
@@ -157,6 +160,7 @@ q: (nq,), v: (nv,), qdd: (nv,).  Returns data.tau, shape (nv,), a read-only view
 struct ForwardDynamics {
   static constexpr const char* name = "forward_dynamics";
   static constexpr std::array<const char*, 4> params{"q", "v", "tau", "method"};
+  static constexpr int optional = 1;  // method
   static constexpr const char* doc = R"(forward_dynamics(model, data, q, v, tau, method='on')
 --
 
@@ -282,8 +286,11 @@ q: (nq,), v: (nv,).  Returns two new arrays of shape (3,).)";
 template <class Fn>
 bool parse(PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames, PyObject** slots) {
   constexpr int n = int(Fn::params.size()) + 2;
-  constexpr std::string_view last = Fn::params.back();
-  constexpr int required = last == "method" || last == "kinematics" ? n - 1 : n;  // optional by keyword
+  constexpr int optional = [] {
+    if constexpr (requires { Fn::optional; }) return Fn::optional;
+    else return 0;
+  }();
+  constexpr int required = n - optional;
   auto param = [](int i) { return i == 0 ? "model" : i == 1 ? "data" : Fn::params[size_t(i - 2)]; };
   if (nargs > n) {
     PyErr_Format(PyExc_TypeError, "%s() takes %d arguments (%zd given)", Fn::name, n, nargs);
