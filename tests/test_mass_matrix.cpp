@@ -25,7 +25,6 @@ BodySpec random_body(Rng& rng, const std::string& name, int parent, JointType j,
   return b;
 }
 
-
 constexpr int kTrials = 200;
 
 // Example 1, pendulum with a moving base: 𝓜 = [m1 + m2, m2 L cos θ; m2 L cos θ, I2zz + m2 L²]
@@ -237,7 +236,6 @@ TEST(NoteExamples, Example4ThreeLinkArm) {
 }
 
 // literal procedure = composite algorithm on random trees
-
 class RandomTrees : public ::testing::TestWithParam<TreeCase> {};
 
 TEST_P(RandomTrees, LiteralEqualsCompositeAndIsSPD) {
