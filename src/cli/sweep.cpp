@@ -1,6 +1,8 @@
 // soadyn sweep SWEEP.yaml …: the ensemble runner lives in the Python package (it drives Dask), so
-// this subcommand replaces the process with `python3 -m soadyn sweep …`, the build tree's package
-// first on PYTHONPATH when it exists (an installed soadyn is found in site-packages).
+// this subcommand replaces the process with `python3 -m soadyn sweep …`, the package beside this
+// executable first on PYTHONPATH: build/python beside build/soadyn in the build tree, the install's
+// site-packages beside <prefix>/bin/soadyn once installed (paths from CMakeLists.txt, relative to
+// the executable, so a moved install finds its own); without either, python3's own site-packages.
 #include "cli.hpp"
 
 #include <cerrno>
@@ -22,16 +24,28 @@ void add_sweep(CLI::App& app) {
       ->allow_extras();
 }
 
-int exec_sweep(int argc, char** argv) {
-#ifdef SOADYN_PYTHON_BUILD_DIR
-  const std::string dir = SOADYN_PYTHON_BUILD_DIR;
+namespace {
+
+void put_package_on_path() {
+  namespace fs = std::filesystem;
   std::error_code ec;
-  if (std::filesystem::exists(dir + "/soadyn/__init__.py", ec)) {
-    const char* old = std::getenv("PYTHONPATH");
-    const std::string path = old && *old ? dir + ":" + old : dir;
-    ::setenv("PYTHONPATH", path.c_str(), 1);
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) return;
+  for (const char* relative : {SOADYN_PYTHON_BUILD_FROM_EXE, SOADYN_PYTHON_SITE_FROM_EXE}) {
+    const std::string dir = (exe.parent_path() / relative).lexically_normal().string();
+    if (fs::exists(dir + "/soadyn/__init__.py", ec)) {
+      const char* old = std::getenv("PYTHONPATH");
+      const std::string path = old && *old ? dir + ":" + old : dir;
+      ::setenv("PYTHONPATH", path.c_str(), 1);
+      return;
+    }
   }
-#endif
+}
+
+}  // namespace
+
+int exec_sweep(int argc, char** argv) {
+  put_package_on_path();
   const char* python = SOADYN_PYTHON_EXECUTABLE;
   std::vector<char*> args{const_cast<char*>(python), const_cast<char*>("-m"), const_cast<char*>("soadyn"),
                           const_cast<char*>("sweep")};
