@@ -1,23 +1,32 @@
 """soadyn.sweep: run a sweep file's cases on Dask distributed (or in this process), resumably.
 
 Also the `soadyn sweep` command: python3 -m soadyn sweep SWEEP.yaml [-o DIR] [--scheduler ADDRESS]
-[--workers N] [--batch-size N] [--keep-logs] [-q].
+[--workers N] [--batch-size N] [--keep-logs] [--drop-bad-parts] [-q].
 
 Output directory:
+    DIR/sweep.lock       held (flock) by the sweep writing into DIR, its pid and sweep file inside:
+                         a second sweep into DIR while one runs is refused, naming the first
     DIR/sweep.json       the sweep's fingerprint (sweep file, base scenario, soadyn version) and size
     DIR/parts/*.json     one file per finished batch, its rows (written atomically, by the worker
                          on an embedded cluster, else by this process)
     DIR/results.h5       the table, a row per case in case order (rebuilt at the end of each run)
     DIR/logs/case-N.h5   each case's run log, with --keep-logs (written by the worker)
+
+A part this sweep did not write (not a JSON list of rows with exactly the result columns of the
+right types, a case outside the sweep, more than MAX_PART_BYTES) stops the sweep, naming the part,
+its row and column: nothing is used or removed unasked.  --drop-bad-parts (drop_bad_parts=True)
+sets each such part aside as NAME.bad, where no sweep reads it, and runs its cases again.
 """
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import fcntl
 import glob
 import json
 import math
 import os
+import stat
 import sys
 import time
 from typing import Any, Dict, List, Optional, Tuple
@@ -25,7 +34,9 @@ from typing import Any, Dict, List, Optional, Tuple
 import numpy as np
 
 from ._soadyn import Error, __version__
-from .ensemble import RESULT_COLUMNS, Sweep, run_batch
+from .ensemble import RESULT_COLUMNS, Sweep, printable, read_text, run_batch
+
+MAX_PART_BYTES = 1 << 30  # a part file (a batch's rows, ~0.5 kB each)
 
 
 @dataclasses.dataclass
@@ -48,33 +59,129 @@ class SweepResult:
 
 # ---------------------------------------------------------------- the store
 
-def _open_store(sw: Sweep, out: str) -> Dict[int, dict]:
-    """Create DIR or check it holds this sweep; return the rows already done."""
+def _lock(sw: Sweep, out: str) -> int:
+    """Take DIR/sweep.lock for this sweep (an exclusive flock, held until the returned descriptor
+    is closed, by this process's end at the latest) and write this process's pid and sweep file
+    in it; a sweep that holds it already is named in the refusal."""
+    path = os.path.join(out, "sweep.lock")
+    try:
+        # no O_TRUNC: the lock's holder wrote its name there; O_NOFOLLOW, O_NONBLOCK: never a
+        # symlink's target, never wait on a FIFO
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC, 0o644)
+    except OSError as e:
+        raise Error(f"{path}: cannot open the sweep's lock file: {e.strerror}") from None
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise Error(f"{path}: not a regular file: remove it (a sweep keeps its lock there)")
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise Error(f"{out}: in use by another sweep ({_owner(fd)}): wait for it to end, or give another -o") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"pid {os.getpid()}\nsweep {os.path.abspath(sw.path)}\n".encode("utf-8", "surrogateescape"), 0)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def _owner(fd: int) -> str:
+    """'pid N, SWEEP' from a lock file its holder has written (it writes just after locking)"""
+    for _ in range(20):
+        text = os.pread(fd, 4096, 0).decode("utf-8", "replace")
+        fields = dict(line.split(" ", 1) for line in text.splitlines() if " " in line)
+        if "pid" in fields:
+            return printable(f"pid {fields['pid']}" + (f", {fields['sweep']}" if "sweep" in fields else ""))
+        time.sleep(0.05)
+    return "pid not written yet"
+
+
+def _open_store(sw: Sweep, out: str, drop_bad_parts: bool = False, say=None) -> Dict[int, dict]:
+    """Check DIR holds this sweep (or nothing yet); return the rows already done.  The caller
+    holds DIR's lock."""
     os.makedirs(os.path.join(out, "parts"), exist_ok=True)
     manifest = os.path.join(out, "sweep.json")
     info = {"fingerprint": sw.fingerprint(), "cases": len(sw.cases), "sweep": os.path.abspath(sw.path),
             "soadyn": __version__}
-    if os.path.exists(manifest):
-        with open(manifest, encoding="utf-8") as f:
-            old = json.load(f)
+    if os.path.lexists(manifest):
+        try:
+            old = json.loads(read_text(manifest))
+        except ValueError as e:
+            raise Error(f"{manifest}: not a sweep's manifest ({e}): give another -o, or remove {out} "
+                        f"if it holds nothing of yours") from None
+        if not isinstance(old, dict) or not isinstance(old.get("fingerprint"), str):
+            raise Error(f"{manifest}: not a sweep's manifest (no fingerprint): give another -o")
         if old.get("fingerprint") != info["fingerprint"]:
-            raise Error(f"{out}: holds the results of another sweep ({old.get('sweep')}, fingerprint "
-                        f"{old.get('fingerprint')}; this one is {info['fingerprint']}): give another -o or remove it")
+            raise Error(f"{out}: holds the results of another sweep ({printable(str(old.get('sweep')))}, fingerprint "
+                        f"{printable(old['fingerprint'])}; this one is {info['fingerprint']}): give another -o or remove it")
     else:
         _write_atomic(manifest, json.dumps(info, indent=1))
-    return _read_parts(out)
+    return _read_parts(out, len(sw.cases), drop_bad_parts, say)
 
 
-def _read_parts(out: str) -> Dict[int, dict]:
-    """The rows in DIR/parts, by case (a part that does not parse is removed: its cases run again)."""
+# a result column's JSON types (the rest: numbers, NaN and infinities included) and their name
+_COLUMN_TYPES = {"status": (str,), "reference_status": (str,), "completed": (bool,), "steps": (int,),
+                 "rhs_evals": (int,)}
+_TYPE_NAMES = {(str,): "text", (bool,): "true or false", (int,): "an integer", (int, float): "a number"}
+
+
+def _bad_row(row, ncases: int) -> Optional[str]:
+    """what makes `row` not a row this sweep wrote (None if it is one)"""
+    if not isinstance(row, dict):
+        return "expected a mapping of columns"
+    for c in ("case",) + RESULT_COLUMNS:
+        if c not in row:
+            return f"missing column '{c}'"
+    extra = [c for c in row if c != "case" and c not in RESULT_COLUMNS]
+    if extra:
+        return f"unknown column '{extra[0]}'"
+    case = row["case"]
+    if not isinstance(case, int) or isinstance(case, bool):
+        return f"case: expected a case number, got {printable(json.dumps(case)[:40])}"
+    if not 0 <= case < ncases:
+        return f"case {case}: out of range (the sweep has {ncases} cases, 0 to {ncases - 1})"
+    for c in RESULT_COLUMNS:
+        v, types = row[c], _COLUMN_TYPES.get(c, (int, float))
+        if not isinstance(v, types) or (isinstance(v, bool) and bool not in types):
+            return f"case {case}: column '{c}': expected {_TYPE_NAMES[types]}, got {printable(json.dumps(v)[:40])}"
+    return None
+
+
+def _read_parts(out: str, ncases: int, drop_bad_parts: bool = False, say=None) -> Dict[int, dict]:
+    """The rows in DIR/parts, by case.  A part that is not what this sweep writes (see the module's
+    docstring) stops the sweep naming it; with drop_bad_parts it is set aside as NAME.bad."""
     done: Dict[int, dict] = {}
-    for part in sorted(glob.glob(os.path.join(out, "parts", "*.json"))):
+    for part in sorted(glob.glob(os.path.join(glob.escape(out), "parts", "*.json"))):
+        rows, problem = None, None
         try:
-            with open(part, encoding="utf-8") as f:
-                for row in json.load(f):
-                    done[int(row["case"])] = row
-        except (OSError, ValueError, KeyError):
-            os.remove(part)  # a file cut short: its cases run again
+            rows = json.loads(read_text(part, MAX_PART_BYTES))
+        except RecursionError:
+            problem = "not a part: its JSON is nested too deeply"
+        except json.JSONDecodeError as e:
+            problem = f"not valid JSON (line {e.lineno}, column {e.colno}: {e.msg})"
+        except ValueError as e:  # read_text's reasons
+            problem = str(e)
+        if problem is None and not isinstance(rows, list):
+            problem = "expected a list of rows"
+        if problem is None:
+            for k, row in enumerate(rows):
+                bad = _bad_row(row, ncases)
+                if bad:
+                    problem = f"row {k + 1}: {bad}"
+                    break
+        if problem is None:
+            for row in rows:
+                done[row["case"]] = row
+            continue
+        if not drop_bad_parts:
+            raise Error(f"{part}: {problem}: not a part this sweep wrote; run again with --drop-bad-parts to set it "
+                        f"aside as {os.path.basename(part)}.bad and run its cases again (or remove it)")
+        aside, k = part + ".bad", 1
+        while os.path.lexists(aside):  # an earlier part of that name set aside: keep both
+            aside, k = f"{part}.bad{k}", k + 1
+        os.rename(part, aside)
+        if say:
+            say(f"set aside {part} ({problem}) as {os.path.basename(aside)}: its cases run again")
     return done
 
 
@@ -97,13 +204,21 @@ def _table(sw: Sweep, rows: Dict[int, dict]) -> Dict[str, np.ndarray]:
     table: Dict[str, np.ndarray] = {"case": np.array(ids, dtype=np.int64)}
     for p in sw.paths:
         col = [sw.cases[i][p] for i in ids]
-        table[p] = np.array(col, dtype=object if any(isinstance(v, str) for v in col) else np.float64)
+        # numbers as float64; text, booleans, lists (gravity: [0, 0, -9.81]) as objects
+        numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in col)
+        table[p] = np.array(col, dtype=np.float64) if numbers else _objects(col)
     for c in RESULT_COLUMNS:
         col = [rows[i][c] for i in ids]
         dtype = {"status": object, "reference_status": object, "completed": bool, "steps": np.int64,
                  "rhs_evals": np.int64}.get(c, np.float64)
         table[c] = np.array(col, dtype=dtype)
     return table
+
+
+def _objects(col: list) -> np.ndarray:
+    out = np.empty(len(col), dtype=object)
+    out[:] = col  # element by element: a list stays one element, not a row of a 2-D array
+    return out
 
 
 def write_results(sw: Sweep, table: Dict[str, np.ndarray], path: str):
@@ -119,7 +234,8 @@ def write_results(sw: Sweep, table: Dict[str, np.ndarray], path: str):
         g = f.create_group("cases")
         for name, col in table.items():
             if col.dtype == object:
-                g.create_dataset(name, data=np.array([str(v) for v in col], dtype=h5py.string_dtype()))
+                text = [v if isinstance(v, str) else json.dumps(v) for v in col]  # a list as JSON
+                g.create_dataset(name, data=np.array(text, dtype=h5py.string_dtype()))
             else:
                 g.create_dataset(name, data=col)
     os.replace(tmp, path)
@@ -206,7 +322,8 @@ class _Progress:
 # ---------------------------------------------------------------- the sweep
 
 def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, workers: Optional[int] = None,
-          batch_size: Optional[int] = None, keep_logs: bool = False, quiet: bool = False) -> SweepResult:
+          batch_size: Optional[int] = None, keep_logs: bool = False, quiet: bool = False,
+          drop_bad_parts: bool = False) -> SweepResult:
     """Run every case of a sweep file and return the table (see soadyn.ensemble for the format).
 
     out: the results directory (default SWEEP_STEM.results beside the current directory); cases
@@ -215,19 +332,36 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
     'tcp://host:8786' or a distributed.Client for an existing cluster; 'serial' for a plain loop in
     this process without Dask.  batch_size: cases per Dask task (default: guided sizes, each a
     third of a worker's share of what is left, from at most 1000 down to 20).  keep_logs: each case's HDF5 log in out/logs/ (written by the worker:
-    a remote cluster needs out on a shared file system).  Results are the same, bit for bit
-    (CPU times aside), whichever way the cases run."""
+    a remote cluster needs out on a shared file system).  drop_bad_parts: set aside (as NAME.bad)
+    each part file in out/parts that this sweep did not write, instead of stopping at it.  Results
+    are the same, bit for bit (CPU times aside), whichever way the cases run.  Raises soadyn.Error
+    if out is in use by another sweep (out/sweep.lock)."""
     sw = path if isinstance(path, Sweep) else Sweep(path)
     if out is None:
         out = os.path.basename(sw.path).rsplit(".yaml", 1)[0] + ".results"
     out = str(out)
     t0 = time.monotonic()
-    done = _open_store(sw, out)
+    try:
+        os.makedirs(out, exist_ok=True)
+    except OSError as e:
+        raise Error(f"{out}: cannot make the results directory: {e.strerror}") from None
+    lock = _lock(sw, out)
+    try:
+        return _sweep_locked(sw, out, t0, scheduler, workers, batch_size, keep_logs, quiet, drop_bad_parts)
+    finally:
+        os.close(lock)  # the lock goes with it
+
+
+def _sweep_locked(sw, out, t0, scheduler, workers, batch_size, keep_logs, quiet, drop_bad_parts) -> SweepResult:
+    say = (lambda msg: None) if quiet else (lambda msg: print(printable(msg), file=sys.stderr, flush=True))
+    try:
+        done = _open_store(sw, out, drop_bad_parts, say)
+    except OSError as e:
+        raise Error(f"{e.filename or out}: {e.strerror}") from None
     skipped = len(done)
     todo = [i for i in range(len(sw.cases)) if i not in done]
     logs = os.path.abspath(os.path.join(out, "logs")) if keep_logs else None
     progress = _Progress(len(sw.cases), skipped, quiet)
-    say = (lambda msg: None) if quiet else (lambda msg: print(msg, file=sys.stderr, flush=True))
     say(f"sweep {sw.path}: {len(sw.cases)} cases, {skipped} already done in {out}, {len(todo)} to run")
 
     def finish(rows):
@@ -245,7 +379,7 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
             finish(run_batch(*payload(ids)))
     elif todo:
         if _run_dask(sw, todo, payload, finish, progress, scheduler, workers, batch_size, say, out):
-            done = _read_parts(out)  # the workers wrote the parts: the rows come from them
+            done = _read_parts(out, len(sw.cases))  # the workers wrote the parts: the rows come from them
     table = _table(sw, done)
     results = os.path.join(out, "results.h5")
     write_results(sw, table, results)
@@ -386,6 +520,9 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--workers", type=int, help="LocalCluster worker processes (default: this machine's cores)")
     p.add_argument("--batch-size", type=int, help="cases per task (default: guided, from a third of each worker's share down to 20, at most 1000)")
     p.add_argument("--keep-logs", action="store_true", help="keep each case's HDF5 log in DIR/logs/")
+    p.add_argument("--drop-bad-parts", action="store_true",
+                   help="set aside (as NAME.bad) each DIR/parts file this sweep did not write and run its cases again, "
+                        "instead of stopping at it")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
     a = p.parse_args(argv)
     for name in ("workers", "batch_size"):
@@ -393,9 +530,9 @@ def main(argv: Optional[List[str]] = None) -> int:
             p.error(f"--{name.replace('_', '-')}: expected a positive integer, got {getattr(a, name)}")
     try:
         r = sweep(a.sweep, a.output, scheduler=a.scheduler, workers=a.workers, batch_size=a.batch_size,
-                  keep_logs=a.keep_logs, quiet=a.quiet)
+                  keep_logs=a.keep_logs, quiet=a.quiet, drop_bad_parts=a.drop_bad_parts)
     except Error as e:
-        print(f"soadyn: error: {e}", file=sys.stderr)
+        print(f"soadyn: error: {printable(str(e))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("\nsoadyn: sweep interrupted; run the same command again to resume", file=sys.stderr)

@@ -19,17 +19,24 @@ a scenario can vary and every value meets the scenario parser's checks.  Cases r
 distributed (an embedded LocalCluster by default, or any cluster by its scheduler's address) in
 batches; each finished batch is written at once to DIR/parts/, so a sweep that is stopped resumes
 where it was.  The table of results is DIR/results.h5.
+
+Limits (a file past one is refused, naming file:line:column and the field, before anything
+proportional to it is drawn or built): MAX_CASES cases (10^6), MAX_CASE_VALUES varied values
+(cases × varied fields, 10^7), MAX_FILE_BYTES for the sweep file and the base scenario (16 MiB,
+regular files only: no device, FIFO or directory), MAX_YAML_DEPTH levels of nesting (64) and
+MAX_YAML_NODES nodes in a document, each alias counted as the nodes it stands for (10^7: an
+alias bomb is refused, not expanded).  The seed is an integer from 0 to 2^64 - 1.
 """
 from __future__ import annotations
 
 import functools
 import hashlib
+import itertools
 import json
 import math
 import os
 import re
-import sys
-import time
+import stat
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -42,70 +49,243 @@ RESULT_COLUMNS = ("status", "completed", "initial_energy", "t_reached", "steps",
                   "max_energy_balance_error", "final_energy_balance_error", "state_error", "final_state_error", "reference_status")
 DISTRIBUTIONS = ("values", "grid", "uniform", "normal", "log_uniform")
 
+MAX_CASES = 1_000_000            # cases in one sweep
+MAX_CASE_VALUES = 10_000_000     # cases × varied fields: the values the cases hold
+MAX_FILE_BYTES = 16 << 20        # a sweep file, a base scenario
+MAX_YAML_DEPTH = 64              # nested mappings and lists in a YAML document
+MAX_YAML_NODES = 10_000_000      # a YAML document's nodes, each alias counted as what it stands for
+MAX_SEED = 2 ** 64 - 1
+
+
+# ---------------------------------------------------------------- text from files, text to a terminal
+
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u061c\u200e\u200f\u202a-\u202e\u2066-\u2069\ud800-\udfff]")
+
+
+def _escape(m) -> str:
+    c = ord(m.group())
+    if 0xdc80 <= c <= 0xdcff:  # a byte that was not UTF-8 (os.fsdecode's surrogateescape)
+        return f"\\x{c - 0xdc00:02x}"
+    return f"\\x{c:02x}" if c < 0x100 else f"\\u{c:04x}"
+
+
+def printable(text: str) -> str:
+    """text with every control character (C0, DEL, C1, bidirectional overrides) shown as \\xNN or
+    \\uNNNN, as the C++ side's printable(): names and values read from files reach a terminal as
+    text, never as escape sequences or line breaks."""
+    return _CONTROL.sub(_escape, text)
+
+
+def _clip(text: str, n: int = 60) -> str:
+    """text for a one-line message: printable, and cut to n characters (saying how long it was)"""
+    text = printable(text)
+    return text if len(text) <= n else f"{text[:n]}… ({len(text)} characters)"
+
+
+def _field(name: str) -> str:
+    """a field's name for a one-line message: printable, its middle left out when long (a field
+    2000 groups deep is vary[0].zip[0].zip[0]…zip[0].zip[0])"""
+    name = printable(name)
+    return name if len(name) <= 80 else f"{name[:45]}…{name[-30:]}"
+
+
+_KINDS = ((stat.S_ISDIR, "a directory"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+          (stat.S_ISFIFO, "a FIFO"), (stat.S_ISSOCK, "a socket"))
+
+
+def read_text(path: str, limit: int = MAX_FILE_BYTES) -> str:
+    """A regular file's text (UTF-8, at most `limit` bytes); raises ValueError with the reason
+    (the caller names the file and what it is for).  Opened without blocking, so a FIFO is refused,
+    not waited on, and read to at most limit + 1 bytes, so /dev/zero or a growing file cannot
+    fill the memory."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError as e:
+        raise ValueError(e.strerror) from None
+    except ValueError:  # a NUL in the name
+        raise ValueError("the name holds a NUL character") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            kind = next((k for test, k in _KINDS if test(st.st_mode)), "not a regular file")
+            raise ValueError(f"{kind}, not a regular file")
+        if st.st_size > limit:
+            raise ValueError(f"{st.st_size} bytes, more than the {limit >> 20} MiB a file may have")
+        with os.fdopen(os.dup(fd), "rb") as f:
+            data = f.read(limit + 1)
+    except OSError as e:
+        raise ValueError(e.strerror) from None
+    finally:
+        os.close(fd)
+    if len(data) > limit:
+        raise ValueError(f"more than the {limit >> 20} MiB a file may have")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise ValueError(f"not UTF-8 text (byte {e.start})") from None
+
 
 # ---------------------------------------------------------------- reading the sweep file
 
 def _yaml12(base):
     """A PyYAML loader whose booleans are YAML 1.2's (true, false) as in the scenario parser: a
-    joint named y or n, or dynamics: on, stays a string."""
+    joint named y or n, or dynamics: on, stays a string; and 1e-2 is a number, as in YAML 1.2
+    (PyYAML's YAML 1.1 floats need a dot)."""
     class Loader(base):
         pass
     Loader.yaml_implicit_resolvers = {k: [(tag, rx) for tag, rx in v if tag != "tag:yaml.org,2002:bool"]
                                       for k, v in base.yaml_implicit_resolvers.items()}
     Loader.add_implicit_resolver("tag:yaml.org,2002:bool", re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"),
                                  list("tTfF"))
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(r"^[-+]?[0-9]+[eE][-+]?[0-9]+$"),
+                                 list("-+0123456789"))
     return Loader
 
 
 _Loader = _yaml12(yaml.SafeLoader)
 _FastLoader = _yaml12(getattr(yaml, "CSafeLoader", yaml.SafeLoader))
 
+
+class _Open:
+    """A mapping or list being scanned: its nodes so far, and where in it the scan is."""
+    __slots__ = ("mapping", "size", "anchor", "items", "key", "at_key")
+
+    def __init__(self, mapping: bool, anchor: Optional[str]):
+        self.mapping, self.size, self.anchor, self.items, self.key, self.at_key = mapping, 1, anchor, 0, "", True
+
+    def label(self, first: bool) -> str:
+        if not self.mapping:
+            return f"[{self.items}]"
+        if self.at_key:
+            return " (a key)"
+        return self.key if first else "." + self.key
+
+
+def check_yaml(text: str, path: str):
+    """Refuse a YAML document nested more than MAX_YAML_DEPTH deep, or of more than MAX_YAML_NODES
+    nodes counting each alias as the nodes it stands for, naming file:line:column and the field
+    (vary[0].values[3]).  A scan of the parser's events (libyaml's where PyYAML has it), before
+    any composing: PyYAML composes recursively (2000 nested lists end in RecursionError, libyaml's
+    composer in a crash), and it shares an alias's node, but whatever walks the values afterwards
+    (a JSON dump, a table) expands them: a billion laughs in 9 lines.  Each anchor's size is kept,
+    so the scan is linear in the text however the aliases nest."""
+    stack: List[_Open] = []
+    anchors: Dict[str, int] = {}
+
+    def refuse(event, message: str):
+        m = event.start_mark
+        field = _field("".join(e.label(k == 0) for k, e in enumerate(stack)))
+        raise Error(f"{path}:{m.line + 1}:{m.column + 1}: " + (f"{field}: {message}" if field else message))
+
+    def add(event, size: int, key: str = "?"):
+        if not stack:
+            return
+        top = stack[-1]
+        top.size += size
+        if top.size > MAX_YAML_NODES:
+            refuse(event, f"expands to more than {MAX_YAML_NODES} YAML nodes through aliases (the most a document "
+                          "may hold: an alias bomb?)")
+        if top.mapping and top.at_key:
+            top.key, top.at_key = _clip(key, 40), False
+        else:
+            top.items += 1
+            top.at_key = True
+
+    try:
+        for event in yaml.parse(text, Loader=_FastLoader):
+            if isinstance(event, yaml.ScalarEvent):
+                if event.anchor is not None:
+                    anchors[event.anchor] = 1
+                add(event, 1, event.value)
+            elif isinstance(event, yaml.AliasEvent):
+                size = anchors.get(event.anchor)
+                if size is None:
+                    held = any(e.anchor == event.anchor for e in stack)
+                    refuse(event, f"the alias *{_clip(event.anchor, 40)} " + ("stands for a node that holds it (a "
+                           "structure without end)" if held else "names no anchor before it"))
+                add(event, size)
+            elif isinstance(event, yaml.CollectionStartEvent):
+                if len(stack) >= MAX_YAML_DEPTH:
+                    refuse(event, f"nested more than {MAX_YAML_DEPTH} levels deep (the most a sweep file or "
+                                  "scenario may nest)")
+                stack.append(_Open(isinstance(event, yaml.MappingStartEvent), event.anchor))
+            elif isinstance(event, yaml.CollectionEndEvent):
+                done = stack.pop()
+                if done.anchor is not None:
+                    anchors[done.anchor] = done.size
+                add(event, done.size)
+            elif isinstance(event, yaml.DocumentEndEvent):
+                anchors.clear()
+    except yaml.YAMLError as e:
+        mark = getattr(e, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else path
+        raise Error(f"{where}: not valid YAML: {printable(str(getattr(e, 'problem', e)))}") from None
+
+
 class _Doc:
     """A YAML document's nodes, for values and file:line:column messages."""
 
     def __init__(self, text: str, path: str):
         self.path = path
+        check_yaml(text, path)
         self.loader = _Loader(text)
         try:
             self.root = self.loader.get_single_node()
         except yaml.YAMLError as e:
             mark = getattr(e, "problem_mark", None)
             where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else path
-            raise Error(f"{where}: not valid YAML: {getattr(e, 'problem', e)}") from None
+            raise Error(f"{where}: not valid YAML: {printable(str(getattr(e, 'problem', e)))}") from None
 
     def where(self, node) -> str:
         m = node.start_mark
         return f"{self.path}:{m.line + 1}:{m.column + 1}"
 
     def fail(self, node, field: str, message: str):
-        raise Error(f"{self.where(node)}: {field}: {message}")
+        field = _field(field)
+        raise Error(f"{self.where(node)}: {field}: {message}" if field else f"{self.where(node)}: {message}")
 
-    def value(self, node):
-        return self.loader.construct_object(node, deep=True)
+    def value(self, node, field: str = ""):
+        """the node as Python data (tags PyYAML's safe loader does not know, or an integer of more
+        digits than Python converts, are refused at the node)"""
+        try:
+            return self.loader.construct_object(node, deep=True)
+        except yaml.YAMLError as e:
+            self.fail(node, field, f"cannot read this value: {printable(str(getattr(e, 'problem', e)))}")
+        except (ValueError, TypeError, OverflowError) as e:
+            self.fail(node, field, f"cannot read this value: {printable(str(e))}")
 
     def mapping(self, node, field: str, allowed: Sequence[str]) -> Dict[str, Any]:
         if not isinstance(node, yaml.MappingNode):
-            self.fail(node, field, f"expected a mapping, got {_kind(node)}")
+            self.fail(node, field, f"expected a mapping, got {_show(node)}")
         out = {}
         for k, v in node.value:
-            key = self.value(k)
-            if key not in allowed:
-                self.fail(k, f"{field}.{key}" if field else str(key),
-                          f"unknown field (expected one of {', '.join(allowed)})")
+            key = self.value(k, field)
+            name = f"{field}.{key}" if field else str(key)
+            if not isinstance(key, str) or key not in allowed:
+                self.fail(k, name, f"unknown field (expected one of {', '.join(allowed)})")
             if key in out:
-                self.fail(k, f"{field}.{key}" if field else str(key), "given twice")
+                self.fail(k, name, "given twice")
             out[key] = v
         return out
 
-    def number(self, node, field: str, positive=False, integer=False) -> float:
-        v = self.value(node)
-        ok = isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-        if integer:
-            ok = ok and isinstance(v, int) and v >= 1
-        elif positive:
-            ok = ok and v > 0
+    def number(self, node, field: str, positive=False) -> float:
+        """a finite number (an int or a float, not a boolean), as written"""
+        v = self.value(node, field)
+        ok = isinstance(v, (int, float)) and not isinstance(v, bool)
+        if ok:
+            try:
+                x = float(v)
+            except OverflowError:
+                self.fail(node, field, f"expected a finite number, got {_show(node)} (too large)")
+            ok = math.isfinite(x) and (x > 0 or not positive)
         if not ok:
-            what = "a positive integer" if integer else "a positive number" if positive else "a finite number"
+            self.fail(node, field, f"expected {'a positive' if positive else 'a finite'} number, got {_show(node)}")
+        return v
+
+    def integer(self, node, field: str, low: int, high: Optional[int], what: str) -> int:
+        """an integer in [low, high] (high None: no bound; not a float, not a boolean)"""
+        v = self.value(node, field)
+        if not isinstance(v, int) or isinstance(v, bool) or v < low or (high is not None and v > high):
             self.fail(node, field, f"expected {what}, got {_show(node)}")
         return v
 
@@ -115,12 +295,30 @@ class _Doc:
         return self.number(node.value[0], field + "[0]"), self.number(node.value[1], field + "[1]")
 
 
-def _kind(node) -> str:
-    return {yaml.MappingNode: "a mapping", yaml.SequenceNode: "a list"}.get(type(node), f"'{node.value}'")
-
-
 def _show(node) -> str:
-    return f"'{node.value}'" if isinstance(node, yaml.ScalarNode) else _kind(node)
+    if isinstance(node, yaml.ScalarNode):
+        return f"'{_clip(node.value)}'"
+    return {yaml.MappingNode: "a mapping", yaml.SequenceNode: "a list"}.get(type(node), "nothing")
+
+
+def _plain(value, seen=None) -> Optional[str]:
+    """None if value is what JSON carries to the scenario parser (a string, a finite number, a
+    boolean, null, or lists and string-keyed mappings of them), else what is wrong with it"""
+    if isinstance(value, (str, bool, int)) or value is None:
+        return None
+    if isinstance(value, float):
+        return None if math.isfinite(value) else f"expected a finite number, got {value}"
+    seen = set() if seen is None else seen
+    if id(value) in seen:  # an alias: checked where it was first met
+        return None
+    seen.add(id(value))
+    if isinstance(value, list):
+        return next((e for e in (_plain(v, seen) for v in value) if e), None)
+    if isinstance(value, dict):
+        if not all(isinstance(k, str) for k in value):
+            return "expected a mapping with names as keys"
+        return next((e for e in (_plain(v, seen) for v in value.values()) if e), None)
+    return f"expected a number, a string, or a list or mapping of them, got a {type(value).__name__}"
 
 
 _SEGMENT = re.compile(r"([^.\[\]]+)((?:\[-?\d+\])*)")
@@ -132,7 +330,7 @@ def parse_path(path: str) -> List[Any]:
     for seg in path.split("."):
         m = _SEGMENT.fullmatch(seg)
         if not m:
-            raise ValueError(f"bad path segment '{seg}' (expected name or name[index])")
+            raise ValueError(f"bad path segment '{_clip(seg)}' (expected name or name[index])")
         tokens.append(m.group(1))
         tokens += [int(i) for i in re.findall(r"\[(-?\d+)\]", m.group(2))]
     return tokens
@@ -146,11 +344,12 @@ class Leaf:
         self.value_nodes = value_nodes or [node] * len(values)
 
 
-def _leaf(doc: _Doc, node, field: str, seed: int, counter: List[int]) -> Leaf:
+def _leaf_spec(doc: _Doc, node, field: str):
+    """A varied field's entry read and checked, nothing drawn: (its mapping, path, kind, count)."""
     m = doc.mapping(node, field, ("path", "count", "scale") + DISTRIBUTIONS)
     if "path" not in m:
         doc.fail(node, field, "missing required field 'path'")
-    path = doc.value(m["path"])
+    path = doc.value(m["path"], field + ".path")
     if not isinstance(path, str):
         doc.fail(m["path"], field + ".path", f"expected a field path like bodies.upper.mass, got {_show(m['path'])}")
     try:
@@ -161,19 +360,37 @@ def _leaf(doc: _Doc, node, field: str, seed: int, counter: List[int]) -> Leaf:
     if len(kinds) != 1:
         doc.fail(node, field, f"expected exactly one of {', '.join(DISTRIBUTIONS)}, got {len(kinds)}")
     kind = kinds[0]
-    index = counter[0]
-    counter[0] += 1
     if kind == "values":
         if "count" in m or "scale" in m:
             doc.fail(node, field, "'values' takes no count or scale")
         if not isinstance(m["values"], yaml.SequenceNode) or not m["values"].value:
             doc.fail(m["values"], field + ".values", f"expected a non-empty list, got {_show(m['values'])}")
-        return Leaf(path, [doc.value(v) for v in m["values"].value], node, index, m["values"].value)
+        count = len(m["values"].value)
+        if count > MAX_CASES:
+            doc.fail(m["values"], field + ".values", f"{count} values, more than the {MAX_CASES} cases a sweep may have")
+        return m, path, kind, count
     if "count" not in m:
         doc.fail(node, field, f"'{kind}' needs a count")
-    count = doc.number(m["count"], field + ".count", integer=True)
+    count = doc.integer(m["count"], field + ".count", 1, None, "a positive integer")
+    if count > MAX_CASES:
+        doc.fail(m["count"], field + ".count", f"{count} cases, more than the {MAX_CASES} a sweep may have")
+    return m, path, kind, count
+
+
+def _leaf(doc: _Doc, node, field: str, seed: int, counter: List[int]) -> Leaf:
+    m, path, kind, count = _leaf_spec(doc, node, field)
+    index = counter[0]
+    counter[0] += 1
+    if kind == "values":
+        values = []
+        for k, v in enumerate(m["values"].value):
+            values.append(doc.value(v, f"{field}.values[{k}]"))
+            bad = _plain(values[-1])
+            if bad:
+                doc.fail(v, f"{field}.values[{k}]", bad)
+        return Leaf(path, values, node, index, m["values"].value)
     a, b = doc.pair(m[kind], f"{field}.{kind}")
-    scale = doc.value(m["scale"]) if "scale" in m else "linear"
+    scale = doc.value(m["scale"], field + ".scale") if "scale" in m else "linear"
     if "scale" in m and (kind != "grid" or scale not in ("linear", "log")):
         doc.fail(m["scale"], field + ".scale", "expected linear or log, for a grid only")
     rng = np.random.default_rng([seed, index])  # one stream per varied field: adding one moves no other
@@ -199,38 +416,93 @@ def _leaf(doc: _Doc, node, field: str, seed: int, counter: List[int]) -> Leaf:
     return Leaf(path, [float(v) for v in values], node, index)
 
 
-def _combine(doc: _Doc, nodes, field: str, how: str, seed: int, counter: List[int]):
-    """The cases of a group: a list of {path: value} dicts, and its leaves."""
-    parts, leaves = [], []
-    for k, node in enumerate(nodes):
+def _group(doc: _Doc, node, field: str):
+    """(how, members) of a group entry {zip: [...]} or {product: [...]}; None for a varied field"""
+    if not (isinstance(node, yaml.MappingNode) and len(node.value) == 1):
+        return None
+    how = doc.value(node.value[0][0], field)
+    if how not in ("zip", "product"):
+        return None
+    members = node.value[0][1]
+    if not isinstance(members, yaml.SequenceNode) or not members.value:
+        doc.fail(members, f"{field}.{how}", f"expected a non-empty list of varied fields, got {_show(members)}")
+    return how, members
+
+
+def _count(doc: _Doc, node, field: str, how: str, seen: Dict[str, Any]) -> Tuple[int, int]:
+    """A group's (cases, varied fields), from the counts and the lengths of the value lists alone:
+    checked against MAX_CASES and MAX_CASE_VALUES before anything is drawn or combined.  `node` is
+    the group's list of entries; each varied path goes in `seen`."""
+    sizes, fields = [], 0
+    for k, entry in enumerate(node.value):
         f = f"{field}[{k}]"
-        if isinstance(node, yaml.MappingNode) and len(node.value) == 1 and doc.value(node.value[0][0]) in ("zip", "product"):
-            sub_how = doc.value(node.value[0][0])
-            members = node.value[0][1]
-            if not isinstance(members, yaml.SequenceNode) or not members.value:
-                doc.fail(members, f"{f}.{sub_how}", f"expected a non-empty list of varied fields, got {_show(members)}")
-            cases, sub = _combine(doc, members.value, f"{f}.{sub_how}", sub_how, seed, counter)
+        group = _group(doc, entry, f)
+        if group:
+            n, nf = _count(doc, group[1], f"{f}.{group[0]}", group[0], seen)
         else:
-            leaf = _leaf(doc, node, f, seed, counter)
-            cases, sub = [{leaf.path: v} for v in leaf.values], [leaf]
-        parts.append((node, f, cases))
-        leaves += sub
+            _, path, _, n = _leaf_spec(doc, entry, f)
+            if path in seen:
+                doc.fail(entry, "path", f"'{_clip(path)}' is varied twice (also at {doc.where(seen[path])})")
+            seen[path] = entry
+            nf = 1
+        sizes.append((entry, f, n))
+        fields += nf
     if how == "zip":
-        n = len(parts[0][2])
-        for node, f, cases in parts[1:]:
-            if len(cases) != n:
-                doc.fail(node, f, f"zip needs equal lengths: {len(cases)} cases here, {n} in {parts[0][1]}")
-        out = [dict(kv for c in combo for kv in c.items()) for combo in zip(*(p[2] for p in parts))]
+        cases = sizes[0][2]
+        for entry, f, n in sizes[1:]:
+            if n != cases:
+                doc.fail(entry, f, f"zip needs equal lengths: {n} cases here, {cases} in {sizes[0][1]}")
+        shown = f"{cases} cases"
     else:
-        out = [{}]
-        for _, _, cases in parts:  # the first entry varies slowest
-            out = [dict(a, **b) for a in out for b in cases]
-    seen = {}
-    for leaf in leaves:
-        if leaf.path in seen:
-            doc.fail(leaf.node, "path", f"'{leaf.path}' is varied twice (also at {doc.where(seen[leaf.path])})")
-        seen[leaf.path] = leaf.node
-    return out, leaves
+        cases = 1
+        for _, _, n in sizes:
+            cases *= n
+            if cases > MAX_CASES ** 3:  # far past the limit: the exact number would only grow
+                break
+        factors = [str(n) for _, _, n in sizes]
+        shown = f"{cases} cases ({' × '.join(factors)})" if 1 < len(factors) <= 8 else f"{cases} cases"
+        if cases > MAX_CASES ** 3:
+            shown = f"more than {MAX_CASES ** 3} cases"
+    if cases > MAX_CASES:
+        doc.fail(node, field, f"{shown}, more than the {MAX_CASES} a sweep may have")
+    if cases * fields > MAX_CASE_VALUES:
+        doc.fail(node, field, f"{shown} × {fields} varied fields = {cases * fields} values, more than the "
+                              f"{MAX_CASE_VALUES} a sweep may hold")
+    return cases, fields
+
+
+def _columns(doc: _Doc, node, field: str, how: str, seed: int, counter: List[int]):
+    """A group's varied fields as columns: (leaves, one list of values per leaf, cases)."""
+    parts = []
+    for k, entry in enumerate(node.value):
+        f = f"{field}[{k}]"
+        group = _group(doc, entry, f)
+        if group:
+            parts.append(_columns(doc, group[1], f"{f}.{group[0]}", group[0], seed, counter))
+        else:
+            leaf = _leaf(doc, entry, f, seed, counter)
+            parts.append(([leaf], [leaf.values], len(leaf.values)))
+    leaves = [leaf for p in parts for leaf in p[0]]
+    if how == "zip":  # _count checked the lengths
+        return leaves, [c for p in parts for c in p[1]], parts[0][2]
+    # product, the first entry varying slowest: an entry's values each repeated for every case of
+    # the entries after it, that block repeated for every case of the entries before it
+    total = math.prod(p[2] for p in parts)
+    columns, before = [], 1
+    for _, cols, n in parts:
+        after = total // (before * n)
+        for c in cols:
+            columns.append(list(itertools.chain.from_iterable(itertools.repeat(v, after) for v in c)) * before)
+        before *= n
+    return leaves, columns, total
+
+
+def _combine(doc: _Doc, node, field: str, how: str, seed: int):
+    """The cases of the vary list `node`: a list of {path: value} dicts, and its leaves."""
+    _count(doc, node, field, how, {})
+    leaves, columns, _ = _columns(doc, node, field, how, seed, [0])
+    paths = [leaf.path for leaf in leaves]
+    return [dict(zip(paths, row)) for row in zip(*columns)], leaves
 
 
 class Sweep:
@@ -250,43 +522,49 @@ class Sweep:
         self.path = str(path)
         if text is None:
             try:
-                with open(self.path, encoding="utf-8") as f:
-                    text = f.read()
-            except OSError as e:
-                raise Error(f"{self.path}: cannot read the sweep file: {e.strerror}") from None
+                text = read_text(self.path)
+            except ValueError as e:
+                raise Error(f"{self.path}: cannot read the sweep file: {e}") from None
         self.text = text
         doc = _Doc(text, self.path)
+        if doc.root is None:
+            raise Error(f"{self.path}:1:1: scenario: missing required field: the sweep file is empty (expected a "
+                        "mapping with scenario and vary)")
         top = doc.mapping(doc.root, "", ("scenario", "seed", "combine", "set", "vary", "reference", "name"))
         if "scenario" not in top:
             doc.fail(doc.root, "scenario", "missing required field (the base scenario's file)")
-        scen = doc.value(top["scenario"])
+        scen = doc.value(top["scenario"], "scenario")
         if not isinstance(scen, str):
             doc.fail(top["scenario"], "scenario", f"expected a file name, got {_show(top['scenario'])}")
         self.scenario_path = os.path.join(os.path.dirname(self.path), scen)
         try:
-            with open(self.scenario_path, encoding="utf-8") as f:
-                self.scenario_text = f.read()
-        except OSError as e:
-            doc.fail(top["scenario"], "scenario", f"cannot read '{self.scenario_path}': {e.strerror}")
+            self.scenario_text = read_text(self.scenario_path)
+        except ValueError as e:
+            doc.fail(top["scenario"], "scenario", f"cannot read '{_clip(self.scenario_path, 200)}': {e}")
         try:
+            check_yaml(self.scenario_text, self.scenario_path)  # the same bounds on nesting and aliases
             base = parse_scenario(self.scenario_text, self.scenario_path)
         except Error as e:
             doc.fail(top["scenario"], "scenario", str(e))
         self.model = base.model
         self.tree = yaml.load(self.scenario_text, Loader=_FastLoader)
-        self.name = doc.value(top["name"]) if "name" in top else os.path.basename(self.path).split(".")[0]
-        self.seed = int(doc.number(top["seed"], "seed")) if "seed" in top else 0
-        how = doc.value(top["combine"]) if "combine" in top else "product"
+        self.name = doc.value(top["name"], "name") if "name" in top else os.path.basename(self.path).split(".")[0]
+        self.seed = doc.integer(top["seed"], "seed", 0, MAX_SEED, "an integer from 0 to 2^64 - 1") if "seed" in top else 0
+        how = doc.value(top["combine"], "combine") if "combine" in top else "product"
         if how not in ("product", "zip"):
             doc.fail(top["combine"], "combine", f"expected product or zip, got {_show(top['combine'])}")
         self.settings: Dict[str, Any] = {}
         if "set" in top:
             for k, v in doc.mapping(top["set"], "set", _AnyKey()).items():
-                self.settings[k] = doc.value(v)
+                self.settings[k] = doc.value(v, f"set.{k}")
+                bad = _plain(self.settings[k])
+                if bad:
+                    doc.fail(v, f"set.{k}", bad)
                 self._check(doc, v, f"set.{k}", {k: self.settings[k]})
         if "vary" not in top or not isinstance(top["vary"], yaml.SequenceNode) or not top["vary"].value:
             doc.fail(top.get("vary", doc.root), "vary", "expected a non-empty list of varied fields")
-        self.cases, self.leaves = _combine(doc, top["vary"].value, "vary", how, self.seed, [0])
+        self.cases, self.leaves = _combine(doc, top["vary"], "vary", how, self.seed)
+
         self.paths = [leaf.path for leaf in self.leaves]
         for leaf in self.leaves:
             for f in ("path",) if leaf.path in self.settings else ():
@@ -298,7 +576,12 @@ class Sweep:
         self.reference = None
         if "reference" in top:
             ref = doc.mapping(top["reference"], "reference", ("method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics"))
-            self.reference = {k: doc.value(v) for k, v in ref.items()}
+            self.reference = {}
+            for k, v in ref.items():
+                self.reference[k] = doc.value(v, f"reference.{k}")
+                bad = _plain(self.reference[k])
+                if bad:
+                    doc.fail(v, f"reference.{k}", bad)
             self._check(doc, top["reference"], "reference",
                         dict(self.settings, **{f"simulation.{k}": v for k, v in self.reference.items()}))
 
@@ -468,7 +751,7 @@ def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any]
         tree = apply(sweep_tree, model, values)
         scene = parse_scenario(_text(tree), case_path(scenario_path))
         traj = simulate(scene, output=log)
-    except (Error, ValueError) as e:
+    except (Error, ValueError, TypeError) as e:
         row["status"] = "refused: " + _CASE_PREFIX.sub("", str(e))
         return row
     s = traj.summary
