@@ -59,11 +59,20 @@ bool is_fixed_step(const std::string& method) {
   return info && info->fixed_step;
 }
 
+double output_stride(const SimulationSettings& s) { return std::max(1.0, std::round(s.output_dt / s.dt)); }
+
 double output_interval(const SimulationSettings& s) {
-  return is_fixed_step(s.method) ? s.dt * std::max(1.0, std::round(s.output_dt / s.dt)) : s.output_dt;
+  return is_fixed_step(s.method) ? s.dt * output_stride(s) : s.output_dt;
 }
 
-double output_rows(const SimulationSettings& s) { return 1 + std::ceil(s.t_end / output_interval(s) * (1 - 1e-12)); }
+double output_count(const SimulationSettings& s) {
+  if (!is_fixed_step(s.method)) return std::max(1.0, std::ceil(s.t_end / s.output_dt * (1 - 1e-12)));
+  // every `stride` steps, and at t_end: ⌈steps / stride⌉ outputs
+  const StepCount n = count_steps(s.t_end, s.dt);
+  return std::max(1.0, std::ceil((n.whole + (n.partial ? 1.0 : 0.0)) / output_stride(s)));
+}
+
+double output_rows(const SimulationSettings& s) { return 1 + output_count(s); }
 
 namespace {
 std::string g(double x) {
@@ -94,6 +103,8 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
     throw Error("simulation settings: max_steps must be positive, got " + std::to_string(s.max_steps));
   if (sc.model.nv == 0)
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
+  if (const IntegratorInfo* info = find_integrator(s.method); info && info->refuses)
+    if (const std::string why = info->refuses(sc.model); !why.empty()) throw Error(sc.path + ": " + why);
   std::vector<std::string> warnings;
   // CVODE's local error test compares against rtol·|y|: below ~100 ε it asks for more digits than a double holds
   const double reach = 100 * std::numeric_limits<double>::epsilon();
@@ -154,10 +165,12 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   const Sample first = observe(sys, t, y);
   E0 = first.total;
   record(first);
-  // fixed-step methods take steps of exactly dt: outputs every whole number of steps
+  // outputs: CVODE every output_dt; fixed-step methods (steps of exactly dt) every `stride` steps,
+  // output_dt = stride·dt, never between two steps (the k-th output lands on step k·stride, whose
+  // time it reports as k·output_dt, the time a CVODE run at that output_dt reports); both at t_end last
   const double output_dt = output_interval(settings);
   summary.output_dt = output_dt;
-  const long outputs = std::max<long>(1, std::lround(std::ceil(settings.t_end / output_dt * (1 - 1e-12))));
+  const long outputs = long(output_count(settings));
   try {
     bool interrupted = false;
     integrator->set_stop(stop, std::move(poll));

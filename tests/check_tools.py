@@ -171,10 +171,11 @@ def check_work_precision(out, t_end):
             work = {number(r["rtol"]): number(r["rhs_evals"]) for r in rs}
             expect(work.get(1e-12, 0) > work.get(1e-3, 1), f"wp {scene}: {m}: tighter rtol, no more work: {work}")
         for m in runs.FIXED:
-            expect(len(by.get(m, [])) == (6 if runs.split(m)[0] == "implicit-midpoint" else 8), f"wp {scene}: {m}: rows missing")
+            rows_expected = 0 if runs.refuses(scene, m) else 6 if runs.split(m)[0] == "implicit-midpoint" else 8
+            expect(len(by.get(m, [])) == rows_expected, f"wp {scene}: {m}: rows missing")
         # observed order: the log-log slope of error against step, over the points between the
         # reference's accuracy and 10 % (at least three points, else the method is not judged here)
-        for m, p in (("euler", 1.0), ("symplectic-euler", 1.0), ("rk4", 4.0), ("implicit-midpoint", 2.0),
+        for m, p in (("euler", 1.0), ("semi-implicit-euler", 1.0), ("symplectic-euler", 1.0), ("rk4", 4.0), ("implicit-midpoint", 2.0),
                      ("implicit-midpoint/simplified", 2.0)):
             pts = [(number(r["dt"]), number(r["state_error"])) for r in by.get(m, [])]
             pts = [(h, e) for h, e in pts if 1e-10 <= e <= 0.1]
@@ -205,12 +206,13 @@ def check_stability(out, t_end):
     table = {(r["scenario"], r["method"]): (float(r["max_stable_dt"]), r["beyond"]) for r in rows}
     scenes = ["pendulum_on_cart", "double_pendulum", "tumbling_t_handle", "three_link_arm", "stiff_arm",
               "flexible_satellite"]
-    expect(set(table) == {(s, m) for s in scenes for m in runs.FIXED}, f"stability: cells {sorted(table)}")
+    expect(set(table) == {(s, m) for s in scenes for m in runs.FIXED if not runs.refuses(s, m)}, f"stability: cells {sorted(table)}")
     with open(os.path.join(out, "stability.md")) as f:
         md = f.read()
     for s in scenes:
-        line = [l for l in md.splitlines() if l.startswith(f"| {s} | ") and l.count("|") == len(runs.FIXED) + 2]
-        expect(len(line) == 1 and all(f"{table[(s, m)][0]:.3g} s" in line[0] for m in runs.FIXED),
+        line = [l for l in md.splitlines()
+                if l.startswith(f"| {s} | ") and l.count("|") == len(runs.FIXED) + 2 and "cvode" not in l]
+        expect(len(line) == 1 and all(f"{table[(s, m)][0]:.3g} s" in line[0] for m in runs.FIXED if (s, m) in table),
                f"stability: the table row of {s} does not show the CSV's steps")
     # the stiff arm's fast mode (time constant ~0.1 ms) limits the explicit methods to steps of
     # order 1e-4 s (well below the 1 ms at which test_stability sees RK4 blow up); the A-stable

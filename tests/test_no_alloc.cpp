@@ -147,6 +147,34 @@ TEST(NoAllocation, NewtonSolverAllocatesNothingPerCall) {
   EXPECT_TRUE(structured && ok && x.allFinite());
 }
 
+// A fixed-step method's steps (here the symplectic Euler's Newton iterations, the heaviest) after
+// the first: nothing allocates
+TEST(NoAllocation, SymplecticEulerStepsAllocateNothing) {
+  Rng rng(17);
+  const Model model = random_model(rng, {.n = 12, .branching = 0.5, .prismatic = 0.2, .planar = 0.2});
+  Inputs in;
+  for (int i = 0; i < model.nbodies; ++i)
+    if (model.nv_i[i] == 1) {
+      in.springs.push_back({model.joint_names[i], model.idx_v[i], model.idx_q[i], 10.0, 0.0});
+      in.dampers.push_back({model.joint_names[i], model.idx_v[i], 1.0});
+      in.torques.push_back({model.joint_names[i], model.idx_v[i], 0.1, 0.5, 1.0, 0.0});
+    }
+  System sys(model, in, FdMethod::ArticulatedBody);
+  SimulationSettings s;
+  s.method = "symplectic-euler";
+  s.dt = 1e-3;
+  VecX y = sys.state(random_q(rng, model), random_v(rng, model));
+  double t = 0.0;
+  auto integrator = make_integrator(s.method, sys, s, t, y);
+  integrator->advance(s.dt, t, y);  // the first step sizes what it resizes
+
+  Forbidden region;
+  integrator->advance(0.01, t, y);
+  EXPECT_EQ(region.end(), 0);
+  EXPECT_EQ(integrator->stats().steps, 10);
+  EXPECT_TRUE(y.allFinite());
+}
+
 volatile int g_size = 7;  // sizes the optimizer cannot see, so the allocations below cannot be elided
 volatile double g_sink = 0;
 

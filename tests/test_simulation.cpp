@@ -111,39 +111,7 @@ TEST(Satellite, QuaternionStaysUnitInTheIntegratorState) {
   EXPECT_LE(std::min((a - b).norm(), (a + b).norm()), 1e-9) << a.transpose() << " vs " << b.transpose();
 }
 
-// observed convergence order on the double pendulum against CVODE at rtol 1e-13
-double observed_order(const Scenario& sc, const std::string& method, double dt, double T) {
-  SimulationSettings ref = sc.simulation;
-  ref.method = "cvode-adams";
-  ref.rtol = 1e-13;
-  ref.atol = 1e-15;
-  ref.t_end = T;
-  ref.output_dt = T;
-  std::vector<Sample> r;
-  simulate(sc, ref, nullptr, &r);
-  std::vector<double> err;
-  for (double h : {dt, dt / 2, dt / 4}) {
-    SimulationSettings s = ref;
-    s.method = method;
-    s.dt = h;
-    std::vector<Sample> x;
-    const RunSummary sum = simulate(sc, s, nullptr, &x);
-    EXPECT_TRUE(sum.completed);
-    VecX e(4);
-    e << x.back().q - r.back().q, x.back().qd - r.back().qd;
-    err.push_back(e.norm());
-  }
-  const double p1 = std::log2(err[0] / err[1]), p2 = std::log2(err[1] / err[2]);
-  return 0.5 * (p1 + p2);
-}
-
-TEST(ConvergenceOrder, DoublePendulum) {
-  const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
-  EXPECT_NEAR(observed_order(sc, "rk4", 0.01, 1.0), 4.0, 0.3);
-  EXPECT_NEAR(observed_order(sc, "symplectic-euler", 1e-3, 1.0), 1.0, 0.3);
-  EXPECT_NEAR(observed_order(sc, "euler", 1e-4, 1.0), 1.0, 0.3);
-  EXPECT_NEAR(observed_order(sc, "implicit-midpoint", 0.01, 1.0), 2.0, 0.3);
-}
+// (convergence orders of the fixed-step methods: test_integrators, ClaimedOrder)
 
 // ---- HDF5 ----------------------------------------------------------------------------------
 

@@ -1,5 +1,6 @@
 // Where methods fail, pinned with generous margins: explicit Euler gains energy on an undamped
-// pendulum, symplectic Euler keeps it bounded over 10⁵ steps, BDF beats Adams on the stiff arm.
+// pendulum, symplectic Euler keeps it bounded over 10⁵ steps (here 𝓜 is constant; the scenes where
+// it is not are in test_integrators), BDF beats Adams on the stiff arm.
 // (RK4 beyond its limit is in test_simulation: Instability.)
 #include "soadyn/simulate.hpp"
 

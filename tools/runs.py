@@ -13,7 +13,7 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SOADYN = os.environ.get("SOADYN", os.path.join(ROOT, "build", "soadyn"))
 SCENARIOS = os.path.join(ROOT, "scenarios")
-FIXED = ["euler", "symplectic-euler", "rk4", "implicit-midpoint", "implicit-midpoint/simplified"]
+FIXED = ["euler", "semi-implicit-euler", "symplectic-euler", "rk4", "implicit-midpoint", "implicit-midpoint/simplified"]
 CVODE = ["cvode-adams", "cvode-bdf", "cvode-bdf/dq"]
 # A method name with a variant: the settings it changes (the defaults are the analytic Jacobian and,
 # for the implicit midpoint rule, full Newton)
@@ -104,6 +104,24 @@ def run(scenario, method, t_end=None, rtol=None, dt=None, output_dt=None, timeou
             W = f["energy/work_inputs"][:] if "energy/work_inputs" in f else np.zeros_like(E)
             r["q"], r["qd"] = f["q"][-1], f["qd"][-1]
         return energy_summary(r, t, E, T, W)
+
+
+_refusals = {}
+
+
+def refuses(scenario, method):
+    """why `method` refuses the scene's model before running (symplectic-euler: free and ball
+    joints), or None"""
+    key = (scenario, method)
+    if key not in _refusals:
+        try:
+            run(scenario, method, t_end=1e-3, dt=1e-3, output_dt=1e-3)
+            _refusals[key] = None
+        except Exception as e:  # soadyn.Error in process, RuntimeError from the executable
+            if "free or ball joint" not in str(e):
+                raise
+            _refusals[key] = str(e)
+    return _refusals[key]
 
 
 def run_many(jobs, workers=2):

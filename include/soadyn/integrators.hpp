@@ -1,20 +1,28 @@
 // Time integration of 𝓜(q) q̈ = τ(t, q, q̇) − bias(q, q̇) with state y = [q; v].
 //
 // One interface, several methods:
-//   cvode-adams        SUNDIALS CVODE, Adams–Moulton, fixed-point iteration (non-stiff)
-//   cvode-bdf          SUNDIALS CVODE, BDF, Newton with a direct solver (stiff): the Jacobian of f
-//                      analytic (System::jacobian) with I − γJ solved by its structure through an
-//                      nv×nv Schur complement (NewtonSolver), or CVODE's difference quotients and
-//                      its dense LU
-//   euler              explicit Euler (order 1)
-//   symplectic-euler   semi-implicit Euler: v ← v + h q̈(q, v), then q ← q ⊕ h v (order 1, symplectic)
-//   rk4                classical Runge–Kutta (order 4)
-//   implicit-midpoint  y ← y + h f((y + y⁺)/2), Newton iterations (order 2, symplectic, A-stable):
-//                      the one fixed-step baseline that stays stable on stiff scenes.  Full Newton
-//                      (the Jacobian at every iterate, from y) or simplified (once per step, at the
-//                      explicit-Euler predictor)
+//   cvode-adams          SUNDIALS CVODE, Adams–Moulton, fixed-point iteration (non-stiff)
+//   cvode-bdf            SUNDIALS CVODE, BDF, Newton with a direct solver (stiff): the Jacobian of f
+//                        analytic (System::jacobian) with I − γJ solved by its structure through an
+//                        nv×nv Schur complement (NewtonSolver), or CVODE's difference quotients and
+//                        its dense LU
+//   euler                explicit Euler (order 1)
+//   semi-implicit-euler  v ← v + h q̈(q, v), then q ← q ⊕ h v (order 1).  Symplectic only where 𝓜 is
+//                        constant: with 𝓜(q) the update in velocities is not a symplectic map
+//   symplectic-euler     symplectic Euler in the canonical momenta p = 𝓜(q) v (order 1, symplectic):
+//                        p⁺ = p − h ∂H/∂q(q, p⁺) by Newton, then q⁺ = q + h 𝓜(q)⁻¹ p⁺.  Models
+//                        without quaternions (revolute, prismatic, planar joints), where q̇ = v
+//   rk4                  classical Runge–Kutta (order 4)
+//   implicit-midpoint    y ← y + h f((y + y⁺)/2), Newton iterations (order 2, symmetric, A-stable; in
+//                        (q, v), so not symplectic where 𝓜 depends on q): the one fixed-step baseline
+//                        that stays stable on stiff scenes.  Full Newton (the Jacobian at every
+//                        iterate, from y) or simplified (once per step, at the explicit-Euler predictor)
 // Free roots keep a unit quaternion: CVODE projects it (CVodeSetProjFn); fixed-step methods
 // renormalize after each step.
+//
+// Fixed steps.  Step k of a fixed-step method ends at t0 + k·dt, k an integer (times are never
+// accumulated).  A span T is round(T/dt) steps when T/dt is that whole number to within rounding
+// (kWholeSteps, relative); otherwise floor(T/dt) steps of dt and one last, shorter step ending at T.
 #pragma once
 
 #include "soadyn/algorithms.hpp"
@@ -108,11 +116,16 @@ class Integrator {
 };
 
 // The one registry of integration methods: the name users write, a line about it, whether it takes
-// steps of exactly `dt` (else CVODE's adaptive steps under rtol/atol), and how to make one.
+// steps of exactly `dt` (else CVODE's adaptive steps under rtol/atol), the properties claimed for a
+// fixed-step method (each one a test: test_integrators), the models it refuses, and how to make one.
 struct IntegratorInfo {
   std::string_view name;
   std::string_view description;
   bool fixed_step;
+  int order;        // fixed-step methods: the order of convergence (0: CVODE, adaptive)
+  bool symplectic;  // a symplectic map on every model it takes: no secular energy drift
+  // why the method cannot integrate `model` ("": it can); nullptr: every model
+  std::string (*refuses)(const Model& model);
   std::unique_ptr<Integrator> (*make)(System& system, const SimulationSettings& settings, double t0,
                                       const VecX& y0);
 };
@@ -120,7 +133,8 @@ const std::vector<IntegratorInfo>& integrators();
 const IntegratorInfo* find_integrator(std::string_view name);  // nullptr for an unknown name
 std::vector<std::string> integrator_names();
 
-// Makes the named integrator; throws soadyn::Error naming the known methods for an unknown name.
+// Makes the named integrator; throws soadyn::Error naming the known methods for an unknown name, and
+// for a model the method refuses (IntegratorInfo::refuses).
 std::unique_ptr<Integrator> make_integrator(const std::string& method, System& system,
                                             const SimulationSettings& settings, double t0, const VecX& y0);
 
@@ -132,6 +146,16 @@ std::unique_ptr<Integrator> make_cvode(bool bdf, System& system, const Simulatio
 // soadyn::Error for another word.  Likewise `newton`: full or simplified.
 bool analytic_jacobian(const std::string& jacobian);
 bool full_newton(const std::string& newton);
+
+// Fixed steps in a span T (see the header comment): `whole` steps of dt (an integer, held as a double
+// so that spans beyond a long are still counted) and, when T/dt is not a whole number, one shorter
+// step after them.
+constexpr double kWholeSteps = 1e-12;
+struct StepCount {
+  double whole = 0;
+  bool partial = false;
+};
+StepCount count_steps(double T, double dt);
 
 // "where it failed": the first non-finite component, or -1
 int first_non_finite(const VecX& y);

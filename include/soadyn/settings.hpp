@@ -9,10 +9,11 @@ namespace soadyn {
 struct SimulationSettings {
   double t_end = 10.0;                 // s
   double output_dt = 0.01;             // s between logged samples
-  std::string method = "cvode-adams";  // cvode-adams | cvode-bdf | rk4 | euler | symplectic-euler | implicit-midpoint
+  std::string method = "cvode-adams";  // a name of integrators() (integrators.hpp): cvode-adams | cvode-bdf |
+                                       //   euler | semi-implicit-euler | symplectic-euler | rk4 | implicit-midpoint
   double rtol = 1e-8;                  // CVODE relative tolerance
   double atol = 1e-10;                 // CVODE absolute tolerance
-  double dt = 1e-3;                    // fixed-step methods' step, s
+  double dt = 1e-3;                    // fixed-step methods' step, s: exactly (count_steps, integrators.hpp)
   double max_step = 0.0;               // CVODE maximum step, s (0: none)
   long max_steps = 100000000;          // CVODE steps allowed in the whole run
   std::string dynamics = "on";         // forward-dynamics route: dense | sparse | on

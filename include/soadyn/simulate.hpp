@@ -56,15 +56,24 @@ Sample observe(System& system, double t, const VecX& y);
 
 // Throws soadyn::Error if sc cannot be run with settings: t_end, output_dt, dt or atol not positive
 // and finite, rtol outside (0, 1), more steps or rows than 2^53 (time would no longer count
-// exactly), or a model without degrees of freedom (names are checked as UTF-8 by Model::build).  Returns
+// exactly), a model without degrees of freedom (names are checked as UTF-8 by Model::build), or a
+// model the method refuses (IntegratorInfo::refuses: symplectic-euler and quaternions).  Returns
 // warnings (a tolerance below what double precision can deliver).  simulate() calls it; call it
 // first to refuse before any output.
 std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings& settings);
 
-// The time between logged samples as used: fixed-step methods log every whole number of steps.
+// Fixed-step methods log every `output_stride` steps: output_dt / dt rounded to the nearest whole
+// number, at least 1 (so an output_dt that is not a multiple of dt is taken as the nearest one),
+// at the step times t0 + (k·stride)·dt, and at t_end (the end of the run's last step, shorter when
+// t_end is not a whole number of steps: count_steps, integrators.hpp).
+double output_stride(const SimulationSettings& settings);
+
+// The time between logged samples as used: output_stride · dt for fixed-step methods, else output_dt.
 double output_interval(const SimulationSettings& settings);
 
-// Rows a run logs: the initial state and one per output time.
+// Output times after the initial state (the last one at t_end), and the rows a run logs: the
+// initial state and one per output time.
+double output_count(const SimulationSettings& settings);
 double output_rows(const SimulationSettings& settings);
 
 

@@ -142,7 +142,7 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
       .def_readwrite("t_end", &SimulationSettings::t_end, "end time, s")
       .def_readwrite("output_dt", &SimulationSettings::output_dt, "time between logged samples, s")
       .def_readwrite("method", &SimulationSettings::method,
-                     "cvode-adams | cvode-bdf | rk4 | euler | symplectic-euler | implicit-midpoint")
+                     "cvode-adams | cvode-bdf | rk4 | euler | semi-implicit-euler | symplectic-euler | implicit-midpoint")
       .def_readwrite("rtol", &SimulationSettings::rtol, "CVODE relative tolerance")
       .def_readwrite("atol", &SimulationSettings::atol, "CVODE absolute tolerance")
       .def_readwrite("dt", &SimulationSettings::dt, "fixed-step methods' step, s")

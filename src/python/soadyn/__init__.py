@@ -78,8 +78,8 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     """Simulate a scenario and return its Trajectory: 𝓜(q) q̈ = τ(t, q, q̇) − bias(q, q̇) from (q0, v0).
 
     scene: a Scenario or the path of a scenario file.  Each keyword left None keeps the scene's
-    own setting (scene.settings): method (cvode-adams | cvode-bdf | rk4 | euler | symplectic-euler |
-    implicit-midpoint), rtol, atol (CVODE), dt (fixed-step methods' step, s), t_end (s),
+    own setting (scene.settings): method (cvode-adams | cvode-bdf | rk4 | euler | semi-implicit-euler |
+    symplectic-euler | implicit-midpoint), rtol, atol (CVODE), dt (fixed-step methods' step, s), t_end (s),
     output_dt (s between samples), dynamics (forward-dynamics route: on | dense | sparse),
     jacobian (CVODE BDF's Jacobian: analytic | dq), newton (implicit midpoint: full | simplified).
     output: an HDF5 file to log to as well (the layout of `soadyn run`; read_log reads it back).
