@@ -1,9 +1,41 @@
 #include "soadyn/data.hpp"
 
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+
 namespace soadyn {
 
+double memory_limit_bytes() {
+  double limit = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+  for (int resource : {RLIMIT_AS, RLIMIT_DATA}) {
+    rlimit r{};
+    if (getrlimit(resource, &r) == 0 && r.rlim_cur != RLIM_INFINITY) limit = std::min(limit, double(r.rlim_cur));
+  }
+  return limit;
+}
+
+void check_memory(double bytes, int nv, const std::string& what) {
+  const double limit = memory_limit_bytes();
+  if (bytes <= limit) return;
+  char msg[256];
+  std::snprintf(msg, sizeof msg, "the model has nv = %d: %s need about %.1f GB, more than the %.1f GB this process may use",
+                nv, what.c_str(), bytes / 1e9, limit / 1e9);
+  throw Error(msg);
+}
+
+namespace {
+// runs before Data's first member is built
+int checked_bodies(const Model& m) {
+  check_memory(3.0 * 8.0 * double(m.nv) * double(m.nv), m.nv, "its nv×nv matrices (𝓜 and its Cholesky factor)");
+  return m.nbodies;
+}
+}  // namespace
+
 Data::Data(const Model& m)
-    : R(m.nbodies, Mat3::Identity()),
+    : R(checked_bodies(m), Mat3::Identity()),
       eta(Mat3X::Zero(3, m.nbodies)),
       d(Mat3X::Zero(3, m.nbodies)),
       s(Mat3X::Zero(3, m.nbodies)),

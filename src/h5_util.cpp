@@ -1,5 +1,6 @@
 #include "h5_util.hpp"
 
+#include "soadyn/h5log.hpp"
 #include "soadyn/text.hpp"
 
 #include <algorithm>
@@ -143,3 +144,21 @@ void Scalar::write(std::string s) {
 Scalar string_scalar(hid_t parent, const char* name, size_t size) { return Scalar(parent, name, -1, string_type(size, true)); }
 
 }  // namespace soadyn::h5
+
+namespace soadyn {
+
+std::int64_t open_run_file(const std::string& path) {
+  static_assert(sizeof(hid_t) == sizeof(std::int64_t));
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected a run file from soadyn run)");
+  const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  if (fapl < 0) throw Error(path + ": HDF5 could not make file-access properties");
+  H5Pset_metadata_read_attempts(fapl, kMetadataReadAttempts);
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
+  if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
+  H5Pclose(fapl);
+  if (f < 0) throw Error(path + ": cannot open the HDF5 file (corrupt or truncated?)");
+  return f;
+}
+
+}  // namespace soadyn

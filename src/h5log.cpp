@@ -372,7 +372,7 @@ void H5Log::on_finish(const RunSummary& summary) {
   im.closed = true;
 }
 
-std::string H5Log::temporary_path(const std::string& path) { return path + "." + std::to_string(getpid()) + ".tmp"; }
+std::string H5Log::temporary_path(const std::string& path) { return soadyn::temporary_path(path); }
 
 void H5Log::set_flush_interval(double seconds) { impl_->flush_interval = std::chrono::duration<double>(seconds); }
 

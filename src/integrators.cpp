@@ -18,7 +18,6 @@ System::System(const Model& m, const Inputs& in, FdMethod fd)
       method(fd),
       nquad(in.does_work() ? 2 : 0),
       data(m),
-      derivatives(m),
       q(m.nq),
       v(m.nv),
       tau(m.nv),
@@ -56,7 +55,12 @@ void System::rhs(double t, const double* y, double* ydot) {
   }
 }
 
+void System::prepare_jacobian() {
+  if (!derivatives) derivatives.emplace(model);
+}
+
 void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
+  prepare_jacobian();
   ++jac_evals;
   const int nq = model.nq, nv = model.nv;
   q = Eigen::Map<const VecX>(y, nq);
@@ -64,8 +68,8 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   update_kinematics(model, data, q);
   update_velocities(model, data, v);
   inputs.evaluate(t, q, v, tau);
-  forward_dynamics_derivatives(model, data, v, tau, derivatives, &inputs);
-  const MatX& dq = derivatives.dqdd_dq;
+  forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
+  const MatX& dq = derivatives->dqdd_dq;
   J.setZero();
   for (int i = 0; i < model.nbodies; ++i) {
     const JointType type = model.joint_type[i];
@@ -83,7 +87,7 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
       for (int k = 0; k < ni; ++k)
         if (Ti(k, c) != 0.0) J.block(nq, iq + c, nv, 1) += Ti(k, c) * dq.col(iv + k);
   }
-  J.block(nq, nq, nv, nv) = derivatives.dqdd_dv;
+  J.block(nq, nq, nv, nv) = derivatives->dqdd_dv;
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v); nothing depends on W or D
   if (nquad > 0) {
     inputs.power_derivatives(t, v, dP, dD);
@@ -388,7 +392,9 @@ class ImplicitMidpoint : public FixedStep {
         full_(full_newton(settings.newton)),
         J_(s.size(), s.size()),
         newton_(s.model, s.nquad),
-        delta_(s.size()) {}
+        delta_(s.size()) {
+    if (analytic_) s.prepare_jacobian();  // sized here, so no step allocates
+  }
 
  private:
   // y⁺ = y + h f(t + h/2, (y + y⁺)/2), symmetric but in (q, v), so not symplectic where 𝓜 depends
@@ -459,20 +465,20 @@ const std::vector<IntegratorInfo>& integrators() {
   using S = const SimulationSettings&;
   using P = std::unique_ptr<Integrator>;
   static const std::vector<IntegratorInfo> table = {
-      {"cvode-adams", "SUNDIALS CVODE, Adams–Moulton with fixed-point iterations (non-stiff)", false, 0, false, nullptr,
+      {"cvode-adams", "SUNDIALS CVODE, Adams–Moulton with fixed-point iterations (non-stiff)", false, 0, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(false, sys, s, t0, y0); }},
-      {"cvode-bdf", "SUNDIALS CVODE, BDF with Newton and a direct solver (stiff)", false, 0, false, nullptr,
+      {"cvode-bdf", "SUNDIALS CVODE, BDF with Newton and a direct solver (stiff)", false, 0, false, 24, nullptr,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(true, sys, s, t0, y0); }},
-      {"euler", "explicit Euler, order 1", true, 1, false, nullptr,
+      {"euler", "explicit Euler, order 1", true, 1, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<Euler>(sys, s.dt, t0); }},
-      {"semi-implicit-euler", "v then q, order 1; not symplectic where the mass matrix depends on q", true, 1, false,
+      {"semi-implicit-euler", "v then q, order 1; not symplectic where the mass matrix depends on q", true, 1, false, 0,
        nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SemiImplicitEuler>(sys, s.dt, t0); }},
       {"symplectic-euler", "symplectic Euler in the momenta p = M(q) v by Newton, order 1, symplectic (no free or ball joints)",
-       true, 1, true, &SymplecticEuler::refuses,
+       true, 1, true, 12, &SymplecticEuler::refuses,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SymplecticEuler>(sys, s.dt, t0); }},
-      {"rk4", "classical Runge–Kutta, order 4", true, 4, false, nullptr,
+      {"rk4", "classical Runge–Kutta, order 4", true, 4, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<RK4>(sys, s.dt, t0); }},
-      {"implicit-midpoint", "implicit midpoint rule in (q, v) by Newton, order 2, symmetric and A-stable", true, 2, false,
+      {"implicit-midpoint", "implicit midpoint rule in (q, v) by Newton, order 2, symmetric and A-stable", true, 2, false, 24,
        nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<ImplicitMidpoint>(sys, s, t0); }},
   };
   return table;

@@ -1,7 +1,11 @@
-// The output path's checks and its lock (h5log.hpp).
+// Output paths: the checks before a file is replaced, the writer's lock, and text written whole
+// (output_file.hpp).
+#include "soadyn/output_file.hpp"
+
 #include "soadyn/h5log.hpp"
 
 #include <fcntl.h>
+#include <hdf5.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -9,34 +13,146 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 
 namespace soadyn {
 
 namespace fs = std::filesystem;
 
-void check_output_path(const std::string& path, const std::vector<std::string>& inputs) {
-  std::error_code ec;
-  const fs::path p(path);
-  if (path.empty()) throw Error("the output path is empty");
-  if (fs::is_directory(p, ec)) throw Error(path + ": is a directory, expected an output file");
-  if (!fs::exists(p, ec)) return;
-  for (const auto& in : inputs)
-    if (!in.empty() && fs::equivalent(p, fs::path(in), ec))
-      throw Error(path + ": the output is the input file " + in + "; choose another -o");
-  // an existing file is replaced only if it is an HDF5 file (its signature at 0, 512, 1024, …)
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw Error(path + ": exists and cannot be read, so it cannot be checked before it is replaced");
+const char* to_string(OutputKind kind) {
+  switch (kind) {
+    case OutputKind::Run: return "run file";
+    case OutputKind::Page: return "page";
+    case OutputKind::Csv: return "CSV export";
+    case OutputKind::Json: return "JSON export";
+  }
+  return "output";
+}
+
+std::string temporary_path(const std::string& path) { return path + "." + std::to_string(getpid()) + ".tmp"; }
+
+namespace {
+
+// A read-only descriptor, closed on scope exit.
+struct Fd {
+  int fd;
+  explicit Fd(int f) : fd(f) {}
+  ~Fd() {
+    if (fd >= 0) ::close(fd);
+  }
+  Fd(const Fd&) = delete;
+  Fd& operator=(const Fd&) = delete;
+};
+
+// the first `n` bytes of an open file
+std::string head(int fd, size_t n) {
+  std::string s(n, '\0');
+  const ssize_t got = ::pread(fd, s.data(), n, 0);
+  s.resize(got > 0 ? size_t(got) : 0);
+  return s;
+}
+
+// the pid in "<path>.lock", or 0
+long lock_owner(const std::string& lock_path) {
+  Fd f(::open(lock_path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
+  if (f.fd < 0) return 0;
+  const std::string s = head(f.fd, 31);
+  return std::atol(s.c_str());
+}
+
+// A soadyn writer holds "<path>.lock"?  (Its flock; the file alone may be a killed run's leftover.)
+bool held_by_soadyn(const std::string& path, long& pid) {
+  const std::string lock = path + ".lock";
+  Fd f(::open(lock.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
+  if (f.fd < 0) return false;
+  if (::flock(f.fd, LOCK_SH | LOCK_NB) == 0 || errno != EWOULDBLOCK) return false;
+  pid = lock_owner(lock);
+  return true;
+}
+
+// HDF5's signature at 0, 512, 1024, … (a user block may precede it)
+bool is_hdf5(int fd, std::uint64_t size) {
   static const char sig[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
-  const auto size = fs::file_size(p, ec);
-  if (!ec && size == 0) return;
-  for (std::uint64_t off = 0; !ec && off + 8 <= size; off = off ? 2 * off : 512) {
+  for (std::uint64_t off = 0; off + 8 <= size; off = off ? 2 * off : 512) {
     char b[8];
-    f.seekg(std::streamoff(off));
-    if (f.read(b, 8) && std::memcmp(b, sig, 8) == 0) return;
+    if (::pread(fd, b, 8, off_t(off)) == 8 && std::memcmp(b, sig, 8) == 0) return true;
     if (off >= (std::uint64_t(1) << 40)) break;
   }
-  throw Error(path + ": exists and is not an HDF5 file; refusing to replace it (remove it or choose another -o)");
+  return false;
+}
+
+// A soadyn run file: the root attributes every soadyn log has.  Opened read-only with one metadata
+// read attempt, so a corrupt file answers at once.
+bool is_soadyn_run(const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  H5Pset_metadata_read_attempts(fapl, 1);
+  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
+  if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);  // a killed run's file
+  H5Pclose(fapl);
+  if (f < 0) return false;
+  const bool yes = H5Aexists(f, "soadyn_version") > 0 && H5Aexists(f, "layout_version") > 0;
+  H5Fclose(f);
+  return yes;
+}
+
+// Is the file's content what this writer makes?
+bool made_by_this_writer(const std::string& path, int fd, std::uint64_t size, OutputKind kind) {
+  switch (kind) {
+    case OutputKind::Run: return is_hdf5(fd, size) && is_soadyn_run(path);
+    case OutputKind::Page: {
+      const std::string h = head(fd, 4096);
+      return h.rfind("<!DOCTYPE html>", 0) == 0 && h.find("<meta name=\"generator\" content=\"soadyn view") != std::string::npos;
+    }
+    case OutputKind::Csv: {
+      const std::string h = head(fd, 4096);
+      return h.rfind("time [s]", 0) == 0 && h.find('\0') == std::string::npos;
+    }
+    case OutputKind::Json: return head(fd, 9) == "{\"file\": ";
+  }
+  return false;
+}
+
+}  // namespace
+
+OutputTarget check_output_path(const std::string& path, OutputKind kind, const std::vector<std::string>& inputs,
+                               bool force) {
+  const bool text = kind != OutputKind::Run;
+  if (path.empty()) throw Error("the output path is empty");
+  if (path == "-") {
+    if (!text) throw Error("-: a run file cannot go to stdout (HDF5 needs a file); give a file name");
+    return OutputTarget::Stdout;
+  }
+  long pid = 0;
+  if (held_by_soadyn(path, pid))
+    throw Error(path + ": in use by another soadyn run" + (pid > 0 ? " (pid " + std::to_string(pid) + ")" : std::string()) +
+                "; wait for it to end or choose another output");
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    if (errno == ENOENT) return OutputTarget::New;  // nothing there (or a dangling link: replaced by the file)
+    throw Error(path + ": cannot be checked (" + std::strerror(errno) + ")");
+  }
+  std::error_code ec;
+  for (const auto& in : inputs)
+    if (!in.empty() && fs::equivalent(fs::path(path), fs::path(in), ec))
+      throw Error(path + ": the output is the input file " + in + " (the same file, under any name); choose another output");
+  if (S_ISDIR(st.st_mode)) throw Error(path + ": is a directory, expected an output file");
+  if (!S_ISREG(st.st_mode)) {
+    if (!text) throw Error(path + ": not a regular file (a device or FIFO); a run file must be a regular file");
+    if (S_ISFIFO(st.st_mode) || S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) return OutputTarget::InPlace;
+    throw Error(path + ": not a regular file, a device or a FIFO; choose another output");
+  }
+  // another program writing it (HDF5 and most writers take an exclusive flock)
+  Fd f(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
+  if (f.fd < 0)
+    throw Error(path + ": exists and cannot be read (" + std::strerror(errno) + "), so it cannot be checked before it is replaced");
+  if (::flock(f.fd, LOCK_SH | LOCK_NB) != 0 && errno == EWOULDBLOCK)
+    throw Error(path + ": open for writing by another program; close it there or choose another output");
+  if (st.st_size == 0 || force) return OutputTarget::Replace;
+  if (made_by_this_writer(path, f.fd, std::uint64_t(st.st_size), kind)) return OutputTarget::Replace;
+  const bool hdf5 = is_hdf5(f.fd, std::uint64_t(st.st_size));
+  throw Error(path + ": exists and is " + (hdf5 && text ? "an HDF5 file (a run?), " : hdf5 ? "an HDF5 file but " : "") +
+              "not a soadyn " + to_string(kind) +
+              "; refusing to replace it (remove it, choose another output, or give --force)");
 }
 
 OutputLock::OutputLock(const std::string& path) : lock_path_(path + ".lock") {
@@ -44,7 +160,7 @@ OutputLock::OutputLock(const std::string& path) : lock_path_(path + ".lock") {
   std::error_code ec;
   if (p.has_parent_path()) fs::create_directories(p.parent_path(), ec);
   for (int attempt = 0; attempt < 100; ++attempt) {
-    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NONBLOCK, 0644);
     if (fd_ < 0)
       throw Error(path + ": cannot create the lock file " + lock_path_ + " (" + std::strerror(errno) +
                   "; is the directory writable?)");
@@ -55,7 +171,7 @@ OutputLock::OutputLock(const std::string& path) : lock_path_(path + ".lock") {
       ::close(fd_);
       fd_ = -1;
       throw Error(path + ": in use by another soadyn run" + (pid > 0 ? " (pid " + std::to_string(pid) + ")" : std::string()) +
-                  "; wait for it to end or choose another -o");
+                  "; wait for it to end or choose another output");
     }
     // the owner before us may have removed the file after we opened it: lock the file on the path
     struct stat held {}, named {};
@@ -64,8 +180,8 @@ OutputLock::OutputLock(const std::string& path) : lock_path_(path + ".lock") {
       const std::string pid = std::to_string(getpid()) + "\n";
       if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, pid.data(), pid.size(), 0) != ssize_t(pid.size())) {
       }  // the pid is only for messages
-      // "<path>.<pid>.tmp" files are runs' files under construction; with the lock held, any left
-      // are from runs that were killed before their first flush
+      // "<path>.<pid>.tmp" files are outputs under construction; with the lock held, any left are
+      // from writers that were killed before they renamed theirs
       const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
       const std::string prefix = p.filename().string() + ".";
       for (const auto& e : fs::directory_iterator(dir, ec)) {
@@ -86,6 +202,79 @@ OutputLock::~OutputLock() {
   if (fd_ < 0) return;
   ::unlink(lock_path_.c_str());  // while still holding the lock, see the constructor
   ::close(fd_);
+}
+
+TextOutput::TextOutput(std::string path, OutputTarget target) : path_(std::move(path)) {
+  switch (target) {
+    case OutputTarget::Stdout:
+      stdout_ = true;
+      fd_ = 1;
+      return;
+    case OutputTarget::InPlace:
+      // a FIFO without a reader fails at once (ENXIO) instead of blocking
+      fd_ = ::open(path_.c_str(), O_WRONLY | O_CLOEXEC | O_NONBLOCK);
+      if (fd_ < 0)
+        throw Error(path_ + ": cannot open it for writing (" +
+                    std::string(errno == ENXIO ? "a FIFO with no reader" : std::strerror(errno)) + ")");
+      ::fcntl(fd_, F_SETFL, ::fcntl(fd_, F_GETFL) & ~O_NONBLOCK);
+      return;
+    case OutputTarget::New:
+    case OutputTarget::Replace:
+      tmp_ = temporary_path(path_);
+      fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+      if (fd_ < 0)
+        throw Error(path_ + ": cannot create " + tmp_ + " (" + std::strerror(errno) + "; is the directory writable?)");
+      return;
+  }
+}
+
+TextOutput::~TextOutput() {
+  if (!tmp_.empty()) {
+    if (fd_ >= 0) ::close(fd_);
+    ::unlink(tmp_.c_str());
+  } else if (fd_ > 2) {
+    ::close(fd_);
+  }
+}
+
+void TextOutput::fail(int err, const char* doing) {
+  const std::string where = stdout_ ? std::string("stdout") : path_;
+  std::string kept;
+  if (!tmp_.empty()) {
+    if (fd_ >= 0) ::close(fd_);
+    fd_ = -1;
+    ::unlink(tmp_.c_str());
+    tmp_.clear();
+    kept = " (nothing written; an existing file there is unchanged)";
+  }
+  throw IoError(std::string(std::strerror(err)) + " while " + doing + " " + where + kept);
+}
+
+void TextOutput::write(const std::string& text) {
+  const char* p = text.data();
+  size_t left = text.size();
+  while (left > 0) {
+    const ssize_t n = ::write(fd_, p, left);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(n < 0 ? errno : EIO, "writing");
+    p += n, left -= size_t(n);
+  }
+}
+
+void TextOutput::commit() {
+  if (tmp_.empty()) return;  // stdout, a device or a FIFO: written as it went
+  if (::fsync(fd_) != 0) fail(errno, "writing");
+  const int fd = fd_;
+  fd_ = -1;
+  if (::close(fd) != 0) fail(errno, "writing");
+  if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp_.c_str());
+    tmp_.clear();
+    throw IoError(std::string(std::strerror(err)) + " while renaming the new file onto " + path_ +
+                  " (an existing file there is unchanged)");
+  }
+  tmp_.clear();
 }
 
 }  // namespace soadyn

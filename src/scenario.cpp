@@ -3,7 +3,13 @@
 #include "soadyn/integrators.hpp"
 #include "soadyn/text.hpp"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <cmath>
 #include <cstdio>
@@ -59,6 +65,12 @@ struct Reader {
     fail(n.Mark(), field, msg);
   }
 
+  static std::string show_number(double x) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", x);
+    return buf;
+  }
+
   static std::string show(const YAML::Node& n) {
     if (n.IsScalar()) return "'" + n.Scalar() + "'";
     if (n.IsSequence()) return "a list";
@@ -85,6 +97,8 @@ struct Reader {
 
   double number(const YAML::Node& n, const std::string& field) const {
     if (!n.IsScalar()) fail(n, field, "expected a number, got " + show(n));
+    // a quoted or !!str-tagged scalar is a string in YAML, whatever it spells
+    if (n.Tag() == "!" || n.Tag() == "tag:yaml.org,2002:str") fail(n, field, "expected a number, got the string " + show(n));
     double x;
     try {
       x = n.as<double>();
@@ -312,6 +326,10 @@ void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q
       const int size = is_q ? m.nq_i[i] : m.nv_i[i];
       VecX x = size == 1 && it->second.IsScalar() ? VecX::Constant(1, rd.number(it->second, fj))
                                                    : rd.numbers(it->second, fj, size);
+      for (Eigen::Index k = 0; k < x.size(); ++k)
+        if (std::abs(x(k)) > kMaxStateMagnitude)
+          rd.fail(it->second, fj, "expected |value| <= " + Reader::show_number(kMaxStateMagnitude) + " (m, rad, m/s or rad/s), got " +
+                                      Reader::show_number(x(k)) + ": a double resolves no finer than 1e-10 of it there");
       if (const int k = joint_traits(m.joint_type[i]).quaternion; is_q && k >= 0) {
         const double norm = x.segment<4>(k).norm();
         if (std::abs(norm - 1.0) > 1e-6)
@@ -419,14 +437,33 @@ bool is_urdf_path(const std::string& path) {
 }  // namespace
 
 std::string read_text_file(const std::string& path) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory, expected a file");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open the file for reading");
-  std::ostringstream os;
-  os << in.rdbuf();
-  if (in.bad()) throw Error(path + ": read error");
-  const std::string text = os.str();
+  // opened without blocking (a FIFO with no writer would wait forever), then checked for what it is
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) {
+    const int err = errno;
+    throw Error(path + ": cannot open the file for reading (" + std::strerror(err) + ")");
+  }
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) throw Error(path + ": cannot be read (" + std::strerror(errno) + ")");
+  if (S_ISDIR(st.st_mode)) throw Error(path + ": is a directory, expected a file");
+  if (!S_ISREG(st.st_mode)) throw Error(path + ": not a regular file (a device, FIFO or socket); expected a YAML or URDF file");
+  if (std::uint64_t(st.st_size) > kMaxInputBytes)
+    throw Error(path + ": " + std::to_string(st.st_size >> 20) + " MiB, more than the " + std::to_string(kMaxInputBytes >> 20) +
+                " MiB a model or scenario file may have");
+  std::string text(size_t(st.st_size), '\0');
+  size_t got = 0;
+  while (got < text.size()) {  // a file that shrinks while read ends early; one that grows is cut at its size
+    const ssize_t n = ::pread(fd, text.data() + got, text.size() - got, off_t(got));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw Error(path + ": read error (" + std::strerror(errno) + ")");
+    if (n == 0) break;
+    got += size_t(n);
+  }
+  text.resize(got);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw Error(path + ": the file is empty");
   if (text.find('\0') != std::string::npos) throw Error(path + ": a binary file, expected text (YAML or URDF)");
   return text;
@@ -436,7 +473,9 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   const Reader rd{path};
   YAML::Node root;
   try {
-    root = YAML::Load(text);
+    const std::vector<YAML::Node> docs = YAML::LoadAll(text);
+    if (docs.size() > 1) rd.fail(docs[1], "YAML documents", "a second document ('---') would not be read: one scenario per file");
+    if (!docs.empty()) root = docs[0];
   } catch (const YAML::ParserException& e) {
     rd.fail(e.mark, "YAML syntax", e.msg);
   }

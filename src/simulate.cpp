@@ -103,9 +103,29 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
     throw Error("simulation settings: max_steps must be positive, got " + std::to_string(s.max_steps));
   if (sc.model.nv == 0)
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
+  // the run's nv×nv matrices (Data's 3, the method's), before any is allocated
+  if (const IntegratorInfo* info = find_integrator(s.method)) {
+    const double nv = sc.model.nv;
+    try {
+      check_memory(8.0 * (3 + info->dense_workspace) * nv * nv, sc.model.nv,
+                   "the nv×nv matrices of a " + s.method + " run");
+    } catch (const Error& e) {
+      throw Error(sc.path + ": " + e.what());
+    }
+  }
   if (const IntegratorInfo* info = find_integrator(s.method); info && info->refuses)
     if (const std::string why = info->refuses(sc.model); !why.empty()) throw Error(sc.path + ": " + why);
   std::vector<std::string> warnings;
+  // a fixed step longer than the run or than the output interval: the run is then not what was written
+  if (is_fixed_step(s.method) && s.dt > s.t_end)
+    warnings.push_back("dt " + g(s.dt) + " is longer than t_end " + g(s.t_end) + ": the run is one step of " +
+                       g(s.t_end));
+  else if (is_fixed_step(s.method) && s.dt > s.output_dt)
+    warnings.push_back("dt " + g(s.dt) + " is longer than output_dt " + g(s.output_dt) +
+                       ": a sample after every step, every " + g(s.dt) + " s");
+  if (s.output_dt > s.t_end)
+    warnings.push_back("output_dt " + g(s.output_dt) + " is longer than t_end " + g(s.t_end) +
+                       ": the run has only its first and last sample");
   // CVODE's local error test compares against rtol·|y|: below ~100 ε it asks for more digits than a double holds
   const double reach = 100 * std::numeric_limits<double>::epsilon();
   if (!is_fixed_step(s.method) && s.rtol < reach)

@@ -191,7 +191,7 @@ class OneFile(Base):
         self.assertEqual(second.returncode, 2, second.stderr)
         self.assertEqual(second.stderr.strip(),
                          f"soadyn: error: {out}: in use by another soadyn run (pid {first.pid}); "
-                         "wait for it to end or choose another -o")
+                         "wait for it to end or choose another output")
         stdout, stderr = first.communicate(timeout=120)
         self.assertEqual(first.returncode, 0, stderr)
         self.assertWhole(out, status="^completed$")
@@ -220,7 +220,7 @@ class OneFile(Base):
         hu = digest(urdf)
         p = run("run", self.path("urdf_scene.yaml"), "-o", urdf)
         self.assertEqual(p.returncode, 2, p.stderr)
-        self.assertIn("exists and is not an HDF5 file; refusing to replace it", p.stderr)
+        self.assertIn("exists and is not a soadyn run file; refusing to replace it", p.stderr)
         self.assertEqual(digest(urdf), hu)
         self.assertNoLitter(urdf)
 

@@ -4,6 +4,8 @@
 #   tools/setup.sh [--demo] [cmake configure arguments…]
 # --demo: only what the demo needs (the packages to build and run soadyn and tools/plot.py; the
 # soadyn executable alone is built).  Otherwise everything: tests, benchmarks, Python module.
+# Both compile with the same flags (warnings are errors in both), so tools/test.sh after
+# tools/demo.sh reuses the library's and the executable's objects and builds only the rest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -45,14 +47,17 @@ fi
 
 echo "== configuring and building (Release) in build/"
 if ((demo)); then
-  # an existing build/ keeps its options (a later tools/test.sh sets them all again)
+  # an existing build/ keeps its options (a later tools/test.sh sets them all again); the options
+  # left off here (tests, benchmarks, Python) add targets but change no flag of soadyn's
   if [[ -f build/CMakeCache.txt ]]; then
-    cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "$@"
+    cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_WERROR=ON "$@"
   else
-    cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_BUILD_TESTS=OFF -DSOADYN_BUILD_BENCH=OFF -DSOADYN_PYTHON=OFF "$@"
+    cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_WERROR=ON \
+      -DSOADYN_BUILD_TESTS=OFF -DSOADYN_BUILD_BENCH=OFF -DSOADYN_PYTHON=OFF "$@"
   fi
   cmake --build build -j "$(nproc)" --target soadyn_cli
 else
-  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_BUILD_TESTS=ON -DSOADYN_BUILD_BENCH=ON -DSOADYN_PYTHON=ON "$@"
+  cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_WERROR=ON \
+    -DSOADYN_BUILD_TESTS=ON -DSOADYN_BUILD_BENCH=ON -DSOADYN_PYTHON=ON "$@"
   cmake --build build -j "$(nproc)"
 fi

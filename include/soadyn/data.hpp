@@ -10,11 +10,21 @@
 
 #include <Eigen/Cholesky>
 
+#include <string>
 #include <vector>
 
 namespace soadyn {
 
+// Memory the process may use: the machine's physical memory, or less under a soft RLIMIT_AS or
+// RLIMIT_DATA (ulimit -v / -d).  A workspace larger than this is refused before it is allocated.
+double memory_limit_bytes();
+// Refuses (soadyn::Error) a workspace of `bytes` for a model of nv DOFs that exceeds
+// memory_limit_bytes(), naming nv, what needs it and both sizes in GB.
+void check_memory(double bytes, int nv, const std::string& what);
+
 struct Data {
+  // Data's dense nv×nv matrices (𝓜, its factor L and the LLT's copy) are its only quadratic part:
+  // 24 nv² bytes, checked against memory_limit_bytes() before anything is allocated
   explicit Data(const Model& model);
 
   // always-on: the data was sized for this model and the vector has the expected size; a wrong

@@ -33,6 +33,7 @@
 // plainly.  New series are added as new columns of /samples and new views.
 #pragma once
 
+#include "soadyn/output_file.hpp"
 #include "soadyn/simulate.hpp"
 
 #include <chrono>
@@ -58,9 +59,14 @@ class IoError : public Error {
   }
 };
 
-// Refuses an output path before any file is touched: a directory, one of `inputs` (the same file
-// under any name), or an existing file that is not HDF5 (it would be lost).  Throws soadyn::Error.
-void check_output_path(const std::string& path, const std::vector<std::string>& inputs);
+// Opens a run file for reading and returns its HDF5 file id (an hid_t; the caller closes it with
+// H5Fclose): plainly when it was closed, in single-writer/multiple-reader mode when a run is
+// writing it or was killed.  HDF5 retries a metadata read that fails its checksum, sleeping twice
+// as long each time (100 attempts by default: a corrupt file would hang the reader for ever); here
+// kMetadataReadAttempts bound that, so a corrupt or truncated file fails within milliseconds.
+// Throws soadyn::Error naming the path.
+inline constexpr unsigned kMetadataReadAttempts = 20;
+std::int64_t open_run_file(const std::string& path);
 
 // The groups of series a run logs (`soadyn run --log state,energy`); /time is always logged.
 struct LogGroups {
@@ -73,24 +79,6 @@ struct LogGroups {
 
 // Bytes one logged row takes (W doubles), for the projected size of a run.
 std::uint64_t row_bytes(const Model& model, const LogGroups& groups = {});
-
-// An exclusive lock on an output path, held for a run's lifetime (flock on "<path>.lock", which
-// holds the owner's pid).  Throws soadyn::Error naming the path and the owner when another run
-// holds it.  Once held, removes the temporary files ("<path>.<pid>.tmp") of runs killed before
-// their first flush.  Released (and the lock file removed) on destruction; the kernel releases it
-// if the process dies.
-class OutputLock {
- public:
-  explicit OutputLock(const std::string& path);
-  ~OutputLock();
-  OutputLock(const OutputLock&) = delete;
-  OutputLock& operator=(const OutputLock&) = delete;
-  const std::string& lock_path() const { return lock_path_; }
-
- private:
-  std::string lock_path_;
-  int fd_ = -1;
-};
 
 class H5Log : public RunObserver {
  public:

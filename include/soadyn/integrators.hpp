@@ -33,6 +33,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -60,8 +61,11 @@ class System {
   void rhs(double t, const double* y, double* ydot);
   // ∂f/∂y (size()×size()) by the analytic derivatives: ∂q̈/∂q along the tangent, chained to the
   // coordinates y holds (joint_tangent_map), ∂q̈/∂v, and the Jacobian of q̇(q, v) (joint_qdot_jacobian);
-  // the inputs' springs and dampers included.  Counts evaluations.
+  // the inputs' springs and dampers included.  Counts evaluations.  The first call (or
+  // prepare_jacobian) allocates the derivatives' workspace, 7 nv² doubles: a run that never asks for
+  // ∂f/∂y (CVODE Adams, the explicit methods) keeps memory linear in nv beyond Data's 𝓜
   void jacobian(double t, const double* y, Eigen::Ref<MatX> J);
+  void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
   void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
   // the name of component k of y ("theta2 (q)", "bus.wz (v)", "the inputs' work W")
@@ -72,7 +76,7 @@ class System {
   FdMethod method;
   int nquad;  // 2 (W, D) when the inputs do work, else 0
   Data data;
-  DerivativeData derivatives;
+  std::optional<DerivativeData> derivatives;  // jacobian's workspace, made on first use
   VecX q, v, tau, qd;
   VecX y_work, f0, f1;             // jacobian_dq's scratch
   MatX T;                          // one joint's tangent map (≤ 6×7)
@@ -124,6 +128,9 @@ struct IntegratorInfo {
   bool fixed_step;
   int order;        // fixed-step methods: the order of convergence (0: CVODE, adaptive)
   bool symplectic;  // a symplectic map on every model it takes: no secular energy drift
+  // its workspace of nv×nv size beyond Data's, in nv² doubles (Newton's Jacobians and factors,
+  // the derivatives' blocks; measured on a 2000-DOF chain): check_run's memory estimate
+  int dense_workspace;
   // why the method cannot integrate `model` ("": it can); nullptr: every model
   std::string (*refuses)(const Model& model);
   std::unique_ptr<Integrator> (*make)(System& system, const SimulationSettings& settings, double t0,

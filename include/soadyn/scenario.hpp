@@ -10,6 +10,7 @@
 #include "soadyn/model.hpp"
 #include "soadyn/settings.hpp"
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -44,6 +45,17 @@ inline Vec3 urdf_gravity() { return Vec3(0, 0, -9.81); }
 Model load_urdf(const std::string& path, bool free_root, const Vec3& gravity);
 Model parse_urdf(const std::string& xml, const std::string& path, bool free_root, const Vec3& gravity);
 
-std::string read_text_file(const std::string& path);  // throws soadyn::Error naming the file
+// The largest magnitude of an initial coordinate or speed (m, rad, m/s, rad/s) a scenario or the
+// command line may give: past it a double resolves no finer than 1e-10 of the value, coarser than
+// the integrators' tolerances, and a run would stall rather than fail (1e300 rad did).
+inline constexpr double kMaxStateMagnitude = 1e6;
+
+// The largest model or scenario file read: real robot descriptions are well under a megabyte; the
+// cap keeps /dev/zero or a wrong file from exhausting memory.
+inline constexpr std::uint64_t kMaxInputBytes = std::uint64_t(64) << 20;
+
+// A model or scenario file's text: a regular file (a FIFO or device is refused without waiting
+// on it), at most kMaxInputBytes, not empty, no NUL bytes.  Throws soadyn::Error naming the file.
+std::string read_text_file(const std::string& path);
 
 }  // namespace soadyn

@@ -2,9 +2,12 @@
 #pragma once
 
 #include "soadyn/model.hpp"
+#include "soadyn/output_file.hpp"
 
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -32,6 +35,28 @@ std::optional<Vec3> gravity_option(const StateOptions& o);
 // soadyn::Error naming the option, what was expected and what was got
 void state_from_options(const Model& model, const StateOptions& o, VecX& q, VecX& v);
 
+// Checks every output of a command before any is touched (check_output_path), and that no two
+// name one file; an empty path is skipped.  Returns each one's target.
+std::vector<OutputTarget> check_outputs(const std::vector<std::pair<std::string, OutputKind>>& outputs,
+                                        const std::vector<std::string>& inputs, bool force);
+
+// A text output of view or export: the path's lock (a regular file), its TextOutput, and
+// SIGINT/SIGTERM/SIGHUP handlers that remove both before the process exits with 128+N.
+class TextWriter {
+ public:
+  TextWriter(const std::string& path, OutputTarget target);
+  ~TextWriter();
+  TextWriter(const TextWriter&) = delete;
+  TextWriter& operator=(const TextWriter&) = delete;
+  void write(const std::string& text) { out_->write(text); }
+  void commit();
+  const std::string& path() const { return out_->path(); }
+
+ private:
+  std::unique_ptr<OutputLock> lock_;  // declared first: released after the output is gone
+  std::unique_ptr<TextOutput> out_;
+};
+
 struct InspectOptions {
   std::string model;
   StateOptions state;
@@ -53,6 +78,7 @@ struct RunOptions {
   std::optional<std::string> jacobian, newton;  // --jacobian analytic|dq, --newton full|simplified
   std::string max_output_size = "1G";  // refuse a run whose projected file is larger
   double flush_interval = 0.5;         // s of wall time between flushes
+  bool force = false;                  // replace an output that is not a soadyn run file
   bool quiet = false;
 };
 void add_run(CLI::App& app, RunOptions& o);
@@ -63,6 +89,7 @@ struct ViewOptions {
   std::string output;
   double fps = 60.0;         // at most this many frames per simulated second
   long max_frames = 20000;   // and at most this many in all
+  bool force = false;        // replace an output that is not a soadyn page
   bool quiet = false;
 };
 void add_view(CLI::App& app, ViewOptions& o);
@@ -73,6 +100,7 @@ struct ExportOptions {
   std::string columns;    // comma-separated names, groups or joint/body names (empty: all)
   long every = 1;         // keep every K-th row
   bool list = false;      // print the columns instead
+  bool force = false;     // replace outputs that are not soadyn exports
   bool quiet = false;
 };
 void add_export(CLI::App& app, ExportOptions& o);

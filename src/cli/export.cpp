@@ -9,6 +9,7 @@
 #include "h5id.hpp"
 
 #include "soadyn/h5log.hpp"
+#include "soadyn/text.hpp"
 
 #include <unistd.h>
 
@@ -71,16 +72,11 @@ Samples open_samples(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path + ": no such file");
   if (!fs::is_regular_file(path, ec)) throw Error(path + ": not a file (expected a run file from soadyn run)");
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected a run file from soadyn run)");
   Samples s;
-  // a running or killed run's file opens only in SWMR-read mode; a file made without SWMR, plainly
-  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
-  if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (f < 0) throw Error(path + ": cannot open the HDF5 file");
-  s.file = Id(f, H5Fclose);
+  s.file = Id(hid_t(open_run_file(path)), H5Fclose);
   if (H5Lexists(s.file, "samples", H5P_DEFAULT) <= 0) throw Error(path + ": no /samples (not a run file from soadyn run?)");
   s.dset = Id(H5Dopen2(s.file, "samples", H5P_DEFAULT), H5Dclose);
-  if (!s.dset.ok()) throw Error(path + ": /samples cannot be opened");
+  if (!s.dset.ok()) throw Error(path + ": /samples cannot be opened (corrupt or truncated file?)");
   Id space(H5Dget_space(s.dset), H5Sclose);
   hsize_t dims[2] = {0, 0};
   if (H5Sget_simple_extent_ndims(space) != 2) throw Error(path + ": /samples: expected a T×W table");
@@ -181,72 +177,6 @@ std::string json_string(const std::string& s) {
   return out + "\"";
 }
 
-// One text output: "-" is stdout; a file is written as "<path>.<pid>.tmp", renamed at commit().
-class Output {
- public:
-  Output(std::string path, bool json) : path_(std::move(path)), json_(json) {
-    if (path_ == "-") {
-      f_ = stdout;
-      return;
-    }
-    tmp_ = path_ + "." + std::to_string(getpid()) + ".tmp";
-    f_ = std::fopen(tmp_.c_str(), "wb");
-    if (!f_) throw Error(path_ + ": cannot create " + tmp_ + " (" + std::strerror(errno) + "; is the directory writable?)");
-  }
-  ~Output() {
-    if (f_ && f_ != stdout) {
-      std::fclose(f_);
-      std::remove(tmp_.c_str());
-    }
-  }
-  Output(const Output&) = delete;
-  Output& operator=(const Output&) = delete;
-
-  bool json() const { return json_; }
-  const std::string& path() const { return path_; }
-  void write(const std::string& text) {
-    if (std::fwrite(text.data(), 1, text.size(), f_) != text.size()) fail();
-  }
-  void commit() {
-    if (std::fflush(f_) != 0) fail();
-    if (f_ == stdout) return;
-    FILE* f = f_;
-    f_ = nullptr;
-    if (std::fclose(f) != 0) {
-      const int err = errno;
-      std::remove(tmp_.c_str());
-      throw IoError(std::string(std::strerror(err)) + " while writing " + path_ + " (nothing written)");
-    }
-    if (std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-      const int err = errno;
-      std::remove(tmp_.c_str());
-      throw IoError(std::string(std::strerror(err)) + " while renaming " + tmp_ + " to " + path_);
-    }
-  }
-
- private:
-  [[noreturn]] void fail() {
-    throw IoError(std::string(std::strerror(errno)) + " while writing " + (f_ == stdout ? std::string("stdout") : path_) +
-                  (f_ == stdout ? "" : " (nothing written; an existing file there is unchanged)"));
-  }
-  std::string path_, tmp_;
-  bool json_;
-  FILE* f_ = nullptr;
-};
-
-// refuses an output that is the input, another output, a directory or an existing HDF5 file
-void check_output(const std::string& out, const std::string& input, const std::string& other) {
-  if (out.empty() || out == "-") return;
-  std::error_code ec;
-  if (fs::is_directory(out, ec)) throw Error(out + ": is a directory, expected an output file");
-  if (!fs::exists(out, ec)) return;
-  if (fs::equivalent(out, input, ec)) throw Error(out + ": the output is the input file " + input + "; choose another name");
-  if (!other.empty() && other != "-" && fs::exists(other, ec) && fs::equivalent(out, other, ec))
-    throw Error(out + ": named for both --csv and --json");
-  if (H5Fis_hdf5(out.c_str()) > 0)
-    throw Error(out + ": exists and is an HDF5 file (a run?); refusing to replace it with text (remove it or choose another name)");
-}
-
 }  // namespace
 
 void add_export(CLI::App& app, ExportOptions& o) {
@@ -271,31 +201,37 @@ void add_export(CLI::App& app, ExportOptions& o) {
       },
       "K >= 1"));
   c->add_flag("--list", o.list, "print the columns (name, unit) and the row count, write nothing");
+  c->add_flag("--force", o.force,
+              "replace outputs that are not soadyn exports (never an input, a file in use; a device or FIFO is "
+              "written in place)");
   c->add_flag("-q,--quiet", o.quiet, "no summary on stderr");
 }
 
 int run_export(const ExportOptions& o) {
+  if (!o.list && o.csv.empty() && o.json.empty()) throw Error("export: give --csv FILE or --json FILE (or --list)");
+  if (o.csv == "-" && o.json == "-") throw Error("export: only one of --csv and --json can be stdout");
   Samples s = open_samples(o.run);
   if (o.list) {
     std::printf("%s: %llu rows, %llu columns\n", o.run.c_str(), static_cast<unsigned long long>(s.rows),
                 static_cast<unsigned long long>(s.width));
-    for (size_t c = 0; c < s.width; ++c) std::printf("%s [%s]\n", s.names[c].c_str(), s.units[c].c_str());
+    for (size_t c = 0; c < s.width; ++c)
+      std::printf("%s [%s]\n", printable(s.names[c]).c_str(), printable(s.units[c]).c_str());
     return 0;
   }
-  if (o.csv.empty() && o.json.empty()) throw Error("export: give --csv FILE or --json FILE (or --list)");
-  if (o.csv == "-" && o.json == "-") throw Error("export: only one of --csv and --json can be stdout");
   const std::vector<size_t> cols = select_columns(s, o.columns, o.run);
-  check_output(o.csv, o.run, o.json);
-  check_output(o.json, o.run, o.csv);
+  // every output is checked before any is touched, and nothing is written if one is refused
+  const std::vector<OutputTarget> targets =
+      check_outputs({{o.csv, OutputKind::Csv}, {o.json, OutputKind::Json}}, {o.run}, o.force);
 
-  std::vector<std::unique_ptr<Output>> outs;
+  std::vector<std::unique_ptr<TextWriter>> writers;
+  std::vector<bool> is_json;
   try {
-    for (const auto& [path, json] : {std::pair{o.csv, false}, std::pair{o.json, true}})
-      if (!path.empty()) outs.push_back(std::make_unique<Output>(path, json));
+    if (!o.csv.empty()) writers.push_back(std::make_unique<TextWriter>(o.csv, targets[0])), is_json.push_back(false);
+    if (!o.json.empty()) writers.push_back(std::make_unique<TextWriter>(o.json, targets[1])), is_json.push_back(true);
     // headers
-    for (auto& out : outs) {
+    for (size_t i = 0; i < writers.size(); ++i) {
       std::string h;
-      if (!out->json()) {
+      if (!is_json[i]) {
         for (size_t k = 0; k < cols.size(); ++k)
           h += (k ? "," : "") + csv_field(s.names[cols[k]] + " [" + s.units[cols[k]] + "]");
         h += "\n";
@@ -306,7 +242,7 @@ int run_export(const ExportOptions& o) {
         for (size_t k = 0; k < cols.size(); ++k) h += (k ? ", " : "") + json_string(s.units[cols[k]]);
         h += "],\n \"rows\": [";
       }
-      out->write(h);
+      writers[i]->write(h);
     }
     // rows, read in blocks of about 4 MB: rows 0, K, 2K, … of the extent seen at opening
     const hsize_t K = hsize_t(o.every), block = std::max<hsize_t>(1, (hsize_t(1) << 19) / std::max<hsize_t>(1, s.width));
@@ -322,7 +258,7 @@ int run_export(const ExportOptions& o) {
       Id mem_space(H5Screate_simple(2, count, nullptr), H5Sclose);
       if (H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
           H5Dread(s.dset, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, buf.data()) < 0)
-        throw Error(o.run + ": /samples: rows " + std::to_string(r0) + " to " + std::to_string(r0 + n - 1) + " cannot be read");
+        throw Error(o.run + ": /samples: rows " + std::to_string(r0) + " to " + std::to_string(r0 + n - 1) + " cannot be read (corrupt or truncated file?)");
       csv_text.clear(), json_text.clear();
       for (hsize_t r = (K - r0 % K) % K; r < n; r += K) {
         const double* row = buf.data() + r * s.width;
@@ -339,18 +275,18 @@ int run_export(const ExportOptions& o) {
         t_last = row[cols[0]];
         ++written;
       }
-      for (auto& out : outs) out->write(out->json() ? json_text : csv_text);
+      for (size_t i = 0; i < writers.size(); ++i) writers[i]->write(is_json[i] ? json_text : csv_text);
     }
-    for (auto& out : outs) {
-      if (out->json()) out->write("]}\n");
-      out->commit();
+    for (size_t i = 0; i < writers.size(); ++i) {
+      if (is_json[i]) writers[i]->write("]}\n");
+      writers[i]->commit();
     }
     char time_range[80] = "";
     if (written && s.names[cols[0]] == "time") std::snprintf(time_range, sizeof time_range, " (t = %g to %g s)", t_first, t_last);
     if (!o.quiet)
-      for (auto& out : outs)
-        if (out->path() != "-")
-          std::fprintf(stderr, "wrote %s: %llu rows x %zu columns%s\n", out->path().c_str(),
+      for (auto& w : writers)
+        if (w->path() != "-")
+          std::fprintf(stderr, "wrote %s: %llu rows x %zu columns%s\n", w->path().c_str(),
                        static_cast<unsigned long long>(written), cols.size(), time_range);
   } catch (const IoError& e) {
     std::fprintf(stderr, "soadyn: error: %s\n", e.what());

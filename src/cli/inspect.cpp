@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
+#include <tuple>
 
 namespace soadyn::cli {
 
@@ -77,6 +78,12 @@ VecX vector_option(const std::string& option, const std::string& text, int size,
   return Eigen::Map<const VecX>(v.data(), size);
 }
 
+std::string short_num(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
 std::string num(double x) {
   char buf[40];
   std::snprintf(buf, sizeof buf, "%.17g", x);
@@ -106,6 +113,11 @@ void state_from_options(const Model& m, const StateOptions& o, VecX& q, VecX& v)
     }
   m.normalize(q);
   v = vector_option("--qd", o.qd, m.nv, v);
+  for (const auto& [option, x, names] : {std::tuple{"--q", &q, m.q_names()}, std::tuple{"--qd", &v, m.v_names()}})
+    for (Eigen::Index k = 0; k < x->size(); ++k)
+      if (std::abs((*x)(k)) > kMaxStateMagnitude)
+        throw Error(std::string(option) + ": " + names[size_t(k)] + " = " +
+                    short_num((*x)(k)) + ": expected |value| <= " + short_num(kMaxStateMagnitude) + " (m, rad, m/s or rad/s)");
 }
 
 namespace {

@@ -86,6 +86,8 @@ void add_run(CLI::App& app, RunOptions& o) {
   c->add_option("--log", o.log,
                 "groups of series to log, comma-separated: state (q, qd, qdd), energy, momentum, bodies (poses); "
                 "default all; /time is always logged");
+  c->add_flag("--force", o.force,
+              "replace the output even when it is not a soadyn run file (never an input, a file in use or a device)");
   c->add_flag("-q,--quiet", o.quiet, "no summary on stdout");
 }
 
@@ -118,6 +120,9 @@ void install_signal_handlers(const std::string& tmp, const std::string& lock) {
   sigemptyset(&sa.sa_mask);
   sa.sa_flags = SA_RESTART;
   for (int s : {SIGINT, SIGTERM, SIGHUP}) sigaction(s, &sa, nullptr);
+  // past a file-size limit (ulimit -f) a write fails with EFBIG, handled as a full disk is,
+  // instead of the signal ending the process with no message and the lock left behind
+  signal(SIGXFSZ, SIG_IGN);
 }
 
 // a progress bar on stderr when it is a terminal and the run has taken over a second
@@ -181,7 +186,7 @@ int run_simulation(const RunOptions& o) {
     throw Error(out + ": the output would take " + human_size(bytes) + " (" + buf + "), more than --max-output-size " +
                 o.max_output_size + ": raise --output-dt, lower --t-end, or allow it with --max-output-size");
   }
-  check_output_path(out, {o.scenario, sc.path});
+  check_output_path(out, OutputKind::Run, {o.scenario, sc.path}, o.force);
   OutputLock lock(out);
   install_signal_handlers(H5Log::temporary_path(out), lock.lock_path());
 

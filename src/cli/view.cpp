@@ -8,7 +8,9 @@
 #include "cli.hpp"
 #include "view.hpp"
 
+#include "soadyn/h5log.hpp"
 #include "soadyn/kinematics.hpp"
+#include "soadyn/text.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -172,17 +174,22 @@ void add_view(CLI::App& app, ViewOptions& o) {
       "view",
       "Write one self-contained web page (three.js inlined, nothing fetched) that plays a run in 3D,\n"
       "with linked plots of the energy error and a joint.  Open RUN.html#t=1.5 to start paused at t = 1.5 s.\n"
-      "Exit status: 0 written, 2 bad input.");
+      "Exit status: 0 written, 2 bad input or output refused (an input, in use, not a soadyn page), 4 writing failed.");
   c->add_option("RUN", o.run, "HDF5 run file from soadyn run")->required();
   c->add_option("-o,--output", o.output, "HTML file to write (default: RUN with the extension .html)");
   c->add_option("--fps", o.fps, "at most this many frames per simulated second (default 60)")
       ->check(CLI::Range(1.0, 1000.0));
   c->add_option("--max-frames", o.max_frames, "and at most this many frames in all (default 20000)")
       ->check(CLI::Range(2L, 1000000L));
+  c->add_flag("--force", o.force,
+              "replace the output even when it is not a soadyn page (never an input or a file in use)");
   c->add_flag("-q,--quiet", o.quiet, "no summary on stdout");
 }
 
 int run_view(const ViewOptions& o) {
+  // the output is checked before anything is read, and nothing is touched if it is refused
+  const std::string out = o.output.empty() ? std::filesystem::path(o.run).replace_extension(".html").string() : o.output;
+  const OutputTarget target = check_outputs({{out, OutputKind::Page}}, {o.run}, o.force).at(0);
   view::RunFile run = view::read_run(o.run);
   // a run that went unstable may end in non-finite rows: shown up to the last finite one
   Eigen::Index finite = 0;
@@ -293,17 +300,17 @@ int run_view(const ViewOptions& o) {
                                                              {"PLOT", assets::plot_js},
                                                              {"VIEWER", assets::page_js}});
 
-  const std::string out = o.output.empty() ? std::filesystem::path(o.run).replace_extension(".html").string() : o.output;
-  std::error_code ec;
-  if (std::filesystem::is_directory(out, ec)) throw Error(out + ": is a directory, expected an output file");
-  {
-    std::ofstream f(out, std::ios::binary);
-    if (!f) throw Error(out + ": cannot create the page (is the directory writable?)");
-    f.write(page.data(), std::streamsize(page.size()));
-    if (!f.flush()) throw Error(out + ": write error");
+  try {
+    TextWriter w(out, target);
+    w.write(page);
+    w.commit();
+  } catch (const IoError& e) {
+    std::fprintf(stderr, "soadyn: error: %s\n", e.what());
+    return 4;
   }
   if (!o.quiet) {
-    std::printf("run                    %s (%s)\n", o.run.c_str(), run.status.empty() ? "status unknown" : run.status.c_str());
+    std::printf("run                    %s (%s)\n", printable(o.run).c_str(),
+                run.status.empty() ? "status unknown" : printable(run.status).c_str());
     std::printf("bodies                 %zu\n", N);
     std::printf("frames                 %s\n", rule);
     std::printf("page                   %s (%.3g MB)\n", out.c_str(), double(page.size()) / 1e6);

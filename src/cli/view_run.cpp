@@ -2,6 +2,7 @@
 #include "h5id.hpp"
 #include "view.hpp"
 
+#include "soadyn/h5log.hpp"
 #include "soadyn/scenario.hpp"
 
 #include <hdf5.h>
@@ -43,13 +44,13 @@ std::string read_string(hid_t obj, bool attribute, const std::string& where) {
     H5Tset_size(mem, H5T_VARIABLE);
     H5Tset_cset(mem, H5Tget_cset(type));  // HDF5 converts no string between character sets
     char* text = nullptr;
-    if (read(mem, &text) < 0) throw Error(where + ": cannot be read");
+    if (read(mem, &text) < 0) throw Error(where + ": cannot be read (corrupt or truncated file?)");
     std::unique_ptr<char, herr_t (*)(void*)> owner(text, H5free_memory);
     return text ? std::string(text) : std::string();
   }
   const size_t n = H5Tget_size(type);
   std::string text(n, '\0');
-  if (read(type, text.data()) < 0) throw Error(where + ": cannot be read");
+  if (read(type, text.data()) < 0) throw Error(where + ": cannot be read (corrupt or truncated file?)");
   return text.substr(0, text.find('\0'));
 }
 
@@ -63,7 +64,7 @@ std::string string_attribute(hid_t obj, const char* name, const std::string& whe
 MatX read_matrix(hid_t file, const std::string& name, const std::string& path) {
   const std::string where = path + ": dataset " + name;
   Id d(H5Dopen2(file, name.c_str(), H5P_DEFAULT), H5Dclose);
-  if (!d.ok()) throw Error(where + ": cannot be opened");
+  if (!d.ok()) throw Error(where + ": cannot be opened (corrupt or truncated file?)");
   Id space(H5Dget_space(d), H5Sclose);
   hsize_t dims[2] = {0, 1};
   const int rank = H5Sget_simple_extent_ndims(space);
@@ -71,7 +72,7 @@ MatX read_matrix(hid_t file, const std::string& name, const std::string& path) {
   H5Sget_simple_extent_dims(space, dims, nullptr);
   Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m(dims[0], rank == 2 ? dims[1] : 1);
   if (m.size() > 0 && H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, m.data()) < 0)
-    throw Error(where + ": cannot be read");
+    throw Error(where + ": cannot be read (corrupt or truncated file?)");
   return m;
 }
 
@@ -81,12 +82,7 @@ RunFile read_run(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such run file");
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected a run file from soadyn run)");
-  // a finished run opens plainly; a running or killed one in single-writer/multiple-reader mode
-  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, H5P_DEFAULT);
-  Id file(f, H5Fclose);
-  if (!file.ok()) throw Error(path + ": cannot open the HDF5 file");
+  Id file(hid_t(open_run_file(path)), H5Fclose);
 
   RunFile r;
   r.path = path;

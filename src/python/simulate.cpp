@@ -78,7 +78,7 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   std::unique_ptr<OutputLock> lock;  // declared first: held until the log is closed
   std::unique_ptr<H5Log> log;
   if (output) {
-    check_output_path(*output, {sc.path});
+    check_output_path(*output, OutputKind::Run, {sc.path});
     lock = std::make_unique<OutputLock>(*output);
     log = std::make_unique<H5Log>(*output, sc, settings, version());
   }

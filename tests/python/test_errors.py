@@ -115,11 +115,11 @@ def test_nothing_written_for_a_refused_run(tmp_path):
     assert not out.exists()
     msg = raised(soadyn.simulate, scene, t_end=0.1, output=str(tmp_path))
     assert msg == cli_error("run", f"{SCENARIOS}/double_pendulum.yaml", "-o", tmp_path), msg
-    notes = tmp_path / "notes.txt"  # not an HDF5 file: refused, left as it was
+    notes = tmp_path / "notes.txt"  # not a soadyn run file: refused, left as it was
     notes.write_text("keep me")
     msg = raised(soadyn.simulate, scene, t_end=0.1, output=str(notes))
     assert msg == cli_error("run", f"{SCENARIOS}/double_pendulum.yaml", "-o", notes), msg
-    assert "not an HDF5 file" in msg and notes.read_text() == "keep me"
+    assert "not a soadyn run file" in msg and notes.read_text() == "keep me"
 
 
 def test_read_log_refuses_what_is_not_a_run(tmp_path):

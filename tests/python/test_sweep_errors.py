@@ -162,6 +162,13 @@ def test_empty_files_seeds_and_values(tmp_path, runner):
     f = write(tmp_path, HEAD + "  - {path: simulation.dt, log_uniform: [0, 1e-2], count: 3}\n")
     assert refused(f, "-o", out, runner=runner) == \
         f"{f}:4:40: vary[0].log_uniform: expected [low, high] with 0 < low < high, got [0, 0.01]"
+    # a negative index is not Python's count from the end (it once set the last coordinate)
+    for path in ("initial.q[-1]", "inputs[-1].value"):
+        f = write(tmp_path, HEAD + f"  - {{path: '{path}', values: [0.5]}}\n")
+        got = refused(f, "-o", out, runner=runner)
+        assert got.startswith(f"{f}:4:") and "a negative index; entries count from 0" in got, got
+    f = write(tmp_path, HEAD + "  - {path: 'initial.q[2]', values: [0.5]}\n")
+    assert "initial.q[2]: index out of range (the model has 2)" in refused(f, "-o", out, runner=runner)
     f = write(tmp_path, HEAD + "  - {path: simulation.dt, uniform: [0, 1" + "0" * 400 + "], count: 3}\n")
     assert "vary[0].uniform[1]: expected a finite number, got '1000" in refused(f, "-o", out, runner=runner)
     assert not out.exists()

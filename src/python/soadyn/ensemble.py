@@ -332,7 +332,11 @@ def parse_path(path: str) -> List[Any]:
         if not m:
             raise ValueError(f"bad path segment '{_clip(seg)}' (expected name or name[index])")
         tokens.append(m.group(1))
-        tokens += [int(i) for i in re.findall(r"\[(-?\d+)\]", m.group(2))]
+        for i in re.findall(r"\[(-?\d+)\]", m.group(2)):
+            # Python's count from the end would silently pick the last coordinate or entry
+            if i.startswith("-"):
+                raise ValueError(f"{m.group(1)}[{i}]: a negative index; entries count from 0 (write the index itself)")
+            tokens.append(int(i))
     return tokens
 
 
@@ -640,9 +644,8 @@ def _vector_slot(model, which: str, index: int):
     """(joint name, component or None for a 1-DOF joint, the joint's neutral entries) of q[index]
     or qd[index], from the model's coordinate names (joint, or joint.component)."""
     names = list(model.q_names if which == "q" else model.v_names)
-    if not -len(names) <= index < len(names):
+    if not 0 <= index < len(names):
         raise ValueError(f"initial.{which}[{index}]: index out of range (the model has {len(names)})")
-    index %= len(names)
     joint = names[index] if names[index] in model.joint_names else names[index].rsplit(".", 1)[0]
     if joint == names[index]:
         return joint, None, None
@@ -700,7 +703,7 @@ def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
             last = i == len(tokens) - 1
             where = ".".join(str(t) for t in tokens[:i + 1])
             if isinstance(tok, int):
-                if not isinstance(node, list) or not -len(node) <= tok < len(node):
+                if not isinstance(node, list) or not 0 <= tok < len(node):
                     raise ValueError(f"{where}: no entry [{tok}] (the scenario has "
                                      f"{len(node) if isinstance(node, list) else 'no list'} here)")
                 if last:
