@@ -1,5 +1,6 @@
 #include "soadyn/text.hpp"
 
+#include <algorithm>
 #include <cstdio>
 
 namespace soadyn {
@@ -38,6 +39,37 @@ std::string printable(const std::string& text) {
     shown += c >= 0x20 && c < 0x7f ? std::string(1, char(c)) : std::string(hex);
   }
   return shown;
+}
+
+namespace {
+size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] != b[j - 1])});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+}  // namespace
+
+std::string did_you_mean(const std::string& got, const std::vector<std::string>& choices) {
+  std::string best;
+  size_t best_d = std::string::npos;
+  for (const auto& c : choices) {
+    const size_t d = edit_distance(got, c);
+    if (d < best_d) best_d = d, best = c;
+  }
+  if (!best.empty() && best_d <= std::max<size_t>(2, got.size() / 3)) return "; did you mean '" + best + "'?";
+  std::string all;
+  for (const auto& c : choices) all += (all.empty() ? "" : ", ") + c;
+  return choices.empty() ? "" : " (expected one of: " + all + ")";
 }
 
 }  // namespace soadyn

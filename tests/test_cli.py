@@ -209,6 +209,24 @@ class ScenarioMassMatrices(unittest.TestCase):
             self.assertEqual(free["q"][:7], [0, 0, 0, 1, 0, 0, 0])
             # floating: total mass 5 in the translational block
             self.assertAlmostEqual(free["M"][3][3], 5.0, places=14)
+            # run takes the same model options as inspect: the free root falls under gravity
+            # (z = −g t²/2), and view rebuilds the free-root model from the log
+            import h5py
+            out = os.path.join(d, "free.h5")
+            p = run("run", path, "--free-root", "--t-end", "0.5", "--method", "RK4", "--dt", "1e-3", "-q", "-o", out)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            with h5py.File(out, "r") as f:
+                self.assertEqual(f["q"].shape[1], 8)
+                self.assertLess(abs(f["q"][-1, 2] + 9.81 * 0.5 ** 2 / 2), 1e-9)
+                method = f["solver"].attrs["method"]
+                self.assertEqual(method.decode() if isinstance(method, bytes) else str(method), "rk4")
+            p = run("view", out, "-o", os.path.join(d, "free.html"), "-q")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            # --method is matched whatever its case; an unknown one is named
+            self.assertEqual(run("inspect", path, "--method", "Dense").returncode, 0)
+            p = run("run", path, "--method", "rk5", "-o", os.path.join(d, "x.h5"))
+            self.assertEqual(p.returncode, 2)
+            self.assertIn("rk5", p.stderr)
 
 
 # The four scenarios as stated in scenarios/*.yaml: per body (parent, joint, axis, origin,

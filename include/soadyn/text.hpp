@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace soadyn {
 
@@ -11,5 +12,9 @@ bool is_valid_utf8(const std::string& text);
 // `text` as it can be shown in a one-line message: unchanged when it is valid UTF-8 without
 // control characters, else every byte outside printable ASCII written as \xHH.
 std::string printable(const std::string& text);
+
+// "; did you mean 'x'?" for the choice nearest `got` (Levenshtein distance at most max(2, |got|/3)),
+// else " (expected one of: a, b, …)"; "" when there are no choices
+std::string did_you_mean(const std::string& got, const std::vector<std::string>& choices);
 
 }  // namespace soadyn

@@ -23,11 +23,13 @@ std::string join(const std::vector<std::string>& items, const std::string& separ
 // "a,b,c" → numbers; throws soadyn::Error naming the option and the bad item.
 std::vector<double> parse_list(const std::string& option, const std::string& text);
 
-// --q, --qd, --gravity: a state and a gravity other than the scenario's (inspect and run)
+// The model options every command that takes a model has (inspect and run): --free-root, and
+// --q, --qd, --gravity: a state and a gravity other than the scenario's
 struct StateOptions {
   std::string q, qd, gravity;
+  bool free_root = false;
 };
-// adds the three options; `what` says what the state is for ("the state", "the initial state")
+// adds the four options; `what` says what the state is for ("the state", "the initial state")
 void add_state_options(CLI::App* command, StateOptions& o, const std::string& what);
 // --gravity as a vector (nullopt: the scenario's), for load_scenario
 std::optional<Vec3> gravity_option(const StateOptions& o);
@@ -61,7 +63,6 @@ struct InspectOptions {
   std::string model;
   StateOptions state;
   std::string tau;
-  bool free_root = false;
   bool json = false;
   std::string method = "on";
 };

@@ -62,10 +62,9 @@ void add_inspect(CLI::App& app, InspectOptions& o) {
   c->add_option("MODEL", o.model, "scenario (.yaml) or robot (.urdf)")->required();
   add_state_options(c, o.state, "the state");
   c->add_option("--tau", o.tau, "joint forces for qdd, comma-separated, nv numbers (default zero)");
-  c->add_flag("--free-root", o.free_root, "give a URDF's root link a free joint instead of welding it to the world");
   c->add_flag("--json", o.json, "print one JSON object on stdout");
   c->add_option("--method", o.method, "forward-dynamics route for qdd: " + join(fd_method_names(), " | ") + " (default on)")
-      ->check(CLI::IsMember(fd_method_names()));
+      ->transform(CLI::IsMember(fd_method_names(), CLI::ignore_case));
 }
 
 namespace {
@@ -96,6 +95,7 @@ void add_state_options(CLI::App* c, StateOptions& o, const std::string& what) {
   c->add_option("--q", o.q, "configuration of " + what + ", comma-separated, nq numbers (free root: x,y,z,qw,qx,qy,qz first)");
   c->add_option("--qd", o.qd, "velocities of " + what + ", comma-separated, nv numbers (free root: wx,wy,wz,vx,vy,vz first)");
   c->add_option("--gravity", o.gravity, "gravity gx,gy,gz in m/s^2 (default: the scenario's; 0,0,-9.81 for a URDF)");
+  c->add_flag("--free-root", o.free_root, "give a URDF's root link a free joint instead of welding it to the world");
 }
 
 std::optional<Vec3> gravity_option(const StateOptions& o) {
@@ -245,7 +245,7 @@ void print_tables(const Scenario& sc, const Inspection& r, const std::string& me
 }  // namespace
 
 int run_inspect(const InspectOptions& o) {
-  const Scenario sc = load_scenario(o.model, o.free_root, gravity_option(o.state));
+  const Scenario sc = load_scenario(o.model, o.state.free_root, gravity_option(o.state));
   const Inspection r = inspect(sc, o);
   if (o.json) print_json(sc.model, r, o.method);
   else print_tables(sc, r, o.method);

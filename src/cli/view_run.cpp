@@ -168,8 +168,10 @@ RunModel rebuild_model(const RunFile& run) {
   try {
     const std::string ext = std::filesystem::path(label).extension().string();
     if (ext == ".urdf" || ext == ".URDF" || ext == ".xml") {
-      // `soadyn run robot.urdf`: the stored text is the URDF, run with the default gravity
+      // `soadyn run robot.urdf [--free-root]`: the stored text is the URDF, run with the default
+      // gravity; a free root shows as the 7 more columns of q its free joint has
       out.model = parse_urdf(run.scenario_text, label, false, Vec3(0, 0, -9.81));
+      if (run.q.cols() == out.model.nq + 7) out.model = parse_urdf(run.scenario_text, label, true, Vec3(0, 0, -9.81));
       out.name = std::filesystem::path(label).stem().string();
       out.urdf_text = run.scenario_text;
       out.urdf_path = label;

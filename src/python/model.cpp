@@ -3,6 +3,7 @@
 
 #include "soadyn/integrators.hpp"
 #include "soadyn/scenario.hpp"
+#include "soadyn/text.hpp"
 
 #include <optional>
 
@@ -102,8 +103,16 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
             return owned(self.velocity(read_vector("Model.velocity", "q", q, self.nq),
                                        read_vector("Model.velocity", "qd", qd, self.nq)));
           }, "q"_a, "qd"_a, "The reverse map: v from q̇ (ω = 2 quaṫ ⊗ quat* for a free joint); shape (nv,).")
-      .def("body_index", &Model::body_index, "name"_a, "index of the named body, -1 when absent")
-      .def("joint_index", &Model::joint_index, "name"_a, "index of the body the named joint moves, -1 when absent")
+      .def("body_index", [](const Model& self, const std::string& name) {
+            const int i = self.body_index(name);
+            if (i < 0) throw py::key_error("no body named '" + printable(name) + "'" + did_you_mean(name, self.body_names));
+            return i;
+          }, "name"_a, "index of the named body; KeyError (with the nearest name) when absent")
+      .def("joint_index", [](const Model& self, const std::string& name) {
+            const int i = self.joint_index(name);
+            if (i < 0) throw py::key_error("no joint named '" + printable(name) + "'" + did_you_mean(name, self.joint_names));
+            return i;
+          }, "name"_a, "index of the body the named joint moves; KeyError (with the nearest name) when absent")
       .def("__repr__", [](const Model& self) {
         return "<soadyn.Model: " + std::to_string(self.nbodies) + " bodies, nq = " + std::to_string(self.nq) +
                ", nv = " + std::to_string(self.nv) + ">";

@@ -3,11 +3,23 @@
 
 #include "soadyn/version.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace soadyn::python {
 
 PyObject* error_type = nullptr;
+
+// NaN or ±inf in an argument would come back as NaN everywhere: refused, naming the entry
+static void check_finite(const char* where, const char* what, const Eigen::Ref<const VecX>& x) {
+  if (x.allFinite()) return;
+  Eigen::Index k = 0;
+  while (std::isfinite(x(k))) ++k;
+  char value[32];
+  std::snprintf(value, sizeof value, "%g", x(k));
+  throw Error(std::string(where) + ": " + what + "[" + std::to_string(k) + "] = " + value + ": expected a finite number");
+}
 
 void read_vector(const Model& model, const Data& data, const char* where, const char* what, py::handle h,
                  int expected, VecX& out) {
@@ -20,6 +32,7 @@ void read_vector(const Model& model, const Data& data, const char* where, const 
       data.check(model, where, what, p->dimensions[0], expected);
       const char* src = p->data;
       for (int k = 0; k < expected; ++k, src += p->strides[0]) std::memcpy(&out(k), src, sizeof(double));
+      check_finite(where, what, out.head(expected));
       return;
     }
   }
@@ -37,6 +50,7 @@ void read_vector(const Model& model, const Data& data, const char* where, const 
   // element by element: any stride, no temporary
   const auto u = a.unchecked<1>();
   for (int k = 0; k < expected; ++k) out(k) = u(k);
+  check_finite(where, what, out.head(expected));
 }
 
 VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expected) {
@@ -46,6 +60,7 @@ VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expe
   VecX out(expected);
   const auto u = a.unchecked<1>();
   for (int k = 0; k < expected; ++k) out(k) = u(k);
+  check_finite(where, what, out);
   return out;
 }
 

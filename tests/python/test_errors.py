@@ -156,3 +156,26 @@ def test_arguments_by_position_and_name():
     assert str(inspect.signature(soadyn.forward_dynamics)) == "(model, data, q, v, tau, method='on')"
     assert str(inspect.signature(soadyn.mass_matrix)) == "(model, data, q, kinematics=True)"
     assert str(inspect.signature(soadyn.bias)) == "(model, data, q, v, kinematics=True)"
+
+
+def test_unknown_names_raise_key_error_with_the_nearest_name():
+    model = soadyn.load_scenario(f"{SCENARIOS}/double_pendulum.yaml").model
+    assert model.joint_index("theta2") == 1 and model.body_index("upper") == 0
+    with pytest.raises(KeyError) as e:
+        model.joint_index("theta3")
+    assert "no joint named 'theta3'; did you mean 'theta1'?" in str(e.value)
+    with pytest.raises(KeyError) as e:
+        model.body_index("tool0")
+    assert "no body named 'tool0' (expected one of: upper, lower)" in str(e.value)
+
+
+def test_non_finite_arguments_are_refused_naming_the_entry():
+    model = soadyn.load_scenario(f"{SCENARIOS}/double_pendulum.yaml").model
+    data = soadyn.Data(model)
+    for bad in (np.nan, np.inf, -np.inf):
+        q = np.array([0.1, bad])
+        msg = raised(soadyn.mass_matrix, model, data, q)
+        assert "q[1] = " in msg and "expected a finite number" in msg, msg
+        msg = raised(soadyn.mass_matrix, model, data, [0.1, bad])  # a list takes the converting path
+        assert "q[1] = " in msg, msg
+    assert np.isfinite(soadyn.mass_matrix(model, data, np.array([0.1, 0.2]))).all()
