@@ -263,10 +263,17 @@ Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
         merge_mass(m.mass[t], m.com[t], m.inertia[t], b.mass, c, I);
         m.merged_names[t].push_back(b.name);
       }
+      // the welded body stays a named frame on the body it went into
+      m.frame_names.push_back(b.name);
+      m.frame_body.push_back(parent_target.body);
+      m.frame_placement.push_back(joint_in_target);
       continue;
     }
     const int k = m.nbodies++;
     target[i] = {k, Placement{}};
+    m.frame_names.push_back(b.name);
+    m.frame_body.push_back(k);
+    m.frame_placement.emplace_back();
     spec_of.push_back(i);
     m.parent.push_back(parent_target.body);
     m.joint_type.push_back(b.joint);
@@ -390,6 +397,27 @@ int Model::joint_index(const std::string& name) const {
   for (int i = 0; i < nbodies; ++i)
     if (joint_names[i] == name) return i;
   return -1;
+}
+
+int Model::frame_index(const std::string& name) const {
+  for (int f = 0; f < int(frame_names.size()); ++f)
+    if (frame_names[f] == name) return f;
+  return -1;
+}
+
+int Model::add_frame(const std::string& name, int body, const Placement& X) {
+  const std::string where = "frame '" + printable(name) + "'";
+  if (name.empty() || !is_valid_utf8(name)) throw Error(where + ": name: expected a non-empty UTF-8 name");
+  if (frame_index(name) >= 0) throw Error(where + ": name: expected a new name, got one the model already has");
+  if (body < -1 || body >= nbodies)
+    throw Error(where + ": body: expected -1 (the world) .. " + std::to_string(nbodies - 1) + ", got " + std::to_string(body));
+  if (!X.R.allFinite() || !X.p.allFinite()) throw Error(where + ": placement: expected finite numbers");
+  if ((X.R.transpose() * X.R - Mat3::Identity()).norm() > 1e-9 || X.R.determinant() < 0)
+    throw Error(where + ": placement rotation: expected a proper rotation matrix, got " + fmt(X.R));
+  frame_names.push_back(name);
+  frame_body.push_back(body);
+  frame_placement.push_back(X);
+  return int(frame_names.size()) - 1;
 }
 
 bool Model::has_free_joint() const {

@@ -57,6 +57,12 @@ class Model {
   std::vector<int> nq_i, nv_i;             // sizes of each joint
   std::vector<std::string> body_names, joint_names;
   std::vector<std::vector<std::string>> merged_names;  // bodies welded into body i by fixed joints
+  // named frames fixed on a body (frames.hpp): every body's own frame (identity placement), every
+  // body merged away by a fixed joint (a URDF's tool flange, camera, foot sole; body −1 for those
+  // welded to the world), in spec order, then those add_frame adds (a scenario's `frames:`)
+  std::vector<std::string> frame_names;
+  std::vector<int> frame_body;             // body the frame moves with, −1 = the world
+  std::vector<Placement> frame_placement;  // the frame in that body's frame (the world's for −1)
   std::vector<int> dof_parent;             // λ(k): parent DOF of DOF k, -1 at a root (for LᵀDL)
   std::vector<int> dof_body;               // body owning DOF k
   std::vector<int> dof_run;                // lowest m ≤ k with λ(x) = x − 1 for m < x ≤ k: the
@@ -89,6 +95,11 @@ class Model {
 
   int body_index(const std::string& name) const;   // -1 when absent
   int joint_index(const std::string& name) const;  // body index of the named joint, -1 when absent
+  int frame_index(const std::string& name) const;  // -1 when absent
+  // A frame placed by X on body `body` (−1: the world); returns its index.  Throws soadyn::Error
+  // for a name already taken (did-you-mean aside, the message names it), an empty or non-UTF-8
+  // name, a body out of range or a placement that is not a finite proper rotation and translation.
+  int add_frame(const std::string& name, int body, const Placement& X);
   bool has_free_joint() const;
   bool has_quaternions() const;              // a free or ball joint
   VecX neutral_configuration() const;
