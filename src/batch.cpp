@@ -1,0 +1,224 @@
+#include "soadyn/batch.hpp"
+
+#include "soadyn/kinematics.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <exception>
+#include <mutex>
+#include <string>
+#include <thread>
+
+namespace soadyn::batch {
+
+int resolve_threads(int threads) {
+  if (threads > 0) return threads;
+  return std::max(1, int(std::thread::hardware_concurrency()));
+}
+
+Pool::Pool(const Model& model, int threads) : model_(model) {
+  const int n = resolve_threads(threads);
+  workers_.reserve(size_t(n));
+  for (int w = 0; w < n; ++w) workers_.push_back(std::make_unique<Worker>(model));
+}
+
+void Pool::run(long K, const std::function<void(Worker&, long, long)>& f) {
+  if (K <= 0) return;
+  const int n = int(std::min<long>(threads(), K));
+  if (n == 1) {
+    f(*workers_[0], 0, K);
+    return;
+  }
+  // chunks handed out in order from one counter: about 8 per thread, so a slow thread (the machine
+  // is shared) does not hold up the others; which thread takes a chunk changes no result
+  const long chunk = std::max(1L, K / (8L * n));
+  std::atomic<long> next{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&](Worker& w) {
+    try {
+      for (;;) {
+        if (failed.load(std::memory_order_relaxed)) return;
+        const long begin = next.fetch_add(chunk);
+        if (begin >= K) return;
+        f(w, begin, std::min(K, begin + chunk));
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      if (!error) error = std::current_exception();
+      failed = true;
+    }
+  };
+  std::vector<std::thread> threads;
+  threads.reserve(size_t(n - 1));
+  for (int t = 1; t < n; ++t) threads.emplace_back(work, std::ref(*workers_[size_t(t)]));
+  work(*workers_[0]);
+  for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+namespace {
+
+std::string shape(Eigen::Index rows, Eigen::Index cols) { return std::to_string(rows) + "×" + std::to_string(cols); }
+
+// always-on: an n×K argument (K taken from Q) is what it should be, before any state is read
+void check(const char* where, const char* what, Eigen::Index rows, Eigen::Index cols, Eigen::Index n, Eigen::Index K) {
+  if (rows == n && cols == K) return;
+  throw Error(std::string("batch::") + where + ": " + what + ": expected " + shape(n, K) + " (" + std::to_string(n) +
+              " rows, one column per state), got " + shape(rows, cols));
+}
+
+// state k into the worker's q (and v)
+void load(Pool::Worker& w, const In& Q, long k) { w.q = Q.col(k); }
+void load(Pool::Worker& w, const In& Q, const In& V, long k) {
+  w.q = Q.col(k);
+  w.v = V.col(k);
+}
+
+}  // namespace
+
+void forward_dynamics(Pool& pool, In Q, In V, In TAU, Out QDD, FdMethod method) {
+  const Model& m = pool.model();
+  const Eigen::Index K = Q.cols();
+  check("forward_dynamics", "Q", Q.rows(), K, m.nq, K);
+  check("forward_dynamics", "V", V.rows(), V.cols(), m.nv, K);
+  check("forward_dynamics", "TAU", TAU.rows(), TAU.cols(), m.nv, K);
+  check("forward_dynamics", "QDD", QDD.rows(), QDD.cols(), m.nv, K);
+  pool.run(K, [&](Pool::Worker& w, long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      load(w, Q, V, k);
+      w.x = TAU.col(k);
+      update_kinematics(m, w.data, w.q);
+      update_velocities(m, w.data, w.v);
+      soadyn::forward_dynamics(m, w.data, w.x, method);
+      QDD.col(k) = w.data.qdd;
+    }
+  });
+}
+
+void mass_matrix(Pool& pool, In Q, Out M) {
+  const Model& m = pool.model();
+  const Eigen::Index K = Q.cols();
+  check("mass_matrix", "Q", Q.rows(), K, m.nq, K);
+  check("mass_matrix", "M", M.rows(), M.cols(), m.nv, m.nv * K);
+  pool.run(K, [&](Pool::Worker& w, long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      load(w, Q, k);
+      soadyn::mass_matrix(m, w.data, w.q);
+      M.middleCols(k * m.nv, m.nv) = w.data.Mass;
+    }
+  });
+}
+
+void bias(Pool& pool, In Q, In V, Out B) {
+  const Model& m = pool.model();
+  const Eigen::Index K = Q.cols();
+  check("bias", "Q", Q.rows(), K, m.nq, K);
+  check("bias", "V", V.rows(), V.cols(), m.nv, K);
+  check("bias", "B", B.rows(), B.cols(), m.nv, K);
+  pool.run(K, [&](Pool::Worker& w, long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      load(w, Q, V, k);
+      bias_forces(m, w.data, w.q, w.v);
+      B.col(k) = w.data.bias;
+    }
+  });
+}
+
+void inverse_dynamics(Pool& pool, In Q, In V, In QDD, Out TAU) {
+  const Model& m = pool.model();
+  const Eigen::Index K = Q.cols();
+  check("inverse_dynamics", "Q", Q.rows(), K, m.nq, K);
+  check("inverse_dynamics", "V", V.rows(), V.cols(), m.nv, K);
+  check("inverse_dynamics", "QDD", QDD.rows(), QDD.cols(), m.nv, K);
+  check("inverse_dynamics", "TAU", TAU.rows(), TAU.cols(), m.nv, K);
+  pool.run(K, [&](Pool::Worker& w, long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      load(w, Q, V, k);
+      w.x = QDD.col(k);
+      update_kinematics(m, w.data, w.q);
+      update_velocities(m, w.data, w.v);
+      soadyn::inverse_dynamics(m, w.data, w.x);
+      TAU.col(k) = w.data.tau;
+    }
+  });
+}
+
+void inverse_dynamics_derivatives(Pool& pool, In Q, In V, In QDD, Out DQ, Out DV) {
+  const Model& m = pool.model();
+  const Eigen::Index K = Q.cols();
+  const char* where = "inverse_dynamics_derivatives";
+  check(where, "Q", Q.rows(), K, m.nq, K);
+  check(where, "V", V.rows(), V.cols(), m.nv, K);
+  check(where, "QDD", QDD.rows(), QDD.cols(), m.nv, K);
+  check(where, "DQ", DQ.rows(), DQ.cols(), m.nv, m.nv * K);
+  check(where, "DV", DV.rows(), DV.cols(), m.nv, m.nv * K);
+  pool.run(K, [&](Pool::Worker& w, long begin, long end) {
+    if (!w.dd) w.dd.emplace(m);
+    for (long k = begin; k < end; ++k) {
+      load(w, Q, V, k);
+      w.x = QDD.col(k);
+      update_kinematics(m, w.data, w.q);
+      soadyn::inverse_dynamics_derivatives(m, w.data, w.v, w.x, *w.dd);
+      DQ.middleCols(k * m.nv, m.nv) = w.dd->dtau_dq;
+      DV.middleCols(k * m.nv, m.nv) = w.dd->dtau_dv;
+    }
+  });
+}
+
+void forward_dynamics_derivatives(Pool& pool, In Q, In V, In TAU, Out DQ, Out DV, Out* MINV, Out* QDD) {
+  const Model& m = pool.model();
+  const Eigen::Index K = Q.cols();
+  const char* where = "forward_dynamics_derivatives";
+  check(where, "Q", Q.rows(), K, m.nq, K);
+  check(where, "V", V.rows(), V.cols(), m.nv, K);
+  check(where, "TAU", TAU.rows(), TAU.cols(), m.nv, K);
+  check(where, "DQ", DQ.rows(), DQ.cols(), m.nv, m.nv * K);
+  check(where, "DV", DV.rows(), DV.cols(), m.nv, m.nv * K);
+  if (MINV) check(where, "MINV", MINV->rows(), MINV->cols(), m.nv, m.nv * K);
+  if (QDD) check(where, "QDD", QDD->rows(), QDD->cols(), m.nv, K);
+  pool.run(K, [&](Pool::Worker& w, long begin, long end) {
+    if (!w.dd) w.dd.emplace(m);
+    for (long k = begin; k < end; ++k) {
+      load(w, Q, V, k);
+      w.x = TAU.col(k);
+      update_kinematics(m, w.data, w.q);
+      update_velocities(m, w.data, w.v);
+      soadyn::forward_dynamics_derivatives(m, w.data, w.v, w.x, *w.dd, nullptr, MINV != nullptr);
+      DQ.middleCols(k * m.nv, m.nv) = w.dd->dqdd_dq;
+      DV.middleCols(k * m.nv, m.nv) = w.dd->dqdd_dv;
+      if (MINV) MINV->middleCols(k * m.nv, m.nv) = w.dd->Minv;
+      if (QDD) QDD->col(k) = w.data.qdd;
+    }
+  });
+}
+
+// the same with a Pool for the call
+void forward_dynamics(const Model& model, In Q, In V, In TAU, Out QDD, int threads, FdMethod method) {
+  Pool pool(model, threads);
+  forward_dynamics(pool, Q, V, TAU, QDD, method);
+}
+void mass_matrix(const Model& model, In Q, Out M, int threads) {
+  Pool pool(model, threads);
+  mass_matrix(pool, Q, M);
+}
+void bias(const Model& model, In Q, In V, Out B, int threads) {
+  Pool pool(model, threads);
+  bias(pool, Q, V, B);
+}
+void inverse_dynamics(const Model& model, In Q, In V, In QDD, Out TAU, int threads) {
+  Pool pool(model, threads);
+  inverse_dynamics(pool, Q, V, QDD, TAU);
+}
+void inverse_dynamics_derivatives(const Model& model, In Q, In V, In QDD, Out DQ, Out DV, int threads) {
+  Pool pool(model, threads);
+  inverse_dynamics_derivatives(pool, Q, V, QDD, DQ, DV);
+}
+void forward_dynamics_derivatives(const Model& model, In Q, In V, In TAU, Out DQ, Out DV, int threads, Out* MINV,
+                                  Out* QDD) {
+  Pool pool(model, threads);
+  forward_dynamics_derivatives(pool, Q, V, TAU, DQ, DV, MINV, QDD);
+}
+
+}  // namespace soadyn::batch
