@@ -209,6 +209,12 @@ class Cvode : public Integrator {
     return s;
   }
 
+  // CVODE anew from (t, y): order 1 and a fresh step-size search, as after a discontinuity
+  void restart(double t, const VecX& y) override {
+    map(y_.get()) = y;
+    check(CVodeReInit(mem_.get(), t, y_.get()), "CVodeReInit");
+  }
+
   std::string quaternion_handling() const override {
     if (!sys_.model.has_quaternions()) return "none";
     return projection_ ? "CVODE projection (CVodeSetProjFn) onto the unit quaternion"

@@ -22,6 +22,7 @@ System::System(const Model& m, const Inputs& in, FdMethod fd)
       v(m.nv),
       tau(m.nv),
       qd(m.nq),
+      control(VecX::Zero(m.nv)),
       y_work(m.nq + m.nv + nquad),
       f0(m.nq + m.nv + nquad),
       f1(m.nq + m.nv + nquad),
@@ -43,6 +44,7 @@ void System::rhs(double t, const double* y, double* ydot) {
   update_kinematics(model, data, q);
   update_velocities(model, data, v);
   inputs.evaluate(t, q, v, tau);
+  if (controlled) tau += control;
   forward_dynamics(model, data, tau, method);
   model.qdot(q, v, qd);
   Eigen::Map<VecX>(ydot, model.nq) = qd;
@@ -68,6 +70,7 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   update_kinematics(model, data, q);
   update_velocities(model, data, v);
   inputs.evaluate(t, q, v, tau);
+  if (controlled) tau += control;
   forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
   const MatX& dq = derivatives->dqdd_dq;
   J.setZero();
@@ -320,6 +323,7 @@ class SymplecticEuler : public FixedStep {
       ++stats_.jac_evals;
       inverse_dynamics_derivatives(free_, data_, zero_, w_, dd_);  // τ = 𝓜 w, ∂τ/∂q = P(w)
       sys_.inputs.evaluate(t, q_, w_, tau_);
+      if (sys_.controlled) tau_ += sys_.control;
       // R(w) = 𝓜 w − (h/2) P(w)ᵀ w − p + h (g − τ_in)
       r_ = dd_.tau - p_ + h * (g_ - tau_);
       r_.noalias() -= (0.5 * h) * dd_.dtau_dq.transpose() * w_;

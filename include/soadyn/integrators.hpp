@@ -78,6 +78,10 @@ class System {
   Data data;
   std::optional<DerivativeData> derivatives;  // jacobian's workspace, made on first use
   VecX q, v, tau, qd;
+  // an external generalized force added to the inputs' τ while `controlled` (rollout.hpp: a
+  // control held over each step); it depends on neither q nor v, so ∂f/∂y is unchanged
+  VecX control;
+  bool controlled = false;
   VecX y_work, f0, f1;             // jacobian_dq's scratch
   MatX T;                          // one joint's tangent map (≤ 6×7)
   VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
@@ -111,6 +115,13 @@ class Integrator {
     return stop_ && stop_->load(std::memory_order_relaxed) != 0;
   }
   virtual IntegratorStats stats() const = 0;
+  // start afresh at (t, y), forgetting the history of earlier steps: after a jump in the
+  // right-hand side (a new control), which a multistep method must not step across.  Fixed-step
+  // methods keep no history between steps: nothing to do
+  virtual void restart(double t, const VecX& y) {
+    (void)t;
+    (void)y;
+  }
   // how the quaternion of a free root is kept unit ("none" without a free joint)
   virtual std::string quaternion_handling() const = 0;
 

@@ -1,0 +1,73 @@
+// Many short simulations in one call: K rollouts from K initial states, each T steps of dt under
+// its own control sequence (or a control callback), split across threads, as MuJoCo's rollout.
+//
+// Rollout k starts at t = 0 from y0_k = [q; v] (quaternions normalized) and records its state after
+// every step, at t = (s + 1)·dt, s = 0 … T − 1.  Over step s the generalized force is the model's
+// inputs (a scenario's torques, springs, dampers) plus the control u_{k,s}, held constant.  The
+// integrator is any of integrators(): a fixed-step method steps by dt exactly, on the grid
+// simulate() uses (the same states as a simulate() run with output_dt = dt); CVODE advances to each
+// (s + 1)·dt under rtol/atol and, when the control changes there, restarts from that state (its
+// history would otherwise straddle the jump).
+//
+// Layout (batch.hpp's: column-major, the memory of row-major numpy arrays):
+//   Y0        ny×K,          ny = nq + nv                       numpy (K, ny)
+//   controls  nv×(T·K),      column k·T + s = u_{k,s}           numpy (K, T, nv)
+//   states    ny×(T·K),      column k·T + s = y_k((s + 1)·dt)   numpy (K, T, ny)
+//   energies  T×K,           E = T + V (+ springs) at those states numpy (K, T)
+// Each rollout runs on one thread with that thread's System, so its states are the same, to the
+// last bit, whatever the thread count.
+#pragma once
+
+#include "soadyn/batch.hpp"
+#include "soadyn/inputs.hpp"
+#include "soadyn/integrators.hpp"
+#include "soadyn/settings.hpp"
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace soadyn {
+
+struct RolloutSettings {
+  std::string method = "rk4";         // a name of integrators()
+  double dt = 1e-3;                   // s: the step of fixed-step methods, the control and output interval
+  long steps = 0;                     // T (with a control matrix: its T)
+  std::string dynamics = "on";        // forward-dynamics route: dense | sparse | on
+  double rtol = 1e-8, atol = 1e-10;   // CVODE
+  double max_step = 0.0;              // CVODE (0: none)
+  long max_steps = 100000000;         // CVODE, per rollout
+  std::string jacobian = "analytic";  // cvode-bdf, implicit-midpoint
+  std::string newton = "full";        // implicit-midpoint
+  int threads = 1;                    // ≤ 0: one per hardware thread
+  bool energies = true;               // fill `energies` (an extra kinematics pass per state)
+};
+
+// u_{k,s} for rollout k before step s, at time t, from its state y (ny numbers): writes nv numbers
+// into tau.  Called on the rollout's thread; with threads > 1, from several threads at once.
+using ControlFn = std::function<void(long k, long s, double t, const double* y, double* tau)>;
+
+struct RolloutReport {
+  long completed = 0;                // rollouts that ran all T steps
+  bool interrupted = false;          // a stop request ended the call (unfinished rollouts: NaN)
+  int stop = 0;                      // the stop value that ended it
+  std::vector<std::string> status;   // per rollout: "completed", the integrator's error (the states
+                                     //   from there on NaN), or "not run" after a stop
+};
+
+// Throws soadyn::Error (naming the argument, what was expected and what was got) for a wrong shape,
+// a non-finite initial state or control, dt not positive and finite, a negative T, a model without
+// degrees of freedom or an unknown or refusing method, before any rollout starts.  A rollout that
+// fails midway does not throw: its status says why.  `controls` may be null (no control) and so may
+// `control` (no callback); not both given.  `stop` and `poll` as in simulate(): `stop` is read
+// before every step; `poll` runs on the calling thread (with threads = 1 before every step; with
+// more, every 10 ms while the threads work) and may set it.
+RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, const batch::In* controls,
+                      const ControlFn* control, const RolloutSettings& settings, batch::Out states,
+                      batch::Out energies, const std::atomic<int>* stop = nullptr, std::function<void()> poll = {});
+
+// The model's settings of a scenario: method, dt, rtol, atol, dynamics, jacobian, newton, max_step
+RolloutSettings rollout_settings(const SimulationSettings& s);
+
+}  // namespace soadyn

@@ -1,0 +1,228 @@
+#include "soadyn/rollout.hpp"
+
+#include "soadyn/kinematics.hpp"
+#include "soadyn/simulate.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+namespace soadyn {
+
+RolloutSettings rollout_settings(const SimulationSettings& s) {
+  RolloutSettings r;
+  r.method = s.method;
+  r.dt = s.dt;
+  r.dynamics = s.dynamics;
+  r.rtol = s.rtol;
+  r.atol = s.atol;
+  r.max_step = s.max_step;
+  r.max_steps = s.max_steps;
+  r.jacobian = s.jacobian;
+  r.newton = s.newton;
+  return r;
+}
+
+namespace {
+
+SimulationSettings simulation_settings(const RolloutSettings& r) {
+  SimulationSettings s;
+  s.method = r.method;
+  s.dt = r.dt;
+  s.output_dt = r.dt;
+  s.t_end = double(r.steps) * r.dt;
+  s.dynamics = r.dynamics;
+  s.rtol = r.rtol;
+  s.atol = r.atol;
+  s.max_step = r.max_step;
+  s.max_steps = r.max_steps;
+  s.jacobian = r.jacobian;
+  s.newton = r.newton;
+  return s;
+}
+
+std::string shape(Eigen::Index rows, Eigen::Index cols) { return std::to_string(rows) + "×" + std::to_string(cols); }
+
+void check_shape(const char* what, Eigen::Index rows, Eigen::Index cols, Eigen::Index n, Eigen::Index m,
+                 const char* layout) {
+  if (rows == n && cols == m) return;
+  throw Error(std::string("rollout: ") + what + ": expected " + shape(n, m) + " (" + layout + "), got " +
+              shape(rows, cols));
+}
+
+// the first non-finite entry of an argument, named by column
+void check_finite(const char* what, const batch::In& X, const char* column) {
+  if (X.allFinite()) return;
+  for (Eigen::Index c = 0; c < X.cols(); ++c)
+    for (Eigen::Index r = 0; r < X.rows(); ++r)
+      if (!std::isfinite(X(r, c))) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%g", X(r, c));
+        throw Error(std::string("rollout: ") + what + ": entry " + std::to_string(r) + " of " + column + " " +
+                    std::to_string(c) + " is " + value + ": expected a finite number");
+      }
+}
+
+// One thread's System and the rollouts it takes, one at a time, from a shared counter.
+struct Runner {
+  const Model& model;
+  const RolloutSettings& rs;
+  const SimulationSettings ss;
+  const batch::In& Y0;
+  const batch::In* controls;
+  const ControlFn* control;
+  batch::Out& states;
+  batch::Out& energies;
+  const std::atomic<int>* stop;
+  RolloutReport& report;
+  std::atomic<long>& next;
+  std::atomic<long>& completed;
+
+  bool stopped() const { return stop && stop->load(std::memory_order_relaxed) != 0; }
+
+  void run(System& sys, const std::function<void()>& poll) {
+    const long K = Y0.cols(), T = rs.steps;
+    const int nq = model.nq, nv = model.nv, ny = nq + nv;
+    VecX y(sys.size()), previous(nv);
+    sys.controlled = controls || control;
+    for (;;) {
+      const long k = next.fetch_add(1);
+      if (k >= K) return;
+      if (poll) poll();
+      if (stopped()) return;
+      // y0 = [q; v; W = 0; D = 0], quaternions unit
+      y.setZero();
+      y.head(ny) = Y0.col(k);
+      model.normalize(y.head(nq));
+      double t = 0.0;
+      auto integrator = make_integrator(rs.method, sys, ss, t, y);
+      integrator->set_stop(stop, poll);
+      long s = 0;
+      try {
+        for (; s < T; ++s) {
+          if (controls) sys.control = controls->col(k * T + s);
+          if (control) (*control)(k, s, t, y.data(), sys.control.data());
+          // a multistep method restarts where the control jumps
+          if (sys.controlled && s > 0 && sys.control != previous) integrator->restart(t, y);
+          previous = sys.control;
+          const double t_out = double(s + 1) * rs.dt;
+          integrator->advance(t_out, t, y);
+          if (t < t_out) break;  // stopped before a step
+          states.col(k * T + s) = y.head(ny);
+          if (energies.size() > 0) {
+            const VecX& q = sys.q;
+            sys.q = y.head(nq);
+            sys.v = y.segment(nq, nv);
+            update_kinematics(model, sys.data, q);
+            update_velocities(model, sys.data, sys.v);
+            energies(s, k) = kinetic_energy(model, sys.data) + potential_energy(model, sys.data) +
+                             sys.inputs.spring_energy(q);
+          }
+        }
+        if (s == T) {
+          report.status[size_t(k)] = "completed";
+          completed.fetch_add(1);
+        } else {
+          report.status[size_t(k)] = interrupted_status(stop->load(), t);
+        }
+      } catch (const SimulationError& e) {
+        report.status[size_t(k)] = e.what();
+      }
+      // the states the rollout did not reach: NaN
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      if (s < T) {
+        states.middleCols(k * T + s, T - s).setConstant(nan);
+        if (energies.size() > 0) energies.col(k).segment(s, T - s).setConstant(nan);
+      }
+    }
+  }
+};
+
+}  // namespace
+
+RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, const batch::In* controls,
+                      const ControlFn* control, const RolloutSettings& rs, batch::Out states, batch::Out energies,
+                      const std::atomic<int>* stop, std::function<void()> poll) {
+  // every argument checked before any rollout starts
+  const int ny = model.nq + model.nv;
+  const long K = Y0.cols(), T = rs.steps;
+  if (!(rs.dt > 0) || !std::isfinite(rs.dt)) throw Error("rollout: dt: expected a positive finite number");
+  if (T < 0) throw Error("rollout: steps: expected T ≥ 0, got " + std::to_string(T));
+  if (model.nv == 0) throw Error("rollout: the model has no degrees of freedom (every joint is fixed)");
+  if (controls && control) throw Error("rollout: controls: give a control matrix or a callback, not both");
+  check_shape("initial_states", Y0.rows(), K, ny, K, "nq + nv rows, one column per rollout");
+  check_finite("initial_states", Y0, "rollout");
+  if (controls) {
+    check_shape("controls", controls->rows(), controls->cols(), model.nv, T * K, "nv rows, column k·T + s");
+    check_finite("controls", *controls, "column");
+  }
+  check_shape("states", states.rows(), states.cols(), ny, T * K, "nq + nv rows, column k·T + s");
+  if (rs.energies) check_shape("energies", energies.rows(), energies.cols(), T, K, "T rows, one column per rollout");
+  const SimulationSettings ss = simulation_settings(rs);
+  const FdMethod fd = parse_fd_method(rs.dynamics);
+  {
+    System probe(model, inputs, fd);  // an unknown method or one that refuses the model throws here
+    make_integrator(rs.method, probe, ss, 0.0, probe.state(model.neutral_configuration(), VecX::Zero(model.nv)));
+  }
+
+  RolloutReport report;
+  report.status.assign(size_t(K), "not run");
+  std::atomic<long> next{0}, completed{0};
+  batch::Out no_energies = energies.leftCols(0);
+  Runner runner{model, rs, ss, Y0, controls, control, states, rs.energies ? energies : no_energies, stop, report, next,
+                completed};
+  const int n = int(std::min<long>(batch::resolve_threads(rs.threads), std::max(1L, K)));
+  if (n == 1) {
+    System sys(model, inputs, fd);
+    runner.run(sys, poll);
+  } else {
+    // n threads take the rollouts; the calling thread polls while they work
+    std::exception_ptr error;
+    std::mutex mutex;
+    std::condition_variable cv;
+    int running = n;
+    std::vector<std::thread> threads;
+    threads.reserve(size_t(n));
+    for (int w = 0; w < n; ++w)
+      threads.emplace_back([&] {
+        try {
+          System sys(model, inputs, fd);
+          runner.run(sys, {});
+        } catch (...) {
+          std::lock_guard<std::mutex> lock(mutex);
+          if (!error) error = std::current_exception();
+          next = K;  // the others stop after their current rollout
+        }
+        std::lock_guard<std::mutex> lock(mutex);
+        --running;
+        cv.notify_all();
+      });
+    {
+      std::unique_lock<std::mutex> lock(mutex);
+      while (running > 0) {
+        cv.wait_for(lock, std::chrono::milliseconds(10));
+        if (poll && running > 0) {
+          lock.unlock();
+          poll();
+          lock.lock();
+        }
+      }
+    }
+    for (auto& t : threads) t.join();
+    if (error) std::rethrow_exception(error);
+  }
+  report.completed = completed.load();
+  if (stop && stop->load() != 0) {
+    report.interrupted = true;
+    report.stop = stop->load();
+  }
+  return report;
+}
+
+}  // namespace soadyn
