@@ -60,5 +60,6 @@ extern PyObject* error_type;  // soadyn.Error
 void bind_model(py::module_& m);
 void bind_algorithms(py::module_& m);
 void bind_simulate(py::module_& m);
+void bind_batch(py::module_& m);  // soadyn.batch and soadyn._rollout (batch.cpp)
 
 }  // namespace soadyn::python

@@ -156,4 +156,5 @@ PYBIND11_MODULE(_soadyn, m) {
   sp::bind_model(m);
   sp::bind_algorithms(m);
   sp::bind_simulate(m);
+  sp::bind_batch(m);
 }

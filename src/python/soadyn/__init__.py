@@ -34,6 +34,10 @@ Algorithms (model, data, …), each first updating the kinematics at q (and velo
     update_kinematics(q), update_velocities(q, v): fill data.R, eta, d, s, r, G, V, Vbar
 Simulation
     simulate(scene, method=…, rtol=…, t_end=…, output=None) -> Trajectory
+    rollout(scene, initial_states, controls=None, steps=None, dt=…, method=…, threads=1)
+        -> (states (K, T, nq + nv), energies (K, T))      K runs of T steps in one call, no GIL
+Many states per call (soadyn.batch: (K, nq), (K, nv) in, (K, nv) or (K, nv, nv) out, threads=)
+    batch.forward_dynamics, mass_matrix, bias, inverse_dynamics, id_derivatives, fd_derivatives
     read_log(path) -> Trajectory
 Ensembles (soadyn.ensemble: the sweep file's format)
     sweep(path, out=None, scheduler=None, workers=None, …) -> SweepResult   on Dask, resumable
@@ -56,6 +60,7 @@ from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model
                       load_scenario, mass_matrix, mass_matrix_literal, momentum, parse_scenario, potential_energy,
                       update_kinematics, update_velocities)
 from . import _soadyn
+from ._soadyn import batch
 from ._trajectory import RunSummary, Trajectory, read_log, summary_from_dict
 from ._sweep import SweepResult, read_results, sweep
 from .ensemble import Sweep, load_sweep
@@ -64,7 +69,7 @@ __all__ = [
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
-    "potential_energy", "read_log", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
+    "potential_energy", "read_log", "rollout", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
 
 for _cls in (Data, Error, Inputs, Model, Scenario, SimulationSettings, RunSummary, Trajectory):
@@ -114,6 +119,39 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
             pass
         raise interrupt
     return traj
+
+
+def rollout(scene, initial_states, controls=None, *, steps: Optional[int] = None, dt: Optional[float] = None,
+            method: Optional[str] = None, threads: int = 1, dynamics: Optional[str] = None,
+            rtol: Optional[float] = None, atol: Optional[float] = None, energies: bool = True):
+    """K simulations of T steps in one call: (states, energies).
+
+    scene: a Model (no inputs; rk4 at dt = 1e-3 unless told), a Scenario or a scenario path (its
+    inputs and its settings: method, dt, rtol, atol, dynamics).  initial_states: (K, nq + nv), one
+    [q, v] per rollout (quaternions normalized).  controls: None; an array (K, T, nv), the
+    generalized force u[k, s] added to the inputs' over step s of rollout k; or a callable
+    controls(k, s, t, y) -> (nv,) called before each step with the state y (nq + nv,) (then
+    steps= is required; it runs with the GIL, so it serializes threads).  dt: the step of fixed-step
+    methods and the interval of the controls and of the output; CVODE (method cvode-adams or
+    cvode-bdf) advances to each step's end under rtol/atol and restarts where the control changes.
+
+    Returns states (K, T, nq + nv), the state of rollout k after step s at t = (s + 1)·dt, and
+    energies (K, T), the total energy T + V (+ springs) there (None with energies=False).  The
+    rollouts run without the GIL on `threads` threads (0: one per core); each rollout's states are
+    the same whatever the thread count, and those of simulate() with output_dt = dt.  A rollout
+    that fails (unstable) is NaN from there on, with a RuntimeWarning saying why.  Ctrl-C ends
+    every rollout before its next step and re-raises.  Bad shapes raise soadyn.Error (a
+    ValueError) naming the argument and the expected shape.
+    """
+    states, energy, status, interrupt = _soadyn._rollout(scene, initial_states, controls, steps, dt, method, threads,
+                                                         dynamics, rtol, atol, energies)
+    if interrupt is not None:
+        raise interrupt
+    failed = [(k, s) for k, s in enumerate(status) if s != "completed"]
+    if failed:
+        _warnings.warn(f"rollout: {len(failed)} of {len(status)} rollouts failed (NaN from there on); "
+                       f"rollout {failed[0][0]}: {failed[0][1]}", RuntimeWarning, stacklevel=2)
+    return states, energy
 
 
 del Optional, Union, _cls

@@ -169,6 +169,10 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
              output_dt: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
              newton: Optional[str] = None, output: Optional[str] = None) -> Trajectory: ...
 def read_log(path: str) -> Trajectory: ...
+def rollout(scene: Union[Model, Scenario, str], initial_states: ArrayLike, controls: Optional[object] = None, *,
+            steps: Optional[int] = None, dt: Optional[float] = None, method: Optional[str] = None, threads: int = 1,
+            dynamics: Optional[str] = None, rtol: Optional[float] = None, atol: Optional[float] = None,
+            energies: bool = True) -> Tuple[Vector, Optional[Vector]]: ...
 
 # ensembles (soadyn.ensemble describes the sweep file)
 class Sweep:

@@ -1,0 +1,300 @@
+// soadyn.batch (many states per call) and soadyn.rollout (many simulations per call), both
+// without the GIL.  Arrays are (K, n) row-major: batch.hpp's n×K column-major matrices in place,
+// so a C-contiguous float64 array goes in without a copy (anything else is converted once) and
+// results come out as new arrays written in place by the library.
+#include "common.hpp"
+
+#include "soadyn/batch.hpp"
+#include "soadyn/rollout.hpp"
+#include "soadyn/scenario.hpp"
+
+#include <chrono>
+#include <csignal>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <optional>
+#include <exception>
+
+namespace soadyn::python {
+
+namespace {
+
+using CArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using Map = Eigen::Map<const MatX>;
+using MapOut = Eigen::Map<MatX>;
+
+std::string shape_of(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t k = 0; k < a.ndim(); ++k) s += (k ? ", " : "") + std::to_string(a.shape(k));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+// (K, n) → n×K, checked: K from the first array (K < 0), then the same K for the others
+struct Arg {
+  CArray array;
+  Map map{nullptr, 0, 0};
+};
+
+Arg read_states(const char* where, const char* what, py::handle h, int n, const char* n_name, py::ssize_t& K,
+                const char* K_from) {
+  Arg a;
+  a.array = CArray::ensure(h);
+  if (!a.array)
+    throw py::type_error(std::string(where) + ": " + what + ": expected an array of numbers, got " +
+                         std::string(py::str(py::type::handle_of(h).attr("__name__"))));
+  const bool ok = a.array.ndim() == 2 && a.array.shape(1) == n && (K < 0 || a.array.shape(0) == K);
+  if (!ok) {
+    std::string expected = K < 0 ? "(K, " + std::to_string(n) + ")" : "(" + std::to_string(K) + ", " + std::to_string(n) + ")";
+    throw Error(std::string(where) + ": " + what + ": expected shape " + expected + " (K states × " + n_name +
+                (K < 0 ? "" : std::string(", K from ") + K_from) + "), got " + shape_of(a.array));
+  }
+  if (K < 0) K = a.array.shape(0);
+  new (&a.map) Map(a.array.data(), n, K);
+  if (!a.map.allFinite()) {
+    for (py::ssize_t k = 0; k < K; ++k)
+      for (int i = 0; i < n; ++i)
+        if (!std::isfinite(a.map(i, k))) {
+          char value[32];
+          std::snprintf(value, sizeof value, "%g", a.map(i, k));
+          throw Error(std::string(where) + ": " + what + "[" + std::to_string(k) + ", " + std::to_string(i) +
+                      "] = " + value + ": expected a finite number");
+        }
+  }
+  return a;
+}
+
+py::array new_array(std::vector<py::ssize_t> shape) { return py::array_t<double>(std::move(shape)); }
+double* ptr(py::array& a) { return static_cast<double*>(a.mutable_data()); }
+// (K, nv, nv) whose block k is the column-major nv×nv of state k: the C array read transposed
+py::object blocks(py::array a) { return a.attr("transpose")(0, 2, 1); }
+
+int threads_arg(const char* where, int threads) {
+  if (threads < 0) throw Error(std::string(where) + ": threads: expected ≥ 0 (0: one per core), got " + std::to_string(threads));
+  return threads;
+}
+
+// the library call without the GIL; its exceptions rethrown with the GIL held
+template <class F>
+void nogil(F&& f) {
+  std::exception_ptr failure;
+  {
+    py::gil_scoped_release release;
+    try {
+      f();
+    } catch (...) {
+      failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
+
+void bind_batch_functions(py::module_& b) {
+  b.doc() = R"(Many states per call: each function takes (K, nq) and (K, nv) arrays, one row per state, and
+returns new arrays, (K, nv) or (K, nv, nv), computed without the GIL on `threads` threads
+(0: one per core).  Results are bitwise those of the single-state functions in a loop, whatever
+the thread count.  C-contiguous float64 inputs are read in place.)";
+  b.def("forward_dynamics", [](const Model& m, py::handle q, py::handle v, py::handle tau, const std::string& method,
+                               int threads) {
+        const char* where = "batch.forward_dynamics";
+        py::ssize_t K = -1;
+        const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+        const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
+        const Arg T = read_states(where, "tau", tau, m.nv, "nv", K, "q");
+        const FdMethod fd = parse_fd_method(method);
+        py::array out = new_array({K, m.nv});
+        MapOut QDD(ptr(out), m.nv, K);
+        nogil([&] { batch::forward_dynamics(m, Q.map, V.map, T.map, QDD, threads_arg(where, threads), fd); });
+        return out;
+      }, "model"_a, "q"_a, "v"_a, "tau"_a, "method"_a = "on", "threads"_a = 1,
+      "q̈ = 𝓜⁻¹ (τ − bias) of each state: q (K, nq), v and tau (K, nv) → (K, nv).");
+  b.def("mass_matrix", [](const Model& m, py::handle q, int threads) {
+        py::ssize_t K = -1;
+        const Arg Q = read_states("batch.mass_matrix", "q", q, m.nq, "nq", K, "q");
+        py::array out = new_array({K, m.nv, m.nv});
+        MapOut M(ptr(out), m.nv, m.nv * K);
+        nogil([&] { batch::mass_matrix(m, Q.map, M, threads_arg("batch.mass_matrix", threads)); });
+        return out;  // symmetric: each block reads the same either way
+      }, "model"_a, "q"_a, "threads"_a = 1, "𝓜(q) of each state, as mass_matrix(…, kinematics=False) (body axes): q (K, nq) → (K, nv, nv).");
+  b.def("bias", [](const Model& m, py::handle q, py::handle v, int threads) {
+        py::ssize_t K = -1;
+        const Arg Q = read_states("batch.bias", "q", q, m.nq, "nq", K, "q");
+        const Arg V = read_states("batch.bias", "v", v, m.nv, "nv", K, "q");
+        py::array out = new_array({K, m.nv});
+        MapOut B(ptr(out), m.nv, K);
+        nogil([&] { batch::bias(m, Q.map, V.map, B, threads_arg("batch.bias", threads)); });
+        return out;
+      }, "model"_a, "q"_a, "v"_a, "threads"_a = 1, "bias(q, q̇) of each state, as bias(…, kinematics=False) (body axes): q (K, nq), v (K, nv) → (K, nv).");
+  b.def("inverse_dynamics", [](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
+        const char* where = "batch.inverse_dynamics";
+        py::ssize_t K = -1;
+        const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+        const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
+        const Arg A = read_states(where, "qdd", qdd, m.nv, "nv", K, "q");
+        py::array out = new_array({K, m.nv});
+        MapOut TAU(ptr(out), m.nv, K);
+        nogil([&] { batch::inverse_dynamics(m, Q.map, V.map, A.map, TAU, threads_arg(where, threads)); });
+        return out;
+      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1,
+      "τ = 𝓜 q̈ + bias of each state: q (K, nq), v and qdd (K, nv) → (K, nv).");
+  b.def("id_derivatives", [](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
+        const char* where = "batch.id_derivatives";
+        py::ssize_t K = -1;
+        const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+        const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
+        const Arg A = read_states(where, "qdd", qdd, m.nv, "nv", K, "q");
+        py::array dq = new_array({K, m.nv, m.nv}), dv = new_array({K, m.nv, m.nv});
+        MapOut DQ(ptr(dq), m.nv, m.nv * K), DV(ptr(dv), m.nv, m.nv * K);
+        nogil([&] { batch::inverse_dynamics_derivatives(m, Q.map, V.map, A.map, DQ, DV, threads_arg(where, threads)); });
+        return py::make_tuple(blocks(dq), blocks(dv));
+      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1,
+      "(∂τ/∂q, ∂τ/∂v) of each state, as id_derivatives: q (K, nq), v and qdd (K, nv) → two (K, nv, nv).");
+  b.def("fd_derivatives", [](const Model& m, py::handle q, py::handle v, py::handle tau, bool minv, int threads) {
+        const char* where = "batch.fd_derivatives";
+        py::ssize_t K = -1;
+        const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+        const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
+        const Arg T = read_states(where, "tau", tau, m.nv, "nv", K, "q");
+        py::array dq = new_array({K, m.nv, m.nv}), dv = new_array({K, m.nv, m.nv});
+        py::array mi = new_array({minv ? K : 0, m.nv, m.nv});
+        MapOut DQ(ptr(dq), m.nv, m.nv * K), DV(ptr(dv), m.nv, m.nv * K), MI(ptr(mi), m.nv, minv ? m.nv * K : 0);
+        nogil([&] {
+          batch::Out mi_out(MI);
+          batch::forward_dynamics_derivatives(m, Q.map, V.map, T.map, DQ, DV, threads_arg(where, threads),
+                                              minv ? &mi_out : nullptr);
+        });
+        if (!minv) return py::make_tuple(blocks(dq), blocks(dv));
+        return py::make_tuple(blocks(dq), blocks(dv), blocks(mi));
+      }, "model"_a, "q"_a, "v"_a, "tau"_a, "minv"_a = true, "threads"_a = 1,
+      "(∂q̈/∂q, ∂q̈/∂v, 𝓜⁻¹) of each state, as fd_derivatives: q (K, nq), v and tau (K, nv) → three (K, nv, nv)\n"
+      "(two with minv=False: ∂q̈/∂τ = 𝓜⁻¹ is then not computed).");
+}
+
+// Python's main thread (where signal handlers run), as threading.main_thread().ident
+unsigned long main_thread() {
+  static const unsigned long ident = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+  return ident;
+}
+
+
+// (states, energies or None, status list, exception raised by a signal handler or None)
+py::tuple run_rollout(py::object scene, py::handle initial_states, py::object controls, std::optional<long> steps,
+                      std::optional<double> dt, std::optional<std::string> method, int threads,
+                      std::optional<std::string> dynamics, std::optional<double> rtol, std::optional<double> atol,
+                      bool energies) {
+  const char* where = "rollout";
+  // the scene: a Model (no inputs, rk4 at dt = 1e-3 unless told), a Scenario or a scenario file
+  static const Inputs no_inputs;
+  std::optional<Scenario> loaded;
+  const Model* model = nullptr;
+  const Inputs* inputs = &no_inputs;
+  RolloutSettings rs;
+  if (py::isinstance<py::str>(scene)) {
+    loaded = load_scenario(scene.cast<std::string>());
+    scene = py::none();
+  }
+  if (loaded || py::isinstance<Scenario>(scene)) {
+    const Scenario& sc = loaded ? *loaded : scene.cast<const Scenario&>();
+    model = &sc.model;
+    inputs = &sc.inputs;
+    rs = rollout_settings(sc.simulation);
+  } else if (py::isinstance<Model>(scene)) {
+    model = &scene.cast<const Model&>();
+  } else {
+    throw py::type_error(std::string(where) + ": scene: expected a soadyn.Model, a soadyn.Scenario or a scenario path, got " +
+                         std::string(py::str(py::type::handle_of(scene).attr("__name__"))));
+  }
+  const Model& m = *model;
+  if (method) rs.method = *method;
+  if (dt) rs.dt = *dt;
+  if (dynamics) rs.dynamics = *dynamics;
+  if (rtol) rs.rtol = *rtol;
+  if (atol) rs.atol = *atol;
+  rs.threads = threads_arg(where, threads);
+  rs.energies = energies;
+  const int ny = m.nq + m.nv;
+  py::ssize_t K = -1;
+  const Arg Y0 = read_states(where, "initial_states", initial_states, ny, "nq + nv", K, "");
+  // controls: None, an array (K, T, nv), or a callable control(k, s, t, y) -> (nv,)
+  CArray U;
+  std::optional<Map> U_map;
+  ControlFn callback;
+  if (!controls.is_none() && PyCallable_Check(controls.ptr())) {
+    if (!steps) throw Error("rollout: steps: expected the number of steps T with a control callback");
+    rs.steps = *steps;
+    callback = [&controls, nv = m.nv, ny](long k, long s, double t, const double* y, double* tau) {
+      py::gil_scoped_acquire gil;
+      py::array_t<double> state(ny);
+      std::memcpy(state.mutable_data(), y, sizeof(double) * size_t(ny));
+      const py::object r = controls(k, s, t, state);
+      const CArray u = CArray::ensure(r);
+      if (!u || u.ndim() != 1 || u.shape(0) != nv)
+        throw Error("rollout: controls: the callback must return " + std::to_string(nv) + " numbers (nv,), got " +
+                    (u ? shape_of(u) : std::string(py::str(py::type::handle_of(r).attr("__name__")))) +
+                    " for rollout " + std::to_string(k) + ", step " + std::to_string(s));
+      std::memcpy(tau, u.data(), sizeof(double) * size_t(nv));
+    };
+  } else if (!controls.is_none()) {
+    U = CArray::ensure(controls);
+    if (!U || U.ndim() != 3 || U.shape(0) != K || U.shape(2) != m.nv || (steps && U.shape(1) != *steps))
+      throw Error("rollout: controls: expected shape (" + std::to_string(K) + ", " + (steps ? std::to_string(*steps) : "T") +
+                  ", " + std::to_string(m.nv) + ") (K rollouts × T steps × nv, K from initial_states), got " +
+                  (U ? shape_of(U) : "no array"));
+    rs.steps = long(U.shape(1));
+    U_map.emplace(U.data(), m.nv, rs.steps * K);
+  } else {
+    if (!steps) throw Error("rollout: steps: expected the number of steps T (or controls of shape (K, T, nv))");
+    rs.steps = *steps;
+  }
+  if (rs.steps < 0) throw Error("rollout: steps: expected T ≥ 0, got " + std::to_string(rs.steps));
+  const py::ssize_t T = rs.steps;
+  py::array states = new_array({K, T, ny});
+  py::array energy = new_array({K, energies ? T : 0});
+  MapOut S(ptr(states), ny, T * K), E(ptr(energy), energies ? T : 0, K);
+  // Ctrl-C: on Python's main thread the library polls Python's signal handlers every 10 ms
+  std::atomic<int> stop{0};
+  py::object pending = py::none();
+  std::function<void()> poll;
+  if (PyThread_get_thread_ident() == main_thread()) {
+    auto last = std::chrono::steady_clock::now();
+    poll = [&, last]() mutable {
+      if (stop.load(std::memory_order_relaxed) != 0) return;
+      const auto now = std::chrono::steady_clock::now();
+      if (now - last < std::chrono::milliseconds(10)) return;
+      last = now;
+      py::gil_scoped_acquire gil;
+      if (PyErr_CheckSignals() != 0) {
+        PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
+        PyErr_Fetch(&type, &value, &trace);
+        PyErr_NormalizeException(&type, &value, &trace);
+        if (trace) PyException_SetTraceback(value, trace);
+        pending = py::reinterpret_steal<py::object>(value);
+        Py_XDECREF(type);
+        Py_XDECREF(trace);
+        stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
+      }
+    };
+  }
+  RolloutReport report;
+  nogil([&] {
+    const batch::In Y(Y0.map);
+    std::optional<batch::In> Uin;
+    if (U_map) Uin.emplace(*U_map);
+    report = rollout(m, *inputs, Y, Uin ? &*Uin : nullptr, callback ? &callback : nullptr, rs, S, E, &stop, poll);
+  });
+  return py::make_tuple(states, energies ? py::object(energy) : py::none(), report.status, pending);
+}
+
+}  // namespace
+
+void bind_batch(py::module_& m) {
+  py::module_ b = m.def_submodule("batch", "Many states per call (soadyn::batch)");
+  bind_batch_functions(b);
+  m.def("_rollout", &run_rollout, "scene"_a, "initial_states"_a, "controls"_a = py::none(), "steps"_a = py::none(),
+        "dt"_a = py::none(), "method"_a = py::none(), "threads"_a = 1, "dynamics"_a = py::none(), "rtol"_a = py::none(),
+        "atol"_a = py::none(), "energies"_a = true,
+        "The rollouts behind soadyn.rollout: (states, energies or None, status per rollout, exception from a signal "
+        "handler or None).");
+}
+
+}  // namespace soadyn::python
