@@ -1,10 +1,13 @@
 #!/usr/bin/python3
 """Write the benchmark mechanisms as URDF (tools/bench/models.hpp builds the same ones in C++):
-chain_N.urdf and tree_N.urdf in the given folder.
+chain_N.urdf and tree_N.urdf in the given folder, and quadruped_18.urdf.
 
 chain: N links in series, revolute joints; joint 1 at the origin, every later joint at (0.3, 0, 0)
 in its parent's frame; axes cycling z, y, x; every link mass 1, centre of mass (0.15, 0, 0),
 inertia diag(0.01, 0.02, 0.03).  Binary tree: the same links, parent of link i is link (i-1)//2.
+quadruped_18: a 12 kg trunk and four legs of three revolute joints (hip abduction about x, hip and
+knee flexion about y), the mass properties of a small quadruped; load it with free_root=True for
+the 18-DOF free-floating robot (6 + 12) of tools/bench/batch.py.
 """
 import os
 import sys
@@ -28,6 +31,26 @@ def urdf(n, binary):
     return "\n".join(out) + "\n"
 
 
+def quadruped():
+    def inertial(mass, xyz, ixx, iyy, izz):
+        return (f'<inertial><origin xyz="{xyz}"/><mass value="{mass}"/>'
+                f'<inertia ixx="{ixx}" iyy="{iyy}" izz="{izz}" ixy="0" ixz="0" iyz="0"/></inertial>')
+    out = ['<?xml version="1.0"?>', '<robot name="quadruped_18">',
+           f'  <link name="trunk">{inertial(12.0, "0.01 0 0", 0.07, 0.26, 0.28)}</link>']
+    for leg, (x, y) in {"fl": (0.19, 0.05), "fr": (0.19, -0.05), "hl": (-0.19, 0.05), "hr": (-0.19, -0.05)}.items():
+        side = 1 if y > 0 else -1
+        links = [(f"{leg}_hip", inertial(0.7, f"0 {0.01 * side} 0", 0.0005, 0.0008, 0.0006), "trunk", f"{x} {y} 0", "1 0 0"),
+                 (f"{leg}_thigh", inertial(1.0, f"0 {-0.02 * side} -0.03", 0.006, 0.006, 0.001), f"{leg}_hip",
+                  f"0 {0.08 * side} 0", "0 1 0"),
+                 (f"{leg}_calf", inertial(0.2, "0 0 -0.1", 0.003, 0.003, 0.00005), f"{leg}_thigh", "0 0 -0.21", "0 1 0")]
+        for name, inert, parent, xyz, axis in links:
+            out.append(f'  <link name="{name}">{inert}</link>')
+            out.append(f'  <joint name="{name}_joint" type="continuous"><parent link="{parent}"/><child link="{name}"/>'
+                       f'<origin xyz="{xyz}"/><axis xyz="{axis}"/></joint>')
+    out.append("</robot>")
+    return "\n".join(out) + "\n"
+
+
 def main():
     folder = sys.argv[1] if len(sys.argv) > 1 else "build/bench_models"
     os.makedirs(folder, exist_ok=True)
@@ -37,6 +60,8 @@ def main():
     for n in [1, 3, 7, 15, 31, 63, 127, 255]:
         with open(os.path.join(folder, f"tree_{n}.urdf"), "w") as f:
             f.write(urdf(n, True))
+    with open(os.path.join(folder, "quadruped_18.urdf"), "w") as f:
+        f.write(quadruped())
     print(f"wrote the benchmark URDFs to {folder}")
 
 

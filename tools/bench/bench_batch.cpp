@@ -1,0 +1,112 @@
+// States per second of q̈ and of ∂q̈ (forward_dynamics, forward_dynamics_derivatives without 𝓜⁻¹)
+// over K states: the plain C++ loop on one Data against soadyn::batch on 1 and 2 threads.  One JSON
+// object per line; tools/bench/batch.py runs it beside the Python side and makes the table.
+//   soadyn_bench_batch MODEL.urdf FREE_ROOT(0|1) [MIN_SECONDS] [K …]
+#include "soadyn/batch.hpp"
+#include "soadyn/kinematics.hpp"
+#include "soadyn/scenario.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace soadyn;
+
+namespace {
+
+struct States {
+  MatX Q, V, TAU;
+};
+
+States random_states(const Model& m, long K) {
+  std::mt19937_64 gen(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  States s{MatX(m.nq, K), MatX(m.nv, K), MatX(m.nv, K)};
+  for (long k = 0; k < K; ++k) {
+    VecX q(m.nq);
+    for (int i = 0; i < m.nq; ++i) q(i) = u(gen);
+    m.normalize(q);
+    s.Q.col(k) = q;
+    for (int i = 0; i < m.nv; ++i) s.V(i, k) = u(gen), s.TAU(i, k) = 3 * u(gen);
+  }
+  return s;
+}
+
+// the best of three windows, each repeating f until it has run min_seconds: states per second
+template <class F>
+double rate(long K, double min_seconds, F&& f) {
+  double best = 0;
+  for (int window = 0; window < 3; ++window) {
+    long reps = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    double elapsed = 0;
+    do {
+      f();
+      ++reps;
+      elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    } while (elapsed < min_seconds);
+    best = std::max(best, double(K) * double(reps) / elapsed);
+  }
+  return best;
+}
+
+void print(const char* model, const char* what, long K, const char* how, double per_second) {
+  std::printf("{\"model\": \"%s\", \"what\": \"%s\", \"K\": %ld, \"how\": \"%s\", \"states_per_second\": %.6g}\n", model,
+              what, K, how, per_second);
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: %s MODEL.urdf FREE_ROOT(0|1) [MIN_SECONDS] [K …]\n", argv[0]);
+    return 2;
+  }
+  const std::string path = argv[1];
+  const Model m = load_urdf(path, std::atoi(argv[2]) != 0, urdf_gravity());
+  const double min_seconds = argc > 3 ? std::atof(argv[3]) : 0.1;
+  std::vector<long> Ks;
+  for (int a = 4; a < argc; ++a) Ks.push_back(std::atol(argv[a]));
+  if (Ks.empty()) Ks = {1, 10, 100, 1000, 10000, 100000};
+  const std::string name = path.substr(path.find_last_of('/') + 1);
+  for (long K : Ks) {
+    const States s = random_states(m, K);
+    MatX QDD(m.nv, K), DQ(m.nv, m.nv * K), DV(m.nv, m.nv * K);
+    // the C++ loop: one Data, the single-state calls
+    Data data(m);
+    DerivativeData dd(m);
+    VecX q(m.nq), v(m.nv), tau(m.nv);
+    print(name.c_str(), "qdd", K, "C++ loop", rate(K, min_seconds, [&] {
+            for (long k = 0; k < K; ++k) {
+              q = s.Q.col(k), v = s.V.col(k), tau = s.TAU.col(k);
+              update_kinematics(m, data, q);
+              update_velocities(m, data, v);
+              forward_dynamics(m, data, tau, FdMethod::ArticulatedBody);
+              QDD.col(k) = data.qdd;
+            }
+          }));
+    print(name.c_str(), "dqdd", K, "C++ loop", rate(K, min_seconds, [&] {
+            for (long k = 0; k < K; ++k) {
+              q = s.Q.col(k), v = s.V.col(k), tau = s.TAU.col(k);
+              update_kinematics(m, data, q);
+              update_velocities(m, data, v);
+              forward_dynamics_derivatives(m, data, v, tau, dd);
+              DQ.middleCols(k * m.nv, m.nv) = dd.dqdd_dq;
+              DV.middleCols(k * m.nv, m.nv) = dd.dqdd_dv;
+            }
+          }));
+    for (int threads : {1, 2}) {
+      batch::Pool pool(m, threads);  // kept across calls, as a caller in a loop would
+      const std::string how = "C++ batch, " + std::to_string(threads) + " thread" + (threads > 1 ? "s" : "");
+      print(name.c_str(), "qdd", K, how.c_str(),
+            rate(K, min_seconds, [&] { batch::forward_dynamics(pool, s.Q, s.V, s.TAU, QDD); }));
+      print(name.c_str(), "dqdd", K, how.c_str(),
+            rate(K, min_seconds, [&] { batch::forward_dynamics_derivatives(pool, s.Q, s.V, s.TAU, DQ, DV); }));
+    }
+  }
+  return 0;
+}
