@@ -403,6 +403,40 @@ void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, Inputs& 
   });
 }
 
+// frames: {name: {body, position, rpy}}: a named frame placed on a body, or on any frame the model
+// has (a link merged by a fixed joint, an earlier entry), or on the world
+void read_frames(const Reader& rd, const YAML::Node& n, Model& m) {
+  if (!n.IsMap()) rd.fail(n, "frames", "expected a map from frame name to {body, position, rpy}, got " + Reader::show(n));
+  for (auto it = n.begin(); it != n.end(); ++it) {
+    const std::string name = rd.string(it->first, "frames");
+    const std::string f = "frames." + printable(name);
+    rd.keys(it->second, f, {"body", "position", "rpy"});
+    const YAML::Node body = rd.require(it->second, "body", f);
+    const std::string on = rd.string(body, f + ".body");
+    Placement X;
+    int b = -1;
+    if (on != "world") {
+      const int at = m.frame_index(on);
+      if (at < 0) {
+        std::vector<std::string> names = m.frame_names;
+        names.push_back("world");
+        rd.fail(body, f + ".body", "no body or frame named '" + printable(on) + "'" + did_you_mean(on, names));
+      }
+      b = m.frame_body[at];
+      X = m.frame_placement[at];
+    }
+    Placement local;
+    if (it->second["position"]) local.p = rd.vec3(it->second["position"], f + ".position");
+    if (it->second["rpy"]) local.R = Reader::rpy(rd.vec3(it->second["rpy"], f + ".rpy"));
+    if (m.frame_index(name) >= 0) rd.fail(it->first, f, "the model already has a frame named '" + printable(name) + "' (a body or a merged link)");
+    try {
+      m.add_frame(name, b, compose(X, local));
+    } catch (const Error& e) {
+      rd.fail(it->first, f, e.what());
+    }
+  }
+}
+
 bool is_urdf_path(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
   return ext == ".urdf" || ext == ".URDF" || ext == ".xml";
@@ -470,7 +504,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     rd.fail(e.mark, "YAML syntax", e.msg);
   }
   if (!root || root.IsNull()) throw Error(path + ": the file is empty");
-  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "free_root", "initial", "simulation", "inputs"});
+  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "free_root", "frames", "initial", "simulation", "inputs"});
 
   Scenario sc;
   sc.path = path;
@@ -497,6 +531,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     sc.model = build_located(rd, bodies, gravity);
   }
 
+  if (root["frames"]) read_frames(rd, root["frames"], sc.model);
   sc.q0 = sc.model.neutral_configuration();
   sc.v0 = VecX::Zero(sc.model.nv);
   if (root["initial"]) read_initial(rd, root["initial"], sc.model, sc.q0, sc.v0);

@@ -61,5 +61,6 @@ void bind_model(py::module_& m);
 void bind_algorithms(py::module_& m);
 void bind_simulate(py::module_& m);
 void bind_batch(py::module_& m);  // soadyn.batch and soadyn._rollout (batch.cpp)
+void bind_frames(py::module_& m);  // after bind_model: it adds Model's frame members
 
 }  // namespace soadyn::python

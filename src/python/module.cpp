@@ -157,4 +157,5 @@ PYBIND11_MODULE(_soadyn, m) {
   sp::bind_algorithms(m);
   sp::bind_simulate(m);
   sp::bind_batch(m);
+  sp::bind_frames(m);
 }
