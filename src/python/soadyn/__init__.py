@@ -32,6 +32,12 @@ Algorithms (model, data, …), each first updating the kinematics at q (and velo
     jacobian(q)               J = S Ψ_D G (eq. 7)                -> new array            (6N, nv)
     kinetic_energy(q, v), potential_energy(q) -> float;  momentum(q, v) -> (linear, angular)
     update_kinematics(q), update_velocities(q, v): fill data.R, eta, d, s, r, G, V, Vbar
+Frames and task space (model, data, q, …, frame, reference="local_world_aligned"), new arrays
+    model.frame_names: every body, every link merged by a fixed joint, a scenario's frames: entries
+    frame_placement(q, frame) -> (R, p);  frame_velocity(q, v, frame), frame_acceleration(q, v, qdd, frame)
+    frame_jacobian(q, frame) (6, nv);  frame_jacobian_dot_times_v(q, v, frame);  point_jacobian(q, body, point)
+    com(q), com_velocity(q, v), com_jacobian(q) (3, nv);  centroidal_momentum_matrix(q) A_G (6, nv)
+    operational_space_inertia(q, J) Λ = (J 𝓜⁻¹ Jᵀ)⁻¹;  coriolis_matrix(q, v) C with C v = bias − gravity
 Simulation
     simulate(scene, method=…, rtol=…, t_end=…, output=None) -> Trajectory
     rollout(scene, initial_states, controls=None, steps=None, dt=…, method=…, threads=1)
@@ -59,6 +65,10 @@ from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model
                       jacobian, kinetic_energy, load,
                       load_scenario, mass_matrix, mass_matrix_literal, momentum, parse_scenario, potential_energy,
                       update_kinematics, update_velocities)
+from ._soadyn import (centroidal_inertia, centroidal_momentum, centroidal_momentum_matrix,  # frames.hpp
+                      centroidal_momentum_matrix_dot_times_v, com, com_jacobian, com_velocity, coriolis_matrix,
+                      frame_acceleration, frame_jacobian, frame_jacobian_dot_times_v, frame_placement, frame_velocity,
+                      operational_space_inertia, point_jacobian)
 from . import _soadyn
 from ._soadyn import batch
 from ._trajectory import RunSummary, Trajectory, read_log, summary_from_dict
@@ -66,6 +76,9 @@ from ._sweep import SweepResult, read_results, sweep
 from .ensemble import Sweep, load_sweep
 
 __all__ = [
+    "centroidal_inertia", "centroidal_momentum", "centroidal_momentum_matrix", "centroidal_momentum_matrix_dot_times_v",
+    "com", "com_jacobian", "com_velocity", "coriolis_matrix", "frame_acceleration", "frame_jacobian",
+    "frame_jacobian_dot_times_v", "frame_placement", "frame_velocity", "operational_space_inertia", "point_jacobian",
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
