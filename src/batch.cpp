@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <exception>
 #include <mutex>
 #include <string>
@@ -16,23 +17,37 @@ int resolve_threads(int threads) {
   return std::max(1, int(std::thread::hardware_concurrency()));
 }
 
-Pool::Pool(const Model& model, int threads) : model_(model) {
-  const int n = resolve_threads(threads);
-  workers_.reserve(size_t(n));
-  for (int w = 0; w < n; ++w) workers_.push_back(std::make_unique<Worker>(model));
+Pool::Pool(const Model& model, int threads) : model_(model), threads_(resolve_threads(threads)) {
+  workers_.resize(size_t(threads_));
+}
+
+Pool::Worker& Pool::worker(int w) {
+  auto& slot = workers_[size_t(w)];
+  if (!slot) slot = std::make_unique<Worker>(model_);
+  return *slot;
 }
 
 void Pool::run(long K, const std::function<void(Worker&, long, long)>& f) {
   if (K <= 0) return;
-  const int n = int(std::min<long>(threads(), K));
+  const int n = int(std::min<long>(threads_, K));
   if (n == 1) {
-    f(*workers_[0], 0, K);
+    f(worker(0), 0, K);
     return;
   }
   // chunks handed out in order from one counter: about 8 per thread, so a slow thread (the machine
   // is shared) does not hold up the others; which thread takes a chunk changes no result
   const long chunk = std::max(1L, K / (8L * n));
-  std::atomic<long> next{0};
+  // the first chunk here, timed: is the rest worth starting threads for?
+  Worker& first = worker(0);
+  const auto t0 = std::chrono::steady_clock::now();
+  f(first, 0, chunk);
+  const double per_state = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / double(chunk);
+  if (double(K - chunk) * per_state < worth_a_thread) {
+    f(first, chunk, K);
+    return;
+  }
+  for (int t = 1; t < n; ++t) worker(t);  // sized here, before the threads start
+  std::atomic<long> next{chunk};
   std::atomic<bool> failed{false};
   std::exception_ptr error;
   std::mutex error_mutex;
@@ -53,7 +68,7 @@ void Pool::run(long K, const std::function<void(Worker&, long, long)>& f) {
   std::vector<std::thread> threads;
   threads.reserve(size_t(n - 1));
   for (int t = 1; t < n; ++t) threads.emplace_back(work, std::ref(*workers_[size_t(t)]));
-  work(*workers_[0]);
+  work(first);
   for (auto& t : threads) t.join();
   if (error) std::rethrow_exception(error);
 }

@@ -11,7 +11,10 @@
 #include "soadyn/kinematics.hpp"
 #include "test_util.hpp"
 
+#include <atomic>
+#include <chrono>
 #include <string>
+#include <thread>
 
 namespace soadyn {
 namespace {
@@ -47,6 +50,12 @@ Model mixed_model(Rng& rng) {
 constexpr long kStates = 37;  // not a multiple of any thread count tried
 const int kThreads[] = {1, 2, 3};
 
+// a pool that starts all its threads however small the batch (Pool::run would keep 37 states of
+// these small models on the calling thread)
+struct EveryThread : batch::Pool {
+  EveryThread(const Model& m, int threads) : batch::Pool(m, threads) { worth_a_thread = 0.0; }
+};
+
 TEST(Batch, ForwardDynamicsEqualsLoop) {
   Rng rng(11);
   const Model m = mixed_model(rng);
@@ -62,7 +71,8 @@ TEST(Batch, ForwardDynamicsEqualsLoop) {
     }
     for (int threads : kThreads) {
       MatX qdd(m.nv, kStates);
-      batch::forward_dynamics(m, s.Q, s.V, s.X, qdd, threads, info.method);
+      EveryThread pool(m, threads);
+      batch::forward_dynamics(pool, s.Q, s.V, s.X, qdd, info.method);
       EXPECT_TRUE(qdd == ref) << info.name << ", " << threads << " threads";
     }
   }
@@ -86,7 +96,7 @@ TEST(Batch, MassMatrixBiasInverseDynamicsEqualLoop) {
     tau_ref.col(k) = d.tau;
   }
   for (int threads : kThreads) {
-    batch::Pool pool(m, threads);  // one pool for the three calls: its Data carry over between them
+    EveryThread pool(m, threads);  // one pool for the three calls: its Data carry over between them
     MatX M(nv, nv * kStates), b(nv, kStates), tau(nv, kStates);
     batch::mass_matrix(pool, s.Q, M);
     batch::bias(pool, s.Q, s.V, b);
@@ -120,7 +130,7 @@ TEST(Batch, DerivativesEqualLoop) {
     qdd.col(k) = d.qdd;
   }
   for (int threads : kThreads) {
-    batch::Pool pool(m, threads);
+    EveryThread pool(m, threads);
     MatX a(nv, nv * kStates), b(nv, nv * kStates), c(nv, nv * kStates), e(nv, nv * kStates), f(nv, kStates);
     batch::inverse_dynamics_derivatives(pool, s.Q, s.V, s.X, a, b);
     EXPECT_TRUE(a == idq) << threads << " threads";
@@ -142,7 +152,8 @@ TEST(Batch, MoreThreadsThanStatesAndNoStates) {
   const States s = random_states(rng, m, 2);
   MatX ref(m.nv, 2), qdd(m.nv, 2);
   batch::forward_dynamics(m, s.Q, s.V, s.X, ref, 1);
-  batch::forward_dynamics(m, s.Q, s.V, s.X, qdd, 5);
+  EveryThread five(m, 5);
+  batch::forward_dynamics(five, s.Q, s.V, s.X, qdd);
   EXPECT_TRUE(qdd == ref);
   MatX none(m.nv, 0);
   batch::forward_dynamics(m, MatX(m.nq, 0), MatX(m.nv, 0), MatX(m.nv, 0), none, 2);
@@ -178,12 +189,31 @@ TEST(Batch, BadShapesRefusedNamingTheArgument) {
 TEST(Batch, ErrorInAThreadIsRethrown) {
   Rng rng(16);
   const Model m = mixed_model(rng);
-  batch::Pool pool(m, 3);
+  EveryThread pool(m, 3);
   EXPECT_THROW(pool.run(100,
                         [](batch::Pool::Worker&, long begin, long end) {
                           if (begin <= 50 && 50 < end) throw Error("state 50");
                         }),
                Error);
+}
+
+// the calling thread keeps a small batch: no thread is worth starting for 37 cheap states
+TEST(Batch, SmallBatchStaysOnTheCallingThread) {
+  Rng rng(18);
+  const Model m = mixed_model(rng);
+  batch::Pool pool(m, 2);
+  std::atomic<int> other{0};
+  const auto caller = std::this_thread::get_id();
+  pool.run(kStates, [&](batch::Pool::Worker&, long, long) {
+    if (std::this_thread::get_id() != caller) ++other;
+  });
+  EXPECT_EQ(other.load(), 0);
+  pool.worth_a_thread = 0.0;
+  pool.run(kStates, [&](batch::Pool::Worker&, long, long) {
+    if (std::this_thread::get_id() != caller) ++other;
+    std::this_thread::sleep_for(std::chrono::microseconds(200));  // long enough for the other to start
+  });
+  EXPECT_GT(other.load(), 0);
 }
 
 TEST(Batch, NoAllocationPerStateOnOneThread) {

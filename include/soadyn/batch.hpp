@@ -11,8 +11,11 @@
 // reads what a Data held before its stages filled it again: the results are bitwise those of the
 // loop over states, whatever the thread count (test_batch).
 //
-// No allocation per state: the Pool sizes every per-thread array once (the derivatives' workspace
-// on the first derivative call); a call allocates only the threads it starts (threads − 1).
+// No allocation per state: the Pool sizes every per-thread array once, when a thread first needs it
+// (the derivatives' workspace on the first derivative call); a call allocates only the threads it
+// starts.  A thread costs ~0.1 ms to start and join: the calling thread times its first chunk and
+// starts the others only when the rest of the work is worth it (kWorthAThread), so small batches
+// run on the calling thread alone.
 #pragma once
 
 #include "soadyn/algorithms.hpp"
@@ -33,12 +36,18 @@ using Out = Eigen::Ref<MatX>;
 // threads ≤ 0: one per hardware thread (std::thread::hardware_concurrency)
 int resolve_threads(int threads);
 
+// work left (seconds on one thread) below which Pool::run starts no other thread: several thread
+// starts, so that a second thread at least halves what is left after paying for its start
+inline constexpr double kWorthAThread = 5e-4;
+
 // One Data (and, on demand, one DerivativeData) per thread, sized once from the model.
 class Pool {
  public:
   Pool(const Model& model, int threads);
   const Model& model() const { return model_; }
-  int threads() const { return int(workers_.size()); }
+  int threads() const { return threads_; }
+  // run's threshold for starting threads (seconds of work left); 0 starts every thread (tests)
+  double worth_a_thread = kWorthAThread;
 
   struct Worker {
     explicit Worker(const Model& m) : data(m), q(m.nq), v(m.nv), x(m.nv) {}
@@ -48,12 +57,16 @@ class Pool {
   };
 
   // f(worker, begin, end) over [0, K) in chunks, each chunk on one thread with that thread's
-  // worker; the calling thread takes part.  An exception in any chunk is rethrown here after
+  // worker; the calling thread takes part and times its first chunk: the other threads start only
+  // when the states left would take it longer than kWorthAThread.  An exception in any chunk is rethrown here after
   // every thread has stopped (the remaining chunks are skipped).
   void run(long K, const std::function<void(Worker&, long begin, long end)>& f);
 
  private:
+  Worker& worker(int w);  // made on first use
+
   const Model& model_;
+  int threads_;
   std::vector<std::unique_ptr<Worker>> workers_;
 };
 

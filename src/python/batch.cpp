@@ -15,6 +15,8 @@
 #include <cstring>
 #include <optional>
 #include <exception>
+#include <memory>
+#include <mutex>
 
 namespace soadyn::python {
 
@@ -89,85 +91,153 @@ void nogil(F&& f) {
   if (failure) std::rethrow_exception(failure);
 }
 
+// A Pool for Python: the library's Pool (one Data per thread, kept between calls) and a lock, so
+// that two Python threads sharing it take turns rather than share a Data.
+struct PyPool {
+  PyPool(const Model& m, int threads) : pool(m, threads) {}
+  batch::Pool pool;
+  std::mutex busy;
+};
+
+// the library call on the pool, without the GIL; its exceptions rethrown with the GIL held
+template <class F>
+void on(PyPool& p, F&& f) {
+  nogil([&] {
+    std::lock_guard<std::mutex> lock(p.busy);
+    f(p.pool);
+  });
+}
+
+py::object forward_dynamics(PyPool& p, py::handle q, py::handle v, py::handle tau, const std::string& method) {
+  const Model& m = p.pool.model();
+  const char* where = "batch.forward_dynamics";
+  py::ssize_t K = -1;
+  const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+  const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
+  const Arg T = read_states(where, "tau", tau, m.nv, "nv", K, "q");
+  const FdMethod fd = parse_fd_method(method);
+  py::array out = new_array({K, m.nv});
+  MapOut QDD(ptr(out), m.nv, K);
+  on(p, [&](batch::Pool& pool) { batch::forward_dynamics(pool, Q.map, V.map, T.map, QDD, fd); });
+  return out;
+}
+
+py::object mass_matrix(PyPool& p, py::handle q) {
+  const Model& m = p.pool.model();
+  py::ssize_t K = -1;
+  const Arg Q = read_states("batch.mass_matrix", "q", q, m.nq, "nq", K, "q");
+  py::array out = new_array({K, m.nv, m.nv});
+  MapOut M(ptr(out), m.nv, m.nv * K);
+  on(p, [&](batch::Pool& pool) { batch::mass_matrix(pool, Q.map, M); });
+  return out;  // symmetric: each block reads the same either way
+}
+
+py::object bias(PyPool& p, py::handle q, py::handle v) {
+  const Model& m = p.pool.model();
+  py::ssize_t K = -1;
+  const Arg Q = read_states("batch.bias", "q", q, m.nq, "nq", K, "q");
+  const Arg V = read_states("batch.bias", "v", v, m.nv, "nv", K, "q");
+  py::array out = new_array({K, m.nv});
+  MapOut B(ptr(out), m.nv, K);
+  on(p, [&](batch::Pool& pool) { batch::bias(pool, Q.map, V.map, B); });
+  return out;
+}
+
+py::object inverse_dynamics(PyPool& p, py::handle q, py::handle v, py::handle qdd) {
+  const Model& m = p.pool.model();
+  const char* where = "batch.inverse_dynamics";
+  py::ssize_t K = -1;
+  const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+  const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
+  const Arg A = read_states(where, "qdd", qdd, m.nv, "nv", K, "q");
+  py::array out = new_array({K, m.nv});
+  MapOut TAU(ptr(out), m.nv, K);
+  on(p, [&](batch::Pool& pool) { batch::inverse_dynamics(pool, Q.map, V.map, A.map, TAU); });
+  return out;
+}
+
+py::object id_derivatives(PyPool& p, py::handle q, py::handle v, py::handle qdd) {
+  const Model& m = p.pool.model();
+  const char* where = "batch.id_derivatives";
+  py::ssize_t K = -1;
+  const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+  const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
+  const Arg A = read_states(where, "qdd", qdd, m.nv, "nv", K, "q");
+  py::array dq = new_array({K, m.nv, m.nv}), dv = new_array({K, m.nv, m.nv});
+  MapOut DQ(ptr(dq), m.nv, m.nv * K), DV(ptr(dv), m.nv, m.nv * K);
+  on(p, [&](batch::Pool& pool) { batch::inverse_dynamics_derivatives(pool, Q.map, V.map, A.map, DQ, DV); });
+  return py::make_tuple(blocks(dq), blocks(dv));
+}
+
+py::object fd_derivatives(PyPool& p, py::handle q, py::handle v, py::handle tau, bool minv) {
+  const Model& m = p.pool.model();
+  const char* where = "batch.fd_derivatives";
+  py::ssize_t K = -1;
+  const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+  const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
+  const Arg T = read_states(where, "tau", tau, m.nv, "nv", K, "q");
+  py::array dq = new_array({K, m.nv, m.nv}), dv = new_array({K, m.nv, m.nv});
+  py::array mi = new_array({minv ? K : 0, m.nv, m.nv});
+  MapOut DQ(ptr(dq), m.nv, m.nv * K), DV(ptr(dv), m.nv, m.nv * K), MI(ptr(mi), m.nv, minv ? m.nv * K : 0);
+  on(p, [&](batch::Pool& pool) {
+    batch::Out mi_out(MI);
+    batch::forward_dynamics_derivatives(pool, Q.map, V.map, T.map, DQ, DV, minv ? &mi_out : nullptr);
+  });
+  if (!minv) return py::make_tuple(blocks(dq), blocks(dv));
+  return py::make_tuple(blocks(dq), blocks(dv), blocks(mi));
+}
+
+// Each function twice: soadyn.batch.f(model, …, threads=1), with a Pool made for the call, and
+// Pool.f(…) on a Pool kept by the caller (no Data made per call)
+struct Doc {
+  const char* forward_dynamics = "q̈ = 𝓜⁻¹ (τ − bias) of each state: q (K, nq), v and tau (K, nv) → (K, nv).";
+  const char* mass_matrix =
+      "𝓜(q) of each state, as mass_matrix(…, kinematics=False) (body axes): q (K, nq) → (K, nv, nv).";
+  const char* bias = "bias(q, q̇) of each state, as bias(…, kinematics=False) (body axes): q (K, nq), v (K, nv) → (K, nv).";
+  const char* inverse_dynamics = "τ = 𝓜 q̈ + bias of each state: q (K, nq), v and qdd (K, nv) → (K, nv).";
+  const char* id_derivatives =
+      "(∂τ/∂q, ∂τ/∂v) of each state, as id_derivatives: q (K, nq), v and qdd (K, nv) → two (K, nv, nv).";
+  const char* fd_derivatives =
+      "(∂q̈/∂q, ∂q̈/∂v, 𝓜⁻¹) of each state, as fd_derivatives: q (K, nq), v and tau (K, nv) → three (K, nv, nv)\n"
+      "(two with minv=False: ∂q̈/∂τ = 𝓜⁻¹ is then not computed).";
+};
+
 void bind_batch_functions(py::module_& b) {
   b.doc() = R"(Many states per call: each function takes (K, nq) and (K, nv) arrays, one row per state, and
 returns new arrays, (K, nv) or (K, nv, nv), computed without the GIL on `threads` threads
-(0: one per core).  Results are bitwise those of the single-state functions in a loop, whatever
-the thread count.  C-contiguous float64 inputs are read in place.)";
-  b.def("forward_dynamics", [](const Model& m, py::handle q, py::handle v, py::handle tau, const std::string& method,
-                               int threads) {
-        const char* where = "batch.forward_dynamics";
-        py::ssize_t K = -1;
-        const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
-        const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
-        const Arg T = read_states(where, "tau", tau, m.nv, "nv", K, "q");
-        const FdMethod fd = parse_fd_method(method);
-        py::array out = new_array({K, m.nv});
-        MapOut QDD(ptr(out), m.nv, K);
-        nogil([&] { batch::forward_dynamics(m, Q.map, V.map, T.map, QDD, threads_arg(where, threads), fd); });
-        return out;
-      }, "model"_a, "q"_a, "v"_a, "tau"_a, "method"_a = "on", "threads"_a = 1,
-      "q̈ = 𝓜⁻¹ (τ − bias) of each state: q (K, nq), v and tau (K, nv) → (K, nv).");
-  b.def("mass_matrix", [](const Model& m, py::handle q, int threads) {
-        py::ssize_t K = -1;
-        const Arg Q = read_states("batch.mass_matrix", "q", q, m.nq, "nq", K, "q");
-        py::array out = new_array({K, m.nv, m.nv});
-        MapOut M(ptr(out), m.nv, m.nv * K);
-        nogil([&] { batch::mass_matrix(m, Q.map, M, threads_arg("batch.mass_matrix", threads)); });
-        return out;  // symmetric: each block reads the same either way
-      }, "model"_a, "q"_a, "threads"_a = 1, "𝓜(q) of each state, as mass_matrix(…, kinematics=False) (body axes): q (K, nq) → (K, nv, nv).");
-  b.def("bias", [](const Model& m, py::handle q, py::handle v, int threads) {
-        py::ssize_t K = -1;
-        const Arg Q = read_states("batch.bias", "q", q, m.nq, "nq", K, "q");
-        const Arg V = read_states("batch.bias", "v", v, m.nv, "nv", K, "q");
-        py::array out = new_array({K, m.nv});
-        MapOut B(ptr(out), m.nv, K);
-        nogil([&] { batch::bias(m, Q.map, V.map, B, threads_arg("batch.bias", threads)); });
-        return out;
-      }, "model"_a, "q"_a, "v"_a, "threads"_a = 1, "bias(q, q̇) of each state, as bias(…, kinematics=False) (body axes): q (K, nq), v (K, nv) → (K, nv).");
-  b.def("inverse_dynamics", [](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
-        const char* where = "batch.inverse_dynamics";
-        py::ssize_t K = -1;
-        const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
-        const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
-        const Arg A = read_states(where, "qdd", qdd, m.nv, "nv", K, "q");
-        py::array out = new_array({K, m.nv});
-        MapOut TAU(ptr(out), m.nv, K);
-        nogil([&] { batch::inverse_dynamics(m, Q.map, V.map, A.map, TAU, threads_arg(where, threads)); });
-        return out;
-      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1,
-      "τ = 𝓜 q̈ + bias of each state: q (K, nq), v and qdd (K, nv) → (K, nv).");
-  b.def("id_derivatives", [](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
-        const char* where = "batch.id_derivatives";
-        py::ssize_t K = -1;
-        const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
-        const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
-        const Arg A = read_states(where, "qdd", qdd, m.nv, "nv", K, "q");
-        py::array dq = new_array({K, m.nv, m.nv}), dv = new_array({K, m.nv, m.nv});
-        MapOut DQ(ptr(dq), m.nv, m.nv * K), DV(ptr(dv), m.nv, m.nv * K);
-        nogil([&] { batch::inverse_dynamics_derivatives(m, Q.map, V.map, A.map, DQ, DV, threads_arg(where, threads)); });
-        return py::make_tuple(blocks(dq), blocks(dv));
-      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1,
-      "(∂τ/∂q, ∂τ/∂v) of each state, as id_derivatives: q (K, nq), v and qdd (K, nv) → two (K, nv, nv).");
-  b.def("fd_derivatives", [](const Model& m, py::handle q, py::handle v, py::handle tau, bool minv, int threads) {
-        const char* where = "batch.fd_derivatives";
-        py::ssize_t K = -1;
-        const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
-        const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
-        const Arg T = read_states(where, "tau", tau, m.nv, "nv", K, "q");
-        py::array dq = new_array({K, m.nv, m.nv}), dv = new_array({K, m.nv, m.nv});
-        py::array mi = new_array({minv ? K : 0, m.nv, m.nv});
-        MapOut DQ(ptr(dq), m.nv, m.nv * K), DV(ptr(dv), m.nv, m.nv * K), MI(ptr(mi), m.nv, minv ? m.nv * K : 0);
-        nogil([&] {
-          batch::Out mi_out(MI);
-          batch::forward_dynamics_derivatives(m, Q.map, V.map, T.map, DQ, DV, threads_arg(where, threads),
-                                              minv ? &mi_out : nullptr);
-        });
-        if (!minv) return py::make_tuple(blocks(dq), blocks(dv));
-        return py::make_tuple(blocks(dq), blocks(dv), blocks(mi));
-      }, "model"_a, "q"_a, "v"_a, "tau"_a, "minv"_a = true, "threads"_a = 1,
-      "(∂q̈/∂q, ∂q̈/∂v, 𝓜⁻¹) of each state, as fd_derivatives: q (K, nq), v and tau (K, nv) → three (K, nv, nv)\n"
-      "(two with minv=False: ∂q̈/∂τ = 𝓜⁻¹ is then not computed).");
+(0: one per core; a batch too small to be worth a thread start stays on the calling thread).
+Results are bitwise those of the single-state functions in a loop, whatever the thread count.
+C-contiguous float64 inputs are read in place.  Pool(model, threads) keeps the per-thread Data
+between calls, for small batches called often: pool.forward_dynamics(q, v, tau), ….)";
+  const Doc doc;
+  auto pool = [](const Model& m, int threads) { return std::make_unique<PyPool>(m, threads_arg("batch", threads)); };
+  b.def("forward_dynamics", [pool](const Model& m, py::handle q, py::handle v, py::handle tau, const std::string& method,
+                                   int threads) { return forward_dynamics(*pool(m, threads), q, v, tau, method); },
+        "model"_a, "q"_a, "v"_a, "tau"_a, "method"_a = "on", "threads"_a = 1, doc.forward_dynamics);
+  b.def("mass_matrix", [pool](const Model& m, py::handle q, int threads) { return mass_matrix(*pool(m, threads), q); },
+        "model"_a, "q"_a, "threads"_a = 1, doc.mass_matrix);
+  b.def("bias", [pool](const Model& m, py::handle q, py::handle v, int threads) { return bias(*pool(m, threads), q, v); },
+        "model"_a, "q"_a, "v"_a, "threads"_a = 1, doc.bias);
+  b.def("inverse_dynamics", [pool](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
+        return inverse_dynamics(*pool(m, threads), q, v, qdd);
+      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1, doc.inverse_dynamics);
+  b.def("id_derivatives", [pool](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
+        return id_derivatives(*pool(m, threads), q, v, qdd);
+      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1, doc.id_derivatives);
+  b.def("fd_derivatives", [pool](const Model& m, py::handle q, py::handle v, py::handle tau, bool minv, int threads) {
+        return fd_derivatives(*pool(m, threads), q, v, tau, minv);
+      }, "model"_a, "q"_a, "v"_a, "tau"_a, "minv"_a = true, "threads"_a = 1, doc.fd_derivatives);
+
+  py::class_<PyPool>(b, "Pool", "One Data per thread for a model, kept between batched calls (soadyn::batch::Pool).")
+      .def(py::init([](const Model& m, int threads) { return new PyPool(m, threads_arg("batch.Pool", threads)); }),
+           "model"_a, "threads"_a = 1, py::keep_alive<1, 2>())
+      .def_property_readonly("threads", [](const PyPool& p) { return p.pool.threads(); })
+      .def("forward_dynamics", &forward_dynamics, "q"_a, "v"_a, "tau"_a, "method"_a = "on", doc.forward_dynamics)
+      .def("mass_matrix", &mass_matrix, "q"_a, doc.mass_matrix)
+      .def("bias", &bias, "q"_a, "v"_a, doc.bias)
+      .def("inverse_dynamics", &inverse_dynamics, "q"_a, "v"_a, "qdd"_a, doc.inverse_dynamics)
+      .def("id_derivatives", &id_derivatives, "q"_a, "v"_a, "qdd"_a, doc.id_derivatives)
+      .def("fd_derivatives", &fd_derivatives, "q"_a, "v"_a, "tau"_a, "minv"_a = true, doc.fd_derivatives);
 }
 
 // Python's main thread (where signal handlers run), as threading.main_thread().ident

@@ -23,10 +23,11 @@ THREADS = [1, 2, 3]
 
 @pytest.fixture(scope="module")
 def tree():
-    """a random tree with every joint type and a free root, and K = 29 random states"""
+    """a random tree with every joint type and a free root, and K = 2001 random states: enough work
+    that the batch starts its threads (it keeps a small batch on the calling thread)"""
     rng = np.random.default_rng(7)
     model = soadyn.parse_scenario(random_tree_yaml(rng, 9, free_root=True)).model
-    K = 29
+    K = 2001
     q = np.array([model.normalize(rng.uniform(-2, 2, model.nq)) for _ in range(K)])
     v = rng.uniform(-1, 1, (K, model.nv))
     x = rng.uniform(-3, 3, (K, model.nv))
@@ -64,6 +65,36 @@ def test_batched_equals_looped_to_the_bit(tree, threads):
     for got, ref in zip(fd, looped(soadyn.fd_derivatives, model, q, v, x)):
         assert got.shape == ref.shape and (got == ref).all()
     assert len(b.fd_derivatives(model, q, v, x, minv=False, threads=threads)) == 2
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_pool_kept_between_calls_gives_the_same_bits(tree, threads):
+    model, q, v, x = tree
+    pool = soadyn.batch.Pool(model, threads=threads)
+    assert pool.threads == threads
+    for _ in range(2):  # its Data carry over from call to call
+        assert (pool.forward_dynamics(q, v, x) == soadyn.batch.forward_dynamics(model, q, v, x)).all()
+        assert (pool.mass_matrix(q[:3]) == soadyn.batch.mass_matrix(model, q[:3])).all()
+        assert (pool.bias(q, v) == soadyn.batch.bias(model, q, v)).all()
+        assert (pool.inverse_dynamics(q, v, x) == soadyn.batch.inverse_dynamics(model, q, v, x)).all()
+        for a, b in zip(pool.fd_derivatives(q[:50], v[:50], x[:50]), soadyn.batch.fd_derivatives(model, q[:50], v[:50], x[:50])):
+            assert (a == b).all()
+        for a, b in zip(pool.id_derivatives(q[:50], v[:50], x[:50]), soadyn.batch.id_derivatives(model, q[:50], v[:50], x[:50])):
+            assert (a == b).all()
+    with pytest.raises(ValueError, match="batch.forward_dynamics: tau"):
+        pool.forward_dynamics(q, v, x[:, :2])
+
+
+def test_pool_keeps_its_model_alive():
+    scene = soadyn.load_scenario(f"{SCENARIOS}/double_pendulum.yaml")
+    model = soadyn.load(f"{SCENARIOS}/double_pendulum.yaml")
+    q, v = np.tile(scene.q0, (4, 1)), np.tile(scene.v0, (4, 1))
+    ref = soadyn.batch.bias(model, q, v)
+    pool = soadyn.batch.Pool(model)
+    del model
+    import gc
+    gc.collect()
+    assert (pool.bias(q, v) == ref).all()
 
 
 def test_any_layout_and_lists_read(tree):

@@ -8,8 +8,10 @@ Models: the 7-DOF arm (tests/data/arm7.urdf, base welded) and the 18-DOF free-fl
 of tools/bench/make_models.py (a free root and 12 revolute joints).  q̈ is forward_dynamics by the
 O(N) route; ∂q̈ is forward_dynamics_derivatives (∂q̈/∂q, ∂q̈/∂v; 𝓜⁻¹ not formed: fd_derivatives
 with minv=False).  The C++ side is build/soadyn_bench_batch (the loop on one Data; batch with a
-Pool kept across calls); the Python side calls soadyn.batch, which makes its Pool (one Data per
-thread) and starts its threads on every call, and allocates its result arrays.  Each figure is the
+Pool kept across calls); the Python side calls a soadyn.batch.Pool kept across calls likewise,
+which converts and checks its arguments and allocates its result arrays on every call (the module
+functions, soadyn.batch.forward_dynamics(model, …), also make the Pool's Data each call: ~5 µs
+more).  Threads start only for a batch worth it (batch.hpp, kWorthAThread).  Each figure is the
 best of three windows of at least --min-seconds.  Prints a Markdown table.
 """
 import argparse
@@ -68,10 +70,9 @@ def main():
             tau = rng.uniform(-3, 3, (K, model.nv))
             for threads in (1, 2):
                 how = f"Python batch, {threads} thread" + ("s" if threads > 1 else "")
-                rows[(key, "qdd", K)][how] = rate(K, args.min_seconds, lambda: soadyn.batch.forward_dynamics(
-                    model, q, v, tau, threads=threads))
-                rows[(key, "dqdd", K)][how] = rate(K, args.min_seconds, lambda: soadyn.batch.fd_derivatives(
-                    model, q, v, tau, minv=False, threads=threads))
+                pool = soadyn.batch.Pool(model, threads=threads)
+                rows[(key, "qdd", K)][how] = rate(K, args.min_seconds, lambda: pool.forward_dynamics(q, v, tau))
+                rows[(key, "dqdd", K)][how] = rate(K, args.min_seconds, lambda: pool.fd_derivatives(q, v, tau, minv=False))
     hows = ["C++ loop", "C++ batch, 1 thread", "C++ batch, 2 threads", "Python batch, 1 thread", "Python batch, 2 threads"]
     print(f"load average at the end: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print("| model | | K | " + " | ".join(hows) + " | Python 1 t / C++ loop | 2 t / 1 t (C++) |")

@@ -43,7 +43,8 @@ Simulation
     rollout(scene, initial_states, controls=None, steps=None, dt=…, method=…, threads=1)
         -> (states (K, T, nq + nv), energies (K, T))      K runs of T steps in one call, no GIL
 Many states per call (soadyn.batch: (K, nq), (K, nv) in, (K, nv) or (K, nv, nv) out, threads=)
-    batch.forward_dynamics, mass_matrix, bias, inverse_dynamics, id_derivatives, fd_derivatives
+    batch.forward_dynamics, mass_matrix, bias, inverse_dynamics, id_derivatives, fd_derivatives;
+    batch.Pool(model, threads) keeps one Data per thread between calls: pool.forward_dynamics(q, v, tau), …
     read_log(path) -> Trajectory
 Ensembles (soadyn.ensemble: the sweep file's format)
     sweep(path, out=None, scheduler=None, workers=None, …) -> SweepResult   on Dask, resumable
