@@ -44,9 +44,9 @@ void check_finite(const BodySpec& b, int i, const std::string& field, const Eige
   if (!m.allFinite()) refuse(b, i, field, "finite numbers", fmt(m));
 }
 
-// Mass properties of one rigid body (or one part of one): symmetric, positive semidefinite and
-// obeying the triangle inequality, each up to round-off.  A part may be a point mass (zero
-// inertia), a thin rod (one zero principal moment) or, without mass, a bare frame.
+// Mass properties of one rigid body (or one part of one): symmetric and positive semidefinite,
+// each up to round-off.  A part may be a point mass (zero inertia), a thin rod (one zero principal
+// moment) or, without mass, a bare frame.  The triangle inequality is triangle_excess's (below).
 void check_inertia(const BodySpec& b, int i, double mass, const Mat3& I) {
   if (mass == 0.0) {
     if (!I.isZero(0.0)) refuse(b, i, "mass", "a positive mass for a body with inertia " + fmt(I), "0");
@@ -63,11 +63,67 @@ void check_inertia(const BodySpec& b, int i, double mass, const Mat3& I) {
   if (l(0) < -1e-9 * std::abs(l(2)) || !(l(2) >= 0.0))
     refuse(b, i, "inertia", "a positive semidefinite matrix (principal moments >= 0)",
            "principal moments " + fmt(l.transpose()));
-  // triangle inequality: each principal moment is at most the sum of the other two
-  if (l(2) > (l(0) + l(1)) * (1.0 + 1e-9) + 1e-9 * l(2))
-    refuse(b, i, "inertia",
-           "principal moments obeying the triangle inequality (largest <= sum of the others)",
-           "principal moments " + fmt(l.transpose()));
+}
+
+// Triangle inequality of the principal moments l0 <= l1 <= l2 (each at most the sum of the
+// others): the excess (l2 − l0 − l1)/(l0 + l1), 0 when it holds up to round-off.
+double triangle_excess(const Vec3& l) {
+  if (!(l(2) > (l(0) + l(1)) * (1.0 + 1e-9) + 1e-9 * l(2))) return 0.0;
+  return l(0) + l(1) > 0.0 ? (l(2) - l(0) - l(1)) / (l(0) + l(1)) : std::numeric_limits<double>::infinity();
+}
+
+std::string percent(double r) {
+  if (!std::isfinite(r)) return "both others zero";
+  std::ostringstream os;
+  os.precision(2);
+  os << std::fixed << 100.0 * r << " %";
+  return os.str();
+}
+
+// The triangle inequality over every body part at once (a sum of parts that obey it obeys it, so
+// the merged bodies need no second look): each violation is warned of, balanced or refused as
+// `check` says, and one message names every offending body.  Balancing raises the two smaller
+// principal moments by half the excess each, about the same principal axes: the nearest
+// physical inertia that keeps the largest moment.
+std::vector<BodySpec> triangle_inequality(const std::vector<BodySpec>& specs, InertiaCheck check,
+                                          std::vector<std::string>& warnings) {
+  std::vector<BodySpec> out = specs;
+  std::string listed, refused;
+  int first_refused = -1, n_listed = 0;
+  for (int i = 0; i < int(specs.size()); ++i) {
+    const BodySpec& b = specs[i];
+    if (b.mass == 0.0) continue;
+    const Eigen::SelfAdjointEigenSolver<Mat3> es(0.5 * (b.inertia + b.inertia.transpose()));
+    const Vec3 l = es.eigenvalues();
+    const double r = triangle_excess(l);
+    if (r == 0.0) continue;
+    const std::string item = "'" + printable(b.name) + "' " + fmt(l.transpose()) + " (+" + percent(r) + ")";
+    const bool refuse_it = check == InertiaCheck::Strict ||
+                           (check == InertiaCheck::Warn && !(r <= kTriangleTolerance));
+    if (refuse_it) {
+      refused += (refused.empty() ? "" : ", ") + item;
+      if (first_refused < 0) first_refused = i;
+      continue;
+    }
+    listed += (n_listed++ ? ", " : "") + item;
+    if (check == InertiaCheck::Balance) {
+      const double e = l(2) - l(0) - l(1);
+      const Vec3 lb(l(0) + 0.5 * e, l(1) + 0.5 * e, l(2));
+      out[i].inertia = es.eigenvectors() * lb.asDiagonal() * es.eigenvectors().transpose();
+    }
+  }
+  if (first_refused >= 0)
+    throw ModelError(first_refused, "body '" + printable(specs[first_refused].name) + "' (index " +
+                                        std::to_string(first_refused) + ")",
+                     "inertia: expected principal moments obeying the triangle inequality (largest <= sum "
+                     "of the others" + std::string(check == InertiaCheck::Warn ? ", within " + percent(kTriangleTolerance) : "") +
+                     "), got " + refused +
+                     (check == InertiaCheck::Strict ? "" : "; --inertia-check balance (a scenario's inertia_check: balance) makes them physical"));
+  if (n_listed)
+    warnings.push_back(std::string(check == InertiaCheck::Balance ? "balanced" : "loaded as given") + " " +
+                       std::to_string(n_listed) + (n_listed == 1 ? " inertia" : " inertias") +
+                       " breaking the triangle inequality (largest principal moment > sum of the others): " + listed);
+  return out;
 }
 
 // The checks every user-supplied body must pass.
@@ -237,11 +293,12 @@ void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const
 
 }  // namespace
 
-Model Model::build(const std::vector<BodySpec>& specs, const Vec3& gravity) {
+Model Model::build(const std::vector<BodySpec>& given, const Vec3& gravity, InertiaCheck inertia_check) {
   if (!gravity.allFinite()) throw Error("gravity: expected finite numbers, got " + fmt(gravity.transpose()));
-  for (int i = 0; i < int(specs.size()); ++i) validate(specs[i], i);
+  for (int i = 0; i < int(given.size()); ++i) validate(given[i], i);
 
   Model m;
+  const std::vector<BodySpec> specs = triangle_inequality(given, inertia_check, m.warnings);
   m.gravity = gravity;
   std::vector<Target> target(specs.size());
   std::vector<int> spec_of;  // spec index of each model body

@@ -270,9 +270,9 @@ BodyNodes read_bodies(const Reader& rd, const YAML::Node& list) {
 }
 
 // Model::build's refusals, located at the offending body's line
-Model build_located(const Reader& rd, const BodyNodes& bodies, const Vec3& gravity) {
+Model build_located(const Reader& rd, const BodyNodes& bodies, const Vec3& gravity, InertiaCheck inertia_check) {
   try {
-    return Model::build(bodies.specs, gravity);
+    return Model::build(bodies.specs, gravity, inertia_check);
   } catch (const ModelError& e) {
     const int k = e.spec >= 0 && e.spec < int(bodies.nodes.size()) ? e.spec : 0;
     rd.fail(bodies.nodes[k], "body '" + printable(bodies.specs[k].name) + "'", e.detail);
@@ -437,6 +437,21 @@ void read_frames(const Reader& rd, const YAML::Node& n, Model& m) {
   }
 }
 
+// log: {frames: [name, …]}: frames (of the model or of `frames:`) whose poses a run file logs
+void read_log_section(const Reader& rd, const YAML::Node& n, const Model& m, std::vector<std::string>& out) {
+  rd.keys(n, "log", {"frames"});
+  const YAML::Node list = n["frames"];
+  if (!list) return;
+  if (!list.IsSequence()) rd.fail(list, "log.frames", "expected a list of frame names, got " + Reader::show(list));
+  for (size_t k = 0; k < list.size(); ++k) {
+    const std::string f = "log.frames[" + std::to_string(k) + "]";
+    const std::string name = rd.string(list[k], f);
+    if (m.frame_index(name) < 0) rd.fail(list[k], f, "no frame named '" + printable(name) + "'" + did_you_mean(name, m.frame_names));
+    if (std::find(out.begin(), out.end(), name) != out.end()) rd.fail(list[k], f, "frame '" + printable(name) + "' listed twice");
+    out.push_back(name);
+  }
+}
+
 bool is_urdf_path(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
   return ext == ".urdf" || ext == ".URDF" || ext == ".xml";
@@ -477,7 +492,27 @@ std::string read_text_file(const std::string& path) {
   return text;
 }
 
-Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root) {
+std::optional<InertiaCheck> parse_inertia_check(const std::string& s) {
+  if (s == "warn") return InertiaCheck::Warn;
+  if (s == "balance") return InertiaCheck::Balance;
+  if (s == "strict") return InertiaCheck::Strict;
+  return std::nullopt;
+}
+
+namespace {
+
+// a scenario's inertia_check: warn | balance | strict (Model::build's InertiaCheck)
+InertiaCheck read_inertia_check(const Reader& rd, const YAML::Node& n) {
+  const std::string s = rd.string(n, "inertia_check");
+  if (const auto c = parse_inertia_check(s)) return *c;
+  rd.fail(n, "inertia_check", "expected warn, balance or strict, got '" + printable(s) + "'" +
+                                  did_you_mean(s, {"warn", "balance", "strict"}));
+}
+
+}  // namespace
+
+Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root,
+                        std::optional<InertiaCheck> inertia_check) {
   const Reader rd{path};
   YAML::Node root;
   try {
@@ -504,7 +539,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     rd.fail(e.mark, "YAML syntax", e.msg);
   }
   if (!root || root.IsNull()) throw Error(path + ": the file is empty");
-  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "free_root", "frames", "initial", "simulation", "inputs"});
+  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs"});
 
   Scenario sc;
   sc.path = path;
@@ -513,6 +548,10 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   if (root["description"]) sc.description = root["description"].as<std::string>("");
   // a URDF robot gets the URDF gravity wherever it enters; bodies written here get none by default
   const Vec3 gravity = root["gravity"] ? rd.vec3(root["gravity"], "gravity") : root["urdf"] ? urdf_gravity() : Vec3::Zero();
+  // the caller's (--inertia-check) over the file's
+  const InertiaCheck check = inertia_check ? *inertia_check
+                             : root["inertia_check"] ? read_inertia_check(rd, root["inertia_check"])
+                                                     : InertiaCheck::Warn;
 
   if (root["urdf"] && root["bodies"]) rd.fail(root["urdf"], "urdf", "give either 'bodies' or 'urdf', not both");
   if (root["urdf"]) {
@@ -520,7 +559,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     const std::filesystem::path p = std::filesystem::path(path).parent_path() / rel;
     const bool free = free_root || (root["free_root"] && rd.boolean(root["free_root"], "free_root"));
     try {
-      sc.model = load_urdf(p.string(), free, gravity);
+      sc.model = load_urdf(p.string(), free, gravity, check);
     } catch (const Error& e) {
       rd.fail(root["urdf"], "urdf", e.what());
     }
@@ -528,10 +567,11 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     if (root["free_root"]) rd.fail(root["free_root"], "free_root", "applies to 'urdf' models; give the root a free joint");
     const BodyNodes bodies = read_bodies(rd, rd.require(root, "bodies", "scenario"));
     if (free_root) throw Error(path + ": --free-root applies to URDF models; give the root body a free joint");
-    sc.model = build_located(rd, bodies, gravity);
+    sc.model = build_located(rd, bodies, gravity, check);
   }
 
   if (root["frames"]) read_frames(rd, root["frames"], sc.model);
+  if (root["log"]) read_log_section(rd, root["log"], sc.model, sc.log_frames);
   sc.q0 = sc.model.neutral_configuration();
   sc.v0 = VecX::Zero(sc.model.nv);
   if (root["initial"]) read_initial(rd, root["initial"], sc.model, sc.q0, sc.v0);
@@ -540,25 +580,27 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   return sc;
 }
 
-Scenario load_scenario(const std::string& path, bool free_root, const std::optional<Vec3>& gravity) {
+Scenario load_scenario(const std::string& path, bool free_root, const std::optional<Vec3>& gravity,
+                       std::optional<InertiaCheck> inertia_check) {
   const std::string text = read_text_file(path);
   Scenario sc;
   if (is_urdf_path(path)) {
     sc.path = path;
     sc.text = text;
     sc.name = std::filesystem::path(path).stem().string();
-    sc.model = parse_urdf(text, path, free_root, gravity.value_or(urdf_gravity()));
+    sc.model = parse_urdf(text, path, free_root, gravity.value_or(urdf_gravity()),
+                          inertia_check.value_or(InertiaCheck::Warn));
     sc.q0 = sc.model.neutral_configuration();
     sc.v0 = VecX::Zero(sc.model.nv);
   } else {
-    sc = parse_scenario(text, path, free_root);
+    sc = parse_scenario(text, path, free_root, inertia_check);
     if (gravity) sc.model.gravity = *gravity;
   }
   return sc;
 }
 
-Model load_urdf(const std::string& path, bool free_root, const Vec3& gravity) {
-  return parse_urdf(read_text_file(path), path, free_root, gravity);
+Model load_urdf(const std::string& path, bool free_root, const Vec3& gravity, InertiaCheck inertia_check) {
+  return parse_urdf(read_text_file(path), path, free_root, gravity, inertia_check);
 }
 
 }  // namespace soadyn

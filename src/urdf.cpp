@@ -172,9 +172,10 @@ void check_moving_mass(const std::vector<BodySpec>& specs, bool free_root, const
 
 // Model::build's refusals, located at the joint's line for what the joint says (axis, placement,
 // joint, the mass matrix's DOFs) and at the link's line for mass properties.
-Model build_located(const std::vector<BodySpec>& specs, const Vec3& gravity, const urdf_xml::Index& idx) {
+Model build_located(const std::vector<BodySpec>& specs, const Vec3& gravity, InertiaCheck inertia_check,
+                    const urdf_xml::Index& idx) {
   try {
-    return Model::build(specs, gravity);
+    return Model::build(specs, gravity, inertia_check);
   } catch (const ModelError& e) {
     const BodySpec& s = specs.at(e.spec);
     const std::string field = e.detail.substr(0, e.detail.find(':'));
@@ -187,7 +188,8 @@ Model build_located(const std::vector<BodySpec>& specs, const Vec3& gravity, con
 
 }  // namespace
 
-Model parse_urdf(const std::string& xml, const std::string& path, bool free_root, const Vec3& gravity) {
+Model parse_urdf(const std::string& xml, const std::string& path, bool free_root, const Vec3& gravity,
+                 InertiaCheck inertia_check) {
   const urdf_xml::Index idx = urdf_xml::index(xml, path);
   const urdf::ModelInterfaceSharedPtr robot = read_robot(idx);
 
@@ -200,7 +202,7 @@ Model parse_urdf(const std::string& xml, const std::string& path, bool free_root
     specs.push_back(joint_spec(*j, *link, link_index, free_root, idx));
   }
   check_moving_mass(specs, free_root, idx);
-  return build_located(specs, gravity, idx);
+  return build_located(specs, gravity, inertia_check, idx);
 }
 
 }  // namespace soadyn

@@ -411,11 +411,38 @@ class BadInput(unittest.TestCase):
                 f.write(b"\x00\x01binary")
             self.refused("inspect", binary, expect="a binary file, expected text")
 
+    def test_inertias_breaking_the_triangle_inequality(self):
+        # a CAD export rounded 2.5 % past the triangle inequality on two links: one warning naming
+        # both; strict refuses naming both; balance loads them made physical
+        urdf = os.path.join(os.environ.get("SOADYN_SOURCE_DIR", "."), "tests/data/urdf/rounded_inertias.urdf")
+        p = run("inspect", urdf, "--json")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        warnings = [l for l in p.stderr.splitlines() if l.strip()]
+        self.assertEqual(len(warnings), 1, p.stderr)
+        self.assertIn("warning", warnings[0])
+        self.assertIn("'ankle_motor' [8.000000013e-05 0.0001599999999 0.000246] (+2.50 %), 'camera'", warnings[0])
+        err = self.refused("inspect", urdf, "--inertia-check", "strict", expect="rounded_inertias.urdf:21: link 'ankle_motor': inertia")
+        self.assertIn("'camera' [0.002 0.003 0.00512] (+2.40 %)", err)
+        with tempfile.TemporaryDirectory() as d:
+            p = run("run", urdf, "--inertia-check", "balance", "--t-end", "0.01", "-o", os.path.join(d, "r.h5"))
+            self.assertEqual(p.returncode, 0, p.stderr)
+            self.assertIn("balanced 2 inertias", p.stderr)
+        self.refused("inspect", urdf, "--inertia-check", "balanse", expect="--inertia-check")
+
     def test_run_options(self):
         f = f"{SCENARIOS}/double_pendulum.yaml"
         for opt in ("--dt", "--rtol", "--atol", "--t-end", "--output-dt"):
             self.refused("run", f, opt, "-1", expect=f"{opt}: expected a positive number, got '-1'")
-        self.refused("run", f, "--method", "rk5", expect="--method")
+        self.refused("run", f, "--method", "rk5", expect="got 'rk5'; did you mean 'rk4'?")
+        # a mistyped option, command or choice gets the nearest name; case is ignored in choices
+        self.refused("run", f, "--tend", "5", expect="'--tend' is not an option of soadyn run; did you mean '--t-end'?")
+        self.refused("run", f, "--methd=euler", expect="did you mean '--method'?")
+        self.refused("inspct", f, expect="'inspct' is not a soadyn command; did you mean 'inspect'?")
+        self.refused("export", "x.h5", "--cvs", "a.csv", expect="did you mean '--csv'?")
+        self.refused("run", f, "--jacobian", "analytik", expect="did you mean 'analytic'?")
+        with tempfile.TemporaryDirectory() as d:
+            p = run("run", f, "--jacobian", "DQ", "--method", "CVODE-BDF", "--t-end", "0.01", "-q", "-o", os.path.join(d, "r.h5"))
+            self.assertEqual(p.returncode, 0, p.stderr)
 
     def test_options(self):
         self.refused("inspect", f"{SCENARIOS}/double_pendulum.yaml", "--method", "fast", expect="--method")

@@ -1,6 +1,8 @@
 // Building a model: what it refuses (with the message), and fixed-joint merging.
 #include "test_util.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <cstdio>
 
 using namespace soadyn;
@@ -277,3 +279,64 @@ TEST(ModelBuild, RefusesBodiesTooFarForADouble) {
 }
 
 }  // namespace
+
+// Inertias breaking the triangle inequality by a CAD export's rounding (InertiaCheck)
+namespace {
+std::vector<BodySpec> rounded_tree() {
+  auto specs = std::vector{body("a", -1), body("b", 0), body("c", 1), body("cam", 2)};
+  specs[1].inertia = Vec3(0.1, 0.1, 0.205).asDiagonal();   // +2.5 %
+  specs[3].joint = JointType::Fixed;                        // a welded part: +4 %
+  specs[3].inertia = Vec3(0.01, 0.015, 0.026).asDiagonal();
+  return specs;
+}
+Vec3 principal(const Mat3& I) { return Eigen::SelfAdjointEigenSolver<Mat3>(I).eigenvalues(); }
+}  // namespace
+
+TEST(ModelBuild, TriangleExcessWithinToleranceLoadsWithOneWarningNamingEveryBody) {
+  const auto specs = rounded_tree();
+  const Model m = Model::build(specs);
+  ASSERT_EQ(m.warnings.size(), 1u);
+  EXPECT_THAT(m.warnings[0], HasSubstr("loaded as given 2 inertias"));
+  EXPECT_THAT(m.warnings[0], HasSubstr("'b' [0.1 0.1 0.205] (+2.50 %)"));
+  EXPECT_THAT(m.warnings[0], HasSubstr("'cam'"));
+  EXPECT_THAT(m.warnings[0], ::testing::Not(HasSubstr("'a'")));
+  EXPECT_LT((m.inertia[1] - specs[1].inertia).norm(), 1e-15);  // as given
+  EXPECT_TRUE(Model::build(std::vector{body("a", -1)}).warnings.empty());
+}
+
+TEST(ModelBuild, TriangleExcessBeyondToleranceOrStrictListsEveryBody) {
+  auto specs = rounded_tree();
+  specs[0].inertia = Vec3(0.1, 0.1, 0.24).asDiagonal();  // +20 %
+  specs[2].inertia = Vec3(0.1, 0.1, 0.22).asDiagonal();  // +10 %
+  const std::string warn = refusal(specs);
+  EXPECT_THAT(warn, HasSubstr("within 5.00 %"));
+  EXPECT_THAT(warn, HasSubstr("'a' [0.1 0.1 0.24] (+20.00 %), 'c' [0.1 0.1 0.22] (+10.00 %)"));
+  EXPECT_THAT(warn, ::testing::Not(HasSubstr("'b'")));  // within tolerance
+  EXPECT_THAT(warn, HasSubstr("balance"));
+  try {
+    Model::build(rounded_tree(), Vec3::Zero(), InertiaCheck::Strict);
+    ADD_FAILURE() << "strict accepted";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("'b' [0.1 0.1 0.205] (+2.50 %), 'cam'"));
+  }
+}
+
+TEST(ModelBuild, BalancedInertiaKeepsItsAxesAndLargestMomentAndIsPhysical) {
+  auto specs = rounded_tree();
+  // a rotated inertia, 30 % over: principal moments 0.1, 0.2, 0.39 about turned axes
+  const Mat3 R = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+  specs[2].inertia = R * Vec3(0.1, 0.2, 0.39).asDiagonal() * R.transpose();
+  const Model merged = Model::build(specs, Vec3::Zero(), InertiaCheck::Balance);
+  for (int k = 0; k < merged.nbodies; ++k) {  // parts balanced, so their sums are physical
+    const Vec3 l = principal(merged.inertia[k]);
+    EXPECT_LE(l(2), (l(0) + l(1)) * (1 + 1e-12)) << k;
+  }
+  specs[3].mass = 0.0;  // a bare frame on c: body c is its own spec alone
+  specs[3].inertia.setZero();
+  const Model m = Model::build(specs, Vec3::Zero(), InertiaCheck::Balance);
+  ASSERT_EQ(m.warnings.size(), 1u);
+  EXPECT_THAT(m.warnings[0], HasSubstr("balanced 2 inertias"));
+  // 0.1 + 0.045, 0.2 + 0.045, 0.39: the largest now the sum of the others, same axes
+  const Mat3 expect = R * Vec3(0.145, 0.245, 0.39).asDiagonal() * R.transpose();
+  EXPECT_LT((m.inertia[2] - expect).norm(), 1e-14);
+}

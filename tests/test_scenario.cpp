@@ -327,6 +327,23 @@ TEST(BadScenario, NonSpdInertiaAndTriangleInequality) {
               HasSubstr("positive semidefinite"));
 }
 
+// inertia_check: warn (default) | balance | strict, and the caller's choice over the file's
+TEST(Scenario, InertiaCheckKey) {
+  const std::string rounded = with(kGood, "inertia: [0.1, 0.1, 0.1]\n  - name: b", "inertia: [0.1, 0.1, 0.205]\n  - name: b");
+  const Scenario warned = parse_scenario(rounded, "scene.yaml");
+  ASSERT_EQ(warned.model.warnings.size(), 1u);
+  EXPECT_THAT(warned.model.warnings[0], HasSubstr("loaded as given 1 inertia"));
+  EXPECT_THAT(error_of("inertia_check: strict\n" + rounded), HasSubstr("scene.yaml:4:5: body 'a': inertia: expected"));
+  const Scenario balanced = parse_scenario("inertia_check: balance\n" + rounded, "scene.yaml");
+  EXPECT_THAT(balanced.model.warnings.at(0), HasSubstr("balanced 1 inertia"));
+  EXPECT_NEAR(balanced.model.inertia[0](0, 0), 0.1025, 1e-15);
+  // the caller's (--inertia-check) wins over the file's
+  EXPECT_THAT(parse_scenario("inertia_check: strict\n" + rounded, "scene.yaml", false, InertiaCheck::Warn).model.warnings.at(0),
+              HasSubstr("loaded as given"));
+  EXPECT_THAT(error_of("inertia_check: balanse\n" + kGood),
+              HasSubstr("scene.yaml:1:16: inertia_check: expected warn, balance or strict, got 'balanse'; did you mean 'balance'?"));
+}
+
 TEST(BadScenario, ZeroOrNegativeMass) {
   EXPECT_THAT(error_of(with(kGood, "mass: 1.0", "mass: 0")), HasSubstr("body 'a'.mass: expected a positive mass, got '0'"));
   EXPECT_THAT(error_of(with(kGood, "mass: 1.0", "mass: -2")), HasSubstr("expected a positive mass, got '-2'"));

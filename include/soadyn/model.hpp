@@ -35,11 +35,22 @@ struct BodySpec {
   Mat3 inertia = Mat3::Zero();          // about the centre of mass, body frame
 };
 
+// What Model::build does with an inertia whose largest principal moment exceeds the sum of the
+// other two (the triangle inequality no rigid body breaks; CAD exports and rounded URDFs do):
+//  Warn    (default) load it as given, with a warning, if the excess (l2 − l0 − l1)/(l0 + l1) is
+//          at most kTriangleTolerance; refuse beyond it;
+//  Balance raise the two smaller moments by half the excess each (same principal axes), warned;
+//  Strict  refuse any excess beyond round-off.
+// A refusal names every offending body, with its principal moments and excess.
+enum class InertiaCheck { Warn, Balance, Strict };
+inline constexpr double kTriangleTolerance = 0.05;
+
 class Model {
  public:
   // Validates the specs and builds the model; throws soadyn::Error naming the body, the field,
   // what was expected and what was got.
-  static Model build(const std::vector<BodySpec>& specs, const Vec3& gravity = Vec3::Zero());
+  static Model build(const std::vector<BodySpec>& specs, const Vec3& gravity = Vec3::Zero(),
+                     InertiaCheck inertia_check = InertiaCheck::Warn);
 
   int nbodies = 0;  // N, moving bodies after fixed joints are merged
   int nq = 0;       // configuration size
@@ -83,6 +94,7 @@ class Model {
   std::vector<int> turn_body, turn_q;
   int turn_roots = 0;
   bool has_planar = false;                 // a planar joint (the body-axes bias takes the inertial route)
+  std::vector<std::string> warnings;       // what build accepted but a user should hear (one line each)
 
   double world_mass = 0.0;                 // bodies welded to the world: mass and first moment,
   Vec3 world_first_moment = Vec3::Zero();  // kept for the potential energy only

@@ -26,15 +26,22 @@ struct Scenario {
   VecX q0, v0;        // initial state (neutral and zero where the file is silent)
   SimulationSettings simulation;
   Inputs inputs;
+  std::vector<std::string> log_frames;  // log: {frames: [...]}: frames whose poses a run file logs (/frames)
 };
 
 // Loads a .yaml scenario or a .urdf (then: zero initial state, default settings, no inputs).
-// `gravity` overrides the file's gravity; a URDF's default is urdf_gravity().
+// `gravity` overrides the file's gravity; a URDF's default is urdf_gravity().  `inertia_check`
+// overrides a scenario's `inertia_check:` (default InertiaCheck::Warn, see model.hpp).
 Scenario load_scenario(const std::string& path, bool free_root = false,
-                       const std::optional<Vec3>& gravity = std::nullopt);
+                       const std::optional<Vec3>& gravity = std::nullopt,
+                       std::optional<InertiaCheck> inertia_check = std::nullopt);
 
 // Parses scenario text; `path` names it in messages and anchors a relative `urdf:`.
-Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root = false);
+Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root = false,
+                        std::optional<InertiaCheck> inertia_check = std::nullopt);
+
+// "warn", "balance", "strict" (the scenario's and the command line's words); nullopt otherwise.
+std::optional<InertiaCheck> parse_inertia_check(const std::string& s);
 
 // The gravity of a URDF robot wherever it enters (a .urdf given to load_scenario, `urdf:` in a
 // scenario), unless the scenario's `gravity:` or the caller says otherwise: m/s², z up.
@@ -42,8 +49,10 @@ inline Vec3 urdf_gravity() { return Vec3(0, 0, -9.81); }
 
 // URDF import.  Fixed joints are merged; the root link is welded to the world unless the URDF
 // has a floating joint or free_root is set.
-Model load_urdf(const std::string& path, bool free_root, const Vec3& gravity);
-Model parse_urdf(const std::string& xml, const std::string& path, bool free_root, const Vec3& gravity);
+Model load_urdf(const std::string& path, bool free_root, const Vec3& gravity,
+                InertiaCheck inertia_check = InertiaCheck::Warn);
+Model parse_urdf(const std::string& xml, const std::string& path, bool free_root, const Vec3& gravity,
+                 InertiaCheck inertia_check = InertiaCheck::Warn);
 
 // The largest magnitude of an initial coordinate or speed (m, rad, m/s, rad/s) a scenario or the
 // command line may give: past it a double resolves no finer than 1e-10 of the value, coarser than

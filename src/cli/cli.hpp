@@ -3,6 +3,7 @@
 
 #include "soadyn/model.hpp"
 #include "soadyn/output_file.hpp"
+#include "soadyn/scenario.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -22,17 +23,28 @@ std::string join(const std::vector<std::string>& items, const std::string& separ
 
 // "a,b,c" → numbers; throws soadyn::Error naming the option and the bad item.
 std::vector<double> parse_list(const std::string& option, const std::string& text);
+// a list option of `size` numbers (parse_list), or `fallback` when the text is empty
+VecX vector_option(const std::string& option, const std::string& text, int size, const VecX& fallback);
 
-// The model options every command that takes a model has (inspect and run): --free-root, and
-// --q, --qd, --gravity: a state and a gravity other than the scenario's
+// A choice among `names`, matched ignoring case and stored as spelled there; anything else is
+// "expected a | b, got 'x'; did you mean 'a'?"
+CLI::Validator one_of(const std::vector<std::string>& names);
+// For a command line CLI11 refused: "'--tend' is not an option of soadyn run; did you mean
+// '--t-end'?" for the first argument that is not an option of the command it names, with a
+// near name; empty when there is none.
+std::string option_suggestion(CLI::App& app, const std::vector<std::string>& args);
+
+// The model options every command that takes a model has (inspect and run): --free-root,
+// --inertia-check, and --q, --qd, --gravity: a state and a gravity other than the scenario's
 struct StateOptions {
   std::string q, qd, gravity;
   bool free_root = false;
+  std::string inertia_check;  // warn | balance | strict, empty: the scenario's
 };
-// adds the four options; `what` says what the state is for ("the state", "the initial state")
+// adds the five options; `what` says what the state is for ("the state", "the initial state")
 void add_state_options(CLI::App* command, StateOptions& o, const std::string& what);
-// --gravity as a vector (nullopt: the scenario's), for load_scenario
-std::optional<Vec3> gravity_option(const StateOptions& o);
+// the scenario or URDF the options say, with the model's warnings (Model::warnings) on stderr
+Scenario load_with_options(const std::string& path, const StateOptions& o);
 // q (unit quaternions checked, then normalized) and v from --q and --qd, else `q0`, `v0`; throws
 // soadyn::Error naming the option, what was expected and what was got
 void state_from_options(const Model& model, const StateOptions& o, VecX& q, VecX& v);

@@ -13,47 +13,6 @@
 
 namespace soadyn::cli {
 
-std::vector<std::string> join_negative_values(int argc, char** argv) {
-  static const std::vector<std::string> list_options = {"--q", "--qd", "--tau", "--gravity"};
-  std::vector<std::string> out;
-  for (int k = 0; k < argc; ++k) {
-    const std::string a = argv[k];
-    const bool takes_list = std::find(list_options.begin(), list_options.end(), a) != list_options.end();
-    if (takes_list && k + 1 < argc && argv[k + 1][0] == '-') {
-      out.push_back(a + "=" + argv[k + 1]);
-      ++k;
-    } else {
-      out.push_back(a);
-    }
-  }
-  return out;
-}
-
-std::vector<double> parse_list(const std::string& option, const std::string& text) {
-  std::vector<double> out;
-  std::stringstream ss(text);
-  std::string item;
-  int k = 0;
-  while (std::getline(ss, item, ',')) {
-    const size_t b = item.find_first_not_of(" \t"), e = item.find_last_not_of(" \t");
-    const std::string t = b == std::string::npos ? "" : item.substr(b, e - b + 1);
-    char* end = nullptr;
-    const double x = t.empty() ? 0.0 : std::strtod(t.c_str(), &end);
-    if (t.empty() || *end != '\0' || !std::isfinite(x))
-      throw Error(option + ": item " + std::to_string(k + 1) + ": expected a finite number, got '" + t + "'");
-    out.push_back(x);
-    ++k;
-  }
-  if (!text.empty() && text.back() == ',') throw Error(option + ": trailing comma in '" + text + "'");
-  return out;
-}
-
-std::string join(const std::vector<std::string>& items, const std::string& separator) {
-  std::string out;
-  for (const auto& s : items) out += (out.empty() ? "" : separator) + s;
-  return out;
-}
-
 void add_inspect(CLI::App& app, InspectOptions& o) {
   CLI::App* c = app.add_subcommand(
       "inspect",
@@ -64,24 +23,10 @@ void add_inspect(CLI::App& app, InspectOptions& o) {
   c->add_option("--tau", o.tau, "joint forces for qdd, comma-separated, nv numbers (default zero)");
   c->add_flag("--json", o.json, "print one JSON object on stdout");
   c->add_option("--method", o.method, "forward-dynamics route for qdd: " + join(fd_method_names(), " | ") + " (default on)")
-      ->transform(CLI::IsMember(fd_method_names(), CLI::ignore_case));
+      ->transform(one_of(fd_method_names()));
 }
 
 namespace {
-
-VecX vector_option(const std::string& option, const std::string& text, int size, const VecX& fallback) {
-  if (text.empty()) return fallback;
-  const auto v = parse_list(option, text);
-  if (int(v.size()) != size)
-    throw Error(option + ": expected " + std::to_string(size) + " numbers, got " + std::to_string(v.size()));
-  return Eigen::Map<const VecX>(v.data(), size);
-}
-
-std::string short_num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
 
 std::string num(double x) {
   char buf[40];
@@ -90,35 +35,6 @@ std::string num(double x) {
 }
 
 }  // namespace
-
-void add_state_options(CLI::App* c, StateOptions& o, const std::string& what) {
-  c->add_option("--q", o.q, "configuration of " + what + ", comma-separated, nq numbers (free root: x,y,z,qw,qx,qy,qz first)");
-  c->add_option("--qd", o.qd, "velocities of " + what + ", comma-separated, nv numbers (free root: wx,wy,wz,vx,vy,vz first)");
-  c->add_option("--gravity", o.gravity, "gravity gx,gy,gz in m/s^2 (default: the scenario's; 0,0,-9.81 for a URDF)");
-  c->add_flag("--free-root", o.free_root, "give a URDF's root link a free joint instead of welding it to the world");
-}
-
-std::optional<Vec3> gravity_option(const StateOptions& o) {
-  if (o.gravity.empty()) return std::nullopt;
-  return Vec3(vector_option("--gravity", o.gravity, 3, Vec3::Zero()));
-}
-
-void state_from_options(const Model& m, const StateOptions& o, VecX& q, VecX& v) {
-  q = vector_option("--q", o.q, m.nq, q);
-  for (int i = 0; i < m.nbodies; ++i)
-    if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
-      const double norm = q.segment<4>(m.idx_q[i] + k).norm();
-      if (std::abs(norm - 1.0) > 1e-6)
-        throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + num(norm));
-    }
-  m.normalize(q);
-  v = vector_option("--qd", o.qd, m.nv, v);
-  for (const auto& [option, x, names] : {std::tuple{"--q", &q, m.q_names()}, std::tuple{"--qd", &v, m.v_names()}})
-    for (Eigen::Index k = 0; k < x->size(); ++k)
-      if (std::abs((*x)(k)) > kMaxStateMagnitude)
-        throw Error(std::string(option) + ": " + names[size_t(k)] + " = " +
-                    short_num((*x)(k)) + ": expected |value| <= " + short_num(kMaxStateMagnitude) + " (m, rad, m/s or rad/s)");
-}
 
 namespace {
 
@@ -245,7 +161,7 @@ void print_tables(const Scenario& sc, const Inspection& r, const std::string& me
 }  // namespace
 
 int run_inspect(const InspectOptions& o) {
-  const Scenario sc = load_scenario(o.model, o.state.free_root, gravity_option(o.state));
+  const Scenario sc = load_with_options(o.model, o.state);
   const Inspection r = inspect(sc, o);
   if (o.json) print_json(sc.model, r, o.method);
   else print_tables(sc, r, o.method);

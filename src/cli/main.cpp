@@ -47,7 +47,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "soadyn: error: " << e.what() << " (see soadyn --help)\n";
+    const std::string hint = soadyn::cli::option_suggestion(app, {args.begin() + 1, args.end()});
+    std::cerr << "soadyn: error: " << (hint.empty() ? std::string(e.what()) : hint) << " (see soadyn --help)\n";
     return 2;
   }
   try {

@@ -68,14 +68,14 @@ void add_run(CLI::App& app, RunOptions& o) {
       "flushed rows), 128+N interrupted by signal N (130 SIGINT, 143 SIGTERM, 129 SIGHUP).");
   c->add_option("MODEL", o.scenario, "scenario (.yaml) or robot (.urdf)")->required();
   c->add_option("-o,--output", o.output, "HDF5 output file (default out/<scenario name>.h5)");
-  c->add_option("--method", o.method, join(integrator_names(), " | "))->transform(CLI::IsMember(integrator_names(), CLI::ignore_case));
+  c->add_option("--method", o.method, join(integrator_names(), " | "))->transform(one_of(integrator_names()));
   c->add_option("--rtol", o.rtol, "CVODE relative tolerance, in (0, 1)")->check(kPositive);
   c->add_option("--atol", o.atol, "CVODE absolute tolerance")->check(kPositive);
   c->add_option("--dt", o.dt, "fixed-step methods' step, s")->check(kPositive);
   c->add_option("--jacobian", o.jacobian, "cvode-bdf and implicit-midpoint: analytic (default) | dq (difference quotients)")
-      ->check(CLI::IsMember({"analytic", "dq"}));
+      ->transform(one_of({"analytic", "dq"}));
   c->add_option("--newton", o.newton, "implicit-midpoint: full (default) | simplified Newton iterations")
-      ->check(CLI::IsMember({"full", "simplified"}));
+      ->transform(one_of({"full", "simplified"}));
   c->add_option("--t-end", o.t_end, "end time, s")->check(kPositive);
   c->add_option("--output-dt", o.output_dt, "time between logged samples, s")->check(kPositive);
   c->add_option("--max-output-size", o.max_output_size, "refuse a run whose file would be larger (default 1G)")
@@ -161,7 +161,7 @@ void warn(const std::string& what) { std::fprintf(stderr, "soadyn: warning: %s\n
 int run_simulation(const RunOptions& o) {
   // everything is checked before any file is touched
   const LogGroups groups = LogGroups::parse(o.log);
-  Scenario sc = load_scenario(o.scenario, o.state.free_root, gravity_option(o.state));
+  Scenario sc = load_with_options(o.scenario, o.state);
   state_from_options(sc.model, o.state, sc.q0, sc.v0);
   SimulationSettings s = sc.simulation;
   if (o.method) s.method = *o.method;

@@ -169,14 +169,16 @@ RunModel rebuild_model(const RunFile& run) {
     const std::string ext = std::filesystem::path(label).extension().string();
     if (ext == ".urdf" || ext == ".URDF" || ext == ".xml") {
       // `soadyn run robot.urdf [--free-root]`: the stored text is the URDF, run with the default
-      // gravity; a free root shows as the 7 more columns of q its free joint has
-      out.model = parse_urdf(run.scenario_text, label, false, Vec3(0, 0, -9.81));
-      if (run.q.cols() == out.model.nq + 7) out.model = parse_urdf(run.scenario_text, label, true, Vec3(0, 0, -9.81));
+      // gravity; a free root shows as the 7 more columns of q its free joint has.  (The view draws
+      // poses only: inertias are balanced rather than refused whatever the run was told.)
+      const InertiaCheck any = InertiaCheck::Balance;
+      out.model = parse_urdf(run.scenario_text, label, false, Vec3(0, 0, -9.81), any);
+      if (run.q.cols() == out.model.nq + 7) out.model = parse_urdf(run.scenario_text, label, true, Vec3(0, 0, -9.81), any);
       out.name = std::filesystem::path(label).stem().string();
       out.urdf_text = run.scenario_text;
       out.urdf_path = label;
     } else {
-      const Scenario sc = parse_scenario(run.scenario_text, label);
+      const Scenario sc = parse_scenario(run.scenario_text, label, false, InertiaCheck::Balance);
       out.model = sc.model;
       out.name = sc.name;
       out.description = sc.description;

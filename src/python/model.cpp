@@ -31,6 +31,21 @@ std::optional<Vec3> gravity_arg(const std::optional<ArrayIn>& g) {
   return Vec3(read_vector("load", "gravity", *g, 3));
 }
 
+// 'warn' | 'balance' | 'strict' → InertiaCheck (None: the file's); ValueError otherwise
+std::optional<InertiaCheck> inertia_check_arg(const std::optional<std::string>& s) {
+  if (!s) return std::nullopt;
+  if (const auto c = parse_inertia_check(*s)) return c;
+  throw py::value_error("inertia_check: expected 'warn', 'balance' or 'strict', got '" + *s + "'" +
+                        did_you_mean(*s, {"warn", "balance", "strict"}));
+}
+
+// the model's build warnings as Python UserWarnings (an error when warnings are errors)
+const Model& warned(const Model& model) {
+  for (const std::string& w : model.warnings)
+    if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 2) < 0) throw py::error_already_set();
+  return model;
+}
+
 }  // namespace
 
 void bind_model(py::module_& m) {
@@ -56,6 +71,8 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
       .def_readonly("nv", &Model::nv, "velocity size (degrees of freedom)")
       .def_readonly("nbodies", &Model::nbodies, "N, the moving bodies (fixed joints merged)")
       .def_readonly("body_names", &Model::body_names, "name of each body, parent-first order (N)")
+      .def_readonly("warnings", &Model::warnings,
+                    "what building the model accepted but a user should hear (one line each; also issued as UserWarning by load)")
       .def_readonly("joint_names", &Model::joint_names, "name of the joint moving each body (N)")
       .def_readonly("parents", &Model::parent, "parent(i) < i of each body, -1 for the ground (N)")
       .def_readonly("idx_q", &Model::idx_q, "first q index of each body's joint (N)")
@@ -237,20 +254,32 @@ full text).  q0 and v0 may be assigned (size-checked); settings is changed in pl
                " bodies, nq = " + std::to_string(s.model.nq) + ", nv = " + std::to_string(s.model.nv) + ">";
       });
 
-  m.def("load", [](const std::string& path, bool free_root, const std::optional<ArrayIn>& gravity) {
-        return load_scenario(path, free_root, gravity_arg(gravity)).model;
-      }, "path"_a, "free_root"_a = false, "gravity"_a = py::none(),
+  m.def("load", [](const std::string& path, bool free_root, const std::optional<ArrayIn>& gravity,
+                   const std::optional<std::string>& inertia_check) {
+        return warned(load_scenario(path, free_root, gravity_arg(gravity), inertia_check_arg(inertia_check)).model);
+      }, "path"_a, "free_root"_a = false, "gravity"_a = py::none(), "inertia_check"_a = py::none(),
       R"(Load a Model from a URDF (.urdf) or a scenario (.yaml).
 
 free_root: give a URDF's root link a free joint instead of welding it to the world.
 gravity: (3,) m/s², overrides the file's (a URDF's default is (0, 0, −9.81)).
+inertia_check: 'warn' (default: inertias breaking the triangle inequality by at most 5 % load
+  with a UserWarning, the rest are refused), 'balance' (made physical) or 'strict' (refused);
+  overrides a scenario's inertia_check.
 Raises soadyn.Error naming the file, line and field of any mistake.)");
-  m.def("load_scenario", [](const std::string& path, bool free_root, const std::optional<ArrayIn>& gravity) {
-        return load_scenario(path, free_root, gravity_arg(gravity));
-      }, "path"_a, "free_root"_a = false, "gravity"_a = py::none(),
-      "Load a Scenario (.yaml; a .urdf gives zero initial state, default settings and no inputs).");
-  m.def("parse_scenario", [](const std::string& text, const std::string& path) { return parse_scenario(text, path); },
-        "text"_a, "path"_a = "<string>",
+  m.def("load_scenario", [](const std::string& path, bool free_root, const std::optional<ArrayIn>& gravity,
+                            const std::optional<std::string>& inertia_check) {
+        Scenario sc = load_scenario(path, free_root, gravity_arg(gravity), inertia_check_arg(inertia_check));
+        warned(sc.model);
+        return sc;
+      }, "path"_a, "free_root"_a = false, "gravity"_a = py::none(), "inertia_check"_a = py::none(),
+      "Load a Scenario (.yaml; a .urdf gives zero initial state, default settings and no inputs).\n"
+      "free_root, gravity and inertia_check as for load().");
+  m.def("parse_scenario", [](const std::string& text, const std::string& path, const std::optional<std::string>& inertia_check) {
+        Scenario sc = parse_scenario(text, path, false, inertia_check_arg(inertia_check));
+        warned(sc.model);
+        return sc;
+      },
+        "text"_a, "path"_a = "<string>", "inertia_check"_a = py::none(),
         "A Scenario from YAML text; path names it in messages and anchors a relative 'urdf:'.");
 }
 

@@ -179,3 +179,17 @@ def test_non_finite_arguments_are_refused_naming_the_entry():
         msg = raised(soadyn.mass_matrix, model, data, [0.1, bad])  # a list takes the converting path
         assert "q[1] = " in msg, msg
     assert np.isfinite(soadyn.mass_matrix(model, data, np.array([0.1, 0.2]))).all()
+
+
+def test_inertias_breaking_the_triangle_inequality_warn_balance_or_refuse():
+    urdf = os.path.join(os.path.dirname(SCENARIOS), "tests", "data", "urdf", "rounded_inertias.urdf")
+    with pytest.warns(UserWarning, match=r"loaded as given 2 inertias .*'ankle_motor'.*'camera'"):
+        model = soadyn.load(urdf)
+    assert len(model.warnings) == 1
+    with pytest.warns(UserWarning, match="balanced 2 inertias"):
+        balanced = soadyn.load(urdf, inertia_check="balance")
+    moments = np.linalg.eigvalsh(balanced.inertias[1])
+    assert moments[2] <= (moments[0] + moments[1]) * (1 + 1e-12)
+    assert "'camera' [0.002 0.003 0.00512]" in raised(soadyn.load, urdf, inertia_check="strict")
+    with pytest.raises(ValueError, match="did you mean 'strict'"):
+        soadyn.load(urdf, inertia_check="strikt")

@@ -25,7 +25,7 @@ def test_readme_has_the_three_examples():
         assert len(b.strip().splitlines()) <= most, b
 
 
-@pytest.mark.parametrize("index,picture", [(0, "eig.png"), (1, "energy.png"), (2, None)])
+@pytest.mark.parametrize("index,picture", [(0, "out/eig.png"), (1, "out/energy.png"), (2, None)])
 def test_readme_example_runs_verbatim(tmp_path, index, picture):
     # the README's relative paths, seen from a scratch directory that receives the picture
     for d in ("scenarios", "tests"):
@@ -33,6 +33,9 @@ def test_readme_example_runs_verbatim(tmp_path, index, picture):
     p = subprocess.run([sys.executable, "-c", python_blocks()[index]], cwd=tmp_path, capture_output=True, text=True,
                        timeout=300, env=dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=PACKAGE_PARENT))
     assert p.returncode == 0, p.stderr
+    # what a snippet writes goes under out/ (git ignores it), never beside the user's files
+    written = [f.relative_to(tmp_path) for f in tmp_path.iterdir() if f.name not in ("scenarios", "tests", "out")]
+    assert not written, f"README snippet {index} wrote {written} outside out/"
     if picture is None:  # the task-space step prints where the tool is and the torques
         assert p.stdout.startswith("tool at ["), p.stdout
         return
