@@ -1,4 +1,6 @@
 #include "soadyn/h5log.hpp"
+
+#include "soadyn/data.hpp"
 #include "soadyn/text.hpp"
 
 #include "h5_util.hpp"
@@ -47,6 +49,11 @@ const char* kBodies =
     "[w x y z] of its attitude, body to inertial, with w >= 0, com: its centre of mass (merged bodies included); "
     "all in inertial coordinates";
 
+const char* kFrames =
+    "F named frames (a scenario's log: frames:), each fixed on a body: a body's own frame, a link merged by a fixed "
+    "joint or a scenario's frames: entry; position: the frame's origin, orientation: the unit quaternion [w x y z] "
+    "of its attitude, frame to inertial, with w >= 0; all in inertial coordinates";
+
 // "rad", or one unit per column when they differ
 void units_attribute(hid_t obj, const std::vector<std::string>& units) {
   if (std::all_of(units.begin(), units.end(), [&](const std::string& u) { return u == units.front(); }))
@@ -58,7 +65,7 @@ void units_attribute(hid_t obj, const std::vector<std::string>& units) {
 }  // namespace
 
 LogGroups LogGroups::parse(const std::string& text) {
-  LogGroups g{false, false, false, false};
+  LogGroups g{false, false, false, false, {}};
   std::stringstream ss(text);
   std::string item;
   while (std::getline(ss, item, ',')) {
@@ -95,6 +102,8 @@ struct H5Log::Impl {
   std::vector<double> buffer;  // rows not yet written
   double t_last = 0.0, t_flushed = -1.0;
   LogGroups groups;
+  std::unique_ptr<Model> model;  // for the frames' poses (groups.frames)
+  std::unique_ptr<Data> data;
   Scalar status, quaternion, t_reached, cpu, steps, rhs, jac, etf, nli, max_balance, final_balance;
   std::vector<Scalar*> scalars() {
     return {&status, &quaternion, &t_reached, &cpu, &steps, &rhs, &jac, &etf, &nli, &max_balance, &final_balance};
@@ -158,7 +167,13 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
   im.tmp_path = temporary_path(path);
   im.groups = groups;
   const Model& m = sc.model;
-  const log::Layout lay = log::layout(m, groups);
+  for (const std::string& name : sc.log_frames)
+    if (const int f = m.frame_index(name);
+        f >= 0 && std::find(im.groups.frames.begin(), im.groups.frames.end(), f) == im.groups.frames.end())
+      im.groups.frames.push_back(f);
+  im.model = std::make_unique<Model>(m);
+  im.data = std::make_unique<Data>(m);
+  const log::Layout lay = log::layout(m, im.groups);
   im.width = int(lay.columns.size());
   try {
     Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "H5Pcreate");
@@ -261,6 +276,13 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
       attribute(g, "description", std::string(kBodies));
       h5::string_dataset(g, "names", m.body_names);
     }
+    if (!im.groups.frames.empty()) {
+      Id g(H5Gopen2(im.file, "frames", H5P_DEFAULT), H5Gclose, "opening /frames");
+      attribute(g, "description", std::string(kFrames));
+      std::vector<std::string> names;
+      for (const int f : im.groups.frames) names.push_back(m.frame_names[size_t(f)]);
+      h5::string_dataset(g, "names", names);
+    }
     for (const log::View& v : lay.views) create_view(im.file, v, im.width);
     check(H5Fstart_swmr_write(im.file), "H5Fstart_swmr_write");  // writes everything so far
   } catch (const H5Failure& e) {
@@ -288,7 +310,7 @@ H5Log::~H5Log() {
 }
 
 void H5Log::on_sample(const Sample& s) {
-  log::append_row(impl_->groups, s, impl_->buffer);
+  log::append_row(*impl_->model, *impl_->data, impl_->groups, s, impl_->buffer);
   impl_->t_last = s.t;
 }
 

@@ -1,5 +1,8 @@
 #include "log_layout.hpp"
 
+#include "soadyn/frames.hpp"
+#include "soadyn/kinematics.hpp"
+
 namespace soadyn::log {
 
 namespace {
@@ -75,16 +78,33 @@ Layout layout(const Model& m, const LogGroups& g) {
       b.view(std::string("/bodies/") + kind, c, int(parts.size()), m.nbodies);
     }
   }
+  if (!g.frames.empty()) {
+    b.out.groups.push_back("/frames");
+    const std::pair<const char*, std::vector<const char*>> series[] = {{"position", {"x", "y", "z"}},
+                                                                        {"orientation", {"w", "x", "y", "z"}}};
+    for (const auto& [kind, parts] : series) {
+      const std::string unit = std::string(kind) == "orientation" ? "1" : "m";
+      std::vector<Column> c;
+      for (const int f : g.frames)
+        for (const char* x : parts) c.push_back({std::string("frames.") + kind + "." + m.frame_names[size_t(f)] + "." + x, unit});
+      b.view(std::string("/frames/") + kind, c, int(parts.size()), int(g.frames.size()));
+    }
+  }
   return std::move(b.out);
 }
 
-void append_row(const LogGroups& g, const Sample& s, std::vector<double>& b) {
+void append_row(const Model& m, Data& data, const LogGroups& g, const Sample& s, std::vector<double>& b) {
   auto put = [&b](const auto& x) { b.insert(b.end(), x.data(), x.data() + x.size()); };
   b.push_back(s.t);
   if (g.state) put(s.q), put(s.qd), put(s.qdd);
   if (g.energy) b.insert(b.end(), {s.kinetic, s.potential, s.total, s.work_inputs, s.dissipated});
   if (g.momentum) put(s.linear), put(s.angular);
   if (g.bodies) put(s.body_position), put(s.body_orientation), put(s.body_com);  // column-major: body by body
+  if (g.frames.empty()) return;
+  // the frames' placements at q: every position, then every orientation (w ≥ 0)
+  update_frames(m, data, s.q);
+  for (const int f : g.frames) put(frame_placement(m, data, f).p);
+  for (const int f : g.frames) put(attitude_quaternion(frame_placement(m, data, f).R));
 }
 
 }  // namespace soadyn::log

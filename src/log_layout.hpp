@@ -30,8 +30,9 @@ struct Layout {
 
 Layout layout(const Model& model, const LogGroups& groups);
 
-// appends one row: the sample's numbers in the order of layout(model, groups).columns
-void append_row(const LogGroups& groups, const Sample& s, std::vector<double>& row);
+// appends one row: the sample's numbers in the order of layout(model, groups).columns; the
+// frames' poses (groups.frames) are computed from s.q with `data` (kinematics frames only)
+void append_row(const Model& model, Data& data, const LogGroups& groups, const Sample& s, std::vector<double>& row);
 
 // SI units of q and v, one per column (joint_traits)
 std::vector<std::string> q_units(const Model& model);

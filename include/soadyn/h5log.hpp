@@ -9,6 +9,8 @@
 //     /energy/kinetic, potential, total, work_inputs, dissipated (T)  group "energy"
 //     /momentum/linear, /momentum/angular (T×3)                    group "momentum"
 //     /bodies/position, /bodies/com (T×N×3), /bodies/orientation (T×N×4, w x y z)  group "bodies"
+//     /frames/position (T×F×3), /frames/orientation (T×F×4)        a scenario's log: frames: [...]
+//   /frames/names    those F frames (frames.hpp), a string dataset, when there are any
 //   /bodies/names    the N bodies (after fixed joints are merged), a string dataset
 //   /scenario        the scenario's full text (a string dataset: any size)
 //   /model: attributes nq, nv, q_names, v_names, q_units, v_units, joint_names, joint_types,
@@ -71,6 +73,9 @@ std::int64_t open_run_file(const std::string& path);
 // The groups of series a run logs (`soadyn run --log state,energy`); /time is always logged.
 struct LogGroups {
   bool state = true, energy = true, momentum = true, bodies = true;
+  // frames whose poses are logged after everything else (indices of Model::frame_names; H5Log
+  // adds a scenario's log: frames: to those given); not part of parse() and str()
+  std::vector<int> frames;
   // "state,energy,momentum,bodies" (any subset, any order; "all"); throws soadyn::Error naming
   // the bad item
   static LogGroups parse(const std::string& text);

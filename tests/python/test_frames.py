@@ -134,3 +134,29 @@ def test_operational_space_inertia_and_coriolis(rng):
         soadyn.operational_space_inertia(pend, d2, [0.3, 0.4], J2)
     with pytest.raises(soadyn.Error, match="J: expected k"):
         soadyn.operational_space_inertia(pend, d2, [0.3, 0.4], np.zeros((3, 5)))
+
+
+def test_log_frames_puts_their_poses_in_the_run_file(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    text = open(f"{SCENARIOS}/double_pendulum.yaml").read() + (
+        "frames:\n  tip: {body: lower, position: [0, 0, -1], rpy: [0.2, 0, 0]}\nlog: {frames: [tip, upper]}\n")
+    scene = soadyn.parse_scenario(text, f"{SCENARIOS}/dp_tip.yaml")
+    out = tmp_path / "run.h5"
+    soadyn.simulate(scene, "rk4", dt=1e-3, t_end=0.2, output_dt=0.05, output=str(out))
+    with h5py.File(out, "r") as f:
+        assert [n.decode() if isinstance(n, bytes) else n for n in f["frames/names"][:]] == ["tip", "upper"]
+        pos, att, q = f["frames/position"][:], f["frames/orientation"][:], f["q"][:]
+        assert pos.shape == (len(q), 2, 3) and att.shape == (len(q), 2, 4)
+        assert f["frames/position"].attrs["units"] == "m"
+        names = list(f["samples"].attrs["column_names"])
+        assert "frames.position.tip.x" in names and "frames.orientation.upper.w" in names
+    model, data = scene.model, scene.model.create_data()
+    for k in range(len(q)):
+        R, p = soadyn.frame_placement(model, data, q[k], "tip")
+        assert_close(pos[k, 0], p, 1e-14)
+        w = np.sqrt(1 + np.trace(R)) / 2  # the quaternion's w (w >= 0), then x from R
+        assert_close(att[k, 0, 0], w, 1e-12)
+        assert_close(att[k, 0, 1], (R[2, 1] - R[1, 2]) / (4 * w), 1e-12)
+    # the names are checked where the scenario says them
+    with pytest.raises(soadyn.Error, match=r"log.frames\[0\]: no frame named 'tpi'; did you mean 'tip'\?"):
+        soadyn.parse_scenario(text.replace("[tip, upper]", "[tpi]"), f"{SCENARIOS}/dp_tip.yaml")
