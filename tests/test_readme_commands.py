@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""README's shell commands run verbatim, in order, and none overwrites another's output.
+"""The READMEs' shell commands run verbatim, in order, and none overwrites another's output.
 
-Which commands: every line of every ```sh block of README.md (a line ending in a backslash joins
+Which READMEs: README.md, then the folder READMEs (READMES below), each written to be run from the
+top of a clone.  Which commands: every line of every ```sh block (a line ending in a backslash joins
 the next; blank and comment-only lines are not commands), except
   - the two set-up commands, tools/demo.sh and tools/test.sh (the test runs after them), and
   - blocks preceded by the line `<!-- README test: not run (reason) -->` (network, installing).
@@ -23,12 +24,15 @@ import time
 ROOT = os.environ.get("SOADYN_SOURCE_DIR", os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SOADYN = os.environ.get("SOADYN", os.path.join(ROOT, "build", "soadyn"))
 SETUP = ("tools/demo.sh", "tools/test.sh")
+READMES = ("README.md", "src/cli/README.md", "scenarios/README.md", "include/soadyn/README.md",
+           "src/python/README.md", "tools/results/README.md", "tests/README.md")
 SKIP = re.compile(r"<!--\s*README test: not run \((.+?)\)\s*-->")
 
 
 def commands(readme):
-    """[(line number, command)] to run, and [(line number, command, reason)] skipped"""
-    lines = open(readme, encoding="utf-8").read().split("\n")
+    """[("file:line", command)] to run, and [("file:line", command, reason)] skipped, of one README"""
+    name = readme
+    lines = open(os.path.join(ROOT, readme), encoding="utf-8").read().split("\n")
     run, skipped = [], []
     k = 0
     while k < len(lines):
@@ -52,12 +56,13 @@ def commands(readme):
                 else:
                     cmd = pending + line
                     pending = ""
+                    where = f"{name}:{start}"
                     if reason:
-                        skipped.append((start, cmd.strip(), reason))
+                        skipped.append((where, cmd.strip(), reason))
                     elif cmd.strip().startswith(SETUP):
-                        skipped.append((start, cmd.strip(), "set-up: runs before this test"))
+                        skipped.append((where, cmd.strip(), "set-up: runs before this test"))
                     else:
-                        run.append((start, cmd.strip()))
+                        run.append((where, cmd.strip()))
                     start = None
             k += 1
         k += 1
@@ -77,20 +82,25 @@ def snapshot(d):
 
 def git_status():
     p = subprocess.run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=all", "--", "scenarios", "tests",
-                        "tools", "README.md"], capture_output=True, text=True)
+                        "tools", "src", "include", "README.md"], capture_output=True, text=True)
     return p.stdout if p.returncode == 0 else None
 
 
 def main():
-    run, skipped = commands(os.path.join(ROOT, "README.md"))
+    run, skipped = [], []
+    for readme in READMES:
+        if os.path.exists(os.path.join(ROOT, readme)):
+            r, k = commands(readme)
+            run += r
+            skipped += k
     if "--list" in sys.argv:
         for n, c in run:
-            print(f"README.md:{n}: {c}")
+            print(f"{n}: {c}")
         for n, c, why in skipped:
-            print(f"README.md:{n}: not run ({why}): {c}")
+            print(f"{n}: not run ({why}): {c}")
         return
     if len(run) < 10:
-        sys.exit(f"only {len(run)} commands found in README.md's ```sh blocks: the extraction is broken")
+        sys.exit(f"only {len(run)} commands found in the READMEs' ```sh blocks: the extraction is broken")
     failures = []
     source_before = git_status()
     with tempfile.TemporaryDirectory(prefix="readme_") as d:
@@ -106,18 +116,18 @@ def main():
                                env=dict(os.environ, MPLBACKEND="Agg"))
             after = snapshot(d)
             status = "ok" if p.returncode == 0 else f"exit status {p.returncode}"
-            print(f"README.md:{n}: {status} in {time.time() - t0:.1f} s: {cmd}")
+            print(f"{n}: {status} in {time.time() - t0:.1f} s: {cmd}")
             if p.returncode != 0:
-                failures.append(f"README.md:{n}: {cmd}: exit status {p.returncode}\n{p.stderr.strip()}")
+                failures.append(f"{n}: {cmd}: exit status {p.returncode}\n{p.stderr.strip()}")
             for path, sig in after.items():
                 if path in before and before[path] != sig and path in written:
-                    failures.append(f"README.md:{n}: {cmd}: overwrites {path}, written by README.md:{written[path]}")
+                    failures.append(f"{n}: {cmd}: overwrites {path}, written by {written[path]}")
                 if path not in before or before[path] != sig:
                     written.setdefault(path, n)
     if source_before is not None and git_status() != source_before:
         failures.append("README's commands changed the source tree:\n" + git_status())
     for n, c, why in skipped:
-        print(f"README.md:{n}: not run ({why}): {c}")
+        print(f"{n}: not run ({why}): {c}")
     if failures:
         print("\n".join(["", "FAILED:"] + failures))
         sys.exit(1)

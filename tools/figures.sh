@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerate every chart and table in tools/results/ (README, "Results"):
+# Regenerate every chart and table in tools/results/ (tools/results/README.md):
 #   bench.{png,md,csv,json}   time per call against N, exponents, soadyn/MuJoCo ratios (tools/bench/run.sh)
 #   wp_<scenario>.{png,csv}   work-precision charts (tools/work_precision.py)
 #   stability.{png,md,csv}    where each method fails (tools/stability.py)

@@ -2,7 +2,7 @@
 //
 // A scenario states only what its scene has: bodies (or a URDF), gravity, an initial state,
 // and, when the scene needs them, simulation settings and inputs.  Everything else has a
-// documented default (README, "Scenario files").  Every mistake is reported as
+// documented default (scenarios/README.md).  Every mistake is reported as
 // `file:line:column: field: message` through soadyn::Error.
 #pragma once
 

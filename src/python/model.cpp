@@ -163,7 +163,7 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
                ", nv = " + std::to_string(self.nv) + ">";
       });
 
-  py::class_<SimulationSettings>(m, "SimulationSettings", "A scenario's 'simulation' section (README, \"Scenario files\").")
+  py::class_<SimulationSettings>(m, "SimulationSettings", "A scenario's 'simulation' section (scenarios/README.md).")
       .def(py::init<>())
       .def_readwrite("t_end", &SimulationSettings::t_end, "end time, s")
       .def_readwrite("output_dt", &SimulationSettings::output_dt, "time between logged samples, s")

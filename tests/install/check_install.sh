@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # ctest install_consume: `cmake --install` into a scratch prefix, then only what it put there:
-#  - the README's C++ example is tests/install/consumer.cpp, byte for byte;
+#  - include/soadyn/README.md's C++ example is tests/install/consumer.cpp, byte for byte, and the
+#    top README's C++ block builds with pkg-config and runs on tests/data/arm7.urdf;
 #  - consumer.cpp built with find_package(soadyn) (soadyn::soadyn, the static library) and with
 #    pkg-config (the shared library), each run: both check 𝓜, bias and q̈ of a two-link arm
 #    against the closed form (1e-12);
@@ -19,11 +20,13 @@ rm -rf "$scratch"
 mkdir -p "$scratch"
 fail() { echo "install_consume: $*" >&2; exit 1; }
 
-echo "== README's C++ example is tests/install/consumer.cpp"
-awk '/^## The library$/ {s = 1; next} s && /^```cpp$/ {c = 1; next} c && /^```$/ {exit} c' \
-  "$source/README.md" >"$scratch/readme_example.cpp"
-diff -u "$scratch/readme_example.cpp" "$source/tests/install/consumer.cpp" ||
-  fail "the first C++ block of README's 'The library' differs from tests/install/consumer.cpp"
+echo "== include/soadyn/README.md's C++ example is tests/install/consumer.cpp"
+first_cpp() { awk '/^```cpp$/ {c = 1; next} c && /^```$/ {exit} c' "$1"; }
+first_cpp "$source/include/soadyn/README.md" >"$scratch/library_example.cpp"
+diff -u "$scratch/library_example.cpp" "$source/tests/install/consumer.cpp" ||
+  fail "the first C++ block of include/soadyn/README.md differs from tests/install/consumer.cpp"
+first_cpp "$source/README.md" >"$scratch/readme_example.cpp"
+[[ -s $scratch/readme_example.cpp ]] || fail "README.md has no C++ block"
 
 echo "== cmake --install $build --prefix $prefix"
 "$cmake" --install "$build" --prefix "$prefix" >"$scratch/install.log"
@@ -56,6 +59,12 @@ pkg-config --static --libs soadyn >/dev/null || fail "pkg-config --static --libs
 LD_LIBRARY_PATH=$prefix/$libdir ldd "$scratch/consumer_pc" | grep -q "$prefix/$libdir/libsoadyn.so" ||
   fail "the pkg-config consumer does not load the installed libsoadyn.so"
 LD_LIBRARY_PATH=$prefix/$libdir "$scratch/consumer_pc"
+
+echo "== README's C++ block, with pkg-config, on tests/data/arm7.urdf"
+# shellcheck disable=SC2086
+"$cxx" -std=c++20 "$scratch/readme_example.cpp" $cflags $libs -o "$scratch/readme_example"
+LD_LIBRARY_PATH=$prefix/$libdir "$scratch/readme_example" "$source/tests/data/arm7.urdf" | tee "$scratch/readme_example.out"
+grep -q '^qdd = ' "$scratch/readme_example.out" || fail "README's C++ block printed no qdd"
 
 echo "== the installed soadyn executable"
 "$prefix/$bindir/soadyn" --version | tee "$scratch/version.txt"

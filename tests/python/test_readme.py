@@ -1,4 +1,5 @@
-"""README's Python examples run verbatim and draw their plots; the install step works."""
+"""The Python examples of README.md and src/python/README.md run verbatim and draw their plots; the
+install step works."""
 import os
 import re
 import subprocess
@@ -12,25 +13,27 @@ from conftest import ROOT
 PACKAGE_PARENT = os.path.dirname(os.path.dirname(os.path.abspath(soadyn.__file__)))
 
 
-def python_blocks():
-    text = open(os.path.join(ROOT, "README.md"), encoding="utf-8").read()
-    section = text.split("\n## Python\n", 1)[1].split("\n## ", 1)[0]
-    return re.findall(r"```python\n(.*?)```", section, re.S)
+def python_blocks(readme):
+    """the ```python blocks of a README's "## Python" section (or of the whole file without one)"""
+    text = open(os.path.join(ROOT, readme), encoding="utf-8").read()
+    if "\n## Python\n" in text:
+        text = text.split("\n## Python\n", 1)[1].split("\n## ", 1)[0]
+    return re.findall(r"```python\n(.*?)```", text, re.S)
 
 
-def test_readme_has_the_three_examples():
-    blocks = python_blocks()
-    assert len(blocks) == 3
-    for b, most in zip(blocks, (5, 5, 10)):
-        assert len(b.strip().splitlines()) <= most, b
+def test_the_examples_are_short():
+    top, package = python_blocks("README.md"), python_blocks("src/python/README.md")
+    assert len(top) == 1 and len(top[0].strip().splitlines()) <= 10, top
+    assert len(package) == 2 and all(len(b.strip().splitlines()) <= 5 for b in package), package
 
 
-@pytest.mark.parametrize("index,picture", [(0, "out/eig.png"), (1, "out/energy.png"), (2, None)])
-def test_readme_example_runs_verbatim(tmp_path, index, picture):
+@pytest.mark.parametrize("readme,index,picture", [("README.md", 0, None), ("src/python/README.md", 0, "out/eig.png"),
+                                                  ("src/python/README.md", 1, "out/energy.png")])
+def test_readme_example_runs_verbatim(tmp_path, readme, index, picture):
     # the README's relative paths, seen from a scratch directory that receives the picture
     for d in ("scenarios", "tests"):
         os.symlink(os.path.join(ROOT, d), tmp_path / d)
-    p = subprocess.run([sys.executable, "-c", python_blocks()[index]], cwd=tmp_path, capture_output=True, text=True,
+    p = subprocess.run([sys.executable, "-c", python_blocks(readme)[index]], cwd=tmp_path, capture_output=True, text=True,
                        timeout=300, env=dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=PACKAGE_PARENT))
     assert p.returncode == 0, p.stderr
     # what a snippet writes goes under out/ (git ignores it), never beside the user's files

@@ -347,15 +347,15 @@ def test_output_directory_siblings(tmp_path):
 
 
 def test_limits_are_documented():
-    """the named limits, in the module's docstring and in the README's sweep section"""
+    """the named limits, in the module's docstring and in src/python/README.md's sweep section"""
     import soadyn._sweep
     assert (ensemble.MAX_CASES, ensemble.MAX_CASE_VALUES, ensemble.MAX_FILE_BYTES, ensemble.MAX_YAML_DEPTH,
             ensemble.MAX_YAML_NODES) == (10 ** 6, 10 ** 7, 16 << 20, 64, 10 ** 7)
     docs = ensemble.__doc__ + soadyn._sweep.__doc__
     for words in ("10^6", "10^7", "16 MiB", "(64)", "drop-bad-parts", "sweep.lock"):
         assert words in docs, words
-    readme = open(os.path.join(os.path.dirname(SCENARIOS), "README.md"), encoding="utf-8").read()
+    readme = open(os.path.join(os.path.dirname(SCENARIOS), "src", "python", "README.md"), encoding="utf-8").read()
     section = readme[readme.index("## Ensembles: `soadyn sweep`"):]
-    section = section[:section.index("\n## ")]
+    section = section[:section.index("\n## ")] if "\n## " in section else section
     for words in ("10⁶ cases", "10⁷ values", "16 MiB", "64 levels", "--drop-bad-parts", "sweep.lock"):
         assert words in section, words
