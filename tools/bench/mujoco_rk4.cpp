@@ -2,8 +2,13 @@
 // soadyn, written as MJCF (merged bodies, hinge/slide joints, full inertias), checked to give the
 // same 𝓜 at the initial state, stepped with mj_step to t_end, and the final state printed as JSON.
 //   soadyn_mujoco_rk4 SCENARIO.yaml DT T_END
+// With --rollouts K: K rollouts of T_END / DT steps from K initial states (q0, v0 + 0.01 k), timed
+// (wall clock) as a loop of mj_step and as soadyn's rollout() with rk4 on 1 and 2 threads; prints
+// rollouts per second of each and the largest difference between their final states.
+//   soadyn_mujoco_rk4 SCENARIO.yaml DT T_END --rollouts K
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
+#include "soadyn/rollout.hpp"
 #include "soadyn/scenario.hpp"
 
 #include <mujoco/mujoco.h>
@@ -14,6 +19,7 @@
 #include <cstring>
 #include <ctime>
 #include <sstream>
+#include <string>
 
 using namespace soadyn;
 
@@ -53,11 +59,55 @@ std::string mjcf(const Model& m) {
   return os.str();
 }
 
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// K rollouts by mj_step against soadyn's rollout(), same model, method, step and initial states
+int rollouts(const Scenario& sc, mjModel* mm, mjData* md, long steps, long K) {
+  const Model& m = sc.model;
+  MatX Y0(m.nq + m.nv, K);
+  for (long k = 0; k < K; ++k) Y0.col(k) << sc.q0, (sc.v0.array() + 0.01 * double(k)).matrix();
+  MatX final_mj(m.nq + m.nv, K);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long k = 0; k < K; ++k) {
+    mj_resetData(mm, md);
+    for (int i = 0; i < m.nq; ++i) md->qpos[i] = Y0(i, k);
+    for (int i = 0; i < m.nv; ++i) md->qvel[i] = Y0(m.nq + i, k);
+    for (long s = 0; s < steps; ++s) mj_step(mm, md);
+    for (int i = 0; i < m.nq; ++i) final_mj(i, k) = md->qpos[i];
+    for (int i = 0; i < m.nv; ++i) final_mj(m.nq + i, k) = md->qvel[i];
+  }
+  const double mujoco = double(K) / seconds_since(t0);
+  RolloutSettings rs;
+  rs.method = "rk4";
+  rs.dt = mm->opt.timestep;
+  rs.steps = steps;
+  rs.energies = false;
+  MatX states(m.nq + m.nv, steps * K), energies(0, K);
+  double per_second[2] = {0, 0};
+  for (int threads : {1, 2}) {
+    rs.threads = threads;
+    const auto t1 = std::chrono::steady_clock::now();
+    const RolloutReport rep = rollout(m, sc.inputs, Y0, nullptr, nullptr, rs, states, energies);
+    per_second[threads - 1] = double(K) / seconds_since(t1);
+    if (rep.completed != K) throw Error("soadyn's rollouts did not all complete: " + rep.status[0]);
+  }
+  double diff = 0;
+  for (long k = 0; k < K; ++k) diff = std::max(diff, (states.col(k * steps + steps - 1) - final_mj.col(k)).cwiseAbs().maxCoeff());
+  std::printf("{\"K\": %ld, \"steps\": %ld, \"dt\": %.9g, \"mujoco_rollouts_per_second\": %.6g, "
+              "\"soadyn_rollouts_per_second_1_thread\": %.6g, \"soadyn_rollouts_per_second_2_threads\": %.6g, "
+              "\"max_final_state_difference\": %.3g}\n",
+              K, steps, rs.dt, mujoco, per_second[0], per_second[1], diff);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 4) {
-    std::fprintf(stderr, "usage: soadyn_mujoco_rk4 SCENARIO.yaml DT T_END\n");
+  const bool many = argc == 6 && std::string(argv[4]) == "--rollouts";
+  if (argc != 4 && !many) {
+    std::fprintf(stderr, "usage: soadyn_mujoco_rk4 SCENARIO.yaml DT T_END [--rollouts K]\n");
     return 2;
   }
   try {
@@ -89,6 +139,12 @@ int main(int argc, char** argv) {
     mass_matrix(m, d);
     const double diff = (Mmj - d.Mass).cwiseAbs().maxCoeff();
     if (!(diff <= 1e-9 * d.Mass.cwiseAbs().maxCoeff())) throw Error("MuJoCo's mass matrix differs by " + std::to_string(diff));
+    if (many) {
+      const int rc = rollouts(sc, mm, md, steps, std::atol(argv[5]));
+      mj_deleteData(md);
+      mj_deleteModel(mm);
+      return rc;
+    }
     const std::clock_t c0 = std::clock();
     for (long k = 0; k < steps; ++k) mj_step(mm, md);
     const double cpu = double(std::clock() - c0) / CLOCKS_PER_SEC;
