@@ -77,6 +77,7 @@ struct InspectOptions {
   std::string tau;
   bool json = false;
   std::string method = "on";
+  std::vector<std::string> frames;  // --frame: named frames whose pose and Jacobian are printed
 };
 void add_inspect(CLI::App& app, InspectOptions& o);
 int run_inspect(const InspectOptions& o);

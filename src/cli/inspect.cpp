@@ -1,8 +1,10 @@
 #include "cli.hpp"
 
 #include "soadyn/algorithms.hpp"
+#include "soadyn/frames.hpp"
 #include "soadyn/kinematics.hpp"
 #include "soadyn/scenario.hpp"
+#include "soadyn/text.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -24,6 +26,9 @@ void add_inspect(CLI::App& app, InspectOptions& o) {
   c->add_flag("--json", o.json, "print one JSON object on stdout");
   c->add_option("--method", o.method, "forward-dynamics route for qdd: " + join(fd_method_names(), " | ") + " (default on)")
       ->transform(one_of(fd_method_names()));
+  c->add_option("--frame", o.frames,
+                "a named frame (a body, a link merged by a fixed joint, a scenario's frames: entry) whose pose and "
+                "Jacobian J (6 x nv, [w; v] of the frame's origin, inertial axes) are printed; may be repeated");
 }
 
 namespace {
@@ -72,6 +77,12 @@ struct Inspection {
   Momentum h;
   Mat3X position, com;                            // η_i and r_i, inertial
   Eigen::Matrix<double, 4, Eigen::Dynamic> orientation;  // [w x y z], body → inertial, w ≥ 0
+  struct Frame {
+    int index;
+    Placement X;   // frame → inertial
+    MatX J;        // local_world_aligned, 6×nv
+  };
+  std::vector<Frame> frames;                      // --frame
 };
 
 // q (unit quaternions checked, then normalized), v and τ from the options, then 𝓜, bias and q̈.
@@ -82,6 +93,11 @@ Inspection inspect(const Scenario& sc, const InspectOptions& o) {
   r.v = sc.v0;
   state_from_options(m, o.state, r.q, r.v);
   r.tau = vector_option("--tau", o.tau, m.nv, VecX::Zero(m.nv));
+  for (const std::string& name : o.frames) {
+    const int f = m.frame_index(name);
+    if (f < 0) throw Error("--frame: no frame named '" + printable(name) + "'" + did_you_mean(name, m.frame_names));
+    r.frames.push_back({f, {}, {}});
+  }
 
   Data d(m);
   update_kinematics(m, d, r.q);
@@ -102,6 +118,11 @@ Inspection inspect(const Scenario& sc, const InspectOptions& o) {
   for (int i = 0; i < m.nbodies; ++i) {
     r.orientation.col(i) = attitude_quaternion(d.R[i]);
   }
+  update_kinematics(m, d, r.q);  // the frames' placements and Jacobians, from [kin]
+  for (Inspection::Frame& f : r.frames) {
+    f.X = frame_placement(m, d, f.index);
+    frame_jacobian(m, d, f.index, Reference::LocalWorldAligned, f.J);
+  }
   return r;
 }
 
@@ -120,7 +141,21 @@ void print_json(const Model& m, const Inspection& r, const std::string& method) 
     out += std::string(i ? ", " : "") + "{\"name\": " + json_string(m.body_names[i]) +
            ", \"position\": " + json_array(r.position.col(i)) + ", \"orientation\": " + json_array(r.orientation.col(i)) +
            ", \"com\": " + json_array(r.com.col(i)) + "}";
-  out += "], \"method\": " + json_string(method) + "}";
+  out += "]";
+  if (!r.frames.empty()) {
+    out += ", \"frames\": [";
+    for (size_t n = 0; n < r.frames.size(); ++n) {
+      const Inspection::Frame& f = r.frames[n];
+      const int b = m.frame_body[size_t(f.index)];
+      out += std::string(n ? ", " : "") + "{\"name\": " + json_string(m.frame_names[size_t(f.index)]) +
+             ", \"body\": " + json_string(b < 0 ? "world" : m.body_names[size_t(b)]) + ", \"position\": " + json_array(f.X.p) +
+             ", \"orientation\": " + json_array(attitude_quaternion(f.X.R)) + ", \"jacobian\": [";
+      for (int k = 0; k < 6; ++k) out += (k ? ", " : "") + json_array(VecX(f.J.row(k).transpose()));
+      out += "]}";
+    }
+    out += "]";
+  }
+  out += ", \"method\": " + json_string(method) + "}";
   std::cout << out << std::endl;
 }
 
@@ -152,6 +187,21 @@ void print_tables(const Scenario& sc, const Inspection& r, const std::string& me
     const Eigen::Vector4d u = r.orientation.col(i);
     std::printf("  %-20s [% .12g, % .12g, % .12g]  [% .12g, % .12g, % .12g, % .12g]  [% .12g, % .12g, % .12g]\n",
                 m.body_names[i].c_str(), p(0), p(1), p(2), u(0), u(1), u(2), u(3), c(0), c(1), c(2));
+  }
+  for (const Inspection::Frame& f : r.frames) {
+    const int b = m.frame_body[size_t(f.index)];
+    const Eigen::Vector4d u = attitude_quaternion(f.X.R);
+    std::printf("frame      %s on %s: origin [% .12g, % .12g, % .12g] m, attitude [% .12g, % .12g, % .12g, % .12g] "
+                "frame -> inertial\n",
+                m.frame_names[size_t(f.index)].c_str(), b < 0 ? "the world" : m.body_names[size_t(b)].c_str(), f.X.p(0),
+                f.X.p(1), f.X.p(2), u(0), u(1), u(2), u(3));
+    std::printf("  Jacobian (6 x %d): [w; v] of the frame's origin = J qd, inertial axes\n", m.nv);
+    const char* rows[] = {"wx", "wy", "wz", "vx", "vy", "vz"};
+    for (int k = 0; k < 6; ++k) {
+      std::printf("  %-24s", rows[k]);
+      for (int c = 0; c < m.nv; ++c) std::printf(" % 14.9g", f.J(k, c));
+      std::printf("\n");
+    }
   }
   std::printf("momentum   linear  [% .10g, % .10g, % .10g]\n", r.h.linear.x(), r.h.linear.y(), r.h.linear.z());
   std::printf("           angular [% .10g, % .10g, % .10g] (about the inertial origin)\n", r.h.angular.x(),

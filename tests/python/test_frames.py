@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import soadyn
-from conftest import ROOT, SCENARIOS, assert_close, random_tree_yaml
+from conftest import ROOT, SCENARIOS, assert_close, cli, cli_error, random_tree_yaml
 
 ARM = os.path.join(ROOT, "tests", "data", "frames", "arm_fixed.urdf")
 H = 1e-5
@@ -160,3 +160,23 @@ def test_log_frames_puts_their_poses_in_the_run_file(tmp_path):
     # the names are checked where the scenario says them
     with pytest.raises(soadyn.Error, match=r"log.frames\[0\]: no frame named 'tpi'; did you mean 'tip'\?"):
         soadyn.parse_scenario(text.replace("[tip, upper]", "[tpi]"), f"{SCENARIOS}/dp_tip.yaml")
+
+
+def test_inspect_frame_prints_pose_and_jacobian():
+    """`soadyn inspect --frame`: the same pose and Jacobian as the library's, in tables and in JSON"""
+    import json
+    q = [0.3, -0.5, 0.8]
+    p = cli("inspect", ARM, "--q", ",".join(map(str, q)), "--frame", "tool", "--frame", "camera", "--json")
+    assert p.returncode == 0, p.stderr
+    frames = json.loads(p.stdout)["frames"]
+    assert [f["name"] for f in frames] == ["tool", "camera"] and [f["body"] for f in frames] == ["link3", "world"]
+    model = soadyn.load(ARM)
+    data = model.create_data()
+    R, pos = soadyn.frame_placement(model, data, q, "tool")
+    assert_close(frames[0]["position"], pos, 1e-15)
+    assert_close(frames[0]["jacobian"], soadyn.frame_jacobian(model, data, q, "tool"), 1e-15)
+    w = np.sqrt(1 + np.trace(R)) / 2
+    assert_close(frames[0]["orientation"][0], w, 1e-12)
+    tables = cli("inspect", ARM, "--frame", "flange")
+    assert tables.returncode == 0 and "frame      flange on link3: origin [" in tables.stdout, tables.stdout
+    assert cli_error("inspect", ARM, "--frame", "tol") == "--frame: no frame named 'tol'; did you mean 'tool'?"
