@@ -312,6 +312,18 @@ py::tuple run_rollout(py::object scene, py::handle initial_states, py::object co
                   (U ? shape_of(U) : "no array"));
     rs.steps = long(U.shape(1));
     U_map.emplace(U.data(), m.nv, rs.steps * K);
+    if (!U_map->allFinite()) {  // named by (k, s, i), as the caller indexes it
+      const auto u = U.unchecked<3>();
+      for (py::ssize_t k = 0; k < K; ++k)
+        for (py::ssize_t s = 0; s < U.shape(1); ++s)
+          for (int i = 0; i < m.nv; ++i)
+            if (!std::isfinite(u(k, s, i))) {
+              char value[32];
+              std::snprintf(value, sizeof value, "%g", u(k, s, i));
+              throw Error("rollout: controls[" + std::to_string(k) + ", " + std::to_string(s) + ", " + std::to_string(i) +
+                          "] = " + value + ": expected a finite number");
+            }
+    }
   } else {
     if (!steps) throw Error("rollout: steps: expected the number of steps T (or controls of shape (K, T, nv))");
     rs.steps = *steps;

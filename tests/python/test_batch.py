@@ -183,6 +183,14 @@ def test_rollout_bad_arguments_refused():
         soadyn.rollout(scene, y0, np.zeros((3, 5, 2)))
     with pytest.raises(ValueError, match=r"rollout: controls: expected shape \(2, 4, 2\)"):
         soadyn.rollout(scene, y0, np.zeros((2, 5, 2)), steps=4)
+    u = np.zeros((2, 3, 2))
+    u[1, 2, 0] = np.nan
+    with pytest.raises(ValueError, match=r"rollout: controls\[1, 2, 0\] = nan: expected a finite number"):
+        soadyn.rollout(scene, y0, u)
+    y_bad = y0.copy()
+    y_bad[0, 3] = np.inf
+    with pytest.raises(ValueError, match=r"rollout: initial_states\[0, 3\] = inf"):
+        soadyn.rollout(scene, y_bad, steps=2)
     with pytest.raises(ValueError, match="rollout: steps"):
         soadyn.rollout(scene, y0)
     with pytest.raises(ValueError, match="method: expected one of"):
