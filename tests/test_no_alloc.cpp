@@ -3,6 +3,7 @@
 // so every heap allocation is counted: operator new (which calls malloc) and Eigen's own
 // aligned_malloc alike, in Release (NDEBUG) builds too, where Eigen's malloc guard is compiled out.
 #include "soadyn/derivatives.hpp"
+#include "soadyn/frames.hpp"
 #include "soadyn/integrators.hpp"
 #include "soadyn/newton_solver.hpp"
 
@@ -98,6 +99,32 @@ TEST(NoAllocation, AlgorithmsAllocateNothingPerCall) {
     EXPECT_EQ(region.end(), 0) << "free root " << free_root;
     EXPECT_TRUE(std::isfinite(e + h.linear.sum()));
   }
+}
+
+// frames.hpp: what a task-space controller calls each step, outputs sized once
+TEST(NoAllocation, FramesAllocateNothingPerCall) {
+  Rng rng(20);
+  Model model = random_model(rng, {.n = 40, .prismatic = 0.2, .ball = 0.2, .free_root = true, .fixed = 5});
+  const int f = model.add_frame("tool", model.nbodies - 1, {rng.rotation(), rng.vec3()});
+  Data data(model);
+  const VecX q = random_q(rng, model), v = random_v(rng, model), qdd = random_v(rng, model);
+  MatX J(6, model.nv), Jc(3, model.nv), AG(6, model.nv), Jp(3, model.nv);
+  Vec6 out, sum = Vec6::Zero();
+  Forbidden region;
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  for (Reference r : {Reference::World, Reference::Local, Reference::LocalWorldAligned}) {
+    frame_jacobian(model, data, f, r, J);
+    frame_jacobian_dot_times_v(model, data, f, r, out);
+    sum += out + frame_velocity(model, data, f, r) + frame_acceleration(model, data, f, qdd, r, true);
+  }
+  point_jacobian(model, data, 0, Vec3(0.1, 0.2, 0.3), Jp);
+  com_jacobian(model, data, Jc);
+  centroidal_momentum_matrix(model, data, AG);
+  sum += centroidal_momentum_matrix_dot_times_v(model, data) + centroidal_momentum(model, data);
+  sum.head<3>() += frame_placement(model, data, f).p + com(model, data) + com_velocity(model, data);
+  EXPECT_EQ(region.end(), 0);
+  EXPECT_TRUE(sum.allFinite() && J.allFinite() && AG.allFinite());
 }
 
 TEST(NoAllocation, DerivativesAllocateNothingPerCall) {
