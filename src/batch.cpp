@@ -209,6 +209,24 @@ void forward_dynamics_derivatives(Pool& pool, In Q, In V, In TAU, Out DQ, Out DV
   });
 }
 
+void frame_jacobian(Pool& pool, In Q, int frame, Reference reference, Out J) {
+  const Model& m = pool.model();
+  const Eigen::Index K = Q.cols();
+  check("frame_jacobian", "Q", Q.rows(), K, m.nq, K);
+  check("frame_jacobian", "J", J.rows(), J.cols(), 6, m.nv * K);
+  if (frame < 0 || frame >= int(m.frame_names.size()))
+    throw Error("batch::frame_jacobian: frame: expected an index 0.." + std::to_string(int(m.frame_names.size()) - 1) +
+                ", got " + std::to_string(frame));
+  pool.run(K, [&](Pool::Worker& w, long begin, long end) {
+    for (long k = begin; k < end; ++k) {
+      load(w, Q, k);
+      update_kinematics(m, w.data, w.q);
+      soadyn::frame_jacobian(m, w.data, frame, reference, w.J);
+      J.middleCols(k * m.nv, m.nv) = w.J;
+    }
+  });
+}
+
 // the same with a Pool for the call
 void forward_dynamics(const Model& model, In Q, In V, In TAU, Out QDD, int threads, FdMethod method) {
   Pool pool(model, threads);
@@ -234,6 +252,11 @@ void forward_dynamics_derivatives(const Model& model, In Q, In V, In TAU, Out DQ
                                   Out* QDD) {
   Pool pool(model, threads);
   forward_dynamics_derivatives(pool, Q, V, TAU, DQ, DV, MINV, QDD);
+}
+
+void frame_jacobian(const Model& model, In Q, int frame, Reference reference, Out J, int threads) {
+  Pool pool(model, threads);
+  frame_jacobian(pool, Q, frame, reference, J);
 }
 
 }  // namespace soadyn::batch

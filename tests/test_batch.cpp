@@ -146,6 +146,30 @@ TEST(Batch, DerivativesEqualLoop) {
   }
 }
 
+TEST(Batch, FrameJacobianEqualsLoop) {
+  Rng rng(19);
+  const Model m = mixed_model(rng);
+  const States s = random_states(rng, m, kStates);
+  const int nv = m.nv, frame = int(m.frame_names.size()) - 1;
+  for (const ReferenceInfo& ref : references()) {
+    MatX J_ref(6, nv * kStates), J;
+    Data d(m);
+    for (long k = kStates - 1; k >= 0; --k) {
+      update_kinematics(m, d, s.Q.col(k));
+      frame_jacobian(m, d, frame, ref.reference, J);
+      J_ref.middleCols(k * nv, nv) = J;
+    }
+    for (int threads : kThreads) {
+      EveryThread pool(m, threads);
+      MatX out(6, nv * kStates);
+      batch::frame_jacobian(pool, s.Q, frame, ref.reference, out);
+      EXPECT_TRUE(out == J_ref) << ref.name << ", " << threads << " threads";
+    }
+  }
+  MatX out(6, nv * kStates);
+  EXPECT_THROW(batch::frame_jacobian(m, s.Q, int(m.frame_names.size()), Reference::World, out, 1), Error);
+}
+
 TEST(Batch, MoreThreadsThanStatesAndNoStates) {
   Rng rng(14);
   const Model m = mixed_model(rng);

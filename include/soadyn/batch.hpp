@@ -21,6 +21,7 @@
 #include "soadyn/algorithms.hpp"
 #include "soadyn/data.hpp"
 #include "soadyn/derivatives.hpp"
+#include "soadyn/frames.hpp"
 #include "soadyn/model.hpp"
 
 #include <functional>
@@ -50,10 +51,11 @@ class Pool {
   double worth_a_thread = kWorthAThread;
 
   struct Worker {
-    explicit Worker(const Model& m) : data(m), q(m.nq), v(m.nv), x(m.nv) {}
+    explicit Worker(const Model& m) : data(m), q(m.nq), v(m.nv), x(m.nv), J(6, m.nv) {}
     Data data;
     std::optional<DerivativeData> dd;  // made by the first derivative call on this worker
     VecX q, v, x;                      // state k copied here (the algorithms take VecX)
+    MatX J;                            // 6×nv: a frame Jacobian
   };
 
   // f(worker, begin, end) over [0, K) in chunks, each chunk on one thread with that thread's
@@ -100,5 +102,10 @@ void forward_dynamics_derivatives(Pool& pool, In Q, In V, In TAU, Out DQ, Out DV
                                   Out* QDD = nullptr);
 void forward_dynamics_derivatives(const Model& model, In Q, In V, In TAU, Out DQ, Out DV, int threads,
                                   Out* MINV = nullptr, Out* QDD = nullptr);
+
+// the Jacobian of frame `frame` (an index of Model::frame_names) in `reference` (frames.hpp) at
+// each state: Q nq×K → J 6×(nv·K), block k the 6×nv J of state k
+void frame_jacobian(Pool& pool, In Q, int frame, Reference reference, Out J);
+void frame_jacobian(const Model& model, In Q, int frame, Reference reference, Out J, int threads);
 
 }  // namespace soadyn::batch

@@ -7,6 +7,7 @@
 #include "soadyn/batch.hpp"
 #include "soadyn/rollout.hpp"
 #include "soadyn/scenario.hpp"
+#include "soadyn/text.hpp"
 
 #include <chrono>
 #include <csignal>
@@ -187,6 +188,32 @@ py::object fd_derivatives(PyPool& p, py::handle q, py::handle v, py::handle tau,
   return py::make_tuple(blocks(dq), blocks(dv), blocks(mi));
 }
 
+// a frame by name (KeyError with the nearest one) or by index
+int frame_of(const Model& m, const py::object& f, const char* where) {
+  if (py::isinstance<py::str>(f)) {
+    const std::string name = f.cast<std::string>();
+    const int i = m.frame_index(name);
+    if (i < 0) throw py::key_error("no frame named '" + printable(name) + "'" + did_you_mean(name, m.frame_names));
+    return i;
+  }
+  if (py::isinstance<py::int_>(f) && !py::isinstance<py::bool_>(f)) return int(f.cast<long>());  // range: the library
+  throw py::type_error(std::string(where) + ": frame: expected a frame name or index, got " +
+                       std::string(py::str(py::type::handle_of(f).attr("__name__"))));
+}
+
+py::object frame_jacobian(PyPool& p, py::handle q, const py::object& frame, const std::string& reference) {
+  const Model& m = p.pool.model();
+  const char* where = "batch.frame_jacobian";
+  const int f = frame_of(m, frame, where);
+  const Reference r = parse_reference(reference);
+  py::ssize_t K = -1;
+  const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
+  py::array out = new_array({K, m.nv, 6});
+  MapOut J(ptr(out), 6, m.nv * K);
+  on(p, [&](batch::Pool& pool) { batch::frame_jacobian(pool, Q.map, f, r, J); });
+  return blocks(out);
+}
+
 // Each function twice: soadyn.batch.f(model, …, threads=1), with a Pool made for the call, and
 // Pool.f(…) on a Pool kept by the caller (no Data made per call)
 struct Doc {
@@ -200,6 +227,9 @@ struct Doc {
   const char* fd_derivatives =
       "(∂q̈/∂q, ∂q̈/∂v, 𝓜⁻¹) of each state, as fd_derivatives: q (K, nq), v and tau (K, nv) → three (K, nv, nv)\n"
       "(two with minv=False: ∂q̈/∂τ = 𝓜⁻¹ is then not computed).";
+  const char* frame_jacobian =
+      "J of the frame (a name or index of model.frame_names) at each state, as frame_jacobian: q (K, nq) → (K, 6, nv)\n"
+      "(reference: world, local or local_world_aligned).";
 };
 
 void bind_batch_functions(py::module_& b) {
@@ -227,6 +257,9 @@ between calls, for small batches called often: pool.forward_dynamics(q, v, tau),
   b.def("fd_derivatives", [pool](const Model& m, py::handle q, py::handle v, py::handle tau, bool minv, int threads) {
         return fd_derivatives(*pool(m, threads), q, v, tau, minv);
       }, "model"_a, "q"_a, "v"_a, "tau"_a, "minv"_a = true, "threads"_a = 1, doc.fd_derivatives);
+  b.def("frame_jacobian", [pool](const Model& m, py::handle q, const py::object& frame, const std::string& reference,
+                                 int threads) { return frame_jacobian(*pool(m, threads), q, frame, reference); },
+        "model"_a, "q"_a, "frame"_a, "reference"_a = "local_world_aligned", "threads"_a = 1, doc.frame_jacobian);
 
   py::class_<PyPool>(b, "Pool", "One Data per thread for a model, kept between batched calls (soadyn::batch::Pool).")
       .def(py::init([](const Model& m, int threads) { return new PyPool(m, threads_arg("batch.Pool", threads)); }),
@@ -237,7 +270,8 @@ between calls, for small batches called often: pool.forward_dynamics(q, v, tau),
       .def("bias", &bias, "q"_a, "v"_a, doc.bias)
       .def("inverse_dynamics", &inverse_dynamics, "q"_a, "v"_a, "qdd"_a, doc.inverse_dynamics)
       .def("id_derivatives", &id_derivatives, "q"_a, "v"_a, "qdd"_a, doc.id_derivatives)
-      .def("fd_derivatives", &fd_derivatives, "q"_a, "v"_a, "tau"_a, "minv"_a = true, doc.fd_derivatives);
+      .def("fd_derivatives", &fd_derivatives, "q"_a, "v"_a, "tau"_a, "minv"_a = true, doc.fd_derivatives)
+      .def("frame_jacobian", &frame_jacobian, "q"_a, "frame"_a, "reference"_a = "local_world_aligned", doc.frame_jacobian);
 }
 
 // Python's main thread (where signal handlers run), as threading.main_thread().ident

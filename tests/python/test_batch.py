@@ -67,6 +67,22 @@ def test_batched_equals_looped_to_the_bit(tree, threads):
     assert len(b.fd_derivatives(model, q, v, x, minv=False, threads=threads)) == 2
 
 
+@pytest.mark.parametrize("threads", THREADS)
+def test_frame_jacobians_batched_equal_looped(tree, threads):
+    model, q, v, x = tree
+    frame = model.frame_names[-1]
+    for reference in ("world", "local", "local_world_aligned"):
+        got = soadyn.batch.frame_jacobian(model, q, frame, reference=reference, threads=threads)
+        ref = looped(soadyn.frame_jacobian, model, q, frame=frame, reference=reference)
+        assert got.shape == (len(q), 6, model.nv) and (got == ref).all(), reference
+    assert (soadyn.batch.Pool(model, threads).frame_jacobian(q[:5], len(model.frame_names) - 1)
+            == soadyn.batch.frame_jacobian(model, q[:5], frame)).all()
+    with pytest.raises(KeyError, match="no frame named"):
+        soadyn.batch.frame_jacobian(model, q, "no such frame")
+    with pytest.raises(ValueError, match="batch::frame_jacobian: frame: expected an index"):
+        soadyn.batch.frame_jacobian(model, q, 10**6)
+
+
 @pytest.mark.parametrize("threads", [1, 2])
 def test_pool_kept_between_calls_gives_the_same_bits(tree, threads):
     model, q, v, x = tree
