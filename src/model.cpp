@@ -350,13 +350,19 @@ Model Model::build(const std::vector<BodySpec>& given, const Vec3& gravity, Iner
     m.nv += joint_nv(b.joint);
   }
 
-  // each moving body, with everything welded to it, must be a rigid body with mass
+  // each moving body, with everything welded to it, must be a rigid body with mass; or a massless
+  // frame that moving bodies hang from (one of several joints in one MJCF body, a bare gimbal
+  // ring), which the positive definiteness of 𝓜 below then decides
+  std::vector<char> has_child(size_t(m.nbodies), 0);
+  for (int k = 0; k < m.nbodies; ++k)
+    if (m.parent[k] >= 0) has_child[size_t(m.parent[k])] = 1;
   for (int k = 0; k < m.nbodies; ++k) {
     BodySpec merged = specs[spec_of[k]];
     merged.inertia = m.inertia[k];
     if (!std::isfinite(m.mass[k]) || !m.inertia[k].allFinite())
       refuse(merged, spec_of[k], "mass", "welded bodies whose combined inertia a double can hold",
              "an overflow (not finite) merging their masses and inertias about the joint frame");
+    if (m.mass[k] == 0.0 && has_child[size_t(k)] && m.inertia[k].isZero(0.0)) continue;
     if (!(m.mass[k] > 0.0))
       refuse(merged, spec_of[k], "mass",
              "a positive mass for a moving body" +

@@ -1,6 +1,7 @@
 #include "soadyn/scenario.hpp"
 
 #include "soadyn/integrators.hpp"
+#include "soadyn/mjcf.hpp"
 #include "soadyn/text.hpp"
 
 #include <fcntl.h>
@@ -492,6 +493,25 @@ std::string read_text_file(const std::string& path) {
   return text;
 }
 
+bool is_mjcf_text(const std::string& text) {
+  // the first element after the prolog, comments and DOCTYPE
+  size_t at = 0;
+  while ((at = text.find('<', at)) != std::string::npos) {
+    if (text.compare(at, 4, "<!--") == 0) {
+      at = text.find("-->", at);
+      if (at == std::string::npos) return false;
+      continue;
+    }
+    if (text.compare(at, 2, "<?") == 0 || text.compare(at, 2, "<!") == 0) {
+      ++at;
+      continue;
+    }
+    return text.compare(at, 7, "<mujoco") == 0 &&
+           (at + 7 >= text.size() || std::string(" \t\r\n>/").find(text[at + 7]) != std::string::npos);
+  }
+  return false;
+}
+
 std::optional<InertiaCheck> parse_inertia_check(const std::string& s) {
   if (s == "warn") return InertiaCheck::Warn;
   if (s == "balance") return InertiaCheck::Balance;
@@ -554,12 +574,21 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
                                                      : InertiaCheck::Warn;
 
   if (root["urdf"] && root["bodies"]) rd.fail(root["urdf"], "urdf", "give either 'bodies' or 'urdf', not both");
+  std::optional<MjcfModel> mjcf;  // an MJCF robot: its drawn pose, dampers and springs
   if (root["urdf"]) {
     const std::string rel = rd.string(root["urdf"], "urdf");
     const std::filesystem::path p = std::filesystem::path(path).parent_path() / rel;
     const bool free = free_root || (root["free_root"] && rd.boolean(root["free_root"], "free_root"));
     try {
-      sc.model = load_urdf(p.string(), free, gravity, check);
+      // a URDF, or an MJCF file (MuJoCo's <mujoco>: its own gravity unless the scenario says one)
+      const std::string robot = read_text_file(p.string());
+      if (is_mjcf_text(robot)) {
+        const std::optional<Vec3> g = root["gravity"] ? std::optional<Vec3>(gravity) : std::nullopt;
+        mjcf = parse_mjcf(robot, p.string(), true, {free, g, check});
+        sc.model = mjcf->model;
+      } else {
+        sc.model = parse_urdf(robot, p.string(), free, gravity, check);
+      }
     } catch (const Error& e) {
       rd.fail(root["urdf"], "urdf", e.what());
     }
@@ -572,8 +601,12 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
 
   if (root["frames"]) read_frames(rd, root["frames"], sc.model);
   if (root["log"]) read_log_section(rd, root["log"], sc.model, sc.log_frames);
-  sc.q0 = sc.model.neutral_configuration();
+  sc.q0 = mjcf ? mjcf->q0 : sc.model.neutral_configuration();
   sc.v0 = VecX::Zero(sc.model.nv);
+  if (mjcf) {
+    sc.inputs.dampers = mjcf->dampers;
+    sc.inputs.springs = mjcf->springs;
+  }
   if (root["initial"]) read_initial(rd, root["initial"], sc.model, sc.q0, sc.v0);
   if (root["simulation"]) read_simulation(rd, root["simulation"], sc.simulation);
   if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.inputs);
@@ -588,6 +621,15 @@ Scenario load_scenario(const std::string& path, bool free_root, const std::optio
     sc.path = path;
     sc.text = text;
     sc.name = std::filesystem::path(path).stem().string();
+    if (is_mjcf_text(text)) {
+      MjcfModel mj = parse_mjcf(text, path, true, {free_root, gravity, inertia_check.value_or(InertiaCheck::Warn)});
+      sc.model = std::move(mj.model);
+      sc.q0 = mj.q0;
+      sc.inputs.dampers = mj.dampers;
+      sc.inputs.springs = mj.springs;
+      sc.v0 = VecX::Zero(sc.model.nv);
+      return sc;
+    }
     sc.model = parse_urdf(text, path, free_root, gravity.value_or(urdf_gravity()),
                           inertia_check.value_or(InertiaCheck::Warn));
     sc.q0 = sc.model.neutral_configuration();

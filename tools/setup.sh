@@ -17,6 +17,7 @@ fi
 packages=(
   cmake gcc g++ make pkg-config
   libeigen3-dev libsundials-dev libhdf5-dev libyaml-cpp-dev liburdfdom-dev libtinyxml2-dev libcli11-dev
+  libmujoco-dev                                     # MJCF import (MuJoCo's compiler); optional to CMake
   libjs-three                                       # soadyn view: three.js inlined in the page
   python3-numpy python3-h5py python3-matplotlib     # tools/plot.py
 )

@@ -3,6 +3,7 @@
 #include "view.hpp"
 
 #include "soadyn/h5log.hpp"
+#include "soadyn/mjcf.hpp"
 #include "soadyn/scenario.hpp"
 
 #include <hdf5.h>
@@ -167,7 +168,20 @@ RunModel rebuild_model(const RunFile& run) {
   RunModel out;
   try {
     const std::string ext = std::filesystem::path(label).extension().string();
-    if (ext == ".urdf" || ext == ".URDF" || ext == ".xml") {
+    if (ext == ".xml" && is_mjcf_text(run.scenario_text)) {
+      // `soadyn run robot.xml`: an MJCF model, compiled from its file when it is still the one the
+      // run used (so its <include>s resolve), else from the stored text
+      std::error_code ec;
+      const bool same = std::filesystem::is_regular_file(label, ec) && read_text_file(label) == run.scenario_text;
+      MjcfOptions mo;
+      mo.inertia_check = InertiaCheck::Balance;
+      out.model = parse_mjcf(run.scenario_text, label, same, mo).model;
+      if (run.q.cols() == out.model.nq + 7) {  // run with --free-root
+        mo.free_root = true;
+        out.model = parse_mjcf(run.scenario_text, label, same, mo).model;
+      }
+      out.name = std::filesystem::path(label).stem().string();
+    } else if (ext == ".urdf" || ext == ".URDF" || ext == ".xml") {
       // `soadyn run robot.urdf [--free-root]`: the stored text is the URDF, run with the default
       // gravity; a free root shows as the 7 more columns of q its free joint has.  (The view draws
       // poses only: inertias are balanced rather than refused whatever the run was told.)

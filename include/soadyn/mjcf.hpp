@@ -1,0 +1,43 @@
+// MJCF (MuJoCo's model format) import, through MuJoCo's own compiler when soadyn is built with it
+// (Debian libmujoco-dev; mjcf_available()).  The tree part of the file becomes a Model: bodies,
+// inertias (given or inferred from geoms by MuJoCo), hinge, slide, ball and free joints, several
+// joints in one body (a chain of massless frames), sites as frames, the option's gravity.  What
+// soadyn does not model (contacts, tendons, equality constraints, actuators, ranges, armature,
+// sensors) is listed in one "ignored: …" warning (Model::warnings), never silently.
+#pragma once
+
+#include "soadyn/inputs.hpp"
+#include "soadyn/model.hpp"
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace soadyn {
+
+struct MjcfOptions {
+  bool free_root = false;              // a worldbody child without joints gets a free joint
+  std::optional<Vec3> gravity;         // default: the file's <option gravity> (MuJoCo: 0 0 −9.81)
+  InertiaCheck inertia_check = InertiaCheck::Warn;
+};
+
+struct MjcfModel {
+  Model model;
+  VecX q0;                                    // the pose the file draws (free joints: their pose)
+  std::vector<std::pair<int, double>> qpos0;  // (q index, MuJoCo's qpos0) of each hinge and slide:
+                                              // soadyn q = MuJoCo qpos − qpos0 there
+  std::vector<DamperInput> dampers;           // the joints' damping
+  std::vector<SpringInput> springs;           // the joints' stiffness about springref
+};
+
+// Whether this build reads MJCF (MuJoCo found at build time).
+bool mjcf_available();
+// Whether an XML text is MJCF (its first element is <mujoco>), as opposed to URDF's <robot>.
+bool is_mjcf_text(const std::string& text);
+// Compiles `xml` (read from `path` when from_disk, so <include> and mesh paths resolve beside it;
+// else the text alone) and builds the model.  Throws soadyn::Error as "path:line: element: what"
+// where MuJoCo's compiler gives a line.
+MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_disk, const MjcfOptions& options = {});
+
+}  // namespace soadyn

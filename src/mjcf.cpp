@@ -1,0 +1,246 @@
+// MJCF import through MuJoCo's own compiler (mj_loadXML), so that <default> classes, <include>,
+// childclass, inferred inertias and every frame convention follow MuJoCo exactly; soadyn then reads
+// the compiled tree from mjModel's body_*, jnt_* and dof_* arrays.
+//
+// Frames.  MuJoCo places body b at (body_pos, body_quat) in its parent's frame and moves it by its
+// joints in order, each about its anchor jnt_pos along jnt_axis (body axes), the later ones turned
+// by the earlier.  A soadyn body's frame has its origin at its joint point, so body b with joints
+// j1..jk becomes k specs: the frames F_m = (b's frame turned by j1..j(m−1)) shifted to jnt_pos of
+// jm, each placed in the one before by the shift between anchors, the first in its parent's last
+// frame; the mass properties go on F_k, the others are massless.  A body without joints is a fixed
+// spec (merged into its parent, its name kept as a frame).  A hinge or slide's q is MuJoCo's
+// qpos − qpos0 (zero at the pose the file draws); a ball's quaternion is MuJoCo's, relative to that
+// pose; a free joint's q is MuJoCo's qpos (body origin and attitude in the world).
+#include "soadyn/mjcf.hpp"
+
+#include "soadyn/text.hpp"
+
+#include <mujoco/mujoco.h>
+
+#include <array>
+#include <cstring>
+#include <memory>
+#include <regex>
+#include <string>
+
+namespace soadyn {
+
+namespace {
+
+struct ModelDeleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+};
+using MjModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
+
+struct VfsDeleter {
+  void operator()(mjVFS* v) const {
+    mj_deleteVFS(v);
+    delete v;
+  }
+};
+
+Mat3 rotation(const mjtNum* quat) {  // MuJoCo's (w, x, y, z)
+  return Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]).normalized().toRotationMatrix();
+}
+Vec3 vec3(const mjtNum* x) { return Vec3(x[0], x[1], x[2]); }
+
+std::string name_of(const mjModel* m, int type, int id, const char* kind) {
+  const char* n = mj_id2name(m, type, id);
+  return n && *n ? std::string(n) : std::string(kind) + std::to_string(id);
+}
+
+// "Error: ... \nElement 'joint', line 7" → "path:7: joint: ..."
+[[noreturn]] void compile_error(const std::string& path, const std::string& message) {
+  std::string what = message;
+  for (const char* prefix : {"XML Error: ", "Error: "})
+    if (what.rfind(prefix, 0) == 0) what = what.substr(std::strlen(prefix));
+  std::smatch where;
+  static const std::regex element(R"(\s*Element '([^']*)', line (\d+)\s*)");
+  std::string line, elem;
+  if (std::regex_search(what, where, element)) {
+    elem = where[1];
+    line = where[2];
+    what = std::string(where.prefix()) + std::string(where.suffix());
+  } else {
+    static const std::regex xml_line(R"(line (\d+))");
+    if (std::regex_search(what, where, xml_line)) line = where[1];
+  }
+  while (!what.empty() && (what.back() == '\n' || what.back() == ' ')) what.pop_back();
+  for (char& c : what)
+    if (c == '\n') c = ' ';
+  throw Error(path + (line.empty() ? "" : ":" + line) + ": " + (elem.empty() ? "" : elem + ": ") + printable(what));
+}
+
+MjModelPtr compile(const std::string& xml, const std::string& path, bool from_disk) {
+  std::array<char, 1000> error{};
+  mjModel* m = nullptr;
+  if (from_disk) {
+    m = mj_loadXML(path.c_str(), nullptr, error.data(), int(error.size()));
+  } else {
+    // the text alone (a run file's stored model): one file in a virtual file system
+    std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
+    mj_defaultVFS(vfs.get());
+    const std::string name = "model.xml";
+    if (mj_makeEmptyFileVFS(vfs.get(), name.c_str(), int(xml.size())) != 0)
+      throw Error(path + ": MJCF: cannot hold the model text in MuJoCo's virtual file system");
+    std::memcpy(vfs->filedata[vfs->nfile - 1], xml.data(), xml.size());
+    m = mj_loadXML(name.c_str(), vfs.get(), error.data(), int(error.size()));
+  }
+  if (!m) compile_error(path, error.data());
+  return MjModelPtr(m);
+}
+
+// What soadyn does not model, one line per kind, never silently.
+std::string ignored(const mjModel* m) {
+  std::vector<std::string> kinds;
+  auto count = [&](int n, const char* one, const char* many) {
+    if (n > 0) kinds.push_back(std::to_string(n) + " " + (n == 1 ? one : many));
+  };
+  int colliding = 0, limited = 0, armature = 0;
+  for (int g = 0; g < m->ngeom; ++g) colliding += (m->geom_contype[g] || m->geom_conaffinity[g]) ? 1 : 0;
+  for (int j = 0; j < m->njnt; ++j) limited += m->jnt_limited[j] ? 1 : 0;
+  for (int k = 0; k < m->nv; ++k) armature += m->dof_armature[k] != 0.0 ? 1 : 0;
+  count(colliding, "colliding geom (contacts)", "colliding geoms (contacts)");
+  count(m->npair, "contact pair", "contact pairs");
+  count(m->ntendon, "tendon", "tendons");
+  count(m->neq, "equality constraint", "equality constraints");
+  count(m->nu, "actuator", "actuators");
+  count(limited, "joint range (recorded in the file, not enforced)", "joint ranges (recorded in the file, not enforced)");
+  count(armature, "DOF armature (rotor inertia, not in 𝓜)", "DOF armatures (rotor inertia, not in 𝓜)");
+  count(m->nsensor, "sensor", "sensors");
+  std::string out;
+  for (const std::string& k : kinds) out += (out.empty() ? "" : ", ") + k;
+  return out;
+}
+
+}  // namespace
+
+bool mjcf_available() { return true; }
+
+MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_disk, const MjcfOptions& o) {
+  const MjModelPtr mp = compile(xml, path, from_disk);
+  const mjModel* m = mp.get();
+
+  std::vector<BodySpec> specs;
+  std::vector<int> last_spec(size_t(m->nbody), -1);  // each MuJoCo body's last spec (-1: the world)
+  std::vector<Vec3> anchor(size_t(m->nbody), Vec3::Zero());  // its last spec's origin in its frame
+  std::vector<std::pair<int, int>> coords;  // (MuJoCo joint, soadyn spec) of each joint, in order
+  for (int b = 1; b < m->nbody; ++b) {
+    const int parent = m->body_parentid[b];
+    const std::string name = name_of(m, mjOBJ_BODY, b, "body");
+    // b's frame in the parent's last spec frame
+    Placement X{rotation(m->body_quat + 4 * b), vec3(m->body_pos + 3 * b) - anchor[size_t(parent)]};
+    const int nj = m->body_jntnum[b];
+    Vec3 at = Vec3::Zero();  // the current spec's origin in b's frame
+    auto spec = [&](const std::string& spec_name) -> BodySpec& {
+      specs.emplace_back();
+      specs.back().name = spec_name;
+      return specs.back();
+    };
+    if (nj == 0) {
+      const bool free = o.free_root && parent == 0;
+      BodySpec& s = spec(name);
+      s.parent = last_spec[size_t(parent)];
+      s.joint = free ? JointType::Free : JointType::Fixed;
+      s.joint_name = free ? name + "_free" : name;
+      s.placement = free ? Placement{} : X;  // a free joint's q is the pose: the file's goes into q0
+    }
+    for (int k = 0; k < nj; ++k) {
+      const int j = m->body_jntadr[b] + k;
+      const std::string jname = name_of(m, mjOBJ_JOINT, j, "joint");
+      const Vec3 pos = m->jnt_type[j] == mjJNT_FREE ? Vec3::Zero() : vec3(m->jnt_pos + 3 * j);
+      BodySpec& s = spec(k + 1 == nj ? name : name + "." + jname);
+      s.joint_name = jname;
+      s.parent = k == 0 ? last_spec[size_t(parent)] : int(specs.size()) - 2;
+      s.placement = k == 0 ? Placement{X.R, X.p + X.R * pos} : Placement{Mat3::Identity(), pos - at};
+      s.axis = vec3(m->jnt_axis + 3 * j);
+      switch (m->jnt_type[j]) {
+        case mjJNT_HINGE: s.joint = JointType::Revolute; break;
+        case mjJNT_SLIDE: s.joint = JointType::Prismatic; break;
+        case mjJNT_BALL: s.joint = JointType::Ball; break;
+        case mjJNT_FREE:
+          if (parent != 0 || nj != 1)
+            throw Error(path + ": joint '" + printable(jname) +
+                        "': a free joint only on a body of the worldbody, and as its only joint");
+          s.joint = JointType::Free;
+          s.parent = -1;
+          s.placement = Placement{};
+          break;
+        default: throw Error(path + ": joint '" + printable(jname) + "': unknown MuJoCo joint type");
+      }
+      coords.emplace_back(j, int(specs.size()) - 1);
+      at = pos;
+    }
+    // mass properties on the last spec: the centre of mass and principal axes (body_ipos,
+    // body_iquat) in b's frame, shifted to the spec's origin
+    BodySpec& s = specs.back();
+    const Mat3 Ri = rotation(m->body_iquat + 4 * b);
+    s.mass = m->body_mass[b];
+    s.com = vec3(m->body_ipos + 3 * b) - at;
+    s.inertia = Ri * vec3(m->body_inertia + 3 * b).asDiagonal() * Ri.transpose();
+    last_spec[size_t(b)] = int(specs.size()) - 1;
+    anchor[size_t(b)] = at;
+  }
+  if (specs.empty()) throw Error(path + ": MJCF: the worldbody has no bodies");
+
+  const Vec3 gravity = o.gravity.value_or(vec3(m->opt.gravity));
+  MjcfModel out;
+  try {
+    out.model = Model::build(specs, gravity, o.inertia_check);
+  } catch (const ModelError& e) {
+    throw Error(path + ": body '" + printable(specs.at(size_t(e.spec)).name) + "': " + e.detail);
+  }
+  Model& model = out.model;
+  if (const std::string what = ignored(m); !what.empty()) model.warnings.push_back("ignored: " + what);
+
+  // sites as frames, placed in the frame of the soadyn body their MuJoCo body moves with
+  for (int i = 0; i < m->nsite; ++i) {
+    const int b = m->site_bodyid[i];
+    const std::string site = name_of(m, mjOBJ_SITE, i, "site");
+    Placement X{rotation(m->site_quat + 4 * i), vec3(m->site_pos + 3 * i)};
+    if (b == 0) {
+      model.add_frame(site, -1, X);
+      continue;
+    }
+    const int f = model.frame_index(name_of(m, mjOBJ_BODY, b, "body"));
+    X.p -= anchor[size_t(b)];
+    if (f >= 0 && model.frame_index(site) < 0) model.add_frame(site, model.frame_body[size_t(f)], compose(model.frame_placement[size_t(f)], X));
+  }
+
+  // the pose the file draws (q = 0 for hinges and slides), the free joints' poses, the dampers
+  // and springs the file gives its 1-DOF joints
+  out.q0 = model.neutral_configuration();
+  for (const auto& [j, spec_index] : coords) {
+    const int body = model.joint_index(specs[size_t(spec_index)].joint_name);
+    if (body < 0) continue;
+    const int iq = model.idx_q[size_t(body)], iv = model.idx_v[size_t(body)];
+    const int type = m->jnt_type[j];
+    const mjtNum* qpos0 = m->qpos0 + m->jnt_qposadr[j];
+    if (type == mjJNT_FREE)
+      for (int k = 0; k < 7; ++k) out.q0(iq + k) = qpos0[k];
+    if (type == mjJNT_BALL)
+      for (int k = 0; k < 4; ++k) out.q0(iq + k) = qpos0[k];
+    if (type == mjJNT_HINGE || type == mjJNT_SLIDE) {
+      out.qpos0.emplace_back(iq, qpos0[0]);
+      const int dof = m->jnt_dofadr[j];
+      if (m->dof_damping[dof] > 0.0)
+        out.dampers.push_back({model.joint_names[size_t(body)], iv, m->dof_damping[dof]});
+      if (m->jnt_stiffness[j] > 0.0)
+        out.springs.push_back({model.joint_names[size_t(body)], iv, iq, m->jnt_stiffness[j],
+                               m->qpos_spring[m->jnt_qposadr[j]] - qpos0[0]});
+    }
+  }
+  // a body freed by free_root starts where the file draws it
+  for (int b = 1; b < m->nbody; ++b)
+    if (o.free_root && m->body_parentid[b] == 0 && m->body_jntnum[b] == 0) {
+      const int body = model.body_index(name_of(m, mjOBJ_BODY, b, "body"));
+      if (body < 0) continue;
+      const int iq = model.idx_q[size_t(body)];
+      out.q0.segment<3>(iq) = vec3(m->body_pos + 3 * b);
+      for (int k = 0; k < 4; ++k) out.q0(iq + 3 + k) = m->body_quat[4 * b + k];
+    }
+  model.normalize(out.q0);
+  return out;
+}
+
+}  // namespace soadyn
