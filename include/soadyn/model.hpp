@@ -109,8 +109,8 @@ class Model {
   int joint_index(const std::string& name) const;  // body index of the named joint, -1 when absent
   int frame_index(const std::string& name) const;  // -1 when absent
   // A frame placed by X on body `body` (−1: the world); returns its index.  Throws soadyn::Error
-  // for a name already taken (did-you-mean aside, the message names it), an empty or non-UTF-8
-  // name, a body out of range or a placement that is not a finite proper rotation and translation.
+  // for a name already taken, an empty or non-UTF-8 name, a body out of range or a placement that
+  // is not a finite proper rotation and translation.
   int add_frame(const std::string& name, int body, const Placement& X);
   bool has_free_joint() const;
   bool has_quaternions() const;              // a free or ball joint
