@@ -207,6 +207,27 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
     if (f >= 0 && model.frame_index(site) < 0) model.add_frame(site, model.frame_body[size_t(f)], compose(model.frame_placement[size_t(f)], X));
   }
 
+  // geoms, placed as sites are
+  static const char* const kinds[] = {"plane", "hfield", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh"};
+  for (int g = 0; g < m->ngeom; ++g) {
+    const int type = m->geom_type[g];
+    if (type < 0 || type > mjGEOM_MESH) continue;
+    const int b = m->geom_bodyid[g];
+    MjcfGeom geom;
+    geom.kind = kinds[type];
+    geom.size = vec3(m->geom_size + 3 * g);
+    geom.rgb = Vec3(m->geom_rgba[4 * g], m->geom_rgba[4 * g + 1], m->geom_rgba[4 * g + 2]);
+    geom.X = Placement{rotation(m->geom_quat + 4 * g), vec3(m->geom_pos + 3 * g)};
+    if (b > 0) {
+      const int f = model.frame_index(name_of(m, mjOBJ_BODY, b, "body"));
+      if (f < 0) continue;
+      geom.X.p -= anchor[size_t(b)];
+      geom.body = model.frame_body[size_t(f)];
+      geom.X = compose(model.frame_placement[size_t(f)], geom.X);
+    }
+    out.geoms.push_back(geom);
+  }
+
   // the pose the file draws (q = 0 for hinges and slides), the free joints' poses, the dampers
   // and springs the file gives its 1-DOF joints
   out.q0 = model.neutral_configuration();

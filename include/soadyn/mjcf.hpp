@@ -22,6 +22,15 @@ struct MjcfOptions {
   InertiaCheck inertia_check = InertiaCheck::Warn;
 };
 
+// A geom, for drawing: in the frame of the model body its MuJoCo body moves with (−1: the world).
+struct MjcfGeom {
+  int body = -1;
+  Placement X;
+  std::string kind;          // box | sphere | cylinder | capsule | ellipsoid | mesh | plane | hfield
+  Vec3 size = Vec3::Zero();  // MuJoCo's geom_size: half-sizes (box, ellipsoid), radius and half-length
+  Vec3 rgb = Vec3::Constant(0.5);
+};
+
 struct MjcfModel {
   Model model;
   VecX q0;                                    // the pose the file draws (free joints: their pose)
@@ -29,6 +38,7 @@ struct MjcfModel {
                                               // soadyn q = MuJoCo qpos − qpos0 there
   std::vector<DamperInput> dampers;           // the joints' damping
   std::vector<SpringInput> springs;           // the joints' stiffness about springref
+  std::vector<MjcfGeom> geoms;                // every geom, for soadyn view
 };
 
 // Whether this build reads MJCF (MuJoCo found at build time).

@@ -181,6 +181,8 @@ RunModel rebuild_model(const RunFile& run) {
         out.model = parse_mjcf(run.scenario_text, label, same, mo).model;
       }
       out.name = std::filesystem::path(label).stem().string();
+      out.urdf_text = run.scenario_text;  // its geoms are drawn (view_scene.cpp)
+      out.urdf_path = label;
     } else if (ext == ".urdf" || ext == ".URDF" || ext == ".xml") {
       // `soadyn run robot.urdf [--free-root]`: the stored text is the URDF, run with the default
       // gravity; a free root shows as the 7 more columns of q its free joint has.  (The view draws

@@ -1,16 +1,19 @@
 // soadyn view: what each body looks like.  From the model: a skeleton (capsules from the joint to
 // the children's joints), the centre of mass, and the uniform box with the body's mass and
 // principal moments.  From a URDF: its <visual> boxes, cylinders and spheres, moved into the frame
-// of the body they were welded into.
+// of the body they were welded into; from an MJCF file, its geoms where MuJoCo's compiler put them.
 #include "view.hpp"
 
 #include "../urdf_pose.hpp"
+#include "soadyn/mjcf.hpp"
+#include "soadyn/scenario.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <map>
 
@@ -115,6 +118,39 @@ void add_urdf_visuals(const Model& model, const std::string& urdf_text, const st
   }
 }
 
+// an MJCF file's geoms (MuJoCo's compiler placed them): boxes, spheres, cylinders; a capsule as
+// its cylinder, an ellipsoid as its box; planes and height fields (the floor) are not drawn
+void add_mjcf_visuals(const std::string& text, const std::string& path, Look& look) {
+  std::error_code ec;
+  const bool same = std::filesystem::is_regular_file(path, ec) && read_text_file(path) == text;
+  MjcfOptions o;
+  o.inertia_check = InertiaCheck::Balance;
+  for (const MjcfGeom& g : parse_mjcf(text, path, same, o).geoms) {
+    Shape s;
+    s.p = g.X.p;
+    s.R = Eigen::Quaterniond(g.X.R).normalized();
+    char color[8];
+    std::snprintf(color, sizeof color, "#%02x%02x%02x", int(255 * g.rgb.x()), int(255 * g.rgb.y()), int(255 * g.rgb.z()));
+    s.color = color;
+    if (g.kind == "box" || g.kind == "ellipsoid") {
+      s.kind = "box";
+      s.size = 2.0 * g.size;
+    } else if (g.kind == "sphere") {
+      s.kind = "sphere";
+      s.size = Vec3(g.size.x(), 0, 0);
+    } else if (g.kind == "cylinder" || g.kind == "capsule") {
+      s.kind = "cylinder";
+      s.size = Vec3(g.size.x(), 2.0 * g.size.y() + (g.kind == "capsule" ? 2.0 * g.size.x() : 0.0), 0);
+    } else if (g.kind == "mesh") {
+      (g.body >= 0 ? look.bodies[size_t(g.body)].meshes : look.world_meshes) += 1;
+      continue;
+    } else {
+      continue;
+    }
+    (g.body >= 0 ? look.bodies[size_t(g.body)].visuals : look.world_visuals).push_back(s);
+  }
+}
+
 }  // namespace
 
 Look make_look(const Model& model, const std::string& urdf_text, const std::string& urdf_path) {
@@ -137,7 +173,8 @@ Look make_look(const Model& model, const std::string& urdf_text, const std::stri
       b.segments.push_back(s + reach * u);
     }
   }
-  if (!urdf_text.empty()) add_urdf_visuals(model, urdf_text, urdf_path, look);
+  if (!urdf_text.empty() && is_mjcf_text(urdf_text)) add_mjcf_visuals(urdf_text, urdf_path, look);
+  else if (!urdf_text.empty()) add_urdf_visuals(model, urdf_text, urdf_path, look);
   return look;
 }
 

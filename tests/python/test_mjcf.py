@@ -58,3 +58,19 @@ def test_a_free_flying_mjcf_body_conserves_energy_under_cvode():
     assert np.abs(e - e[0]).max() < 1e-7 * e[0]
     for h in (traj.linear_momentum, traj.angular_momentum):
         assert np.abs(h - h[0]).max() < 1e-7 * (1 + np.abs(h[0]).max())
+
+
+def test_view_draws_the_geoms(tmp_path):
+    """soadyn run then view of an MJCF model: the torso's box geom (half-sizes 0.15 0.1 0.25) drawn
+    with its full edges, the legs' capsules as cylinders"""
+    import subprocess
+    exe = os.environ.get("SOADYN", os.path.join(ROOT, "build", "soadyn"))
+    run = subprocess.run([exe, "run", os.path.join(MJCF, "floating.xml"), "--t-end", "0.1", "-q", "-o",
+                          str(tmp_path / "f.h5")], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    view = subprocess.run([exe, "view", str(tmp_path / "f.h5"), "-o", str(tmp_path / "f.html"), "-q"],
+                          capture_output=True, text=True, timeout=120)
+    assert view.returncode == 0, view.stderr
+    page = (tmp_path / "f.html").read_text()
+    assert '"kind":"box","size":[0.3,0.2,0.5]' in page
+    assert page.count('"kind":"cylinder"') >= 3
