@@ -183,6 +183,24 @@ TEST_P(Frames, AccelerationMatchesDifferencesOfTheVelocity) {
   }
 }
 
+// frames.hpp's claim: the placements and frame Jacobians need only update_frames' R, η and G
+TEST_P(Frames, PlacementAndJacobianNeedOnlyTheFrames) {
+  Rng rng(21);
+  const Model m = model_with_frames(rng, GetParam().options);
+  Data full(m), frames(m);
+  const VecX q = random_q(rng, m);
+  update_kinematics(m, full, q);
+  update_frames(m, frames, q);
+  MatX Ja, Jb;
+  for (int f = 0; f < int(m.frame_names.size()); ++f) {
+    EXPECT_TRUE(near_rel(frame_placement(m, frames, f).p, frame_placement(m, full, f).p, 1e-15));
+    EXPECT_TRUE(near_rel(frame_placement(m, frames, f).R, frame_placement(m, full, f).R, 1e-15));
+    frame_jacobian(m, full, f, Reference::World, Ja);
+    frame_jacobian(m, frames, f, Reference::World, Jb);
+    EXPECT_TRUE(near_rel(Jb, Ja, 1e-15));
+  }
+}
+
 TEST_P(Frames, PointJacobianIsTheFramesLinearRows) {
   Rng rng(14);
   Model m = random_model(rng, GetParam().options);

@@ -15,8 +15,8 @@
 // walk up b's ancestors, O(depth), nothing else touched.  Accelerations are the same walk over
 // v̇ = Ψ_D (G q̈ + 𝔞) (Data::coriolis, without gravity's base acceleration).
 //
-// Stages (data.hpp): [kin] update_kinematics(q), [vel] update_velocities(v); the placements and
-// Jacobians read only R, η and G, so update_frames(q) is enough for them.  Nothing here allocates
+// Stages (data.hpp): [kin] update_kinematics(q), [vel] update_velocities(v); frame_placement,
+// frame_jacobian and point_jacobian read only R, η and G, so update_frames(q) is enough for them.  Nothing here allocates
 // once its outputs have their size, except where a function says so (test_no_alloc).
 // Elsewhere: a scenario's frames: adds frames and log: {frames: [...]} logs their poses (h5log.hpp,
 // /frames); `soadyn inspect --frame NAME` prints a frame's pose and Jacobian; Python has every call
