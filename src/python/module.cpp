@@ -158,4 +158,5 @@ PYBIND11_MODULE(_soadyn, m) {
   sp::bind_simulate(m);
   sp::bind_batch(m);
   sp::bind_frames(m);
+  sp::bind_regressor(m);
 }

@@ -38,6 +38,9 @@ Frames and task space (model, data, q, …, frame, reference="local_world_aligne
     frame_jacobian(q, frame) (6, nv);  frame_jacobian_dot_times_v(q, v, frame);  point_jacobian(q, body, point)
     com(q), com_velocity(q, v), com_jacobian(q) (3, nv);  centroidal_momentum_matrix(q) A_G (6, nv)
     operational_space_inertia(q, J) Λ = (J 𝓜⁻¹ Jᵀ)⁻¹;  coriolis_matrix(q, v) C with C v = bias − gravity
+Inertial parameters (π: 10 per body, m, m c, I about the body origin, body axes)
+    parameters(model) -> π (10 N,);  with_parameters(model, π) -> Model (inconsistent π refused)
+    regressor(model, data, q, v, qdd) Y (nv, 10 N), τ = Y π;  forward_dynamics_parameter_derivative(…, tau) ∂q̈/∂π
 Simulation
     simulate(scene, method=…, rtol=…, t_end=…, output=None) -> Trajectory
     rollout(scene, initial_states, controls=None, steps=None, dt=…, method=…, threads=1)
@@ -70,6 +73,8 @@ from ._soadyn import (centroidal_inertia, centroidal_momentum, centroidal_moment
                       centroidal_momentum_matrix_dot_times_v, com, com_jacobian, com_velocity, coriolis_matrix,
                       frame_acceleration, frame_jacobian, frame_jacobian_dot_times_v, frame_placement, frame_velocity,
                       operational_space_inertia, point_jacobian)
+from ._soadyn import (forward_dynamics_parameter_derivative, parameters, regressor,  # regressor.hpp
+                      with_parameters)
 from . import _soadyn
 from ._soadyn import batch
 from ._trajectory import RunSummary, Trajectory, read_log, summary_from_dict
@@ -80,6 +85,7 @@ __all__ = [
     "centroidal_inertia", "centroidal_momentum", "centroidal_momentum_matrix", "centroidal_momentum_matrix_dot_times_v",
     "com", "com_jacobian", "com_velocity", "coriolis_matrix", "frame_acceleration", "frame_jacobian",
     "frame_jacobian_dot_times_v", "frame_placement", "frame_velocity", "operational_space_inertia", "point_jacobian",
+    "forward_dynamics_parameter_derivative", "parameters", "regressor", "with_parameters",
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",

@@ -1,0 +1,132 @@
+// The joint-torque regressor and the inertial parameters (regressor.hpp).
+//
+// Inverse dynamics (dynamics.cpp's sweeps) gives each body's joint-point acceleration pair
+// A_i = [α_i; a_i] (a_i the classical acceleration of η_i, gravity folded in at the roots) and
+// velocity ω_i.  Newton–Euler about the moving point η_i, in body i's axes (R_i: body → inertial),
+// with h = m c:
+//   f = m a + α × h + ω × (ω × h),     n = I α + ω × (I ω) + h × a,
+// linear in π_i = (m, h, I): so W_i (6×10) with [n; f] = W_i π_i, moved to inertial axes by R_i.
+// τ_k collects G_kᵀ of the force pairs of k's subtree carried to η_k (F_p += D_iᵀ F_i, as the
+// backward sweep does): Y's block (DOFs of j, parameters of i) = G_jᵀ D_{i:j}ᵀ R_i W_i for every
+// ancestor j of i, and zero elsewhere.
+#include "soadyn/regressor.hpp"
+
+#include "soadyn/algorithms.hpp"
+#include "soadyn/inertia.hpp"
+#include "soadyn/text.hpp"
+
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+#include <string>
+
+namespace soadyn {
+
+namespace {
+
+using Mat610 = Eigen::Matrix<double, 6, kParametersPerBody>;
+
+// the symmetric basis of I's six entries, in π's order xx, xy, yy, xz, yz, zz
+Mat3 inertia_basis(int k) {
+  static const int rc[6][2] = {{0, 0}, {0, 1}, {1, 1}, {0, 2}, {1, 2}, {2, 2}};
+  Mat3 E = Mat3::Zero();
+  E(rc[k][0], rc[k][1]) = E(rc[k][1], rc[k][0]) = 1.0;
+  return E;
+}
+
+std::string body_label(const Model& m, int i) { return "body '" + printable(m.body_names[size_t(i)]) + "'"; }
+
+}  // namespace
+
+VecX parameters(const Model& model) {
+  VecX pi(kParametersPerBody * model.nbodies);
+  for (int i = 0; i < model.nbodies; ++i) {
+    const double m = model.mass[i];
+    const Vec3 h = m * model.com[i];
+    const Mat3& I = model.inertia_origin[i];
+    pi.segment<kParametersPerBody>(kParametersPerBody * i) << m, h.x(), h.y(), h.z(), I(0, 0), I(0, 1), I(1, 1),
+        I(0, 2), I(1, 2), I(2, 2);
+  }
+  return pi;
+}
+
+Model with_parameters(const Model& model, const VecX& pi) {
+  if (pi.size() != kParametersPerBody * model.nbodies)
+    throw Error("with_parameters: pi: expected " + std::to_string(kParametersPerBody * model.nbodies) +
+                " numbers (10 per body), got " + std::to_string(pi.size()));
+  Model out = model;
+  for (int i = 0; i < model.nbodies; ++i) {
+    const auto p = pi.segment<kParametersPerBody>(kParametersPerBody * i);
+    if (!p.allFinite()) throw Error("with_parameters: " + body_label(model, i) + ": expected finite parameters");
+    const double m = p(0);
+    if (!(m > 0.0)) throw Error("with_parameters: " + body_label(model, i) + ": mass: expected > 0, got " + std::to_string(m));
+    const Vec3 c = Vec3(p(1), p(2), p(3)) / m;
+    Mat3 Io;
+    Io << p(4), p(5), p(7), p(5), p(6), p(8), p(7), p(8), p(9);
+    const Mat3 Icm = Io - parallel_axis(m, c);  // about the centre of mass
+    const Vec3 l = Eigen::SelfAdjointEigenSolver<Mat3>(Icm, Eigen::EigenvaluesOnly).eigenvalues();
+    const double tol = 1e-12 * std::max(1.0, Io.cwiseAbs().maxCoeff());
+    if (l(0) < -tol)
+      throw Error("with_parameters: " + body_label(model, i) +
+                  ": inertia about the centre of mass: expected positive semidefinite, got principal moments " +
+                  std::to_string(l(0)) + ", " + std::to_string(l(1)) + ", " + std::to_string(l(2)));
+    if (l(2) > l(0) + l(1) + tol)
+      throw Error("with_parameters: " + body_label(model, i) +
+                  ": inertia about the centre of mass: expected principal moments obeying the triangle inequality, got " +
+                  std::to_string(l(0)) + ", " + std::to_string(l(1)) + ", " + std::to_string(l(2)));
+    out.mass[i] = m;
+    out.com[i] = c;
+    out.inertia[i] = Icm;
+    out.inertia_origin[i] = Io;
+  }
+  return out;
+}
+
+void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y) {
+  inverse_dynamics(model, data, qdd);  // data.A: [α_i; a_i] of every body, inertial axes
+  Y.setZero(model.nv, kParametersPerBody * model.nbodies);
+  for (int i = 0; i < model.nbodies; ++i) {
+    const Mat3& R = data.R[i];
+    const Vec3 w = R.transpose() * data.V.col(i).head<3>();
+    const Vec3 al = R.transpose() * data.A.col(i).head<3>(), a = R.transpose() * data.A.col(i).tail<3>();
+    // W_i in body axes: columns m, h (3), I (6); rows [n; f]
+    Mat610 W = Mat610::Zero();
+    W.block<3, 1>(3, 0) = a;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 e = Vec3::Unit(k);
+      W.block<3, 1>(0, 1 + k) = e.cross(a);
+      W.block<3, 1>(3, 1 + k) = al.cross(e) + w.cross(w.cross(e));
+    }
+    for (int k = 0; k < 6; ++k) {
+      const Mat3 E = inertia_basis(k);
+      W.block<3, 1>(0, 4 + k) = E * al + w.cross(E * w);
+    }
+    // to inertial axes, then up the chain of ancestors: G_jᵀ B, B ← D_jᵀ B = [n + d_j × f; f]
+    Mat610 B;
+    B.topRows<3>() = R * W.topRows<3>();
+    B.bottomRows<3>() = R * W.bottomRows<3>();
+    for (int j = i; j >= 0; j = model.parent[j]) {
+      const int iv = model.idx_v[j], n = model.nv_i[j];
+      Y.block(iv, kParametersPerBody * i, n, kParametersPerBody).noalias() =
+          data.G.middleCols(iv, n).transpose() * B;
+      const Vec3 d = data.d.col(j);
+      for (int c = 0; c < kParametersPerBody; ++c) B.block<3, 1>(0, c) += d.cross(Vec3(B.block<3, 1>(3, c)));
+    }
+  }
+}
+
+void forward_dynamics_parameter_derivative(const Model& model, Data& data, const VecX& tau, MatX& dqdd_dpi) {
+  data.check(model, "forward_dynamics_parameter_derivative", "tau", tau.size(), model.nv);
+  forward_dynamics(model, data, tau, FdMethod::Sparse);  // data.qdd; 𝓜 factored into data.L
+  const VecX qdd = data.qdd;
+  regressor(model, data, qdd, dqdd_dpi);
+  // ∂q̈/∂π = −𝓜⁻¹ Y: one LᵀDL solve per column
+  for (Eigen::Index c = 0; c < dqdd_dpi.cols(); ++c) {
+    auto col = dqdd_dpi.col(c);
+    col = -col;
+    ltdl_solve(model, data, col);
+  }
+  data.qdd = qdd;
+}
+
+}  // namespace soadyn

@@ -1,0 +1,122 @@
+// The joint-torque regressor and the inertial parameters: Y π against inverse dynamics on seeded
+// random trees of every joint type, τ linear in π (Y of a model with other parameters unchanged),
+// the round trip parameters → with_parameters, ∂q̈/∂π against central differences of forward
+// dynamics, and the refusal of physically inconsistent parameters.
+#include "soadyn/regressor.hpp"
+
+#include "soadyn/algorithms.hpp"
+#include "soadyn/kinematics.hpp"
+#include "test_util.hpp"
+
+using namespace soadyn;
+using namespace soadyn::test;
+using ::testing::HasSubstr;
+
+namespace {
+
+const TreeCase kCases[] = {
+    {"chain_revolute", {.n = 6, .branching = 0.0}},
+    {"tree_mixed", {.n = 9, .branching = 0.6, .prismatic = 0.3, .ball = 0.2, .planar = 0.1, .fixed = 2}},
+    {"free_root", {.n = 7, .branching = 0.5, .prismatic = 0.2, .ball = 0.2, .free_root = true}},
+};
+
+class Regressor : public ::testing::TestWithParam<TreeCase> {};
+
+TEST_P(Regressor, TimesParametersIsInverseDynamics) {
+  Rng rng(41);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Model model = random_model(rng, GetParam().options);
+    Data data(model);
+    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
+    update_kinematics(model, data, q);
+    update_velocities(model, data, v);
+    MatX Y;
+    regressor(model, data, qdd, Y);
+    ASSERT_EQ(Y.rows(), model.nv);
+    ASSERT_EQ(Y.cols(), 10 * model.nbodies);
+    inverse_dynamics(model, data, qdd);
+    EXPECT_TRUE(near_rel(Y * parameters(model), data.tau, 1e-12)) << trial;
+    // linear in π: the same Y times another model's parameters is that model's inverse dynamics
+    VecX pi2 = parameters(model);
+    for (int i = 0; i < model.nbodies; ++i) pi2(10 * i) *= 1.5, pi2.segment<3>(10 * i + 1) *= 1.5;  // heavier, same c
+    for (int i = 0; i < model.nbodies; ++i) pi2.segment<6>(10 * i + 4) *= 1.5;
+    const Model heavier = with_parameters(model, pi2);
+    Data d2(heavier);
+    update_kinematics(heavier, d2, q);
+    update_velocities(heavier, d2, v);
+    inverse_dynamics(heavier, d2, qdd);
+    EXPECT_TRUE(near_rel(Y * pi2, d2.tau, 1e-12)) << trial;
+  }
+}
+
+TEST_P(Regressor, ParameterDerivativeOfForwardDynamicsAgainstCentralDifferences) {
+  Rng rng(5);
+  const Model model = random_model(rng, GetParam().options);
+  Data data(model);
+  const VecX q = random_q(rng, model), v = random_v(rng, model), tau = random_v(rng, model, 2.0);
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  MatX dqdd;
+  forward_dynamics_parameter_derivative(model, data, tau, dqdd);
+  const VecX pi = parameters(model);
+  auto qdd_at = [&](const VecX& p) {
+    const Model m2 = with_parameters(model, p);
+    Data d2(m2);
+    update_kinematics(m2, d2, q);
+    update_velocities(m2, d2, v);
+    forward_dynamics(m2, d2, tau, FdMethod::Dense);
+    return VecX(d2.qdd);
+  };
+  MatX fd(model.nv, pi.size());
+  for (Eigen::Index j = 0; j < pi.size(); ++j) {
+    // a small step that keeps every perturbed body physical: the masses' and the moments' own scale
+    const double h = 1e-6 * std::max(std::abs(pi(j)), 1e-3);
+    VecX p = pi, m = pi;
+    p(j) += h;
+    m(j) -= h;
+    fd.col(j) = (qdd_at(p) - qdd_at(m)) / (2 * h);
+  }
+  EXPECT_TRUE(near_rel(dqdd, fd, 1e-6));
+}
+
+INSTANTIATE_TEST_SUITE_P(Trees, Regressor, ::testing::ValuesIn(kCases),
+                         [](const auto& info) { return std::string(info.param.name); });
+
+TEST(Parameters, RoundTripGivesTheSameModel) {
+  Rng rng(3);
+  const Model model = random_model(rng, {.n = 8, .branching = 0.5, .ball = 0.2, .fixed = 2});
+  const Model again = with_parameters(model, parameters(model));
+  Data a(model), b(again);
+  const VecX q = random_q(rng, model);
+  update_kinematics(model, a, q);
+  update_kinematics(again, b, q);
+  mass_matrix(model, a);
+  mass_matrix(again, b);
+  EXPECT_TRUE(near_rel(a.Mass, b.Mass, 1e-13));
+  for (int i = 0; i < model.nbodies; ++i) EXPECT_TRUE(near_rel(model.com[i], again.com[i], 1e-14));
+}
+
+TEST(Parameters, PhysicallyInconsistentParametersAreRefusedNamingTheBody) {
+  Rng rng(9);
+  const Model model = random_model(rng, {.n = 3, .branching = 0.0});
+  auto refusal = [&](VecX pi) {
+    try {
+      with_parameters(model, pi);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  VecX pi = parameters(model);
+  pi(10) = -1.0;  // body 1's mass
+  EXPECT_THAT(refusal(pi), HasSubstr("body '" + model.body_names[1] + "': mass: expected > 0"));
+  pi = parameters(model);
+  pi.segment<6>(24) << 1e-3, 0, 1e-3, 0, 0, 10.0;  // body 2: I_zz far past I_xx + I_yy
+  EXPECT_THAT(refusal(pi), HasSubstr("body '" + model.body_names[2] + "'"));
+  pi = parameters(model);
+  pi(4) = -5.0;  // body 0: negative moment
+  EXPECT_THAT(refusal(pi), HasSubstr("positive semidefinite"));
+  EXPECT_THAT(refusal(VecX::Zero(5)), HasSubstr("expected 30 numbers"));
+}
+
+}  // namespace
