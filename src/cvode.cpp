@@ -18,6 +18,7 @@
 #include <exception>
 #include <memory>
 #include <sstream>
+#include <vector>
 
 namespace soadyn {
 
@@ -149,6 +150,9 @@ class Cvode : public Integrator {
     double tn = t;
     check(CVodeGetCurrentTime(mem, &tn), "CVodeGetCurrentTime");
     int flag = CV_SUCCESS;
+    roots_.clear();
+    // no step past t_out when a restart follows there (a control tick) or a root may lie beyond it
+    if ((exact_stops_ || nroots_ > 0) && tn < t_out) check(CVodeSetStopTime(mem, t_out), "CVodeSetStopTime");
     while (tn < t_out) {
       if (stop_requested()) {  // y_ holds y(t_n), the last step's state
         t = tn;
@@ -158,6 +162,7 @@ class Cvode : public Integrator {
       }
       long steps = 0;  // one counter, not the whole stats() set, on every step
       check(CVodeGetNumSteps(mem, &steps), "CVodeGetNumSteps");
+      steps += before_.steps;
       if (steps >= max_steps_) fail(tn, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
       flag = CVode(mem, t_out, y_.get(), &tn, CV_ONE_STEP);
       if (pending_) {
@@ -166,6 +171,16 @@ class Cvode : public Integrator {
         std::rethrow_exception(e);
       }
       if (flag < 0) break;
+      if (flag == CV_ROOT_RETURN) {  // y_ holds y(t_root): the caller acts, then restarts here
+        std::vector<int> found(size_t(nroots_), 0);
+        check(CVodeGetRootInfo(mem, found.data()), "CVodeGetRootInfo");
+        for (int i = 0; i < nroots_; ++i)
+          if (found[size_t(i)] != 0) roots_.push_back(i);
+        t = tn;
+        y = map(y_.get());
+        if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
+        return;
+      }
     }
     if (flag >= 0) {
       flag = CVodeGetDky(mem, t_out, 0, y_.get());
@@ -188,6 +203,17 @@ class Cvode : public Integrator {
   }
 
   IntegratorStats stats() const override {
+    IntegratorStats s = since_start();
+    s.steps += before_.steps;
+    s.rhs_evals += before_.rhs_evals;
+    s.jac_evals += before_.jac_evals;
+    s.error_test_failures += before_.error_test_failures;
+    s.nonlinear_iterations += before_.nonlinear_iterations;
+    return s;
+  }
+
+  // CVODE's counters since its last (re)initialization
+  IntegratorStats since_start() const {
     IntegratorStats s;
     void* mem = mem_.get();
     // every counter read is checked: a failed read would report a stale or zero count
@@ -211,9 +237,20 @@ class Cvode : public Integrator {
 
   // CVODE anew from (t, y): order 1 and a fresh step-size search, as after a discontinuity
   void restart(double t, const VecX& y) override {
+    before_ = stats();  // CVodeReInit zeroes CVODE's counters: the run's go on from here
     map(y_.get()) = y;
     check(CVodeReInit(mem_.get(), t, y_.get()), "CVodeReInit");
   }
+
+  void set_roots(int n, RootFunction g) override {
+    nroots_ = n;
+    root_fn_ = std::move(g);
+    check(CVodeRootInit(mem_.get(), n, &Cvode::root), "CVodeRootInit");
+    std::vector<int> down(size_t(n), -1);  // only crossings from g > 0 to g < 0
+    if (n > 0) check(CVodeSetRootDirection(mem_.get(), down.data()), "CVodeSetRootDirection");
+  }
+
+  void set_exact_stops(bool on) override { exact_stops_ = on; }
 
   std::string quaternion_handling() const override {
     if (!sys_.model.has_quaternions()) return "none";
@@ -228,6 +265,17 @@ class Cvode : public Integrator {
       self->sys_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
       // a non-finite derivative is recoverable: CVODE retries with a smaller step
       return map(ydot).allFinite() ? 0 : 1;
+    } catch (...) {
+      self->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  static int root(double t, N_Vector y, double* g, void* user) {
+    auto* self = static_cast<Cvode*>(user);
+    try {
+      self->root_fn_(t, N_VGetArrayPointer(y), g);
+      return 0;
     } catch (...) {
       self->pending_ = std::current_exception();
       return -1;
@@ -312,6 +360,10 @@ class Cvode : public Integrator {
   bool bdf_;
   long max_steps_;
   bool projection_ = false;
+  bool exact_stops_ = false;
+  IntegratorStats before_;  // the counters of the run before the last restart
+  int nroots_ = 0;
+  RootFunction root_fn_;
   std::exception_ptr pending_;
   std::string error_message_;
   // declared in creation order, destroyed in reverse: the CVODE memory before what it uses

@@ -96,7 +96,9 @@ std::uint64_t row_bytes(const Model& model, const LogGroups& groups) {
 struct H5Log::Impl {
   std::string path, tmp_path;
   bool published = false, closed = false, broken = false;
-  Id file, samples;
+  Id file, samples, events;
+  std::vector<double> event_rows;  // events not yet written, 7 numbers each
+  hsize_t event_count = 0;
   int width = 0;
   hsize_t rows = 0;            // rows in the file
   std::vector<double> buffer;  // rows not yet written
@@ -118,6 +120,7 @@ struct H5Log::Impl {
     broken = true;
     for (Scalar* s : scalars()) s->release();
     samples.release();
+    events.release();
     file.release();
   }
   [[noreturn]] void io_error(const H5Failure& e) {
@@ -166,6 +169,8 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
   im.path = path;
   im.tmp_path = temporary_path(path);
   im.groups = groups;
+  im.groups.impacts = settings.limits && sc.model.has_limits();
+  im.groups.control = groups.control || !sc.inputs.controllers.empty();
   const Model& m = sc.model;
   for (const std::string& name : sc.log_frames)
     if (const int f = m.frame_index(name);
@@ -270,6 +275,21 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
       attribute(im.samples, "column_names", names);
       attribute(im.samples, "column_units", units);
     }
+    if (im.groups.impacts) {
+      // the joint limits' events, 7 numbers a row, appended at each flush
+      hsize_t dims[2] = {0, 7}, maxdims[2] = {H5S_UNLIMITED, 7}, chunk[2] = {64, 7};
+      Id space(H5Screate_simple(2, dims, maxdims), H5Sclose, "H5Screate_simple");
+      Id props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "H5Pcreate");
+      check(H5Pset_chunk(props, 2, chunk), "H5Pset_chunk");
+      im.events = Id(H5Dcreate2(im.file, "events", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose,
+                     "creating /events");
+      attribute(im.events, "column_names",
+                std::vector<std::string>{"t", "dof", "side", "kind", "v_before", "v_after", "energy_lost"});
+      attribute(im.events, "description",
+                std::string("joint-limit events: t (s), dof (index into v, /model v_names), side (-1 lower, +1 upper), "
+                            "kind (0 impact, 1 hold: an impact that stopped it at the limit, 2 release), v_before and "
+                            "v_after (the DOF's speed, rad/s or m/s), energy_lost (J, kinetic energy the impact took)"));
+    }
     for (const std::string& g : lay.groups) h5::group(im.file, g.c_str() + 1);
     if (groups.bodies) {
       Id g(H5Gopen2(im.file, "bodies", H5P_DEFAULT), H5Gclose, "opening /bodies");
@@ -314,6 +334,12 @@ void H5Log::on_sample(const Sample& s) {
   impl_->t_last = s.t;
 }
 
+void H5Log::on_event(const LimitEvent& e) {
+  const double kind = e.kind == "impact" ? 0 : e.kind == "hold" ? 1 : 2;
+  impl_->event_rows.insert(impl_->event_rows.end(),
+                           {e.t, double(e.dof), double(e.side), kind, e.v_before, e.v_after, e.energy_lost});
+}
+
 void H5Log::flush(const RunSummary* summary) {
   Impl& im = *impl_;
   if (im.broken || im.closed) return;
@@ -329,6 +355,19 @@ void H5Log::flush(const RunSummary* summary) {
       Id mem_space(H5Screate_simple(2, count, nullptr), H5Sclose, "H5Screate_simple");
       check(H5Dwrite(im.samples, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, im.buffer.data()), "writing /samples");
       check(H5Dflush(im.samples), "H5Dflush");  // the rows, then the extent that shows them
+    }
+    if (const hsize_t ne = im.event_rows.size() / 7; ne > 0 && hid_t(im.events) >= 0) {
+      hsize_t size[2] = {im.event_count + ne, 7};
+      check(H5Dset_extent(im.events, size), "extending /events");
+      Id file_space(H5Dget_space(im.events), H5Sclose, "H5Dget_space");
+      hsize_t start[2] = {im.event_count, 0}, count[2] = {ne, 7};
+      check(H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, nullptr, count, nullptr), "H5Sselect_hyperslab");
+      Id mem_space(H5Screate_simple(2, count, nullptr), H5Sclose, "H5Screate_simple");
+      check(H5Dwrite(im.events, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, im.event_rows.data()),
+            "writing /events");
+      check(H5Dflush(im.events), "H5Dflush");
+      im.event_count += ne;
+      im.event_rows.clear();
     }
     if (summary) {
       im.status.write(summary->status);
@@ -382,6 +421,7 @@ void H5Log::on_finish(const RunSummary& summary) {
   if (im.broken) return;
   for (Scalar* s : im.scalars()) s->reset();
   im.samples.reset();
+  im.events.reset();
   // closing ends SWMR writing: the file then opens without the SWMR-read flag
   if (H5Fclose(im.file) < 0) {
     h5::record_cause();

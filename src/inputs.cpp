@@ -5,6 +5,18 @@
 
 namespace soadyn {
 
+double JointTarget::value(double t) const {
+  return constant + amplitude * std::sin(2 * std::numbers::pi * frequency * t + phase);
+}
+double JointTarget::rate(double t) const {
+  const double w = 2 * std::numbers::pi * frequency;
+  return amplitude * w * std::cos(w * t + phase);
+}
+double JointTarget::acceleration(double t) const {
+  const double w = 2 * std::numbers::pi * frequency;
+  return -amplitude * w * w * std::sin(w * t + phase);
+}
+
 void Inputs::evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const {
   tau.setZero();
   for (const auto& u : torques)

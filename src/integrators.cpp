@@ -2,6 +2,7 @@
 
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
+#include "soadyn/limits.hpp"
 #include "soadyn/newton_solver.hpp"
 
 #include <Eigen/LU>
@@ -12,17 +13,19 @@
 
 namespace soadyn {
 
-System::System(const Model& m, const Inputs& in, FdMethod fd)
+System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
     : model(m),
       inputs(in),
       method(fd),
-      nquad(in.does_work() ? 2 : 0),
+      nquad(in.does_work() || control_work ? 2 : 0),
       data(m),
       q(m.nq),
       v(m.nv),
       tau(m.nv),
       qd(m.nq),
       control(VecX::Zero(m.nv)),
+      feedback_tau(VecX::Zero(m.nv)),
+      control_work(control_work),
       y_work(m.nq + m.nv + nquad),
       f0(m.nq + m.nv + nquad),
       f1(m.nq + m.nv + nquad),
@@ -45,14 +48,22 @@ void System::rhs(double t, const double* y, double* ydot) {
   update_velocities(model, data, v);
   inputs.evaluate(t, q, v, tau);
   if (controlled) tau += control;
+  if (feedback) {
+    feedback_tau.setZero();
+    feedback(t, q, v, feedback_tau);
+    tau += feedback_tau;
+  }
   forward_dynamics(model, data, tau, method);
+  if (limits) limits->constrain(*this);  // held DOFs: their constraint forces
   model.qdot(q, v, qd);
   Eigen::Map<VecX>(ydot, model.nq) = qd;
   Eigen::Map<VecX>(ydot + model.nq, model.nv) = data.qdd;
   if (nquad > 0) {
     // Ẇ = (τ_torques + τ_dampers) · q̇,  Ḋ = Σ c q̇²
     const Inputs::Power p = inputs.power(t, v);
-    ydot[model.nq + model.nv] = p.inputs;
+    double controller = 0.0;  // (control + τ_c) · v, the controllers' power (v · τ is power on every joint)
+    if (control_work) controller = feedback_tau.dot(v) + (controlled ? control.dot(v) : 0.0);
+    ydot[model.nq + model.nv] = p.inputs + controller;
     ydot[model.nq + model.nv + 1] = p.dissipated;
   }
 }
@@ -71,6 +82,11 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   update_velocities(model, data, v);
   inputs.evaluate(t, q, v, tau);
   if (controlled) tau += control;
+  if (feedback) {
+    feedback_tau.setZero();
+    feedback(t, q, v, feedback_tau);
+    tau += feedback_tau;
+  }
   forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
   const MatX& dq = derivatives->dqdd_dq;
   J.setZero();
@@ -94,6 +110,7 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v); nothing depends on W or D
   if (nquad > 0) {
     inputs.power_derivatives(t, v, dP, dD);
+    if (control_work && controlled) dP += control;  // ∂(control · v)/∂v
     J.row(nq + nv).segment(nq, nv) = dP.transpose();
     J.row(nq + nv + 1).segment(nq, nv) = dD.transpose();
   }

@@ -58,6 +58,7 @@ Layout layout(const Model& m, const LogGroups& g) {
     for (const char* e : {"kinetic", "potential", "total", "work_inputs", "dissipated"})
       b.view(std::string("/energy/") + e, {{std::string("energy.") + e, "J"}}, 0);
   }
+  if (g.energy && g.impacts) b.view("/energy/impact_loss", {{"energy.impact_loss", "J"}}, 0);
   if (g.momentum) {
     b.out.groups.push_back("/momentum");
     for (const auto& [kind, unit] : {std::pair{"linear", "kg m/s"}, std::pair{"angular", "kg m^2/s"}}) {
@@ -77,6 +78,13 @@ Layout layout(const Model& m, const LogGroups& g) {
         for (const char* x : parts) c.push_back({std::string("bodies.") + kind + "." + m.body_names[size_t(i)] + "." + x, unit});
       b.view(std::string("/bodies/") + kind, c, int(parts.size()), m.nbodies);
     }
+  }
+  if (g.control) {
+    // a generalized force per DOF: N m on a turning one, N on a sliding one
+    const std::vector<std::string> vn = m.v_names(), vu = v_units(m);
+    std::vector<Column> c;
+    for (int k = 0; k < m.nv; ++k) c.push_back({"control." + vn[size_t(k)], vu[size_t(k)] == "rad/s" ? "N m" : "N"});
+    b.view("/control", c, m.nv);
   }
   if (!g.frames.empty()) {
     b.out.groups.push_back("/frames");
@@ -98,8 +106,10 @@ void append_row(const Model& m, Data& data, const LogGroups& g, const Sample& s,
   b.push_back(s.t);
   if (g.state) put(s.q), put(s.qd), put(s.qdd);
   if (g.energy) b.insert(b.end(), {s.kinetic, s.potential, s.total, s.work_inputs, s.dissipated});
+  if (g.energy && g.impacts) b.push_back(s.impact_loss);
   if (g.momentum) put(s.linear), put(s.angular);
   if (g.bodies) put(s.body_position), put(s.body_orientation), put(s.body_com);  // column-major: body by body
+  if (g.control) put(s.control);
   if (g.frames.empty()) return;
   // the frames' placements at q: every position, then every orientation (w ≥ 0)
   update_frames(m, data, s.q);

@@ -166,6 +166,9 @@ void validate(const BodySpec& b, int i) {
       refuse(b, i, "placement", "none for a free joint (its q is the body's pose in the world)",
              "a non-identity placement");
   }
+  // travel: NaN never, lower ≤ upper (equal: the joint cannot move, which a fixed joint says)
+  if (std::isnan(b.lower) || std::isnan(b.upper) || !(b.lower < b.upper))
+    refuse(b, i, "limits", "lower < upper (not NaN)", fmt(b.lower) + " .. " + fmt(b.upper));
   check_inertia(b, i, b.mass, b.inertia);
 }
 
@@ -346,6 +349,12 @@ Model Model::build(const std::vector<BodySpec>& given, const Vec3& gravity, Iner
     m.idx_v.push_back(m.nv);
     m.nq_i.push_back(joint_nq(b.joint));
     m.nv_i.push_back(joint_nv(b.joint));
+    // travel: 1-DOF joints only, where the coordinate is the DOF
+    const bool travels = joint_nv(b.joint) == 1 && joint_nq(b.joint) == 1;
+    for (int j = 0; j < joint_nv(b.joint); ++j) {
+      m.lower.push_back(travels ? b.lower : -std::numeric_limits<double>::infinity());
+      m.upper.push_back(travels ? b.upper : std::numeric_limits<double>::infinity());
+    }
     m.nq += joint_nq(b.joint);
     m.nv += joint_nv(b.joint);
   }
@@ -486,6 +495,12 @@ int Model::add_frame(const std::string& name, int body, const Placement& X) {
 bool Model::has_free_joint() const {
   for (auto t : joint_type)
     if (t == JointType::Free) return true;
+  return false;
+}
+
+bool Model::has_limits() const {
+  for (size_t k = 0; k < lower.size(); ++k)
+    if (std::isfinite(lower[k]) || std::isfinite(upper[k])) return true;
   return false;
 }
 

@@ -4,6 +4,8 @@
 #include "soadyn/mjcf.hpp"
 #include "soadyn/text.hpp"
 
+#include "scenario_reader.hpp"
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -27,123 +29,9 @@ namespace soadyn {
 
 namespace {
 
-// Reads YAML nodes and reports every mistake as file:line:column: field: message.
-struct Reader {
-  std::string file;
+using scenario_detail::find_joint;
+using scenario_detail::Reader;
 
-  [[noreturn]] void fail(const YAML::Mark& m, const std::string& field, const std::string& msg) const {
-    std::string where = file;
-    if (m.line >= 0) where += ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
-    throw Error(where + ": " + field + ": " + msg);
-  }
-  [[noreturn]] void fail(const YAML::Node& n, const std::string& field, const std::string& msg) const {
-    fail(n.Mark(), field, msg);
-  }
-
-  static std::string show_number(double x) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", x);
-    return buf;
-  }
-
-  static std::string show(const YAML::Node& n) {
-    if (n.IsScalar()) return "'" + n.Scalar() + "'";
-    if (n.IsSequence()) return "a list";
-    if (n.IsMap()) return "a map";
-    return "nothing";
-  }
-
-  void keys(const YAML::Node& map, const std::string& field, const std::vector<std::string>& allowed) const {
-    if (!map.IsMap()) fail(map, field, "expected a map, got " + show(map));
-    std::set<std::string> seen;
-    for (auto it = map.begin(); it != map.end(); ++it) {
-      const std::string k = it->first.Scalar();
-      if (std::find(allowed.begin(), allowed.end(), k) == allowed.end())
-        fail(it->first, field, "unknown key '" + k + "'" + did_you_mean(k, allowed));
-      if (!seen.insert(k).second) fail(it->first, field, "duplicate key '" + k + "'");
-    }
-  }
-
-  YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& field) const {
-    const YAML::Node n = map[key];
-    if (!n || n.IsNull()) fail(map, field, "missing required field '" + key + "'");
-    return n;
-  }
-
-  double number(const YAML::Node& n, const std::string& field) const {
-    if (!n.IsScalar()) fail(n, field, "expected a number, got " + show(n));
-    // a quoted or !!str-tagged scalar is a string in YAML, whatever it spells
-    if (n.Tag() == "!" || n.Tag() == "tag:yaml.org,2002:str") fail(n, field, "expected a number, got the string " + show(n));
-    double x;
-    try {
-      x = n.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(n, field, "expected a number, got " + show(n));
-    }
-    if (!std::isfinite(x)) fail(n, field, "expected a finite number, got " + show(n));
-    return x;
-  }
-
-  double positive(const YAML::Node& n, const std::string& field) const {
-    const double x = number(n, field);
-    if (!(x > 0)) fail(n, field, "expected a positive number, got " + show(n));
-    return x;
-  }
-
-  std::string string(const YAML::Node& n, const std::string& field) const {
-    if (!n.IsScalar() || n.Scalar().empty()) fail(n, field, "expected a name, got " + show(n));
-    return n.Scalar();
-  }
-
-  bool boolean(const YAML::Node& n, const std::string& field) const {
-    try {
-      if (n.IsScalar()) return n.as<bool>();
-    } catch (const YAML::Exception&) {
-    }
-    fail(n, field, "expected true or false, got " + show(n));
-  }
-
-  VecX numbers(const YAML::Node& n, const std::string& field, int size) const {
-    if (size == 1 && !n.IsScalar()) fail(n, field, "expected a number, got " + show(n));
-    if (!n.IsSequence()) fail(n, field, "expected a list of " + std::to_string(size) + " numbers, got " + show(n));
-    if (int(n.size()) != size)
-      fail(n, field, "expected " + std::to_string(size) + " numbers, got " + std::to_string(n.size()));
-    VecX v(size);
-    for (int k = 0; k < size; ++k) v(k) = number(n[k], field + "[" + std::to_string(k) + "]");
-    return v;
-  }
-
-  Vec3 vec3(const YAML::Node& n, const std::string& field) const { return numbers(n, field, 3); }
-
-  // rpy: R = Rz(yaw) Ry(pitch) Rx(roll)
-  static Mat3 rpy(const Vec3& a) {
-    return (Eigen::AngleAxisd(a.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(a.y(), Vec3::UnitY()) *
-            Eigen::AngleAxisd(a.x(), Vec3::UnitX()))
-        .toRotationMatrix();
-  }
-
-  // inertia: [ixx, iyy, izz], {ixx, iyy, izz, ixy, ixz, iyz}, or a 3×3 list of rows
-  Mat3 inertia(const YAML::Node& n, const std::string& field) const {
-    Mat3 I = Mat3::Zero();
-    if (n.IsMap()) {
-      keys(n, field, {"ixx", "iyy", "izz", "ixy", "ixz", "iyz"});
-      I(0, 0) = number(require(n, "ixx", field), field + ".ixx");
-      I(1, 1) = number(require(n, "iyy", field), field + ".iyy");
-      I(2, 2) = number(require(n, "izz", field), field + ".izz");
-      if (n["ixy"]) I(0, 1) = I(1, 0) = number(n["ixy"], field + ".ixy");
-      if (n["ixz"]) I(0, 2) = I(2, 0) = number(n["ixz"], field + ".ixz");
-      if (n["iyz"]) I(1, 2) = I(2, 1) = number(n["iyz"], field + ".iyz");
-      return I;
-    }
-    if (n.IsSequence() && n.size() == 3 && n[0].IsSequence()) {
-      for (int r = 0; r < 3; ++r) I.row(r) = vec3(n[r], field + "[" + std::to_string(r) + "]").transpose();
-      return I;
-    }
-    if (n.IsSequence() && n.size() == 3) return vec3(n, field).asDiagonal();
-    fail(n, field,
-         "expected [ixx, iyy, izz], a map {ixx, iyy, izz, ixy, ixz, iyz} or a 3x3 list, got " + show(n));
-  }
-};
 
 
 JointType joint_type(const Reader& rd, const YAML::Node& n, const std::string& field) {
@@ -280,12 +168,6 @@ Model build_located(const Reader& rd, const BodyNodes& bodies, const Vec3& gravi
   }
 }
 
-int find_joint(const Reader& rd, const Model& m, const YAML::Node& key, const std::string& field) {
-  const std::string name = rd.string(key, field);
-  const int i = m.joint_index(name);
-  if (i < 0) rd.fail(key, field, "no joint named '" + name + "'" + did_you_mean(name, m.joint_names));
-  return i;
-}
 
 void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q0, VecX& v0) {
   rd.keys(n, "initial", {"q", "qd"});
@@ -322,7 +204,19 @@ void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q
 }
 
 void read_simulation(const Reader& rd, const YAML::Node& n, SimulationSettings& s) {
-  rd.keys(n, "simulation", {"t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian", "newton"});
+  rd.keys(n, "simulation", {"t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian", "newton",
+                            "limits", "restitution", "control_dt"});
+  if (n["limits"]) s.limits = rd.boolean(n["limits"], "simulation.limits");
+  if (n["restitution"]) {
+    s.restitution = rd.number(n["restitution"], "simulation.restitution");
+    if (!(s.restitution >= 0 && s.restitution <= 1))
+      rd.fail(n["restitution"], "simulation.restitution", "expected a coefficient in [0, 1], got " + Reader::show(n["restitution"]));
+  }
+  if (n["control_dt"]) {
+    s.control_dt = rd.number(n["control_dt"], "simulation.control_dt");
+    if (s.control_dt < 0)
+      rd.fail(n["control_dt"], "simulation.control_dt", "expected 0 (continuous) or a positive number, got " + Reader::show(n["control_dt"]));
+  }
   if (n["t_end"]) s.t_end = rd.positive(n["t_end"], "simulation.t_end");
   if (n["output_dt"]) s.output_dt = rd.positive(n["output_dt"], "simulation.output_dt");
   if (n["rtol"]) s.rtol = rd.positive(n["rtol"], "simulation.rtol");
@@ -359,8 +253,9 @@ void read_simulation(const Reader& rd, const YAML::Node& n, SimulationSettings& 
   word("newton", s.newton, {"full", "simplified"});
 }
 
-void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, Inputs& in) {
-  rd.keys(n, "inputs", {"torques", "springs", "dampers"});
+void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0, Inputs& in) {
+  rd.keys(n, "inputs", {"torques", "springs", "dampers", "controllers"});
+  if (n["controllers"]) scenario_detail::read_controllers(rd, n["controllers"], m, q0, in.controllers);
   auto each = [&](const char* part, auto&& read_one) {
     const YAML::Node list = n[part];
     if (!list) return;
@@ -559,7 +454,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     rd.fail(e.mark, "YAML syntax", e.msg);
   }
   if (!root || root.IsNull()) throw Error(path + ": the file is empty");
-  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs"});
+  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits"});
 
   Scenario sc;
   sc.path = path;
@@ -599,6 +494,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     sc.model = build_located(rd, bodies, gravity, check);
   }
 
+  if (root["limits"]) scenario_detail::read_limits(rd, root["limits"], sc.model);
   if (root["frames"]) read_frames(rd, root["frames"], sc.model);
   if (root["log"]) read_log_section(rd, root["log"], sc.model, sc.log_frames);
   sc.q0 = mjcf ? mjcf->q0 : sc.model.neutral_configuration();
@@ -609,7 +505,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   }
   if (root["initial"]) read_initial(rd, root["initial"], sc.model, sc.q0, sc.v0);
   if (root["simulation"]) read_simulation(rd, root["simulation"], sc.simulation);
-  if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.inputs);
+  if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.q0, sc.inputs);
   return sc;
 }
 

@@ -7,6 +7,7 @@
 #include <ctime>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <time.h>
 
 namespace soadyn {
@@ -28,13 +29,18 @@ Sample observe(System& sys, double t, const VecX& y) {
   s.q = y.head(m.nq);
   s.qd = y.segment(m.nq, m.nv);
   const VecX& q = s.q;
-  const VecX& v = s.qd;
   if (sys.nquad > 0) {
     s.work_inputs = y(m.nq + m.nv);
     s.dissipated = y(m.nq + m.nv + 1);
   }
-  update_kinematics(m, d, q);
-  update_velocities(m, d, v);
+  // q̈ as the integrator sees it: inputs, controllers, joints held at a limit (rhs does the
+  // kinematics and velocities; not counted as the integrator's work)
+  sys.rhs(t, y.data(), sys.f0.data());
+  --sys.rhs_evals;
+  s.qdd = d.qdd;
+  s.control = sys.feedback_tau;
+  if (sys.controlled) s.control += sys.control;
+  if (sys.limits) s.impact_loss = sys.limits->energy_lost();
   // body poses: η_i, r_i, and C_i as a quaternion with w ≥ 0
   s.body_position = d.eta;
   s.body_com = d.r;
@@ -42,9 +48,6 @@ Sample observe(System& sys, double t, const VecX& y) {
   for (int i = 0; i < m.nbodies; ++i) {
     s.body_orientation.col(i) = attitude_quaternion(d.R[i]);
   }
-  sys.inputs.evaluate(t, q, v, sys.tau);
-  forward_dynamics(m, d, sys.tau, sys.method);
-  s.qdd = d.qdd;
   s.kinetic = kinetic_energy(m, d);
   s.potential = potential_energy(m, d) + sys.inputs.spring_energy(q);
   s.total = s.kinetic + s.potential;
@@ -78,6 +81,11 @@ namespace {
 std::string g(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+std::string at_time(double t) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", t);
   return buf;
 }
 }  // namespace
@@ -115,7 +123,22 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   }
   if (const IntegratorInfo* info = find_integrator(s.method); info && info->refuses)
     if (const std::string why = info->refuses(sc.model); !why.empty()) throw Error(sc.path + ": " + why);
+  // joint limits: root finding (CVODE), e in [0, 1], a start inside the limits
+  if (!(s.restitution >= 0 && s.restitution <= 1))
+    throw Error("simulation settings: restitution must lie in [0, 1], got " + g(s.restitution));
+  if (s.limits && sc.model.has_limits()) {
+    if (is_fixed_step(s.method))
+      throw Error("simulation settings: limits: true needs an integrator that locates events (cvode-adams or "
+                  "cvode-bdf); " + s.method + " takes fixed steps");
+    JointLimits(sc.model, s.restitution).check_inside(sc.q0);
+  }
+  if (!(s.control_dt >= 0) || !std::isfinite(s.control_dt))
+    throw Error("simulation settings: control_dt must be 0 (continuous) or a positive finite number, got " + g(s.control_dt));
   std::vector<std::string> warnings;
+  if (s.control_dt > 0 && is_fixed_step(s.method) &&
+      std::abs(s.control_dt / s.dt - std::round(s.control_dt / s.dt)) > 1e-9 * std::max(1.0, s.control_dt / s.dt))
+    warnings.push_back("control_dt " + g(s.control_dt) + " is not a whole number of steps dt " + g(s.dt) +
+                       ": each tick ends a shorter step and the steps restart there");
   // a fixed step longer than the run or than the output interval: the run is then not what was written
   if (is_fixed_step(s.method) && s.dt > s.t_end)
     warnings.push_back("dt " + g(s.dt) + " is longer than t_end " + g(s.t_end) + ": the run is one step of " +
@@ -153,27 +176,59 @@ std::string interrupted_status(int stop, double t) {
 }
 
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer,
-                    std::vector<Sample>* samples, const std::atomic<int>* stop, std::function<void()> poll) {
+                    std::vector<Sample>* samples, const std::atomic<int>* stop, std::function<void()> poll,
+                    ControlFunction controller) {
   const Model& m = sc.model;
   check_run(sc, settings);
-  System sys(m, sc.inputs, parse_fd_method(settings.dynamics));
+  // the control law: the scenario's built-in controllers and the caller's, summed
+  std::optional<BuiltinControllers> builtin;
+  if (!sc.inputs.controllers.empty()) builtin.emplace(m, sc.inputs.controllers);
+  const ControlFunction law =
+      sum_controllers({builtin ? ControlFunction(std::ref(*builtin)) : ControlFunction{}, std::move(controller)}, m.nv);
+  System sys(m, sc.inputs, parse_fd_method(settings.dynamics), bool(law));
+  // a controller that throws or returns a non-finite τ ends the run, said with the time
+  ControlFunction checked;
+  if (law)
+    checked = [&](double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) {
+      try {
+        law(t, q, v, tau);
+      } catch (const SimulationError&) {
+        throw;
+      } catch (const std::exception& e) {
+        throw SimulationError("the controller failed at t = " + at_time(t) + " s: " + e.what(), t);
+      }
+      if (const int bad = first_non_finite(tau); bad >= 0)
+        throw SimulationError("the controller returned a non-finite torque at t = " + at_time(t) + " s (" +
+                                  m.v_names()[size_t(bad)] + " = " + g(tau(bad)) + ")",
+                              t);
+    };
+  const bool sampled = law && settings.control_dt > 0;
+  if (law && !sampled) sys.feedback = checked;
+  sys.controlled = sampled;
+  std::optional<JointLimits> limits;
+  if (settings.limits && m.has_limits()) {
+    limits.emplace(m, settings.restitution);
+    sys.limits = &*limits;
+  }
   VecX y = sys.state(sc.q0, sc.v0);
   m.normalize(y.head(m.nq));
   double t = 0.0;
   auto integrator = make_integrator(settings.method, sys, settings, t, y);
+  if (limits) integrator->set_roots(limits->count(), [&](double tr, const double* yr, double* gr) { limits->roots(sys, tr, yr, gr); });
+  if (sampled) integrator->set_exact_stops(true);
 
   RunSummary summary;
   summary.method = settings.method;
   summary.quaternion_handling = integrator->quaternion_handling();
   const double cpu0 = thread_cpu_seconds();
-  // sampling: the balance error |E(t) − E(0) − W(t)| / max(|E(0)|, peak T)
+  // sampling: the balance error |E(t) − E(0) − W(t) + L(t)| / max(|E(0)|, peak T)
   double E0 = 0.0, peak_T = 0.0;
   auto record = [&](const Sample& s) {
     if (samples) samples->push_back(s);
     if (observer) observer->on_sample(s);
     peak_T = std::max(peak_T, s.kinetic);
     const double scale = std::max({std::abs(E0), peak_T, 1e-300});
-    summary.final_energy_balance_error = std::abs(s.total - E0 - s.work_inputs) / scale;
+    summary.final_energy_balance_error = std::abs(s.total - E0 - s.work_inputs + s.impact_loss) / scale;
     summary.max_energy_balance_error = std::max(summary.max_energy_balance_error, summary.final_energy_balance_error);
   };
   auto update = [&] {
@@ -181,10 +236,52 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
     summary.cpu_seconds = thread_cpu_seconds() - cpu0;
     summary.t_reached = t;
   };
+  auto emit = [&](const std::vector<LimitEvent>& events) {
+    for (const LimitEvent& e : events) {
+      summary.events.push_back(e);
+      if (observer) observer->on_event(e);
+    }
+  };
+  // sampled control: τ_c(t_k, q, v) held from tick k = t / control_dt on
+  long tick = 0;
+  auto sample_control = [&] {
+    sys.control.setZero();
+    checked(t, y.head(m.nq), y.segment(m.nq, m.nv), sys.control);
+    ++summary.control_ticks;
+    ++tick;
+  };
+  // from t to t_out through the control ticks and the limits' events; false when stopped before
+  long events_here = 0;
+  double t_events = -1.0;
+  auto reach = [&](double t_out) {
+    for (;;) {
+      double target = t_out;
+      bool at_tick = false;
+      if (sampled) {
+        const double next = double(tick) * settings.control_dt;
+        if (std::abs(next - t_out) <= 1e-12 * std::max(1.0, t_out)) at_tick = true;
+        else if (next < t_out) target = next, at_tick = true;
+      }
+      integrator->advance(target, t, y);
+      if (!integrator->roots().empty()) {
+        // events that do not let time advance (a joint pinned between pushes) would loop for ever
+        events_here = t == t_events ? events_here + 1 : 0;
+        t_events = t;
+        if (events_here > 100)
+          throw SimulationError("joint limits: more than 100 events at t = " + at_time(t) + " s without time advancing", t);
+        emit(limits->on_roots(sys, t, y, integrator->roots()));
+        integrator->restart(t, y);
+        continue;
+      }
+      if (t < target) return false;
+      if (at_tick) {
+        sample_control();
+        integrator->restart(t, y);
+      }
+      if (target == t_out) return true;
+    }
+  };
 
-  const Sample first = observe(sys, t, y);
-  E0 = first.total;
-  record(first);
   // outputs: CVODE every output_dt; fixed-step methods (steps of exactly dt) every `stride` steps,
   // output_dt = stride·dt, never between two steps (the k-th output lands on step k·stride, whose
   // time it reports as k·output_dt, the time a CVODE run at that output_dt reports); both at t_end last
@@ -192,6 +289,14 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   summary.output_dt = output_dt;
   const long outputs = long(output_count(settings));
   try {
+    // t = 0: the first control sample, the limits already reached, then the first row (E(0)
+    // before any impact there: the energy it took is in L)
+    if (sampled) sample_control();
+    if (limits) emit(limits->start(sys, t, y));
+    if (sampled || limits) integrator->restart(t, y);
+    const Sample first = observe(sys, t, y);
+    E0 = first.total + first.impact_loss;
+    record(first);
     bool interrupted = false;
     integrator->set_stop(stop, std::move(poll));
     for (long k = 1; k <= outputs; ++k) {
@@ -202,9 +307,8 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
       }
       const double t_out = k == outputs ? settings.t_end : double(k) * output_dt;
       const double t_before = t;
-      integrator->advance(t_out, t, y);
       // a stop between steps: the last row is the state where the run ended, off the output grid
-      const bool stopped = stop && t < t_out;
+      const bool stopped = !reach(t_out) && stop;
       if (stopped) {
         summary.status = interrupted_status(stop->load(), t);
         interrupted = true;

@@ -2,7 +2,7 @@
 // every error names file:line, and the joints' document order, so that q keeps the URDF's order.
 //
 // What enters the model: links' <inertial> (mass, inertia, origin), joints' type, <origin>,
-// <axis>, <parent> and <child>.  Geometry, materials, transmissions and simulator extensions never
+// <axis>, <parent>, <child> and <limit lower upper>.  Geometry, materials, transmissions and simulator extensions never
 // reach urdfdom; joints reach it whole (it checks their <limit>, <mimic>, ... ), and soadyn ignores
 // all but the above: none of it changes rigid-body dynamics.
 #include "soadyn/scenario.hpp"
@@ -144,6 +144,13 @@ BodySpec joint_spec(const urdf::Joint& j, const urdf::Link& link, const std::map
       throw Error(idx.at_joint(j.name) + ": axis: expected a non-zero axis of norm between 1e-12 and 1e150, got " + got);
     }
     s.axis.normalize();
+  }
+  // travel: <limit lower upper> on revolute and prismatic joints (continuous ones have none); a
+  // <limit> with lower ≥ upper (urdfdom reads absent bounds as 0, 0) bounds nothing
+  if ((j.type == urdf::Joint::REVOLUTE || j.type == urdf::Joint::PRISMATIC) && j.limits &&
+      j.limits->lower < j.limits->upper) {
+    s.lower = j.limits->lower;
+    s.upper = j.limits->upper;
   }
   mass_properties(link, s);
   return s;

@@ -54,6 +54,12 @@ double value_by_name(const Model& m, const Sample& x, const std::string& name) {
   if (name == "energy.total") return x.total;
   if (name == "energy.work_inputs") return x.work_inputs;
   if (name == "energy.dissipated") return x.dissipated;
+  if (name == "energy.impact_loss") return x.impact_loss;
+  if (starts(name, "control.")) {
+    const std::vector<std::string> vn = m.v_names();
+    for (int k = 0; k < m.nv; ++k)
+      if (name == "control." + vn[size_t(k)]) return x.control(k);
+  }
   const std::string xyz = "xyz", wxyz = "wxyz";
   if (starts(name, "momentum.linear.")) return x.linear(int(xyz.find(name.back())));
   if (starts(name, "momentum.angular.")) return x.angular(int(xyz.find(name.back())));
@@ -111,9 +117,11 @@ TEST(LogContent, EveryColumnNameLeadsToItsNumberInEveryScenario) {
         if (!(t.at(k, j) == want) && wrong++ < 5) ADD_FAILURE() << names[j] << " row " << k << ": " << t.at(k, j) << " vs " << want;
       }
     EXPECT_EQ(wrong, 0);
-    // and every number the sample holds has a column: q, q̇, q̈, 5 energies, 6 momenta, 10 per body
+    // and every number the sample holds has a column: q, q̇, q̈, 5 energies, 6 momenta, 10 per body,
+    // the impacts' loss with limits on, the controllers' τ with controllers
     const Model& m = sc.model;
-    EXPECT_EQ(names.size(), size_t(1 + m.nq + 2 * m.nv + 5 + 6 + 10 * m.nbodies));
+    const size_t impacts = s.limits && m.has_limits() ? 1 : 0, control = sc.inputs.controllers.empty() ? 0 : size_t(m.nv);
+    EXPECT_EQ(names.size(), size_t(1 + m.nq + 2 * m.nv + 5 + 6 + 10 * m.nbodies) + impacts + control);
     std::filesystem::remove(out);
   }
 }

@@ -11,6 +11,10 @@
 //     /bodies/position, /bodies/com (T×N×3), /bodies/orientation (T×N×4, w x y z)  group "bodies"
 //     /frames/position (T×F×3), /frames/orientation (T×F×4)        a scenario's log: frames: [...]
 //   /frames/names    those F frames (frames.hpp), a string dataset, when there are any
+//     /energy/impact_loss (T), L(t) (J)                            with joint limits on (limits.hpp)
+//     /control (T×nv), the controllers' τ, columns control.<v name>  with a controller
+//   /events (E×7): t, dof (into v), side (−1 lower, +1 upper), kind (0 impact, 1 hold, 2 release),
+//                  v_before, v_after, energy_lost; attribute column_names; with joint limits on
 //   /bodies/names    the N bodies (after fixed joints are merged), a string dataset
 //   /scenario        the scenario's full text (a string dataset: any size)
 //   /model: attributes nq, nv, q_names, v_names, q_units, v_units, joint_names, joint_types,
@@ -76,6 +80,10 @@ struct LogGroups {
   // frames whose poses are logged after everything else (indices of Model::frame_names; H5Log
   // adds a scenario's log: frames: to those given); not part of parse() and str()
   std::vector<int> frames;
+  // set by H5Log from the run (not part of parse() and str()): the limits' events and L(t)
+  // (simulation: limits: true on a model with limits), the controllers' τ (built-in ones, or a
+  // caller's controller when it says so)
+  bool impacts = false, control = false;
   // "state,energy,momentum,bodies" (any subset, any order; "all"); throws soadyn::Error naming
   // the bad item
   static LogGroups parse(const std::string& text);
@@ -97,6 +105,7 @@ class H5Log : public RunObserver {
   H5Log& operator=(const H5Log&) = delete;
 
   void on_sample(const Sample& s) override;
+  void on_event(const LimitEvent& e) override;  // written with the next flush
   void on_progress(const RunSummary& summary) override;  // flushes at the first step, then every flush interval
   void set_flush_interval(double seconds);                // wall time between flushes, default 0.5 s
   // flushes and closes the file; a run interrupted before its first step (only the initial state

@@ -4,6 +4,7 @@
 
 #include "soadyn/types.hpp"
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -31,10 +32,33 @@ struct DamperInput {
   double damping = 0.0;    // τ = −c q̇
 };
 
+// A joint's reference q_d(t) = constant + amplitude · sin(2π frequency t + phase), with its rate
+// and acceleration (a controller's target).
+struct JointTarget {
+  double constant = 0.0, amplitude = 0.0, frequency = 0.0, phase = 0.0;
+  double value(double t) const;
+  double rate(double t) const;
+  double acceleration(double t) const;
+};
+
+// A built-in controller (controller.hpp computes it), each DOF's torque clamped to ±max_torque:
+//   pd                    τ_k = K_p (q_d − q_k) + K_d (q̇_d − q̇_k) on one joint
+//   gravity_compensation  τ = g(q), the generalized gravity force, on every DOF
+//   computed_torque       τ = 𝓜(q) (q̈_d + K_d ė + K_p e) + bias(q, q̇), e = q_d − q, on every DOF
+//                         (a model of 1-DOF joints; a joint without a target keeps its initial q)
+struct ControllerInput {
+  enum class Kind { Pd, GravityCompensation, ComputedTorque } kind = Kind::Pd;
+  std::vector<int> dofs, coords;    // pd: its joint; computed_torque: every DOF (coords: into q)
+  std::vector<JointTarget> targets; // one per dof (pd, computed_torque)
+  double kp = 0.0, kd = 0.0;        // 1/s², 1/s for computed_torque; N·m/rad, N·m·s/rad for pd
+  double max_torque = std::numeric_limits<double>::infinity();
+};
+
 struct Inputs {
   std::vector<TorqueInput> torques;
   std::vector<SpringInput> springs;
   std::vector<DamperInput> dampers;
+  std::vector<ControllerInput> controllers;  // evaluated by controller.hpp, not by evaluate()
   bool empty() const { return torques.empty() && springs.empty() && dampers.empty(); }
   // τ(t, q, v): the generalized force the inputs apply
   void evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const;

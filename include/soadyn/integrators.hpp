@@ -26,6 +26,7 @@
 #pragma once
 
 #include "soadyn/algorithms.hpp"
+#include "soadyn/controller.hpp"
 #include "soadyn/derivatives.hpp"
 #include "soadyn/inputs.hpp"
 #include "soadyn/settings.hpp"
@@ -40,6 +41,8 @@
 
 namespace soadyn {
 
+class JointLimits;
+
 // A run that went unstable or that the integrator could not continue.
 class SimulationError : public Error {
  public:
@@ -53,7 +56,8 @@ class SimulationError : public Error {
 // (Inputs::power).  Nothing feeds back from them into q and v.
 class System {
  public:
-  System(const Model& model, const Inputs& inputs, FdMethod method);
+  // control_work: a controller acts (feedback or control), so W has the quadratures and counts it
+  System(const Model& model, const Inputs& inputs, FdMethod method, bool control_work = false);
   int size() const { return model.nq + model.nv + nquad; }
   // [q; v; 0 …]: the state at the start of a run (the quadratures start at zero)
   VecX state(const VecX& q0, const VecX& v0) const;
@@ -82,6 +86,15 @@ class System {
   // control held over each step); it depends on neither q nor v, so ∂f/∂y is unchanged
   VecX control;
   bool controlled = false;
+  // a feedback controller τ_c(t, q, v) added on every evaluation (controller.hpp; continuous
+  // control: sampled control holds its τ in `control`), feedback_tau its last value.  With
+  // control_work, W also counts (control + τ_c) · q̇.  ∂f/∂y leaves out ∂τ_c/∂y (Newton then
+  // converges on an approximate Jacobian)
+  ControlFunction feedback;
+  VecX feedback_tau;
+  bool control_work = false;
+  // joint limits holding DOFs at a bound (limits.hpp): rhs applies their constraint forces
+  JointLimits* limits = nullptr;
   VecX y_work, f0, f1;             // jacobian_dq's scratch
   MatX T;                          // one joint's tangent map (≤ 6×7)
   VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
@@ -124,6 +137,22 @@ class Integrator {
   }
   // how the quaternion of a free root is kept unit ("none" without a free joint)
   virtual std::string quaternion_handling() const = 0;
+  // n root functions g(t, y) → g[0 … n) (limits.hpp), each located where it crosses zero going
+  // down: advance() then returns at the root, t < t_out possibly, with roots() the indices found
+  // (empty otherwise); the caller restarts there.  Methods without root finding throw soadyn::Error
+  using RootFunction = std::function<void(double t, const double* y, double* g)>;
+  virtual void set_roots(int n, RootFunction g) {
+    (void)n;
+    (void)g;
+    throw Error("this integration method cannot locate events (joint limits): use cvode-adams or cvode-bdf");
+  }
+  const std::vector<int>& roots() const { return roots_; }
+  // never step past an advance()'s t_out (a restart follows there: a control tick).  Fixed-step
+  // methods end their steps there already
+  virtual void set_exact_stops(bool) {}
+
+ protected:
+  std::vector<int> roots_;
 
  private:
   const std::atomic<int>* stop_ = nullptr;

@@ -8,6 +8,7 @@
 #include "soadyn/joint.hpp"
 #include "soadyn/types.hpp"
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,10 @@ struct BodySpec {
   double mass = 0.0;                    // must be > 0 (≥ 0 for a body merged by a fixed joint)
   Vec3 com = Vec3::Zero();              // centre of mass in the body frame
   Mat3 inertia = Mat3::Zero();          // about the centre of mass, body frame
+  // a revolute or prismatic joint's travel (a URDF's <limit lower upper>, a scenario's limits:),
+  // rad or m; ±inf: none.  Enforced only when a run asks (SimulationSettings::limits, limits.hpp)
+  double lower = -std::numeric_limits<double>::infinity();
+  double upper = std::numeric_limits<double>::infinity();
 };
 
 // What Model::build does with an inertia whose largest principal moment exceeds the sum of the
@@ -74,6 +79,10 @@ class Model {
   std::vector<std::string> frame_names;
   std::vector<int> frame_body;             // body the frame moves with, −1 = the world
   std::vector<Placement> frame_placement;  // the frame in that body's frame (the world's for −1)
+  // each DOF's travel, rad or m (BodySpec::lower/upper; ±inf on joints without one and on free,
+  // ball and planar joints)
+  std::vector<double> lower, upper;
+  bool has_limits() const;                 // a finite lower or upper somewhere
   std::vector<int> dof_parent;             // λ(k): parent DOF of DOF k, -1 at a root (for LᵀDL)
   std::vector<int> dof_body;               // body owning DOF k
   std::vector<int> dof_run;                // lowest m ≤ k with λ(x) = x − 1 for m < x ≤ k: the

@@ -21,6 +21,10 @@ struct SimulationSettings {
                                        //   (analytic derivatives, derivatives.hpp; or difference quotients)
   std::string newton = "full";         // implicit-midpoint: full (the Jacobian at every iterate) | simplified
                                        //   (once per step, at the explicit-Euler predictor)
+  // joint limits (limits.hpp): off by default, so a model's limits change nothing unless asked
+  bool limits = false;                 // each DOF's lower/upper an event: impact, hold, release (CVODE only)
+  double restitution = 0.0;            // coefficient of restitution e at a limit, 0 ≤ e ≤ 1 (0: held there)
+  double control_dt = 0.0;             // s between controller samples, zero-order hold (0: continuous)
 };
 
 }  // namespace soadyn

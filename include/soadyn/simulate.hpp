@@ -2,6 +2,7 @@
 #pragma once
 
 #include "soadyn/integrators.hpp"
+#include "soadyn/limits.hpp"
 #include "soadyn/scenario.hpp"
 
 #include <atomic>
@@ -20,6 +21,10 @@ struct Sample {
   // D(t) ≥ 0 the dampers' share, dissipated; both integrated by the integrator (System), so
   // E(t) − E(0) = W(t) up to its error
   double work_inputs = 0.0, dissipated = 0.0;
+  // L(t): the kinetic energy joint-limit impacts took since t = 0 (limits.hpp), so that
+  // E(t) − E(0) = W(t) − L(t); and the controllers' τ_c at t (nv; zero without one)
+  double impact_loss = 0.0;
+  VecX control;
   Vec3 linear = Vec3::Zero(), angular = Vec3::Zero();
   // each body's frame origin η_i and centre of mass r_i (inertial, 3×N), and its attitude as a unit
   // quaternion [w x y z], body → inertial, with w ≥ 0 (4×N); N bodies after fixed joints are merged
@@ -36,10 +41,12 @@ struct RunSummary {
   std::string status = "running";     // "completed", "interrupted by SIGINT at t = …", or the error
   double t_reached = 0.0;
   bool completed = false;
-  // the energy-balance error |E(t) − E(0) − W(t)| / max(|E(0)|, peak T): its maximum over the
+  // the energy-balance error |E(t) − E(0) − W(t) + L(t)| / max(|E(0)|, peak T): its maximum over the
   // samples and its value at the last one (W ≡ 0 without torques or dampers: the energy error)
   double max_energy_balance_error = 0.0;
   double final_energy_balance_error = 0.0;
+  std::vector<LimitEvent> events;     // joint-limit events, in time order (settings.limits)
+  long control_ticks = 0;             // sampled control: the controller's evaluations
 };
 
 // Receives samples and the run's state as it goes (the HDF5 log implements it).
@@ -48,6 +55,7 @@ class RunObserver {
   virtual ~RunObserver() = default;
   virtual void on_sample(const Sample& s) = 0;
   virtual void on_progress(const RunSummary&) {}
+  virtual void on_event(const LimitEvent&) {}  // a joint-limit event, before the next sample
   virtual void on_finish(const RunSummary& summary) = 0;
 };
 
@@ -88,9 +96,14 @@ bool is_fixed_step(const std::string& method);
 // signal number gives the status "interrupted by SIG<NAME> at t = <t>", −1 "interrupted at t = <t>".
 // It is only read, so a signal handler may set it.  `poll` (empty: none) runs before every step and
 // may set `stop` (Integrator::set_stop).
+// `controller` (empty: none) adds its τ_c(t, q, v) to the inputs', with the scenario's built-in
+// controllers (sc.inputs.controllers), continuous or sampled every settings.control_dt
+// (controller.hpp).  One that throws, or returns a τ that is not finite, ends the run there: the
+// status says so with the time, and the observer is finished as for any failed run.
+// settings.limits: the model's joint limits as events (limits.hpp), in summary.events.
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer = nullptr,
                     std::vector<Sample>* samples = nullptr, const std::atomic<int>* stop = nullptr,
-                    std::function<void()> poll = {});
+                    std::function<void()> poll = {}, ControlFunction controller = {});
 
 // "interrupted by SIGINT at t = 1.25" (stop > 0: a signal number), "interrupted at t = 1.25" (stop = −1)
 std::string interrupted_status(int stop, double t);

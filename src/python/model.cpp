@@ -70,6 +70,8 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
       .def_readonly("nq", &Model::nq, "configuration size")
       .def_readonly("nv", &Model::nv, "velocity size (degrees of freedom)")
       .def_readonly("nbodies", &Model::nbodies, "N, the moving bodies (fixed joints merged)")
+      .def_readonly("lower", &Model::lower, "each DOF's lower limit, rad or m (-inf: none)")
+      .def_readonly("upper", &Model::upper, "each DOF's upper limit, rad or m (inf: none)")
       .def_readonly("body_names", &Model::body_names, "name of each body, parent-first order (N)")
       .def_readonly("warnings", &Model::warnings,
                     "what building the model accepted but a user should hear (one line each; also issued as UserWarning by load)")
@@ -177,6 +179,10 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
       .def_readwrite("dynamics", &SimulationSettings::dynamics, "forward-dynamics route: dense | sparse | on")
       .def_readwrite("jacobian", &SimulationSettings::jacobian, "cvode-bdf and implicit-midpoint: analytic | dq")
       .def_readwrite("newton", &SimulationSettings::newton, "implicit-midpoint: full | simplified")
+      .def_readwrite("limits", &SimulationSettings::limits, "joint limits as events (CVODE): impact, hold, release")
+      .def_readwrite("restitution", &SimulationSettings::restitution, "coefficient of restitution at a limit, 0..1")
+      .def_readwrite("control_dt", &SimulationSettings::control_dt,
+                     "s between controller samples, zero-order hold (0: continuous)")
       .def("__repr__", [](const SimulationSettings& s) {
         return "SimulationSettings(method='" + s.method + "', t_end=" + py::repr(py::float_(s.t_end)).cast<std::string>() +
                ", output_dt=" + py::repr(py::float_(s.output_dt)).cast<std::string>() +

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstdio>
 #include <exception>
 
 namespace soadyn::python {
@@ -31,6 +32,8 @@ class Recorder : public RunObserver {
     total.push_back(s.total);
     work.push_back(s.work_inputs);
     dissipated.push_back(s.dissipated);
+    impact_loss.push_back(s.impact_loss);
+    control.insert(control.end(), s.control.data(), s.control.data() + s.control.size());
     position.insert(position.end(), s.body_position.data(), s.body_position.data() + s.body_position.size());
     orientation.insert(orientation.end(), s.body_orientation.data(), s.body_orientation.data() + s.body_orientation.size());
     com.insert(com.end(), s.body_com.data(), s.body_com.data() + s.body_com.size());
@@ -44,7 +47,7 @@ class Recorder : public RunObserver {
   void on_finish(const RunSummary& r) override {
     if (next_) next_->on_finish(r);
   }
-  std::vector<double> t, q, v, qdd, kinetic, potential, total, work, dissipated, linear, angular, position, orientation, com;
+  std::vector<double> t, q, v, qdd, kinetic, potential, total, work, dissipated, impact_loss, control, linear, angular, position, orientation, com;
 
  private:
   RunObserver* next_;
@@ -67,7 +70,41 @@ unsigned long main_thread_ident() {
 }
 
 // (arrays, summary, exception raised by a signal handler or None, warnings)
-py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output) {
+// A Python controller f(t, q, v) -> tau as a ControlFunction: the GIL taken for the call only.  An
+// exception it raises is kept (`raised`, re-raised by soadyn.simulate once the file is finished)
+// and ends the run; a τ that is not nv numbers is one error naming the time.
+ControlFunction python_controller(const py::object& f, int nv, py::object& raised) {
+  return [&f, &raised, nv](double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) {
+    py::gil_scoped_acquire gil;
+    char at[32];
+    std::snprintf(at, sizeof at, "%.9g", t);
+    py::object out;
+    try {
+      out = f(t, py::array_t<double>(q.size(), q.data()), py::array_t<double>(v.size(), v.data()));
+    } catch (py::error_already_set& e) {
+      raised = e.value();
+      throw SimulationError(std::string("the controller raised at t = ") + at + " s: " + e.what(), t);
+    }
+    py::array_t<double, py::array::forcecast> a;
+    try {
+      a = py::array_t<double, py::array::forcecast>::ensure(out);
+    } catch (py::error_already_set&) {
+    }
+    if (!a || a.ndim() != 1 || a.shape(0) != nv) {
+      std::string got = a ? "shape (" : "";
+      if (a)
+        for (py::ssize_t k = 0; k < a.ndim(); ++k) got += (k ? ", " : "") + std::to_string(a.shape(k));
+      got = a ? got + (a.ndim() == 1 ? ",)" : ")") : std::string(py::str(py::type::of(out).attr("__name__")));
+      throw SimulationError(std::string("the controller returned ") + got + " at t = " + at + " s; expected " +
+                                std::to_string(nv) + " torques, shape (" + std::to_string(nv) + ",)",
+                            t);
+    }
+    for (int k = 0; k < nv; ++k) tau(k) += a.at(k);
+  };
+}
+
+py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output,
+              const py::object& controller) {
   // everything is checked before any file is touched, as `soadyn run` does
   const std::vector<std::string> warnings = check_run(sc, settings);
   {
@@ -80,7 +117,9 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   if (output) {
     check_output_path(*output, OutputKind::Run, {sc.path});
     lock = std::make_unique<OutputLock>(*output);
-    log = std::make_unique<H5Log>(*output, sc, settings, version());
+    LogGroups groups;
+    groups.control = !controller.is_none();
+    log = std::make_unique<H5Log>(*output, sc, settings, version(), groups);
   }
   Recorder rec(log.get());
   std::atomic<int> stop{0};
@@ -88,6 +127,9 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   std::exception_ptr failure;
   py::object pending = py::none();
   std::function<void()> poll;
+  py::object raised = py::none();  // the controller's exception
+  ControlFunction control;
+  if (!controller.is_none()) control = python_controller(controller, sc.model.nv, raised);
   if (PyThread_get_thread_ident() == main_thread_ident()) {
     auto last = std::chrono::steady_clock::now();
     poll = [&] {
@@ -111,7 +153,7 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   {
     py::gil_scoped_release nogil;
     try {
-      summary = simulate(sc, settings, &rec, nullptr, &stop, std::move(poll));
+      summary = simulate(sc, settings, &rec, nullptr, &stop, std::move(poll), std::move(control));
     } catch (...) {
       failure = std::current_exception();
     }
@@ -127,19 +169,28 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
                   "potential_energy"_a = owned(std::move(rec.potential), {T}),
                   "total_energy"_a = owned(std::move(rec.total), {T}),
                   "work_inputs"_a = owned(std::move(rec.work), {T}), "dissipated"_a = owned(std::move(rec.dissipated), {T}),
+                  "impact_loss"_a = owned(std::move(rec.impact_loss), {T}), "control"_a = owned(std::move(rec.control), {T, nv}),
                   "body_position"_a = owned(std::move(rec.position), {T, nb, 3}),
                   "body_orientation"_a = owned(std::move(rec.orientation), {T, nb, 4}),
                   "body_com"_a = owned(std::move(rec.com), {T, nb, 3}),
                   "linear_momentum"_a = owned(std::move(rec.linear), {T, 3}),
                   "angular_momentum"_a = owned(std::move(rec.angular), {T, 3}));
-  return py::make_tuple(arrays, summary_dict(summary), pending, warnings);
+  py::list events;
+  for (const LimitEvent& e : summary.events)
+    events.append(py::dict("t"_a = e.t, "joint"_a = e.joint, "side"_a = e.side < 0 ? "lower" : "upper", "kind"_a = e.kind,
+                           "v_before"_a = e.v_before, "v_after"_a = e.v_after, "energy_lost"_a = e.energy_lost));
+  py::dict sd = summary_dict(summary);
+  sd["events"] = events;
+  sd["control_ticks"] = summary.control_ticks;
+  return py::make_tuple(arrays, sd, pending.is_none() ? raised : pending, warnings);
 }
 
 }  // namespace
 
 void bind_simulate(py::module_& m) {
-  m.def("_simulate", &run, "scene"_a, "settings"_a, "output"_a = py::none(),
-        "The run behind soadyn.simulate: (arrays, summary, exception from a signal handler or None, warnings).");
+  m.def("_simulate", &run, "scene"_a, "settings"_a, "output"_a = py::none(), "controller"_a = py::none(),
+        "The run behind soadyn.simulate: (arrays, summary, exception from a signal handler or the controller, or None, "
+        "warnings).");
 }
 
 }  // namespace soadyn::python

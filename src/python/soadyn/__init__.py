@@ -62,7 +62,7 @@ Errors: soadyn.Error (a ValueError) with the command line's message: file:line:c
 expected …, got ….
 """
 import warnings as _warnings
-from typing import Optional, Union
+from typing import Callable, Optional, Union
 
 from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model, Scenario, SimulationSettings,
                       __version__, bias, body_poses, fd_derivatives, forward_dynamics, id_derivatives, inverse_dynamics,
@@ -99,7 +99,8 @@ for _cls in (Data, Error, Inputs, Model, Scenario, SimulationSettings, RunSummar
 def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol: Optional[float] = None,
              atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
              output_dt: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
-             newton: Optional[str] = None, output: Optional[str] = None) -> Trajectory:
+             newton: Optional[str] = None, output: Optional[str] = None,
+             controller: Optional[Callable] = None) -> Trajectory:
     """Simulate a scenario and return its Trajectory: 𝓜(q) q̈ = τ(t, q, q̇) − bias(q, q̇) from (q0, v0).
 
     scene: a Scenario or the path of a scenario file.  Each keyword left None keeps the scene's
@@ -108,6 +109,12 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     output_dt (s between samples), dynamics (forward-dynamics route: on | dense | sparse),
     jacobian (CVODE BDF's Jacobian: analytic | dq), newton (implicit midpoint: full | simplified).
     output: an HDF5 file to log to as well (the layout of `soadyn run`; read_log reads it back).
+    controller: f(t, q, v) -> tau, nv torques added to the inputs' (with the scene's built-in
+    controllers): called at every right-hand-side evaluation and sample when continuous, once per
+    tick when the scene's simulation has control_dt > 0 (zero-order hold).  The GIL is taken for
+    the call only.  An exception it raises ends the run, finishes the file and is re-raised with
+    the partial Trajectory as .trajectory; a tau of the wrong shape or not finite ends the run with
+    one error naming the time (in the summary's status).
 
     The integration runs without the GIL.  A run that fails midway does not raise: the summary
     says how it ended and the trajectory holds every sample up to then.  Ctrl-C (or any Python
@@ -120,13 +127,14 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
         scene = load_scenario(scene)
     s = SimulationSettings()
     for k in ("t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian",
-              "newton"):
+              "newton", "limits", "restitution", "control_dt"):
         setattr(s, k, getattr(scene.settings, k))
     for k, value in dict(method=method, rtol=rtol, atol=atol, dt=dt, t_end=t_end, output_dt=output_dt,
                          dynamics=dynamics, jacobian=jacobian, newton=newton).items():
         if value is not None:
             setattr(s, k, value)
-    arrays, summary, interrupt, warns = _soadyn._simulate(scene, s, None if output is None else str(output))
+    arrays, summary, interrupt, warns = _soadyn._simulate(scene, s, None if output is None else str(output),
+                                                          controller)
     for w in warns:  # e.g. an rtol below what double precision can deliver
         _warnings.warn(w, RuntimeWarning, stacklevel=2)
     model = scene.model

@@ -1,6 +1,6 @@
 # Type stubs of the soadyn package (the compiled soadyn._soadyn and the pure-Python parts).
 # tests/python/test_api.py checks that they name every public object with the runtime's parameters.
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from typing import Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -19,6 +19,8 @@ class Model:
     nq: int
     nv: int
     nbodies: int
+    lower: List[float]
+    upper: List[float]
     body_names: List[str]
     warnings: List[str]
     joint_names: List[str]
@@ -83,6 +85,9 @@ class SimulationSettings:
     dynamics: str
     jacobian: str
     newton: str
+    limits: bool
+    restitution: float
+    control_dt: float
 
 class Inputs:
     @property
@@ -198,7 +203,8 @@ def forward_dynamics_parameter_derivative(model: Model, data: Data, q: ArrayLike
 def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol: Optional[float] = None,
              atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
              output_dt: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
-             newton: Optional[str] = None, output: Optional[str] = None) -> Trajectory: ...
+             newton: Optional[str] = None, output: Optional[str] = None,
+             controller: Optional[Callable[[float, np.ndarray, np.ndarray], ArrayLike]] = None) -> Trajectory: ...
 def read_log(path: str) -> Trajectory: ...
 def rollout(scene: Union[Model, Scenario, str], initial_states: ArrayLike, controls: Optional[object] = None, *,
             steps: Optional[int] = None, dt: Optional[float] = None, method: Optional[str] = None, threads: int = 1,

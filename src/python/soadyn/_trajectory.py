@@ -29,6 +29,11 @@ class RunSummary:
     output_dt: float
     max_energy_balance_error: float
     final_energy_balance_error: float
+    # joint-limit events (simulation: limits: true), each a dict t, joint, side ("lower" | "upper"),
+    # kind ("impact" | "hold" | "release"), v_before, v_after, energy_lost; and a sampled
+    # controller's evaluations (soadyn.simulate only; read_log gives none)
+    events: List[dict] = field(default_factory=list)
+    control_ticks: int = 0
 
 
 @dataclass(frozen=True, eq=False)
@@ -61,6 +66,11 @@ class Trajectory:
     joint_names: List[str] = field(default_factory=list)
     parents: List[int] = field(default_factory=list)
     scenario: str = ""
+    # soadyn.simulate only (None from read_log): impact_loss (T,), L(t), the kinetic energy
+    # joint-limit impacts took since t = 0 (E(t) − E(0) = W(t) − L(t)); control (T, nv), the
+    # controllers' torque at each sample (the held value when sampled)
+    impact_loss: Optional[np.ndarray] = None
+    control: Optional[np.ndarray] = None
 
     ARRAYS = ("t", "q", "v", "qdd", "kinetic_energy", "potential_energy", "total_energy", "work_inputs", "dissipated",
               "linear_momentum", "angular_momentum", "body_position", "body_orientation", "body_com")
@@ -86,7 +96,8 @@ class Trajectory:
         if len(E) == 0:
             return E.copy()
         scale = np.maximum(np.maximum(abs(E[0]), np.maximum.accumulate(T)), 1e-300)
-        return (E - E[0] - self.work_inputs) / scale
+        lost = 0.0 if self.impact_loss is None else self.impact_loss
+        return (E - E[0] - self.work_inputs + lost) / scale
 
     def __repr__(self) -> str:
         s = self.summary

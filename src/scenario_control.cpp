@@ -1,0 +1,105 @@
+// A scenario's joint limits and built-in controllers (scenarios/README.md).
+#include "scenario_reader.hpp"
+
+namespace soadyn::scenario_detail {
+
+namespace {
+
+// a 1-DOF joint, or the message why not
+int one_dof_joint(const Reader& rd, const Model& m, const YAML::Node& key, const std::string& field) {
+  const int i = find_joint(rd, m, key, field);
+  if (m.nv_i[i] != 1 || m.nq_i[i] != 1)
+    rd.fail(key, field, "acts on revolute or prismatic joints; '" + key.Scalar() + "' is " + std::string(to_string(m.joint_type[i])));
+  return i;
+}
+
+// a target: a number (constant) or {constant, amplitude, frequency, phase}
+JointTarget read_target(const Reader& rd, const YAML::Node& n, const std::string& field) {
+  JointTarget r;
+  if (n.IsScalar()) {
+    r.constant = rd.number(n, field);
+    return r;
+  }
+  rd.keys(n, field, {"constant", "amplitude", "frequency", "phase"});
+  if (n["constant"]) r.constant = rd.number(n["constant"], field + ".constant");
+  if (n["amplitude"]) r.amplitude = rd.number(n["amplitude"], field + ".amplitude");
+  if (n["frequency"]) r.frequency = rd.number(n["frequency"], field + ".frequency");
+  if (n["phase"]) r.phase = rd.number(n["phase"], field + ".phase");
+  return r;
+}
+
+double non_negative(const Reader& rd, const YAML::Node& n, const std::string& field) {
+  const double x = rd.number(n, field);
+  if (x < 0) rd.fail(n, field, "expected a number >= 0, got " + Reader::show(n));
+  return x;
+}
+
+}  // namespace
+
+void read_limits(const Reader& rd, const YAML::Node& n, Model& m) {
+  if (!n.IsMap()) rd.fail(n, "limits", "expected a map from joint name to [lower, upper], got " + Reader::show(n));
+  for (auto it = n.begin(); it != n.end(); ++it) {
+    const std::string f = "limits." + it->first.Scalar();
+    const int i = one_dof_joint(rd, m, it->first, "limits");
+    const VecX b = rd.numbers(it->second, f, 2);
+    if (!(b(0) < b(1))) rd.fail(it->second, f, "expected lower < upper, got " + Reader::show_number(b(0)) + ", " + Reader::show_number(b(1)));
+    m.lower[size_t(m.idx_v[i])] = b(0);
+    m.upper[size_t(m.idx_v[i])] = b(1);
+  }
+}
+
+void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, const VecX& q0,
+                      std::vector<ControllerInput>& out) {
+  using Kind = ControllerInput::Kind;
+  const std::string f0 = "inputs.controllers";
+  if (!list.IsSequence()) rd.fail(list, f0, "expected a list, got " + Reader::show(list));
+  for (size_t k = 0; k < list.size(); ++k) {
+    const std::string f = f0 + "[" + std::to_string(k) + "]";
+    const YAML::Node e = list[k];
+    if (!e.IsMap()) rd.fail(e, f, "expected a map, got " + Reader::show(e));
+    const YAML::Node type = rd.require(e, "type", f);
+    const std::string kind = rd.string(type, f + ".type");
+    ControllerInput c;
+    if (e["max_torque"]) c.max_torque = rd.positive(e["max_torque"], f + ".max_torque");
+    if (kind == "pd") {
+      rd.keys(e, f, {"type", "joint", "kp", "kd", "target", "max_torque"});
+      const int i = one_dof_joint(rd, m, rd.require(e, "joint", f), f + ".joint");
+      c.kind = Kind::Pd;
+      c.dofs = {m.idx_v[i]};
+      c.coords = {m.idx_q[i]};
+      c.kp = non_negative(rd, rd.require(e, "kp", f), f + ".kp");
+      if (e["kd"]) c.kd = non_negative(rd, e["kd"], f + ".kd");
+      c.targets = {e["target"] ? read_target(rd, e["target"], f + ".target") : JointTarget{}};
+    } else if (kind == "gravity_compensation") {
+      rd.keys(e, f, {"type", "max_torque"});
+      c.kind = Kind::GravityCompensation;
+    } else if (kind == "computed_torque") {
+      rd.keys(e, f, {"type", "kp", "kd", "targets", "max_torque"});
+      if (m.nq != m.nv) rd.fail(type, f + ".type", "computed_torque needs a model of revolute and prismatic joints");
+      c.kind = Kind::ComputedTorque;
+      c.kp = non_negative(rd, rd.require(e, "kp", f), f + ".kp");
+      c.kd = non_negative(rd, rd.require(e, "kd", f), f + ".kd");
+      // every DOF: its target, or its initial q held
+      for (int d = 0; d < m.nv; ++d) {
+        c.dofs.push_back(d);
+        c.coords.push_back(d);
+        JointTarget r;
+        r.constant = q0(d);
+        c.targets.push_back(r);
+      }
+      if (const YAML::Node t = e["targets"]) {
+        if (!t.IsMap()) rd.fail(t, f + ".targets", "expected a map from joint name to target, got " + Reader::show(t));
+        for (auto it = t.begin(); it != t.end(); ++it) {
+          const int i = one_dof_joint(rd, m, it->first, f + ".targets");
+          c.targets[size_t(m.idx_v[i])] = read_target(rd, it->second, f + ".targets." + it->first.Scalar());
+        }
+      }
+    } else {
+      rd.fail(type, f + ".type",
+              "unknown controller '" + kind + "'" + did_you_mean(kind, {"pd", "gravity_compensation", "computed_torque"}));
+    }
+    out.push_back(std::move(c));
+  }
+}
+
+}  // namespace soadyn::scenario_detail

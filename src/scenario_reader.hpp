@@ -1,0 +1,152 @@
+// The scenario parser's YAML reader: every mistake as file:line:column: field: message.  Shared by
+// scenario.cpp and scenario_control.cpp (limits:, controllers:).  Internal.
+#pragma once
+
+#include "soadyn/inputs.hpp"
+#include "soadyn/model.hpp"
+#include "soadyn/text.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace soadyn::scenario_detail {
+
+// Reads YAML nodes and reports every mistake as file:line:column: field: message.
+struct Reader {
+  std::string file;
+
+  [[noreturn]] void fail(const YAML::Mark& m, const std::string& field, const std::string& msg) const {
+    std::string where = file;
+    if (m.line >= 0) where += ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
+    throw Error(where + ": " + field + ": " + msg);
+  }
+  [[noreturn]] void fail(const YAML::Node& n, const std::string& field, const std::string& msg) const {
+    fail(n.Mark(), field, msg);
+  }
+
+  static std::string show_number(double x) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", x);
+    return buf;
+  }
+
+  static std::string show(const YAML::Node& n) {
+    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsSequence()) return "a list";
+    if (n.IsMap()) return "a map";
+    return "nothing";
+  }
+
+  void keys(const YAML::Node& map, const std::string& field, const std::vector<std::string>& allowed) const {
+    if (!map.IsMap()) fail(map, field, "expected a map, got " + show(map));
+    std::set<std::string> seen;
+    for (auto it = map.begin(); it != map.end(); ++it) {
+      const std::string k = it->first.Scalar();
+      if (std::find(allowed.begin(), allowed.end(), k) == allowed.end())
+        fail(it->first, field, "unknown key '" + k + "'" + did_you_mean(k, allowed));
+      if (!seen.insert(k).second) fail(it->first, field, "duplicate key '" + k + "'");
+    }
+  }
+
+  YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& field) const {
+    const YAML::Node n = map[key];
+    if (!n || n.IsNull()) fail(map, field, "missing required field '" + key + "'");
+    return n;
+  }
+
+  double number(const YAML::Node& n, const std::string& field) const {
+    if (!n.IsScalar()) fail(n, field, "expected a number, got " + show(n));
+    // a quoted or !!str-tagged scalar is a string in YAML, whatever it spells
+    if (n.Tag() == "!" || n.Tag() == "tag:yaml.org,2002:str") fail(n, field, "expected a number, got the string " + show(n));
+    double x;
+    try {
+      x = n.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(n, field, "expected a number, got " + show(n));
+    }
+    if (!std::isfinite(x)) fail(n, field, "expected a finite number, got " + show(n));
+    return x;
+  }
+
+  double positive(const YAML::Node& n, const std::string& field) const {
+    const double x = number(n, field);
+    if (!(x > 0)) fail(n, field, "expected a positive number, got " + show(n));
+    return x;
+  }
+
+  std::string string(const YAML::Node& n, const std::string& field) const {
+    if (!n.IsScalar() || n.Scalar().empty()) fail(n, field, "expected a name, got " + show(n));
+    return n.Scalar();
+  }
+
+  bool boolean(const YAML::Node& n, const std::string& field) const {
+    try {
+      if (n.IsScalar()) return n.as<bool>();
+    } catch (const YAML::Exception&) {
+    }
+    fail(n, field, "expected true or false, got " + show(n));
+  }
+
+  VecX numbers(const YAML::Node& n, const std::string& field, int size) const {
+    if (size == 1 && !n.IsScalar()) fail(n, field, "expected a number, got " + show(n));
+    if (!n.IsSequence()) fail(n, field, "expected a list of " + std::to_string(size) + " numbers, got " + show(n));
+    if (int(n.size()) != size)
+      fail(n, field, "expected " + std::to_string(size) + " numbers, got " + std::to_string(n.size()));
+    VecX v(size);
+    for (int k = 0; k < size; ++k) v(k) = number(n[k], field + "[" + std::to_string(k) + "]");
+    return v;
+  }
+
+  Vec3 vec3(const YAML::Node& n, const std::string& field) const { return numbers(n, field, 3); }
+
+  // rpy: R = Rz(yaw) Ry(pitch) Rx(roll)
+  static Mat3 rpy(const Vec3& a) {
+    return (Eigen::AngleAxisd(a.z(), Vec3::UnitZ()) * Eigen::AngleAxisd(a.y(), Vec3::UnitY()) *
+            Eigen::AngleAxisd(a.x(), Vec3::UnitX()))
+        .toRotationMatrix();
+  }
+
+  // inertia: [ixx, iyy, izz], {ixx, iyy, izz, ixy, ixz, iyz}, or a 3×3 list of rows
+  Mat3 inertia(const YAML::Node& n, const std::string& field) const {
+    Mat3 I = Mat3::Zero();
+    if (n.IsMap()) {
+      keys(n, field, {"ixx", "iyy", "izz", "ixy", "ixz", "iyz"});
+      I(0, 0) = number(require(n, "ixx", field), field + ".ixx");
+      I(1, 1) = number(require(n, "iyy", field), field + ".iyy");
+      I(2, 2) = number(require(n, "izz", field), field + ".izz");
+      if (n["ixy"]) I(0, 1) = I(1, 0) = number(n["ixy"], field + ".ixy");
+      if (n["ixz"]) I(0, 2) = I(2, 0) = number(n["ixz"], field + ".ixz");
+      if (n["iyz"]) I(1, 2) = I(2, 1) = number(n["iyz"], field + ".iyz");
+      return I;
+    }
+    if (n.IsSequence() && n.size() == 3 && n[0].IsSequence()) {
+      for (int r = 0; r < 3; ++r) I.row(r) = vec3(n[r], field + "[" + std::to_string(r) + "]").transpose();
+      return I;
+    }
+    if (n.IsSequence() && n.size() == 3) return vec3(n, field).asDiagonal();
+    fail(n, field,
+         "expected [ixx, iyy, izz], a map {ixx, iyy, izz, ixy, ixz, iyz} or a 3x3 list, got " + show(n));
+  }
+};
+
+// the body index of the joint a key names
+inline int find_joint(const Reader& rd, const Model& m, const YAML::Node& key, const std::string& field) {
+  const std::string name = rd.string(key, field);
+  const int i = m.joint_index(name);
+  if (i < 0) rd.fail(key, field, "no joint named '" + name + "'" + did_you_mean(name, m.joint_names));
+  return i;
+}
+
+// scenario_control.cpp: `limits: {joint: [lower, upper]}` onto the model's travel, and
+// `inputs: controllers: [...]` (q0: the initial state, a computed-torque target's default)
+void read_limits(const Reader& rd, const YAML::Node& n, Model& m);
+void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0,
+                      std::vector<ControllerInput>& out);
+
+}  // namespace soadyn::scenario_detail
