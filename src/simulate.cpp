@@ -223,7 +223,18 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   const double cpu0 = thread_cpu_seconds();
   // sampling: the balance error |E(t) − E(0) − W(t) + L(t)| / max(|E(0)|, peak T)
   double E0 = 0.0, peak_T = 0.0;
+  // limits off on a model with limits: the first sample past each DOF's bound, for one warning
+  std::vector<double> past_at(size_t(m.nv), -1.0), past_q(size_t(m.nv), 0.0);
+  const bool watch_limits = !limits && m.has_limits();
   auto record = [&](const Sample& s) {
+    if (watch_limits)
+      for (int i = 0; i < m.nbodies; ++i) {
+        if (m.nq_i[i] != 1 || m.nv_i[i] != 1) continue;
+        const int k = m.idx_v[i];
+        const double q = s.q(m.idx_q[i]), tol = 1e-9 * std::max(1.0, std::abs(q));
+        if (past_at[size_t(k)] < 0 && (q < m.lower[size_t(k)] - tol || q > m.upper[size_t(k)] + tol))
+          past_at[size_t(k)] = s.t, past_q[size_t(k)] = q;
+      }
     if (samples) samples->push_back(s);
     if (observer) observer->on_sample(s);
     peak_T = std::max(peak_T, s.kinetic);
@@ -327,6 +338,16 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
     summary.status = e.what();
   }
   update();
+  if (watch_limits) {
+    std::string past;
+    for (int k = 0; k < m.nv; ++k)
+      if (past_at[size_t(k)] >= 0)
+        past += (past.empty() ? "" : ", ") + m.v_names()[size_t(k)] + " (to " + g(past_q[size_t(k)]) + " at t = " +
+                g(past_at[size_t(k)]) + " s; limits " + g(m.lower[size_t(k)]) + ", " + g(m.upper[size_t(k)]) + ")";
+    if (!past.empty())
+      summary.warnings.push_back("joints past their limits, which this run does not enforce (simulation: limits: true "
+                                 "does): " + past);
+  }
   if (observer) observer->on_finish(summary);
   return summary;
 }

@@ -163,6 +163,14 @@ TEST(Limits, OffByDefaultAndRefusals) {
   double lowest = 1;
   for (const Sample& x : s) lowest = std::min(lowest, x.q(0));
   EXPECT_LT(lowest, -0.9);
+  // and the run says so, once, naming the joint, where it went and when it first did
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("joints past their limits, which this run does not enforce"), std::string::npos);
+  EXPECT_NE(r.warnings[0].find("arm (to -"), std::string::npos) << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find("limits 0, 3)"), std::string::npos) << r.warnings[0];
+  SimulationSettings on = off.simulation;
+  on.limits = true;
+  EXPECT_TRUE(simulate(off, on).warnings.empty());
   SimulationSettings fixed = off.simulation;
   fixed.limits = true;
   fixed.method = "rk4";

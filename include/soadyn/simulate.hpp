@@ -47,6 +47,9 @@ struct RunSummary {
   double final_energy_balance_error = 0.0;
   std::vector<LimitEvent> events;     // joint-limit events, in time order (settings.limits)
   long control_ticks = 0;             // sampled control: the controller's evaluations
+  // what the run did that its settings allowed but a user should hear (one line each): joints
+  // that went past limits which were not enforced (limits off)
+  std::vector<std::string> warnings;
 };
 
 // Receives samples and the run's state as it goes (the HDF5 log implements it).

@@ -197,6 +197,7 @@ int run_simulation(const RunOptions& o) {
     log->set_flush_interval(o.flush_interval);
     Progress progress(log.get(), s.t_end);
     r = simulate(sc, s, &progress, nullptr, &g_stop);
+    for (const std::string& w : r.warnings) warn(w);
   } catch (const IoError& e) {
     std::fprintf(stderr, "soadyn: error: %s\n", e.what());
     return 4;

@@ -179,10 +179,12 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   for (const LimitEvent& e : summary.events)
     events.append(py::dict("t"_a = e.t, "joint"_a = e.joint, "side"_a = e.side < 0 ? "lower" : "upper", "kind"_a = e.kind,
                            "v_before"_a = e.v_before, "v_after"_a = e.v_after, "energy_lost"_a = e.energy_lost));
+  std::vector<std::string> said = warnings;  // the settings', then the run's
+  said.insert(said.end(), summary.warnings.begin(), summary.warnings.end());
   py::dict sd = summary_dict(summary);
   sd["events"] = events;
   sd["control_ticks"] = summary.control_ticks;
-  return py::make_tuple(arrays, sd, pending.is_none() ? raised : pending, warnings);
+  return py::make_tuple(arrays, sd, pending.is_none() ? raised : pending, said);
 }
 
 }  // namespace
