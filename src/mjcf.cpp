@@ -96,16 +96,16 @@ std::string ignored(const mjModel* m) {
   auto count = [&](int n, const char* one, const char* many) {
     if (n > 0) kinds.push_back(std::to_string(n) + " " + (n == 1 ? one : many));
   };
-  int colliding = 0, limited = 0, armature = 0;
+  int colliding = 0, armature = 0, cones = 0;
+  for (int j = 0; j < m->njnt; ++j) cones += m->jnt_limited[j] && m->jnt_type[j] == mjJNT_BALL ? 1 : 0;
   for (int g = 0; g < m->ngeom; ++g) colliding += (m->geom_contype[g] || m->geom_conaffinity[g]) ? 1 : 0;
-  for (int j = 0; j < m->njnt; ++j) limited += m->jnt_limited[j] ? 1 : 0;
   for (int k = 0; k < m->nv; ++k) armature += m->dof_armature[k] != 0.0 ? 1 : 0;
   count(colliding, "colliding geom (contacts)", "colliding geoms (contacts)");
   count(m->npair, "contact pair", "contact pairs");
   count(m->ntendon, "tendon", "tendons");
   count(m->neq, "equality constraint", "equality constraints");
   count(m->nu, "actuator", "actuators");
-  count(limited, "joint range (recorded in the file, not enforced)", "joint ranges (recorded in the file, not enforced)");
+  count(cones, "ball-joint range (a cone)", "ball-joint ranges (cones)");
   count(armature, "DOF armature (rotor inertia, not in 𝓜)", "DOF armatures (rotor inertia, not in 𝓜)");
   count(m->nsensor, "sensor", "sensors");
   std::string out;
@@ -167,6 +167,12 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
           s.placement = Placement{};
           break;
         default: throw Error(path + ": joint '" + printable(jname) + "': unknown MuJoCo joint type");
+      }
+      if (m->jnt_limited[j] && (m->jnt_type[j] == mjJNT_HINGE || m->jnt_type[j] == mjJNT_SLIDE)) {
+        // the range, in soadyn's q (qpos − qpos0): the joint's limits (enforced with limits: true)
+        const double q0 = m->qpos0[m->jnt_qposadr[j]];
+        s.lower = m->jnt_range[2 * j] - q0;
+        s.upper = m->jnt_range[2 * j + 1] - q0;
       }
       coords.emplace_back(j, int(specs.size()) - 1);
       at = pos;

@@ -454,7 +454,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     rd.fail(e.mark, "YAML syntax", e.msg);
   }
   if (!root || root.IsNull()) throw Error(path + ": the file is empty");
-  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits"});
+  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "model", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits"});
 
   Scenario sc;
   sc.path = path;
@@ -462,16 +462,21 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   sc.name = root["name"] ? rd.string(root["name"], "name") : std::filesystem::path(path).stem().string();
   if (root["description"]) sc.description = root["description"].as<std::string>("");
   // a URDF robot gets the URDF gravity wherever it enters; bodies written here get none by default
-  const Vec3 gravity = root["gravity"] ? rd.vec3(root["gravity"], "gravity") : root["urdf"] ? urdf_gravity() : Vec3::Zero();
+  // the robot file: `urdf:` or `model:` (the same key: a URDF or an MJCF file)
+  if (root["urdf"] && root["model"]) rd.fail(root["model"], "model", "give either 'urdf' or 'model' (the same key), not both");
+  const char* robot_key = root["model"] ? "model" : "urdf";
+  const YAML::Node robot_node = root[robot_key];
+  const Vec3 gravity = root["gravity"] ? rd.vec3(root["gravity"], "gravity") : robot_node ? urdf_gravity() : Vec3::Zero();
   // the caller's (--inertia-check) over the file's
   const InertiaCheck check = inertia_check ? *inertia_check
                              : root["inertia_check"] ? read_inertia_check(rd, root["inertia_check"])
                                                      : InertiaCheck::Warn;
 
-  if (root["urdf"] && root["bodies"]) rd.fail(root["urdf"], "urdf", "give either 'bodies' or 'urdf', not both");
+  if (robot_node && root["bodies"])
+    rd.fail(robot_node, robot_key, "give either 'bodies' or '" + std::string(robot_key) + "', not both");
   std::optional<MjcfModel> mjcf;  // an MJCF robot: its drawn pose, dampers and springs
-  if (root["urdf"]) {
-    const std::string rel = rd.string(root["urdf"], "urdf");
+  if (robot_node) {
+    const std::string rel = rd.string(robot_node, robot_key);
     const std::filesystem::path p = std::filesystem::path(path).parent_path() / rel;
     const bool free = free_root || (root["free_root"] && rd.boolean(root["free_root"], "free_root"));
     try {
@@ -485,7 +490,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
         sc.model = parse_urdf(robot, p.string(), free, gravity, check);
       }
     } catch (const Error& e) {
-      rd.fail(root["urdf"], "urdf", e.what());
+      rd.fail(robot_node, robot_key, e.what());
     }
   } else {
     if (root["free_root"]) rd.fail(root["free_root"], "free_root", "applies to 'urdf' models; give the root a free joint");

@@ -12,6 +12,7 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <random>
@@ -188,7 +189,13 @@ TEST(Mjcf, StatesWhatItIgnoresAndMapsDampingAndStiffness) {
   EXPECT_THAT(sc.model.warnings[0], HasSubstr("ignored: "));
   EXPECT_THAT(sc.model.warnings[0], HasSubstr("1 contact pair"));
   EXPECT_THAT(sc.model.warnings[0], HasSubstr("1 actuator"));
-  EXPECT_THAT(sc.model.warnings[0], HasSubstr("1 joint range"));
+  EXPECT_THAT(sc.model.warnings[0], ::testing::Not(HasSubstr("range")));
+  // a hinge's range is its limits, in soadyn's q (qpos − qpos0; degrees read as such)
+  const int yaw = sc.model.idx_v[sc.model.joint_index("yaw")];
+  EXPECT_NEAR(sc.model.lower[yaw], -170.0 * M_PI / 180.0, 1e-14);
+  EXPECT_NEAR(sc.model.upper[yaw], 170.0 * M_PI / 180.0, 1e-14);
+  const int shoulder = sc.model.idx_v[sc.model.joint_index("shoulder")];
+  EXPECT_TRUE(std::isinf(sc.model.lower[shoulder]));
   ASSERT_EQ(sc.inputs.dampers.size(), 1u);
   EXPECT_EQ(sc.inputs.dampers[0].joint, "shoulder_roll");
   EXPECT_NEAR(sc.inputs.dampers[0].damping, 0.5, 1e-15);
@@ -200,6 +207,19 @@ TEST(Mjcf, StatesWhatItIgnoresAndMapsDampingAndStiffness) {
   EXPECT_THAT(fl.model.warnings.at(0), HasSubstr("1 DOF armature"));
   EXPECT_TRUE(fl.model.has_free_joint());
   EXPECT_NEAR(fl.q0(0), 0.1, 1e-15);  // the free joint starts at the drawn pose
+}
+
+// a scenario names an MJCF robot by model: (or urdf:, the same key)
+TEST(Mjcf, AScenariosModelKeyNamesAnMjcfFile) {
+  const Scenario sc = parse_scenario("model: arm.xml\nsimulation: {t_end: 0.1}\n", kDir + "scene.yaml");
+  EXPECT_EQ(sc.model.nv, 6);
+  EXPECT_EQ(sc.inputs.dampers.size(), 1u);
+  try {
+    parse_scenario("model: arm.xml\nurdf: arm.xml\n", kDir + "scene.yaml");
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("give either 'urdf' or 'model'"));
+  }
 }
 
 TEST(Mjcf, CompilerErrorsNameFileLineAndElement) {

@@ -201,8 +201,8 @@ RunModel rebuild_model(const RunFile& run) {
       out.has_work_inputs = !sc.inputs.torques.empty() || !sc.inputs.dampers.empty();
       // the URDF a scenario names, relative to the scenario file (parse_scenario has just read it)
       const YAML::Node root = YAML::Load(sc.text);
-      if (root["urdf"]) {
-        const std::filesystem::path p = std::filesystem::path(label).parent_path() / root["urdf"].as<std::string>();
+      if (const YAML::Node robot = root["model"] ? root["model"] : root["urdf"]) {
+        const std::filesystem::path p = std::filesystem::path(label).parent_path() / robot.as<std::string>();
         std::error_code ec;
         if (std::filesystem::is_regular_file(p, ec)) {
           out.urdf_text = read_text_file(p.string());
