@@ -30,11 +30,7 @@ struct Reader {
     fail(n.Mark(), field, msg);
   }
 
-  static std::string show_number(double x) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%g", x);
-    return buf;
-  }
+  static std::string show_number(double x) { return short_number(x); }
 
   static std::string show(const YAML::Node& n) {
     if (n.IsScalar()) return "'" + n.Scalar() + "'";

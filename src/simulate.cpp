@@ -1,6 +1,7 @@
 #include "soadyn/simulate.hpp"
 
 #include "soadyn/kinematics.hpp"
+#include "soadyn/text.hpp"
 
 #include <csignal>
 #include <cmath>
@@ -78,11 +79,6 @@ double output_count(const SimulationSettings& s) {
 double output_rows(const SimulationSettings& s) { return 1 + output_count(s); }
 
 namespace {
-std::string g(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
 std::string at_time(double t) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.9g", t);
@@ -96,16 +92,16 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
       {"t_end", s.t_end}, {"output_dt", s.output_dt}, {"dt", s.dt}, {"atol", s.atol}};
   for (const auto& [name, x] : positive)
     if (!(x > 0) || !std::isfinite(x))
-      throw Error(std::string("simulation settings: ") + name + " must be a positive finite number, got " + g(x));
-  if (!(s.rtol > 0 && s.rtol < 1)) throw Error("simulation settings: rtol must lie in (0, 1), got " + g(s.rtol));
+      throw Error(std::string("simulation settings: ") + name + " must be a positive finite number, got " + short_number(x));
+  if (!(s.rtol > 0 && s.rtol < 1)) throw Error("simulation settings: rtol must lie in (0, 1), got " + short_number(s.rtol));
   // counts: time advances by whole steps and rows, counted exactly only up to 2^53
   const double limit = 9007199254740992.0;
   const double rows = output_rows(s);
   if (!(rows <= limit))
-    throw Error("simulation settings: t_end / output_dt = " + g(s.t_end) + " / " + g(s.output_dt) + " gives " + g(rows) +
+    throw Error("simulation settings: t_end / output_dt = " + short_number(s.t_end) + " / " + short_number(s.output_dt) + " gives " + short_number(rows) +
                 " rows, more than 2^53: raise output_dt or lower t_end");
   if (is_fixed_step(s.method) && !(s.t_end / s.dt <= limit))
-    throw Error("simulation settings: t_end / dt = " + g(s.t_end) + " / " + g(s.dt) + " gives " + g(s.t_end / s.dt) +
+    throw Error("simulation settings: t_end / dt = " + short_number(s.t_end) + " / " + short_number(s.dt) + " gives " + short_number(s.t_end / s.dt) +
                 " steps, more than 2^53: raise dt or lower t_end");
   if (!is_fixed_step(s.method) && s.max_steps <= 0)
     throw Error("simulation settings: max_steps must be positive, got " + std::to_string(s.max_steps));
@@ -125,7 +121,7 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
     if (const std::string why = info->refuses(sc.model); !why.empty()) throw Error(sc.path + ": " + why);
   // joint limits: root finding (CVODE), e in [0, 1], a start inside the limits
   if (!(s.restitution >= 0 && s.restitution <= 1))
-    throw Error("simulation settings: restitution must lie in [0, 1], got " + g(s.restitution));
+    throw Error("simulation settings: restitution must lie in [0, 1], got " + short_number(s.restitution));
   if (s.limits && sc.model.has_limits()) {
     if (is_fixed_step(s.method))
       throw Error("simulation settings: limits: true needs an integrator that locates events (cvode-adams or "
@@ -133,26 +129,26 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
     JointLimits(sc.model, s.restitution).check_inside(sc.q0);
   }
   if (!(s.control_dt >= 0) || !std::isfinite(s.control_dt))
-    throw Error("simulation settings: control_dt must be 0 (continuous) or a positive finite number, got " + g(s.control_dt));
+    throw Error("simulation settings: control_dt must be 0 (continuous) or a positive finite number, got " + short_number(s.control_dt));
   std::vector<std::string> warnings;
   if (s.control_dt > 0 && is_fixed_step(s.method) &&
       std::abs(s.control_dt / s.dt - std::round(s.control_dt / s.dt)) > 1e-9 * std::max(1.0, s.control_dt / s.dt))
-    warnings.push_back("control_dt " + g(s.control_dt) + " is not a whole number of steps dt " + g(s.dt) +
+    warnings.push_back("control_dt " + short_number(s.control_dt) + " is not a whole number of steps dt " + short_number(s.dt) +
                        ": each tick ends a shorter step and the steps restart there");
   // a fixed step longer than the run or than the output interval: the run is then not what was written
   if (is_fixed_step(s.method) && s.dt > s.t_end)
-    warnings.push_back("dt " + g(s.dt) + " is longer than t_end " + g(s.t_end) + ": the run is one step of " +
-                       g(s.t_end));
+    warnings.push_back("dt " + short_number(s.dt) + " is longer than t_end " + short_number(s.t_end) + ": the run is one step of " +
+                       short_number(s.t_end));
   else if (is_fixed_step(s.method) && s.dt > s.output_dt)
-    warnings.push_back("dt " + g(s.dt) + " is longer than output_dt " + g(s.output_dt) +
-                       ": a sample after every step, every " + g(s.dt) + " s");
+    warnings.push_back("dt " + short_number(s.dt) + " is longer than output_dt " + short_number(s.output_dt) +
+                       ": a sample after every step, every " + short_number(s.dt) + " s");
   if (s.output_dt > s.t_end)
-    warnings.push_back("output_dt " + g(s.output_dt) + " is longer than t_end " + g(s.t_end) +
+    warnings.push_back("output_dt " + short_number(s.output_dt) + " is longer than t_end " + short_number(s.t_end) +
                        ": the run has only its first and last sample");
   // CVODE's local error test compares against rtol·|y|: below ~100 ε it asks for more digits than a double holds
   const double reach = 100 * std::numeric_limits<double>::epsilon();
   if (!is_fixed_step(s.method) && s.rtol < reach)
-    warnings.push_back("rtol " + g(s.rtol) + " is below what double precision can deliver (about " + g(reach) +
+    warnings.push_back("rtol " + short_number(s.rtol) + " is below what double precision can deliver (about " + short_number(reach) +
                        "): CVODE will take tiny steps or fail");
   return warnings;
 }
@@ -199,7 +195,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
       }
       if (const int bad = first_non_finite(tau); bad >= 0)
         throw SimulationError("the controller returned a non-finite torque at t = " + at_time(t) + " s (" +
-                                  m.v_names()[size_t(bad)] + " = " + g(tau(bad)) + ")",
+                                  m.v_names()[size_t(bad)] + " = " + short_number(tau(bad)) + ")",
                               t);
     };
   const bool sampled = law && settings.control_dt > 0;
@@ -342,8 +338,8 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
     std::string past;
     for (int k = 0; k < m.nv; ++k)
       if (past_at[size_t(k)] >= 0)
-        past += (past.empty() ? "" : ", ") + m.v_names()[size_t(k)] + " (to " + g(past_q[size_t(k)]) + " at t = " +
-                g(past_at[size_t(k)]) + " s; limits " + g(m.lower[size_t(k)]) + ", " + g(m.upper[size_t(k)]) + ")";
+        past += (past.empty() ? "" : ", ") + m.v_names()[size_t(k)] + " (to " + short_number(past_q[size_t(k)]) + " at t = " +
+                short_number(past_at[size_t(k)]) + " s; limits " + short_number(m.lower[size_t(k)]) + ", " + short_number(m.upper[size_t(k)]) + ")";
     if (!past.empty())
       summary.warnings.push_back("joints past their limits, which this run does not enforce (simulation: limits: true "
                                  "does): " + past);

@@ -72,4 +72,16 @@ std::string did_you_mean(const std::string& got, const std::vector<std::string>&
   return choices.empty() ? "" : " (expected one of: " + all + ")";
 }
 
+std::string short_number(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+std::string exact_number(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", x);
+  return buf;
+}
+
 }  // namespace soadyn

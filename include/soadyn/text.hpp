@@ -17,4 +17,9 @@ std::string printable(const std::string& text);
 // else " (expected one of: a, b, …)"; "" when there are no choices
 std::string did_you_mean(const std::string& got, const std::vector<std::string>& choices);
 
+// x for a message, as printf's %g (six significant digits), and exactly, as %.17g (it reads back
+// as the same double: JSON, values a user copies)
+std::string short_number(double x);
+std::string exact_number(double x);
+
 }  // namespace soadyn

@@ -31,15 +31,6 @@ void add_inspect(CLI::App& app, InspectOptions& o) {
                 "Jacobian J (6 x nv, [w; v] of the frame's origin, inertial axes) are printed; may be repeated");
 }
 
-namespace {
-
-std::string num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
-
-}  // namespace
 
 namespace {
 
@@ -59,7 +50,7 @@ std::string json_string(const std::string& s) {
 template <class V>
 std::string json_array(const V& v) {
   std::string o = "[";
-  for (Eigen::Index k = 0; k < v.size(); ++k) o += (k ? ", " : "") + num(v(k));
+  for (Eigen::Index k = 0; k < v.size(); ++k) o += (k ? ", " : "") + exact_number(v(k));
   return o + "]";
 }
 
@@ -134,7 +125,7 @@ void print_json(const Model& m, const Inspection& r, const std::string& method) 
   out += ", \"M\": [";
   for (int k = 0; k < m.nv; ++k) out += (k ? ", " : "") + json_array(VecX(r.M.row(k).transpose()));
   out += "], \"bias\": " + json_array(r.bias) + ", \"tau\": " + json_array(r.tau) + ", \"qdd\": " + json_array(r.qdd);
-  out += ", \"kinetic_energy\": " + num(r.T) + ", \"potential_energy\": " + num(r.V);
+  out += ", \"kinetic_energy\": " + exact_number(r.T) + ", \"potential_energy\": " + exact_number(r.V);
   out += ", \"momentum\": {\"linear\": " + json_array(r.h.linear) + ", \"angular\": " + json_array(r.h.angular) + "}";
   out += ", \"bodies\": [";
   for (int i = 0; i < m.nbodies; ++i)

@@ -17,18 +17,6 @@ namespace soadyn::cli {
 
 namespace {
 
-std::string short_num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%g", x);
-  return buf;
-}
-
-std::string num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
-
 std::string lower(std::string s) {
   for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
   return s;
@@ -112,7 +100,7 @@ void state_from_options(const Model& m, const StateOptions& o, VecX& q, VecX& v)
     if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
       const double norm = q.segment<4>(m.idx_q[i] + k).norm();
       if (std::abs(norm - 1.0) > 1e-6)
-        throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + num(norm));
+        throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + exact_number(norm));
     }
   m.normalize(q);
   v = vector_option("--qd", o.qd, m.nv, v);
@@ -120,7 +108,7 @@ void state_from_options(const Model& m, const StateOptions& o, VecX& q, VecX& v)
     for (Eigen::Index k = 0; k < x->size(); ++k)
       if (std::abs((*x)(k)) > kMaxStateMagnitude)
         throw Error(std::string(option) + ": " + names[size_t(k)] + " = " +
-                    short_num((*x)(k)) + ": expected |value| <= " + short_num(kMaxStateMagnitude) + " (m, rad, m/s or rad/s)");
+                    short_number((*x)(k)) + ": expected |value| <= " + short_number(kMaxStateMagnitude) + " (m, rad, m/s or rad/s)");
 }
 
 CLI::Validator one_of(const std::vector<std::string>& names) {
