@@ -199,38 +199,41 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
   Model& model = out.model;
   if (const std::string what = ignored(m); !what.empty()) model.warnings.push_back("ignored: " + what);
 
-  // sites as frames, placed in the frame of the soadyn body their MuJoCo body moves with
-  for (int i = 0; i < m->nsite; ++i) {
-    const int b = m->site_bodyid[i];
-    const std::string site = name_of(m, mjOBJ_SITE, i, "site");
-    Placement X{rotation(m->site_quat + 4 * i), vec3(m->site_pos + 3 * i)};
-    if (b == 0) {
-      model.add_frame(site, -1, X);
-      continue;
-    }
+  // X given in MuJoCo body b's frame, as (model body, placement in its frame; −1: the world): b's
+  // last spec sits at its anchor, and that spec is a frame of the body it moves with
+  auto in_model = [&](int b, Placement X, int& body) -> Placement {
+    body = -1;
+    if (b == 0) return X;
     const int f = model.frame_index(name_of(m, mjOBJ_BODY, b, "body"));
     X.p -= anchor[size_t(b)];
-    if (f >= 0 && model.frame_index(site) < 0) model.add_frame(site, model.frame_body[size_t(f)], compose(model.frame_placement[size_t(f)], X));
+    body = model.frame_body[size_t(f)];
+    return compose(model.frame_placement[size_t(f)], X);
+  };
+
+  // sites as frames; one whose name a body or welded body already has is said, not dropped silently
+  std::string taken;
+  for (int i = 0; i < m->nsite; ++i) {
+    const std::string site = name_of(m, mjOBJ_SITE, i, "site");
+    if (model.frame_index(site) >= 0) {
+      taken += (taken.empty() ? "" : ", ") + printable(site);
+      continue;
+    }
+    int body = -1;
+    const Placement X = in_model(m->site_bodyid[i], {rotation(m->site_quat + 4 * i), vec3(m->site_pos + 3 * i)}, body);
+    model.add_frame(site, body, X);
   }
+  if (!taken.empty()) model.warnings.push_back("sites not kept as frames (a body has the name): " + taken);
 
   // geoms, placed as sites are
   static const char* const kinds[] = {"plane", "hfield", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh"};
   for (int g = 0; g < m->ngeom; ++g) {
     const int type = m->geom_type[g];
     if (type < 0 || type > mjGEOM_MESH) continue;
-    const int b = m->geom_bodyid[g];
     MjcfGeom geom;
     geom.kind = kinds[type];
     geom.size = vec3(m->geom_size + 3 * g);
     geom.rgb = Vec3(m->geom_rgba[4 * g], m->geom_rgba[4 * g + 1], m->geom_rgba[4 * g + 2]);
-    geom.X = Placement{rotation(m->geom_quat + 4 * g), vec3(m->geom_pos + 3 * g)};
-    if (b > 0) {
-      const int f = model.frame_index(name_of(m, mjOBJ_BODY, b, "body"));
-      if (f < 0) continue;
-      geom.X.p -= anchor[size_t(b)];
-      geom.body = model.frame_body[size_t(f)];
-      geom.X = compose(model.frame_placement[size_t(f)], geom.X);
-    }
+    geom.X = in_model(m->geom_bodyid[g], {rotation(m->geom_quat + 4 * g), vec3(m->geom_pos + 3 * g)}, geom.body);
     out.geoms.push_back(geom);
   }
 

@@ -222,6 +222,18 @@ TEST(Mjcf, AScenariosModelKeyNamesAnMjcfFile) {
   }
 }
 
+// a site named as a body is said, not dropped silently; the other sites are frames
+TEST(Mjcf, ASiteNamedAsABodyIsReported) {
+  const std::string xml = R"(<mujoco><worldbody><site name="marker"/>
+    <body name="a"><joint type="hinge"/><geom type="sphere" size="0.1" contype="0" conaffinity="0"/>
+      <site name="a"/><site name="tip" pos="0 0 0.2"/></body></worldbody></mujoco>)";
+  const MjcfModel mj = parse_mjcf(xml, "inline.xml", false);
+  EXPECT_GE(mj.model.frame_index("tip"), 0);
+  EXPECT_EQ(mj.model.frame_body[size_t(mj.model.frame_index("marker"))], -1);
+  ASSERT_EQ(mj.model.warnings.size(), 1u);
+  EXPECT_EQ(mj.model.warnings[0], "sites not kept as frames (a body has the name): a");
+}
+
 TEST(Mjcf, CompilerErrorsNameFileLineAndElement) {
   const std::string path = kDir + "bad_joint.xml";
   try {
