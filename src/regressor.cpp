@@ -118,15 +118,13 @@ void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y) {
 void forward_dynamics_parameter_derivative(const Model& model, Data& data, const VecX& tau, MatX& dqdd_dpi) {
   data.check(model, "forward_dynamics_parameter_derivative", "tau", tau.size(), model.nv);
   forward_dynamics(model, data, tau, FdMethod::Sparse);  // data.qdd; 𝓜 factored into data.L
-  const VecX qdd = data.qdd;
-  regressor(model, data, qdd, dqdd_dpi);
+  regressor(model, data, data.qdd, dqdd_dpi);  // inverse dynamics at q̈ writes tau, A, F, never qdd
   // ∂q̈/∂π = −𝓜⁻¹ Y: one LᵀDL solve per column
   for (Eigen::Index c = 0; c < dqdd_dpi.cols(); ++c) {
     auto col = dqdd_dpi.col(c);
     col = -col;
     ltdl_solve(model, data, col);
   }
-  data.qdd = qdd;
 }
 
 }  // namespace soadyn
