@@ -35,7 +35,7 @@ for f in include/soadyn/algorithms.hpp include/soadyn/types.hpp "$libdir/libsoad
   "$libdir/pkgconfig/soadyn.pc" "$bindir/soadyn"; do
   [[ -e $prefix/$f ]] || fail "not installed: $f"
 done
-readlink "$prefix/$libdir/libsoadyn.so" | grep -q '^libsoadyn\.so\.[0-9]' || fail "libsoadyn.so is not a link to a SOVERSION'd file"
+[[ $(readlink "$prefix/$libdir/libsoadyn.so") =~ ^libsoadyn\.so\.[0-9] ]] || fail "libsoadyn.so is not a link to a SOVERSION'd file"
 
 echo "== find_package(soadyn): consumer linked with soadyn::soadyn"
 "$cmake" -S "$source/tests/install" -B "$scratch/cmake" -DCMAKE_PREFIX_PATH="$prefix" \
@@ -56,7 +56,10 @@ grep -q -- "-march" <<<"$cflags" && fail "pkg-config --cflags soadyn passes on -
 pkg-config --static --libs soadyn >/dev/null || fail "pkg-config --static --libs soadyn failed"
 # shellcheck disable=SC2086  # the flags are words
 "$cxx" -std=c++20 "$source/tests/install/consumer.cpp" $cflags $libs -o "$scratch/consumer_pc"
-LD_LIBRARY_PATH=$prefix/$libdir ldd "$scratch/consumer_pc" | grep -q "$prefix/$libdir/libsoadyn.so" ||
+# ldd's whole output first: `ldd | grep -q` under pipefail fails whenever grep stops reading
+# before ldd has written its last line (ldd then dies of SIGPIPE)
+loaded=$(LD_LIBRARY_PATH=$prefix/$libdir ldd "$scratch/consumer_pc")
+grep -q "$prefix/$libdir/libsoadyn.so" <<<"$loaded" ||
   fail "the pkg-config consumer does not load the installed libsoadyn.so"
 LD_LIBRARY_PATH=$prefix/$libdir "$scratch/consumer_pc"
 
