@@ -5,8 +5,9 @@ For every scenario in scenarios/ (and a URDF arm with visual primitives): run it
 (checked < 5 MB), open the page at #t=a (it must open paused at a), screenshot the scene with the
 bodies shown and hidden (the bodies must cover part of it), move to #t=b and screenshot again (the
 bodies must have moved), and check that the console logged no error and that the page requested
-nothing.  Then: keyboard and plot clicks drive playback; a missing URDF and bad files are refused
-with one clear line; and the checks themselves catch an error and a network request injected into
+nothing.  The frames a run logged (view_visuals.yaml's log: frames:) are drawn as named triads
+where the run file puts them, and move.  Then: keyboard and plot clicks drive playback; a missing
+URDF and bad files are refused with one clear line; and the checks themselves catch an error and a network request injected into
 a copy of a page.
 
 Environment: SOADYN (the executable), SOADYN_SOURCE_DIR; optional argument --save DIR writes one
@@ -119,6 +120,54 @@ def check_scene(b, page, name, save_dir):
         img.quantize(colors=256, method=Image.MEDIANCUT, dither=Image.NONE).save(
             os.path.join(save_dir, f"view_{name}.png"), optimize=True)
     return ok
+
+
+def check_named_frames(b, page, h5):
+    """The frames the run logged (view_visuals.yaml's log: frames:) are drawn as triads where the
+    run file puts them, with their names, and move with the playback."""
+    import h5py
+    with h5py.File(h5, "r") as f:
+        names = [n.decode() if isinstance(n, bytes) else n for n in f["frames/names"][:]]
+        t, pos, att = f["time"][:], f["frames/position"][:], f["frames/orientation"][:]
+    b.navigate("file://" + os.path.abspath(page) + "#t=0")
+    b.wait_for("window.soadynView && soadynView.ready", timeout=60)
+    wait_render(b, float(t[0]))
+    check(b.evaluate("soadynView.counts().namedFrames") == len(names), f"view_visuals: {len(names)} logged frames drawn")
+    note = b.evaluate("document.getElementById('frames-note').textContent")
+    check(all(n in note for n in names), f"view_visuals: the legend names the logged frames ({note!r})")
+    drawn = {}
+    for row in (0, len(t) - 1):  # the first and the last sample are always shown
+        b.evaluate(f"soadynView.seek({float(t[row])!r})")
+        wait_render(b, float(t[row]))
+        drawn[row] = b.evaluate("soadynView.namedFrames()")
+        check([d["name"] for d in drawn[row]] == names, f"view_visuals: triads named {names}")
+        for j, d in enumerate(drawn[row]):
+            dp = float(np.abs(np.array(d["position"]) - pos[row, j]).max())
+            x, y, z, w = d["quaternion"]
+            dq = float(min(np.abs(np.array([w, x, y, z]) - s * att[row, j]).max() for s in (1, -1)))
+            check(dp < 1e-5 and dq < 1e-5 and d["visible"],
+                  f"view_visuals: triad {d['name']} at t = {t[row]:.3g} s where the run logged it "
+                  f"(position {dp:.1e} m, quaternion {dq:.1e} off; float32)")
+    last = len(t) - 1
+    moved = [float(np.linalg.norm(np.array(drawn[last][j]["position"]) - np.array(drawn[0][j]["position"])))
+             for j in range(len(names))]
+    check(min(moved) > 0.05, f"view_visuals: the triads moved {', '.join(f'{m:.3f}' for m in moved)} m over the run (> 0.05)")
+    # on screen: with the bodies hidden, the triads cover part of the scene, and move there
+    rect = canvas_rect(b)
+    act(b, "soadynView.showBodies(false); soadynView.setTrailSeconds(0)")
+    shot_last = pixels(b.screenshot())
+    act(b, "soadynView.showNamedFrames(false)")
+    shot_none = pixels(b.screenshot())
+    act(b, "soadynView.showNamedFrames(true)")
+    covered = changed(shot_last, shot_none, rect)
+    check(covered > 0.0005, f"view_visuals: the triads and labels cover {100 * covered:.3f}% of the scene (> 0.05%)")
+    b.evaluate(f"soadynView.seek({float(t[0])!r})")
+    wait_render(b, float(t[0]))
+    shot_first = pixels(b.screenshot())
+    moved_px = changed(shot_first, shot_last, rect)
+    check(moved_px > 0.0005, f"view_visuals: {100 * moved_px:.3f}% of the scene changed with only the triads drawn "
+                             f"between t = {t[0]:.3g} s and {t[last]:.3g} s (> 0.05%: they moved)")
+    act(b, "soadynView.showBodies(true)")
 
 
 def check_controls(b, page):
@@ -294,6 +343,7 @@ def main():
             counts = b.evaluate("soadynView.counts()")
             # box on the world-welded base, cylinder on link1, sphere on the welded tool; the mesh is not a primitive
             check(counts["visuals"] == 3, f"view_visuals: 3 URDF primitives drawn (got {counts['visuals']})")
+            check_named_frames(b, pages["view_visuals"], os.path.join(tmp, "view_visuals.h5"))
             check_controls(b, pages["double_pendulum"])
             check_detectors(b, pages["double_pendulum"], tmp)
         check_cli_errors(tmp)

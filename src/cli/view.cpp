@@ -8,6 +8,7 @@
 #include "cli.hpp"
 #include "view.hpp"
 
+#include "soadyn/frames.hpp"
 #include "soadyn/h5log.hpp"
 #include "soadyn/kinematics.hpp"
 #include "soadyn/text.hpp"
@@ -22,7 +23,7 @@
 namespace soadyn::cli {
 
 namespace assets {
-extern const std::string_view page_html, page_css, page_js, plot_js, three_js, orbit_js;
+extern const std::string_view page_html, page_css, page_js, plot_js, frames_js, three_js, orbit_js;
 }
 
 namespace {
@@ -212,10 +213,14 @@ int run_view(const ViewOptions& o) {
   const std::vector<Eigen::Index> keep = decimate(run.time, o.fps, o.max_frames, h);
   const size_t K = keep.size(), N = size_t(m.nbodies);
 
-  // poses from q by the library's kinematics: R_i, η_i of every body (the note's [kin] stage)
+  // poses from q by the library's kinematics: R_i, η_i of every body (the note's [kin] stage),
+  // and of the frames the run logged (frames.hpp's placement: R = C_b X.R, p = η_b + C_b X.p)
   Data d(m);
+  std::vector<int> logged;
+  for (const std::string& name : run.frame_names) logged.push_back(m.frame_index(name));
+  const size_t F = logged.size();
   std::vector<double> times(K);
-  std::vector<float> pose(K * N * 7), qs(K * size_t(m.nq));
+  std::vector<float> pose(K * N * 7), frame_pose(K * F * 7), qs(K * size_t(m.nq));
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
   auto extend = [&](const Vec3& x) {
     lo = lo.cwiseMin(x);
@@ -241,6 +246,14 @@ int run_view(const ViewOptions& o) {
         const Vec3 corner(c & 1 ? 0.5 : -0.5, c & 2 ? 0.5 : -0.5, c & 4 ? 0.5 : -0.5);
         extend(p + d.R[i] * (box.p + box.R * corner.cwiseProduct(box.size)));
       }
+    }
+    for (size_t j = 0; j < F; ++j) {
+      const Placement X = frame_placement(m, d, logged[j]);
+      const Eigen::Quaterniond r(X.R);
+      float* out = &frame_pose[(f * F + j) * 7];
+      for (int c = 0; c < 3; ++c) out[c] = float(X.p(c));
+      out[3] = float(r.x()), out[4] = float(r.y()), out[5] = float(r.z()), out[6] = float(r.w());
+      extend(X.p);
     }
     for (int c = 0; c < m.nq; ++c) qs[f * size_t(m.nq) + c] = float(run.q(k, c));
   }
@@ -278,6 +291,16 @@ int run_view(const ViewOptions& o) {
   for (size_t c = 0; c < names.size(); ++c) coords += (c ? "," : "") + quote(names[c]);
   coords += "]";
 
+  // the logged frames: names, the body each moves with, and per shown sample their poses
+  std::string named = "{\"names\":[";
+  for (size_t j = 0; j < F; ++j) named += (j ? "," : "") + quote(run.frame_names[j]);
+  named += "],\"bodies\":[";
+  for (size_t j = 0; j < F; ++j) {
+    const int b = m.frame_body[size_t(logged[j])];
+    named += (j ? "," : "") + quote(b < 0 ? std::string("world") : m.body_names[size_t(b)]);
+  }
+  named += "],\"pose\":" + base64(frame_pose) + "}";
+
   char rule[160];
   std::snprintf(rule, sizeof rule, "%zu of %ld logged samples, at least %.4g s apart (at most %.4g per simulated second)", K,
                 long(run.time.size()), h, 1.0 / h);
@@ -289,7 +312,7 @@ int run_view(const ViewOptions& o) {
       ",\"bounds\":{\"min\":" + vec(lo) + ",\"max\":" + vec(hi) + "},\"frames\":{\"n\":" + std::to_string(K) +
       ",\"nb\":" + std::to_string(N) + ",\"t\":" + base64(times) + ",\"pose\":" + base64(pose) + ",\"rule\":" +
       quote(rule) + "},\"coords\":" + coords + ",\"nq\":" + std::to_string(m.nq) + ",\"q\":" + base64(qs) +
-      ",\"energy\":" + energy + "}";
+      ",\"energy\":" + energy + ",\"named_frames\":" + named + "}";
 
   const std::string title = html_escape(rm.name);
   const std::string page = fill_template(assets::page_html, {{"TITLE", title},
@@ -298,6 +321,7 @@ int run_view(const ViewOptions& o) {
                                                              {"THREE", assets::three_js},
                                                              {"ORBIT", assets::orbit_js},
                                                              {"PLOT", assets::plot_js},
+                                                             {"FRAMES", assets::frames_js},
                                                              {"VIEWER", assets::page_js}});
 
   try {

@@ -22,6 +22,7 @@ struct RunFile {
   MatX q;                                // T × nq
   VecX kinetic, total;                   // T (empty if absent)
   VecX work;                             // T: the inputs' work W(t) (empty in files before layout 3)
+  std::vector<std::string> frame_names;  // the frames a scenario's log: frames: logged (/frames/names)
 };
 
 // Reads `path`; throws soadyn::Error naming the file and what is missing or malformed.

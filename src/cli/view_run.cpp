@@ -160,6 +160,27 @@ RunFile read_run(const std::string& path) {
         }
     }
   }
+  if (exists(file, "/frames/names")) {  // a dataset of variable-length strings (h5log.cpp)
+    const std::string where = path + ": dataset /frames/names";
+    Id d(H5Dopen2(file, "/frames/names", H5P_DEFAULT), H5Dclose);
+    Id type(H5Dget_type(d), H5Tclose);
+    Id space(H5Dget_space(d), H5Sclose);
+    const hssize_t n = H5Sget_simple_extent_npoints(space);
+    if (!type.ok() || H5Tget_class(type) != H5T_STRING || H5Tis_variable_str(type) <= 0)
+      throw Error(where + ": expected variable-length strings");
+    if (n > 0) {
+      Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
+      H5Tset_size(mem, H5T_VARIABLE);
+      H5Tset_cset(mem, H5Tget_cset(type));
+      std::vector<char*> names(size_t(n), nullptr);
+      if (H5Dread(d, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, names.data()) < 0)
+        throw Error(where + ": cannot be read (corrupt or truncated file?)");
+      for (char* p : names) {
+        r.frame_names.push_back(p ? p : "");
+        H5free_memory(p);
+      }
+    }
+  }
   return r;
 }
 
@@ -221,6 +242,10 @@ RunModel rebuild_model(const RunFile& run) {
   if (!run.joint_names.empty() && run.joint_names != m.joint_names)
     throw Error(run.path + ": the joints logged in /model/joint_names differ from the rebuilt model's (did " + label +
                 " or its URDF change since the run?)");
+  for (const std::string& f : run.frame_names)
+    if (m.frame_index(f) < 0)
+      throw Error(run.path + ": /frames/names has '" + f + "', a frame the rebuilt model does not have (did " + label +
+                  " or its URDF change since the run?)");
   return out;
 }
 

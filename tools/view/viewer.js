@@ -173,6 +173,8 @@
   const bodyMeshes = [].concat(layers.skeleton, layers.cm, layers.boxes, layers.visuals, layers.axes);
   bodyMeshes.forEach((m) => scene.add(m));
   layers.boxes[0].renderOrder = 1;  // translucent, after the rest
+  // the frames the run logged: a triad each, with its name (frames.js)
+  const named = new SoadynNamedFrames(THREE, scene, RUN.named_frames, decode, 0.8 * arrowLen, 0.22 * rSkel);
   const visualCount = RUN.bodies.reduce((a, b) => a + b.visuals.length, 0) + RUN.world_visuals.length;
   if (RUN.world_visuals.length) {
     const wb = new Batch();
@@ -300,6 +302,7 @@
       THREE.Quaternion.slerpFlat(qa, 0, P, o + 3, P, o2 + 3, s);
       gi.quaternion.set(qa[0], qa[1], qa[2], qa[3]);
     }
+    named.apply(k, k2, s);
     if (trailBody >= 0) {
       const first = trailSeconds === Infinity ? 0 : frameAt(t - trailSeconds);
       trailGeom.setDrawRange(first, k - first + 1);
@@ -385,6 +388,9 @@
     if (layer === 'visuals' && visualCount === 0) box.parentNode.style.display = 'none';
     box.addEventListener('change', () => { layers[layer].forEach((o) => { o.visible = box.checked; }); dirty = true; });
   });
+  const framesBox = document.getElementById('show-frames');
+  if (named.F === 0) document.getElementById('named-frames-box').style.display = 'none';
+  framesBox.addEventListener('change', () => { named.group.visible = framesBox.checked; dirty = true; });
   const trailSel = document.getElementById('trail-body');
   RUN.bodies.forEach((b, i) => { const o = document.createElement('option'); o.value = i; o.textContent = b.name; trailSel.appendChild(o); });
   trailSel.addEventListener('change', () => setTrailBody(Number(trailSel.value)));
@@ -397,7 +403,8 @@
     (RUN.status && RUN.status !== 'completed' ? ' \u00b7 ' + RUN.status : '') + ' \u00b7 soadyn ' + RUN.version;
   const meshes = RUN.bodies.map((b) => b.meshes).reduce((a, b) => a + b, RUN.world_meshes);
   document.getElementById('frames-note').textContent = 'frames: ' + RUN.frames.rule + '; poses in between are interpolated.' +
-    (meshes > 0 ? '  ' + meshes + ' URDF mesh visual(s) drawn as their body\'s default shape.' : '');
+    (meshes > 0 ? '  ' + meshes + ' URDF mesh visual(s) drawn as their body\'s default shape.' : '') +
+    (named.F ? '  Logged frames (x red, y green, z blue): ' + named.names.map((n, j) => n + ' on ' + named.bodies[j]).join(', ') + '.' : '');
 
   // picking: a click (not a drag) on a body puts the trail behind it
   const pointer = new THREE.Vector2();
@@ -484,7 +491,9 @@
     const p = which === 'joint' ? plotJoint : plotEnergy, r = p.canvas.getBoundingClientRect();
     return { left: r.left + p.left, top: r.top + p.top, w: p.w, h: p.h };
   };
-  api.counts = () => ({ bodies: NB, frames: K, visuals: visualCount, trailBody: trailBody });
+  api.counts = () => ({ bodies: NB, frames: K, visuals: visualCount, trailBody: trailBody, namedFrames: named.F });
+  api.namedFrames = () => named.state();
+  api.showNamedFrames = (on) => { named.group.visible = on; framesBox.checked = on; dirty = true; };
   // where body i's centre of mass is drawn, in page pixels; the camera's position and target
   api.screenOf = (i) => {
     const c = new THREE.Vector3().fromArray(RUN.bodies[i].com).applyMatrix4(bones[i].matrixWorld).project(camera);
