@@ -162,6 +162,35 @@ def test_log_frames_puts_their_poses_in_the_run_file(tmp_path):
         soadyn.parse_scenario(text.replace("[tip, upper]", "[tpi]"), f"{SCENARIOS}/dp_tip.yaml")
 
 
+def test_read_log_gives_the_logged_frames(tmp_path):
+    pytest.importorskip("h5py")
+    # a top on a ball joint turns its frames every way; "top" is the body's own frame
+    text = open(f"{SCENARIOS}/heavy_top.yaml").read() + (
+        "frames:\n  rim: {body: top, position: [0.05, -0.02, 0.1], rpy: [0.3, -0.4, 1.1]}\nlog: {frames: [rim, top]}\n")
+    scene = soadyn.parse_scenario(text, f"{SCENARIOS}/top_rim.yaml")
+    out = tmp_path / "run.h5"
+    soadyn.simulate(scene, "rk4", dt=1e-3, t_end=0.3, output_dt=0.02, output=str(out))
+    traj = soadyn.read_log(str(out))
+    assert list(traj.frames) == ["rim", "top"]
+    model, data = scene.model, scene.model.create_data()
+    T = len(traj)
+    worst_p = worst_R = 0.0
+    turned = []
+    for name, poses in traj.frames.items():
+        assert poses.position.shape == (T, 3) and poses.orientation.shape == (T, 4) and poses.rotation.shape == (T, 3, 3)
+        for k in range(T):
+            R, p = soadyn.frame_placement(model, data, traj.q[k], name)
+            worst_p = max(worst_p, np.abs(poses.position[k] - p).max())
+            worst_R = max(worst_R, np.abs(poses.rotation[k] - R).max())
+        turned.append(np.abs(poses.rotation[-1] - poses.rotation[0]).max())
+    assert worst_p < 1e-12 and worst_R < 1e-12, (worst_p, worst_R)
+    assert min(turned) > 0.01  # the frames did move: the comparison is not of constants
+    # a run that logged no frames has none
+    plain = tmp_path / "plain.h5"
+    soadyn.simulate(soadyn.load_scenario(f"{SCENARIOS}/heavy_top.yaml"), "rk4", dt=1e-3, t_end=0.05, output=str(plain))
+    assert soadyn.read_log(str(plain)).frames == {}
+
+
 def test_inspect_frame_prints_pose_and_jacobian():
     """`soadyn inspect --frame`: the same pose and Jacobian as the library's, in tables and in JSON"""
     import json

@@ -77,7 +77,7 @@ from ._soadyn import (forward_dynamics_parameter_derivative, parameters, regress
                       with_parameters)
 from . import _soadyn
 from ._soadyn import batch
-from ._trajectory import RunSummary, Trajectory, read_log, summary_from_dict
+from ._trajectory import FramePoses, RunSummary, Trajectory, read_log, summary_from_dict
 from ._sweep import SweepResult, read_results, sweep
 from .ensemble import Sweep, load_sweep
 
@@ -86,13 +86,13 @@ __all__ = [
     "com", "com_jacobian", "com_velocity", "coriolis_matrix", "frame_acceleration", "frame_jacobian",
     "frame_jacobian_dot_times_v", "frame_placement", "frame_velocity", "operational_space_inertia", "point_jacobian",
     "forward_dynamics_parameter_derivative", "parameters", "regressor", "with_parameters",
-    "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
+    "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "FramePoses", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
     "potential_energy", "read_log", "rollout", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
 
-for _cls in (Data, Error, Inputs, Model, Scenario, SimulationSettings, RunSummary, Trajectory):
+for _cls in (Data, Error, FramePoses, Inputs, Model, Scenario, SimulationSettings, RunSummary, Trajectory):
     _cls.__module__ = __name__  # soadyn.Model, not soadyn._soadyn.Model, in messages and help
 
 

@@ -129,6 +129,12 @@ class RunSummary:
     max_energy_balance_error: float
     final_energy_balance_error: float
 
+class FramePoses:
+    position: Vector
+    orientation: Vector
+    @property
+    def rotation(self) -> Vector: ...
+
 class Trajectory:
     t: Vector
     q: Vector
@@ -148,6 +154,7 @@ class Trajectory:
     joint_names: List[str]
     parents: List[int]
     scenario: str
+    frames: Dict[str, FramePoses]
     ARRAYS: Tuple[str, ...]
     def __len__(self) -> int: ...
     @property

@@ -1,7 +1,7 @@
 """Trajectory and RunSummary: what soadyn.simulate returns and soadyn.read_log reads back."""
 import os
 from dataclasses import dataclass, field, fields
-from typing import List, Optional
+from typing import Dict, List, Optional
 
 import numpy as np
 
@@ -37,6 +37,26 @@ class RunSummary:
 
 
 @dataclass(frozen=True, eq=False)
+class FramePoses:
+    """One logged frame's pose at every sample (a scenario's `log: {frames: [...]}`, the run
+    file's /frames): position (T, 3), its origin in inertial coordinates (m); orientation (T, 4),
+    the unit quaternion [w x y z] (w ≥ 0) of its attitude, frame → inertial; rotation (T, 3, 3)
+    the same as matrices, R @ x taking frame coordinates to inertial ones: at each sample what
+    soadyn.frame_placement(model, data, q, name) gives."""
+    position: np.ndarray
+    orientation: np.ndarray
+
+    @property
+    def rotation(self) -> np.ndarray:
+        w, x, y, z = (self.orientation[:, k] for k in range(4))
+        R = np.empty((len(w), 3, 3))
+        R[:, 0, 0], R[:, 0, 1], R[:, 0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)
+        R[:, 1, 0], R[:, 1, 1], R[:, 1, 2] = 2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)
+        R[:, 2, 0], R[:, 2, 1], R[:, 2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)
+        return R
+
+
+@dataclass(frozen=True, eq=False)
 class Trajectory:
     """A run's samples as numpy arrays, T samples at the output times.
 
@@ -46,7 +66,8 @@ class Trajectory:
     angular_momentum (T, 3) (about the inertial origin), body_position and body_com (T, N, 3) and
     body_orientation (T, N, 4, [w x y z], body → inertial); joint_names and parents of the model,
     the scenario's text, and the run's summary (a RunSummary).  A log written without a group
-    (`soadyn run --log`) gives NaN for its series.
+    (`soadyn run --log`) gives NaN for its series.  frames: the logged frames by name (read_log
+    only; a FramePoses each: position, orientation, rotation), {} when the run logged none.
     """
     t: np.ndarray
     q: np.ndarray
@@ -66,6 +87,7 @@ class Trajectory:
     joint_names: List[str] = field(default_factory=list)
     parents: List[int] = field(default_factory=list)
     scenario: str = ""
+    frames: Dict[str, FramePoses] = field(default_factory=dict)
     # soadyn.simulate only (None from read_log): impact_loss (T,), L(t), the kinetic energy
     # joint-limit impacts took since t = 0 (E(t) − E(0) = W(t) − L(t)); control (T, nv), the
     # controllers' torque at each sample (the held value when sampled)
@@ -240,6 +262,14 @@ def read_log(path: str) -> Trajectory:
                 names = []
             parents = [int(p) for p in model["parents"][...]] if model is not None and "parents" in model else []
             scenario = text(f["scenario"][()]) if "scenario" in f else text(f.attrs.get("scenario", ""))
-            return Trajectory(**arrays, summary=summary, joint_names=names, parents=parents, scenario=scenario)
+            # /frames: names (F), position (T, F, 3), orientation (T, F, 4)
+            frames = {}
+            if "frames" in f and "names" in f["frames"]:
+                fnames = [text(n) for n in f["frames/names"][...]]
+                shape = (len(fnames),)
+                pos, att = series("frames/position", *shape, 3)[:T], series("frames/orientation", *shape, 4)[:T]
+                frames = {n: FramePoses(position=pos[:, k].copy(), orientation=att[:, k].copy()) for k, n in enumerate(fnames)}
+            return Trajectory(**arrays, summary=summary, joint_names=names, parents=parents, scenario=scenario,
+                              frames=frames)
     except (OSError, RuntimeError, KeyError, ValueError, TypeError, IndexError) as e:  # a corrupt file's parts
         raise Error(f"{path}: cannot read the run file (corrupt or truncated?): {e}") from None
