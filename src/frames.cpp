@@ -2,6 +2,7 @@
 // ancestors of the frame's body through the telescoped D_{b:j} of Ψ_D.
 #include "soadyn/frames.hpp"
 
+#include "soadyn/kinematics.hpp"
 #include "soadyn/operators.hpp"
 #include "soadyn/text.hpp"
 
@@ -162,6 +163,12 @@ Vec6 frame_acceleration(const Model& model, const Data& data, int frame, const V
 
 void frame_jacobian(const Model& model, const Data& data, int frame, Reference reference, MatX& J) {
   check_frame(model, "frame_jacobian", frame);
+  point_columns(model, data, model.frame_body[frame], place(model, data, frame), reference, J);
+}
+
+void frame_jacobian(const Model& model, Data& data, const VecX& q, int frame, Reference reference, MatX& J) {
+  check_frame(model, "frame_jacobian", frame);
+  update_frames_to(model, data, q, model.frame_body[frame]);
   point_columns(model, data, model.frame_body[frame], place(model, data, frame), reference, J);
 }
 

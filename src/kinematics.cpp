@@ -65,56 +65,71 @@ void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool
 
 namespace {
 
-// the kinematics sweep; kInertias = false stops at the frames (R, η, d, G)
+// body i of the kinematics sweep, its parent's frame known and its joint's (cos θ, sin θ) in
+// data.turn; kInertias = false stops at the frames (R, η, d, G)
+template <bool kInertias>
+inline void kinematics_step(const Model& model, Data& data, const VecX& q, int i) {
+  const int p = model.parent[i];
+  const Mat3& Rp = p < 0 ? kIdentity : data.R[p];
+  const Placement& X = model.placement[i];
+  const int iv = model.idx_v[i];
+  // joint frame: C_j = C_p X.R at η_p + C_p X.p
+  Mat3 Rj;
+  if (model.placement_turns[i]) Rj.noalias() = Rp * X.R;
+  else Rj = Rp;
+  Vec3 eta = Rp * X.p;
+  if (p >= 0) eta += data.eta.col(p);
+  Mat3& R = data.R[i];
+  const int unit = model.unit_axis[i];
+  if (unit != 0) {
+    // a revolute or prismatic joint along ±e_k of its joint frame: g_i = ±C_j e_k, and a turn
+    // by θ about it mixes only the other two columns of C_j (one sincos, no 3×3 product)
+    const int k = std::abs(unit) - 1;
+    const double sign = unit > 0 ? 1.0 : -1.0, x = q(model.idx_q[i]);
+    const Vec3 g = sign * Rj.col(k);
+    if (model.joint_type[i] == JointType::Revolute) {
+      turn_frame(Rj, k, data.turn(0, i), sign * data.turn(1, i), R);
+      data.G.col(iv) << g, Vec3::Zero();
+    } else {
+      R = Rj;
+      eta += x * g;
+      data.G.col(iv) << Vec3::Zero(), g;
+    }
+  } else {
+    Mat3 Rm;
+    Vec3 pm;
+    joint_motion(model.joint_type[i], model.axis[i], q.data() + model.idx_q[i], Rm, pm);
+    R.noalias() = Rj * Rm;
+    eta.noalias() += Rj * pm;
+    joint_subspace(model.joint_type[i], model.axis[i], Rj, R, data.G.middleCols(iv, model.nv_i[i]));
+  }
+  // d_i = η_i − η_p;  s_i = C_i com_i;  r_i = η_i + s_i;  M_i = (m_i, m_i s_i, C_i I_η C_iᵀ) (eq. 12)
+  data.eta.col(i) = eta;
+  data.d.col(i) = p < 0 ? eta : Vec3(eta - data.eta.col(p));
+  if constexpr (!kInertias) return;
+  const Vec3 s = R * model.com[i];
+  data.s.col(i) = s;
+  data.r.col(i) = eta + s;
+  data.M[i].m = model.mass[i];
+  data.M[i].h = model.mass[i] * s;
+  rotate_symmetric(R, model.inertia_origin[i], data.M[i].I);
+}
+
 template <bool kInertias>
 void kinematics_sweep(const Model& model, Data& data, const VecX& q) {
   joint_turns(model, q, data.turn);
-  for (int i = 0; i < model.nbodies; ++i) {
-    const int p = model.parent[i];
-    const Mat3& Rp = p < 0 ? kIdentity : data.R[p];
-    const Placement& X = model.placement[i];
-    const int iv = model.idx_v[i];
-    // joint frame: C_j = C_p X.R at η_p + C_p X.p
-    Mat3 Rj;
-    if (model.placement_turns[i]) Rj.noalias() = Rp * X.R;
-    else Rj = Rp;
-    Vec3 eta = Rp * X.p;
-    if (p >= 0) eta += data.eta.col(p);
-    Mat3& R = data.R[i];
-    const int unit = model.unit_axis[i];
-    if (unit != 0) {
-      // a revolute or prismatic joint along ±e_k of its joint frame: g_i = ±C_j e_k, and a turn
-      // by θ about it mixes only the other two columns of C_j (one sincos, no 3×3 product)
-      const int k = std::abs(unit) - 1;
-      const double sign = unit > 0 ? 1.0 : -1.0, x = q(model.idx_q[i]);
-      const Vec3 g = sign * Rj.col(k);
-      if (model.joint_type[i] == JointType::Revolute) {
-        turn_frame(Rj, k, data.turn(0, i), sign * data.turn(1, i), R);
-        data.G.col(iv) << g, Vec3::Zero();
-      } else {
-        R = Rj;
-        eta += x * g;
-        data.G.col(iv) << Vec3::Zero(), g;
-      }
-    } else {
-      Mat3 Rm;
-      Vec3 pm;
-      joint_motion(model.joint_type[i], model.axis[i], q.data() + model.idx_q[i], Rm, pm);
-      R.noalias() = Rj * Rm;
-      eta.noalias() += Rj * pm;
-      joint_subspace(model.joint_type[i], model.axis[i], Rj, R, data.G.middleCols(iv, model.nv_i[i]));
-    }
-    // d_i = η_i − η_p;  s_i = C_i com_i;  r_i = η_i + s_i;  M_i = (m_i, m_i s_i, C_i I_η C_iᵀ) (eq. 12)
-    data.eta.col(i) = eta;
-    data.d.col(i) = p < 0 ? eta : Vec3(eta - data.eta.col(p));
-    if constexpr (!kInertias) continue;
-    const Vec3 s = R * model.com[i];
-    data.s.col(i) = s;
-    data.r.col(i) = eta + s;
-    data.M[i].m = model.mass[i];
-    data.M[i].h = model.mass[i] * s;
-    rotate_symmetric(R, model.inertia_origin[i], data.M[i].I);
+  for (int i = 0; i < model.nbodies; ++i) kinematics_step<kInertias>(model, data, q, i);
+}
+
+// the frames of body i's ancestors and then i's, parent first (a climb of depth(i) calls), each
+// revolute joint along a unit axis with a sincos of its own
+void frames_to(const Model& model, Data& data, const VecX& q, int i) {
+  if (model.parent[i] >= 0) frames_to(model, data, q, model.parent[i]);
+  if (model.unit_axis[i] != 0 && model.joint_type[i] == JointType::Revolute) {
+    const double a = q(model.idx_q[i]);
+    data.turn.col(i) << std::cos(a), std::sin(a);
   }
+  kinematics_step<false>(model, data, q, i);
 }
 
 }  // namespace
@@ -127,6 +142,14 @@ void update_kinematics(const Model& model, Data& data, const VecX& q) {
 void update_frames(const Model& model, Data& data, const VecX& q) {
   data.check(model, "update_frames", "q", q.size(), model.nq);
   kinematics_sweep<false>(model, data, q);
+}
+
+void update_frames_to(const Model& model, Data& data, const VecX& q, int body) {
+  data.check(model, "update_frames_to", "q", q.size(), model.nq);
+  if (body < -1 || body >= model.nbodies)
+    throw Error("update_frames_to: body: expected -1 (the world) .. " + std::to_string(model.nbodies - 1) + ", got " +
+                std::to_string(body));
+  if (body >= 0) frames_to(model, data, q, body);
 }
 
 void update_kinematics_reference(const Model& model, Data& data, const VecX& q) {

@@ -201,6 +201,29 @@ TEST_P(Frames, PlacementAndJacobianNeedOnlyTheFrames) {
   }
 }
 
+// frame_jacobian(q) walks the frame's body's ancestors only: the same J as the staged calls, from
+// a Data that holds another state (a body it skipped, or a turn it did not recompute, shows)
+TEST_P(Frames, JacobianFromQTouchesTheAncestorsOnly) {
+  Rng rng(22);
+  const Model m = model_with_frames(rng, GetParam().options);
+  Data staged(m), from_q(m);
+  MatX Ja, Jb;
+  double worst = 0;
+  for (int trial = 0; trial < 3; ++trial) {
+    const VecX q = random_q(rng, m);
+    update_frames(m, from_q, random_q(rng, m));  // stale
+    update_frames(m, staged, q);
+    for (int f = 0; f < int(m.frame_names.size()); ++f)
+      for (const Reference r : kReferences) {
+        frame_jacobian(m, staged, f, r, Ja);
+        frame_jacobian(m, from_q, q, f, r, Jb);
+        worst = std::max(worst, (Jb - Ja).cwiseAbs().maxCoeff() / std::max(1.0, Ja.cwiseAbs().maxCoeff()));
+        update_frames(m, from_q, random_q(rng, m));
+      }
+  }
+  EXPECT_LT(worst, 1e-14) << "largest relative difference " << sci(worst);
+}
+
 TEST_P(Frames, PointJacobianIsTheFramesLinearRows) {
   Rng rng(14);
   Model m = random_model(rng, GetParam().options);

@@ -115,6 +115,7 @@ TEST(NoAllocation, FramesAllocateNothingPerCall) {
   update_velocities(model, data, v);
   for (Reference r : {Reference::World, Reference::Local, Reference::LocalWorldAligned}) {
     frame_jacobian(model, data, f, r, J);
+    frame_jacobian(model, data, q, f, r, J);  // from q: update_frames_to, then the same walk
     frame_jacobian_dot_times_v(model, data, f, r, out);
     sum += out + frame_velocity(model, data, f, r) + frame_acceleration(model, data, f, qdd, r, true);
   }

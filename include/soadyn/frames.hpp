@@ -61,6 +61,10 @@ Vec6 frame_acceleration(const Model& model, const Data& data, int frame, const V
 
 // [kin] J, 6×nv (resized when it is not): the frame's velocity in `reference` is J v
 void frame_jacobian(const Model& model, const Data& data, int frame, Reference reference, MatX& J);
+// The same from q alone, as Pinocchio's computeFrameJacobian(q): the frames of the frame's body
+// and its ancestors (update_frames_to), then the walk above, O(depth) in all; the other bodies'
+// [kin] fields are left as they were.
+void frame_jacobian(const Model& model, Data& data, const VecX& q, int frame, Reference reference, MatX& J);
 
 // [kin][vel] J̇ v = d/dt (J(q) v) at fixed v, the frame's acceleration at q̈ = 0 in the sense of
 // each reference's velocity: world and local as frame_acceleration's spatial ones,

@@ -12,6 +12,10 @@ void update_kinematics(const Model& model, Data& data, const VecX& q);
 // The frames alone: R_i, η_i, d_i and G_i of [kin] (not s_i, r_i, M_i), for the 𝓜 route that keeps
 // its inertias in body axes (mass_matrix_local.cpp)
 void update_frames(const Model& model, Data& data, const VecX& q);
+// The frames of one body and its ancestors only (R, η, d, G of those, as update_frames gives
+// them; the other bodies' are left as they were): O(depth) for a frame's pose or Jacobian.
+// body = −1 (the world) does nothing.
+void update_frames_to(const Model& model, Data& data, const VecX& q, int body);
 // The same by the generic joint interface (joint_motion, joint_subspace) for every joint: the
 // reference the specialized path is tested against.
 void update_kinematics_reference(const Model& model, Data& data, const VecX& q);
