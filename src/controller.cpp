@@ -13,11 +13,19 @@ BuiltinControllers::BuiltinControllers(const Model& model, std::vector<Controlle
       data_(model),
       zero_(VecX::Zero(model.nv)),
       a_(VecX::Zero(model.nv)),
-      part_(VecX::Zero(model.nv)) {}
+      part_(VecX::Zero(model.nv)) {
+  for (const ControllerInput& c : controllers_) {
+    VecX b = VecX::Constant(model.nv, c.max_torque);
+    if (c.at_effort)
+      for (int k = 0; k < model.nv; ++k) b(k) = std::min(b(k), model.effort[size_t(k)]);
+    bound_.push_back(std::move(b));
+  }
+}
 
 void BuiltinControllers::operator()(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) {
   using Kind = ControllerInput::Kind;
-  for (const ControllerInput& c : controllers_) {
+  for (size_t i = 0; i < controllers_.size(); ++i) {
+    const ControllerInput& c = controllers_[i];
     part_.setZero();
     switch (c.kind) {
       case Kind::Pd: {
@@ -47,7 +55,7 @@ void BuiltinControllers::operator()(double t, const VecX& q, const VecX& v, Eige
         break;
       }
     }
-    tau += part_.cwiseMax(-c.max_torque).cwiseMin(c.max_torque);
+    tau += part_.cwiseMax(-bound_[i]).cwiseMin(bound_[i]);
   }
 }
 

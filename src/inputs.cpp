@@ -1,18 +1,23 @@
 #include "soadyn/inputs.hpp"
 
+#include "soadyn/table.hpp"
+
 #include <cmath>
 #include <numbers>
 
 namespace soadyn {
 
 double JointTarget::value(double t) const {
+  if (table) return table->value(t);
   return constant + amplitude * std::sin(2 * std::numbers::pi * frequency * t + phase);
 }
 double JointTarget::rate(double t) const {
+  if (table) return table->rate(t);
   const double w = 2 * std::numbers::pi * frequency;
   return amplitude * w * std::cos(w * t + phase);
 }
 double JointTarget::acceleration(double t) const {
+  if (table) return table->acceleration(t);
   const double w = 2 * std::numbers::pi * frequency;
   return -amplitude * w * w * std::sin(w * t + phase);
 }

@@ -169,6 +169,7 @@ void validate(const BodySpec& b, int i) {
   // travel: NaN never, lower ≤ upper (equal: the joint cannot move, which a fixed joint says)
   if (std::isnan(b.lower) || std::isnan(b.upper) || !(b.lower < b.upper))
     refuse(b, i, "limits", "lower < upper (not NaN)", fmt(b.lower) + " .. " + fmt(b.upper));
+  if (!(b.effort > 0)) refuse(b, i, "effort", "a force or torque > 0 (inf: none)", fmt(b.effort));
   check_inertia(b, i, b.mass, b.inertia);
 }
 
@@ -354,6 +355,7 @@ Model Model::build(const std::vector<BodySpec>& given, const Vec3& gravity, Iner
     for (int j = 0; j < joint_nv(b.joint); ++j) {
       m.lower.push_back(travels ? b.lower : -std::numeric_limits<double>::infinity());
       m.upper.push_back(travels ? b.upper : std::numeric_limits<double>::infinity());
+      m.effort.push_back(travels ? b.effort : std::numeric_limits<double>::infinity());
     }
     m.nq += joint_nq(b.joint);
     m.nv += joint_nv(b.joint);

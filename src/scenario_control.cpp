@@ -1,6 +1,12 @@
 // A scenario's joint limits and built-in controllers (scenarios/README.md).
 #include "scenario_reader.hpp"
 
+#include "soadyn/table.hpp"
+
+#include <filesystem>
+#include <map>
+#include <memory>
+
 namespace soadyn::scenario_detail {
 
 namespace {
@@ -13,14 +19,62 @@ int one_dof_joint(const Reader& rd, const Model& m, const YAML::Node& key, const
   return i;
 }
 
-// a target: a number (constant) or {constant, amplitude, frequency, phase}
-JointTarget read_target(const Reader& rd, const YAML::Node& n, const std::string& field) {
+// The tables a scenario's targets read (table.hpp), each file read once, its path relative to the
+// scenario file's folder.
+class Tables {
+ public:
+  explicit Tables(const Reader& rd) : rd_(rd) {}
+  const Table& get(const YAML::Node& n, const std::string& field) {
+    const std::string rel = rd_.string(n, field);
+    const std::string path = (std::filesystem::path(rd_.file).parent_path() / rel).string();
+    auto it = read_.find(path);
+    if (it == read_.end()) {
+      try {
+        it = read_.emplace(path, read_table(path)).first;
+      } catch (const Error& e) {
+        rd_.fail(n, field, e.what());
+      }
+    }
+    return it->second;
+  }
+  // the spline through `column` of the table `n` names
+  std::shared_ptr<const CubicSpline> spline(const YAML::Node& n, const std::string& field, const std::string& column,
+                                            const YAML::Node* column_node) {
+    const Table& t = get(n, field);
+    const int c = t.column(column);
+    if (c < 0)
+      rd_.fail(column_node ? *column_node : n, field, t.path + " has no column '" + column + "' (it has " +
+                   join(t.columns) + ")" + did_you_mean(column, t.columns));
+    return std::make_shared<const CubicSpline>(t.time, t.values.col(c));
+  }
+
+ private:
+  static std::string join(const std::vector<std::string>& v) {
+    std::string s;
+    for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+    return s;
+  }
+  const Reader& rd_;
+  std::map<std::string, Table> read_;
+};
+
+// a target: a number (constant), {constant, amplitude, frequency, phase}, or {table: FILE,
+// column: NAME} (the column named as the joint unless given)
+JointTarget read_target(const Reader& rd, const YAML::Node& n, const std::string& field, const std::string& joint,
+                        Tables& tables) {
   JointTarget r;
   if (n.IsScalar()) {
     r.constant = rd.number(n, field);
     return r;
   }
-  rd.keys(n, field, {"constant", "amplitude", "frequency", "phase"});
+  if (n.IsMap() && n["table"]) {
+    rd.keys(n, field, {"table", "column"});
+    const std::string column = n["column"] ? rd.string(n["column"], field + ".column") : joint;
+    const YAML::Node cn = n["column"];
+    r.table = tables.spline(n["table"], field + ".table", column, cn ? &cn : nullptr);
+    return r;
+  }
+  rd.keys(n, field, {"constant", "amplitude", "frequency", "phase", "table"});
   if (n["constant"]) r.constant = rd.number(n["constant"], field + ".constant");
   if (n["amplitude"]) r.amplitude = rd.number(n["amplitude"], field + ".amplitude");
   if (n["frequency"]) r.frequency = rd.number(n["frequency"], field + ".frequency");
@@ -53,6 +107,7 @@ void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, 
   using Kind = ControllerInput::Kind;
   const std::string f0 = "inputs.controllers";
   if (!list.IsSequence()) rd.fail(list, f0, "expected a list, got " + Reader::show(list));
+  Tables tables(rd);
   for (size_t k = 0; k < list.size(); ++k) {
     const std::string f = f0 + "[" + std::to_string(k) + "]";
     const YAML::Node e = list[k];
@@ -60,7 +115,16 @@ void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, 
     const YAML::Node type = rd.require(e, "type", f);
     const std::string kind = rd.string(type, f + ".type");
     ControllerInput c;
-    if (e["max_torque"]) c.max_torque = rd.positive(e["max_torque"], f + ".max_torque");
+    // max_torque: a number, or `effort`: each DOF's <limit effort>
+    if (const YAML::Node mt = e["max_torque"]) {
+      if (mt.IsScalar() && mt.Scalar() == "effort") {
+        c.at_effort = true;
+        if (std::none_of(m.effort.begin(), m.effort.end(), [](double x) { return std::isfinite(x); }))
+          rd.fail(mt, f + ".max_torque", "effort: no joint of the model has an effort (a URDF's <limit effort>)");
+      } else {
+        c.max_torque = rd.positive(mt, f + ".max_torque");
+      }
+    }
     if (kind == "pd") {
       rd.keys(e, f, {"type", "joint", "kp", "kd", "target", "max_torque"});
       const int i = one_dof_joint(rd, m, rd.require(e, "joint", f), f + ".joint");
@@ -69,7 +133,10 @@ void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, 
       c.coords = {m.idx_q[i]};
       c.kp = non_negative(rd, rd.require(e, "kp", f), f + ".kp");
       if (e["kd"]) c.kd = non_negative(rd, e["kd"], f + ".kd");
-      c.targets = {e["target"] ? read_target(rd, e["target"], f + ".target") : JointTarget{}};
+      c.targets = {e["target"] ? read_target(rd, e["target"], f + ".target", m.joint_names[size_t(i)], tables)
+                               : JointTarget{}};
+      if (c.at_effort && !std::isfinite(m.effort[size_t(m.idx_v[i])]))
+        rd.fail(e["max_torque"], f + ".max_torque", "effort: joint '" + m.joint_names[size_t(i)] + "' has no effort (a URDF's <limit effort>)");
     } else if (kind == "gravity_compensation") {
       rd.keys(e, f, {"type", "max_torque"});
       c.kind = Kind::GravityCompensation;
@@ -87,11 +154,23 @@ void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, 
         r.constant = q0(d);
         c.targets.push_back(r);
       }
-      if (const YAML::Node t = e["targets"]) {
-        if (!t.IsMap()) rd.fail(t, f + ".targets", "expected a map from joint name to target, got " + Reader::show(t));
+      if (const YAML::Node t = e["targets"]; t && t.IsScalar()) {
+        // a table: each joint it has a column for follows that column
+        const Table& table = tables.get(t, f + ".targets");
+        int found = 0;
+        for (int i = 0; i < m.nbodies; ++i)
+          if (m.nv_i[i] == 1 && table.column(m.joint_names[size_t(i)]) >= 0) {
+            c.targets[size_t(m.idx_v[i])].table = tables.spline(t, f + ".targets", m.joint_names[size_t(i)], nullptr);
+            ++found;
+          }
+        if (!found)
+          rd.fail(t, f + ".targets", table.path + " has no column named as a joint of the model");
+      } else if (t) {
+        if (!t.IsMap()) rd.fail(t, f + ".targets", "expected a table file or a map from joint name to target, got " + Reader::show(t));
         for (auto it = t.begin(); it != t.end(); ++it) {
           const int i = one_dof_joint(rd, m, it->first, f + ".targets");
-          c.targets[size_t(m.idx_v[i])] = read_target(rd, it->second, f + ".targets." + it->first.Scalar());
+          c.targets[size_t(m.idx_v[i])] =
+              read_target(rd, it->second, f + ".targets." + it->first.Scalar(), m.joint_names[size_t(i)], tables);
         }
       }
     } else {

@@ -152,6 +152,11 @@ BodySpec joint_spec(const urdf::Joint& j, const urdf::Link& link, const std::map
     s.lower = j.limits->lower;
     s.upper = j.limits->upper;
   }
+  // effort: <limit effort> (required by the URDF spec on revolute and prismatic joints, often 0
+  // where the author had no figure: a non-positive effort bounds nothing)
+  if ((j.type == urdf::Joint::REVOLUTE || j.type == urdf::Joint::CONTINUOUS || j.type == urdf::Joint::PRISMATIC) &&
+      j.limits && j.limits->effort > 0 && std::isfinite(j.limits->effort))
+    s.effort = j.limits->effort;
   mass_properties(link, s);
   return s;
 }

@@ -31,6 +31,7 @@ class BuiltinControllers {
  private:
   const Model& model_;
   std::vector<ControllerInput> controllers_;
+  std::vector<VecX> bound_;  // each controller's clamp, per DOF: max_torque, and the effort if asked
   Data data_;
   VecX zero_, a_, part_;
 };

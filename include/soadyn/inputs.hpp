@@ -5,10 +5,13 @@
 #include "soadyn/types.hpp"
 
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace soadyn {
+
+class CubicSpline;
 
 // Joint inputs a scene may need, and no more.  Each acts on one 1-DOF joint (index into v).
 struct TorqueInput {
@@ -33,15 +36,18 @@ struct DamperInput {
 };
 
 // A joint's reference q_d(t) = constant + amplitude · sin(2π frequency t + phase), with its rate
-// and acceleration (a controller's target).
+// and acceleration (a controller's target); or, when `table` is set, the cubic spline through a
+// tabulated column (table.hpp), the other fields then unused.
 struct JointTarget {
   double constant = 0.0, amplitude = 0.0, frequency = 0.0, phase = 0.0;
+  std::shared_ptr<const CubicSpline> table;
   double value(double t) const;
   double rate(double t) const;
   double acceleration(double t) const;
 };
 
-// A built-in controller (controller.hpp computes it), each DOF's torque clamped to ±max_torque:
+// A built-in controller (controller.hpp computes it), each DOF's torque clamped to ±max_torque and,
+// with at_effort, to ±Model::effort (a URDF's <limit effort>; DOFs without one unclamped by it):
 //   pd                    τ_k = K_p (q_d − q_k) + K_d (q̇_d − q̇_k) on one joint
 //   gravity_compensation  τ = g(q), the generalized gravity force, on every DOF
 //   computed_torque       τ = 𝓜(q) (q̈_d + K_d ė + K_p e) + bias(q, q̇), e = q_d − q, on every DOF
@@ -52,6 +58,7 @@ struct ControllerInput {
   std::vector<JointTarget> targets; // one per dof (pd, computed_torque)
   double kp = 0.0, kd = 0.0;        // 1/s², 1/s for computed_torque; N·m/rad, N·m·s/rad for pd
   double max_torque = std::numeric_limits<double>::infinity();
+  bool at_effort = false;
 };
 
 struct Inputs {

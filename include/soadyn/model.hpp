@@ -38,6 +38,9 @@ struct BodySpec {
   // rad or m; ±inf: none.  Enforced only when a run asks (SimulationSettings::limits, limits.hpp)
   double lower = -std::numeric_limits<double>::infinity();
   double upper = std::numeric_limits<double>::infinity();
+  // the joint's largest force or torque (a URDF's <limit effort>), N·m or N; inf: none given.  Used
+  // only by a controller that asks for it (ControllerInput::at_effort, `max_torque: effort`)
+  double effort = std::numeric_limits<double>::infinity();
 };
 
 // What Model::build does with an inertia whose largest principal moment exceeds the sum of the
@@ -82,6 +85,7 @@ class Model {
   // each DOF's travel, rad or m (BodySpec::lower/upper; ±inf on joints without one and on free,
   // ball and planar joints)
   std::vector<double> lower, upper;
+  std::vector<double> effort;              // each DOF's largest |τ| (BodySpec::effort; inf: none)
   bool has_limits() const;                 // a finite lower or upper somewhere
   std::vector<int> dof_parent;             // λ(k): parent DOF of DOF k, -1 at a root (for LᵀDL)
   std::vector<int> dof_body;               // body owning DOF k

@@ -90,6 +90,7 @@ struct RunOptions {
   StateOptions state;
   std::string log = "all";             // the groups logged: state, energy, momentum, bodies
   std::optional<std::string> jacobian, newton;  // --jacobian analytic|dq, --newton full|simplified
+  std::optional<std::string> limits;            // --limits on|off: the joint limits enforced or not
   std::string max_output_size = "1G";  // refuse a run whose projected file is larger
   double flush_interval = 0.5;         // s of wall time between flushes
   bool force = false;                  // replace an output that is not a soadyn run file

@@ -76,6 +76,8 @@ void add_run(CLI::App& app, RunOptions& o) {
       ->transform(one_of({"analytic", "dq"}));
   c->add_option("--newton", o.newton, "implicit-midpoint: full (default) | simplified Newton iterations")
       ->transform(one_of({"full", "simplified"}));
+  c->add_option("--limits", o.limits, "on | off: stop joints at their limits (the scenario's simulation: limits:, default off)")
+      ->transform(one_of({"on", "off"}));
   c->add_option("--t-end", o.t_end, "end time, s")->check(kPositive);
   c->add_option("--output-dt", o.output_dt, "time between logged samples, s")->check(kPositive);
   c->add_option("--max-output-size", o.max_output_size, "refuse a run whose file would be larger (default 1G)")
@@ -132,6 +134,9 @@ class Progress : public RunObserver {
   void on_sample(const Sample& s) override {
     if (next_) next_->on_sample(s);
   }
+  void on_event(const LimitEvent& e) override {
+    if (next_) next_->on_event(e);
+  }
   void on_progress(const RunSummary& r) override {
     if (next_) next_->on_progress(r);
     const auto now = std::chrono::steady_clock::now();
@@ -170,6 +175,7 @@ int run_simulation(const RunOptions& o) {
   if (o.dt) s.dt = *o.dt;
   if (o.jacobian) s.jacobian = *o.jacobian;
   if (o.newton) s.newton = *o.newton;
+  if (o.limits) s.limits = *o.limits == "on";
   if (o.t_end) s.t_end = *o.t_end;
   if (o.output_dt) s.output_dt = *o.output_dt;
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
@@ -227,6 +233,14 @@ int run_simulation(const RunOptions& o) {
     std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t)| / max(|E0|, peak T),\n"
                 "                       W the work of torques and dampers\n",
                 r.final_energy_balance_error, r.max_energy_balance_error);
+    if (!r.events.empty()) {
+      // the limits' events (in the run file's /events): how many, the energy the impacts took, the first
+      double lost = 0;
+      for (const LimitEvent& e : r.events) lost += e.energy_lost;
+      const LimitEvent& first = r.events.front();
+      std::printf("limit events           %zu (impacts took %.3g J, in the balance; the first at t = %.9g s, %s at its %s limit)\n",
+                  r.events.size(), lost, first.t, first.joint.c_str(), first.side < 0 ? "lower" : "upper");
+    }
     if (log->published())
       std::printf("output                 %s (%ld flushes, %.3g ms each)\n", out.c_str(), log->flushes(),
                   1e3 * log->flush_seconds() / double(std::max(1L, log->flushes())));

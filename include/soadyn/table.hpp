@@ -1,0 +1,47 @@
+// Tabulated signals: samples of named columns against time, read from a CSV file or a soadyn run
+// file, and the natural cubic spline through one column (a controller's tabulated target).
+//
+// CSV: a header line naming the columns, the first of them the time ("t" or "time", with or
+// without a unit: "time [s]"), then one line of numbers per sample; blank lines and lines starting
+// with '#' are skipped.  A column may be named as `soadyn export --csv` names it ("q.elbow [rad]"):
+// the "q." and the unit are dropped, so an exported run is a table of its joints.
+// Run file (HDF5): /time and /q, the columns named by /model's q_names.
+// Times must increase; a repeated time (a run's rows at an event) keeps the last row.
+#pragma once
+
+#include "soadyn/types.hpp"
+
+#include <string>
+#include <vector>
+
+namespace soadyn {
+
+struct Table {
+  std::string path;
+  VecX time;                         // T, s, increasing
+  MatX values;                       // T × columns
+  std::vector<std::string> columns;  // names, without "q." and unit
+  int column(const std::string& name) const;  // index, or -1
+};
+
+// Reads a CSV file or a run file (told apart by HDF5's signature); throws soadyn::Error naming
+// file, line and column: `traj.csv:7: column 'elbow': expected a number, got 'x'`.
+Table read_table(const std::string& path);
+
+// The natural cubic spline through (t_i, y_i) (second derivative 0 at both ends): value, rate and
+// acceleration continuous inside [t_0, t_{n−1}]; before and after, the end values held (rate and
+// acceleration 0).  Two samples give the straight line.  O(n) to build, O(log n) to evaluate.
+class CubicSpline {
+ public:
+  CubicSpline(VecX t, VecX y);  // n ≥ 2, t increasing
+  double value(double t) const;
+  double rate(double t) const;
+  double acceleration(double t) const;
+
+ private:
+  // k of the interval [t_k, t_{k+1}] holding t
+  int interval(double t) const;
+  VecX t_, y_, m_;  // m: the second derivatives at the knots
+};
+
+}  // namespace soadyn

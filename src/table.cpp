@@ -1,0 +1,241 @@
+#include "soadyn/table.hpp"
+
+#include "soadyn/h5log.hpp"
+#include "soadyn/text.hpp"
+
+#include "h5_util.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <memory>
+
+namespace soadyn {
+
+int Table::column(const std::string& name) const {
+  const auto it = std::find(columns.begin(), columns.end(), name);
+  return it == columns.end() ? -1 : int(it - columns.begin());
+}
+
+namespace {
+
+std::string trim(const std::string& s) {
+  const size_t a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return {};
+  return s.substr(a, s.find_last_not_of(" \t\r") - a + 1);
+}
+
+// a header field as a column name: quotes, a trailing " [unit]" and export's "q." dropped
+std::string column_name(std::string s) {
+  s = trim(s);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') s = s.substr(1, s.size() - 2);
+  if (!s.empty() && s.back() == ']') {
+    const size_t open = s.rfind('[');
+    if (open != std::string::npos) s = trim(s.substr(0, open));
+  }
+  if (s.rfind("q.", 0) == 0) s = s.substr(2);
+  return s;
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  size_t from = 0;
+  while (true) {
+    const size_t comma = line.find(',', from);
+    out.push_back(line.substr(from, comma == std::string::npos ? std::string::npos : comma - from));
+    if (comma == std::string::npos) return out;
+    from = comma + 1;
+  }
+}
+
+// Rows kept in time order, a repeated time replacing the row before it; throws if time decreases.
+Table ordered(Table t, const std::vector<int>& lines) {
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index k = 0; k < t.time.size(); ++k) {
+    if (k > 0 && t.time(k) < t.time(k - 1))
+      throw Error(t.path + (lines.empty() ? "" : ":" + std::to_string(lines[size_t(k)])) +
+                  ": time decreases (" + short_number(t.time(k - 1)) + " then " + short_number(t.time(k)) + ")");
+    if (k > 0 && t.time(k) == t.time(k - 1)) keep.back() = k;
+    else keep.push_back(k);
+  }
+  if (keep.size() < 2) throw Error(t.path + ": a table needs samples at two times at least, got " + std::to_string(keep.size()));
+  Table r;
+  r.path = t.path;
+  r.columns = t.columns;
+  r.time.resize(Eigen::Index(keep.size()));
+  r.values.resize(Eigen::Index(keep.size()), t.values.cols());
+  for (size_t i = 0; i < keep.size(); ++i) {
+    r.time(Eigen::Index(i)) = t.time(keep[i]);
+    r.values.row(Eigen::Index(i)) = t.values.row(keep[i]);
+  }
+  return r;
+}
+
+Table read_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open the table (" + std::strerror(errno) + ")");
+  Table t;
+  t.path = path;
+  std::vector<std::vector<double>> rows;
+  std::vector<int> lines;
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    const std::string body = trim(line);
+    if (body.empty() || body[0] == '#') continue;
+    const std::string at = path + ":" + std::to_string(n);
+    const std::vector<std::string> fields = split(body);
+    if (t.columns.empty()) {
+      // the header: the time first, then names no other column has
+      for (const std::string& f : fields) {
+        const std::string name = column_name(f);
+        if (name.empty()) throw Error(at + ": a column without a name in the header");
+        if (std::find(t.columns.begin(), t.columns.end(), name) != t.columns.end())
+          throw Error(at + ": column '" + name + "' is named twice");
+        t.columns.push_back(name);
+      }
+      if (t.columns[0] != "t" && t.columns[0] != "time")
+        throw Error(at + ": the first column must be the time ('t' or 'time [s]'), got '" + t.columns[0] + "'");
+      if (t.columns.size() < 2) throw Error(at + ": the header names no column beside the time");
+      continue;
+    }
+    if (fields.size() != t.columns.size())
+      throw Error(at + ": expected " + std::to_string(t.columns.size()) + " fields as the header has, got " +
+                  std::to_string(fields.size()));
+    std::vector<double> row;
+    for (size_t c = 0; c < fields.size(); ++c) {
+      const std::string f = trim(fields[c]);
+      char* end = nullptr;
+      const double x = std::strtod(f.c_str(), &end);
+      if (f.empty() || end != f.c_str() + f.size() || !std::isfinite(x))
+        throw Error(at + ": column '" + t.columns[c] + "': expected a finite number, got '" + f + "'");
+      row.push_back(x);
+    }
+    rows.push_back(std::move(row));
+    lines.push_back(n);
+  }
+  if (t.columns.empty()) throw Error(path + ": the table is empty (expected a header line, then samples)");
+  t.time.resize(Eigen::Index(rows.size()));
+  t.values.resize(Eigen::Index(rows.size()), Eigen::Index(t.columns.size() - 1));
+  for (size_t k = 0; k < rows.size(); ++k) {
+    t.time(Eigen::Index(k)) = rows[k][0];
+    for (size_t c = 1; c < rows[k].size(); ++c) t.values(Eigen::Index(k), Eigen::Index(c - 1)) = rows[k][c];
+  }
+  t.columns.erase(t.columns.begin());
+  return ordered(std::move(t), lines);
+}
+
+// a T or T×cols dataset of doubles, row-major
+MatX dataset(hid_t file, const char* name, const std::string& path) {
+  if (H5Lexists(file, name, H5P_DEFAULT) <= 0)
+    throw Error(path + ": dataset " + name + " is missing (a run logged without the state group?)");
+  h5::Id d(H5Dopen2(file, name, H5P_DEFAULT), H5Dclose, path + ": opening " + name);
+  h5::Id space(H5Dget_space(d), H5Sclose, path + ": " + name);
+  hsize_t dims[2] = {0, 1};
+  const int rank = H5Sget_simple_extent_ndims(space);
+  if (rank < 1 || rank > 2) throw Error(path + ": dataset " + name + ": expected 1 or 2 dimensions");
+  H5Sget_simple_extent_dims(space, dims, nullptr);
+  const Eigen::Index rows = static_cast<Eigen::Index>(dims[0]), cols = rank == 2 ? static_cast<Eigen::Index>(dims[1]) : 1;
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m(rows, cols);
+  if (m.size() > 0 && H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, m.data()) < 0)
+    throw Error(path + ": dataset " + name + " cannot be read (corrupt or truncated file?)");
+  return m;
+}
+
+// /model's q_names: an attribute of variable-length strings
+std::vector<std::string> q_names(hid_t file, const std::string& path) {
+  if (H5Aexists_by_name(file, "/model", "q_names", H5P_DEFAULT) <= 0)
+    throw Error(path + ": /model has no q_names (not a run file from soadyn run?)");
+  h5::Id a(H5Aopen_by_name(file, "/model", "q_names", H5P_DEFAULT, H5P_DEFAULT), H5Aclose, path + ": /model q_names");
+  h5::Id type(H5Aget_type(a), H5Tclose, path + ": /model q_names");
+  h5::Id space(H5Aget_space(a), H5Sclose, path + ": /model q_names");
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  if (H5Tget_class(type) != H5T_STRING || H5Tis_variable_str(type) <= 0 || n < 1)
+    throw Error(path + ": /model q_names: expected a list of strings");
+  h5::Id mem(H5Tcopy(H5T_C_S1), H5Tclose, "a string type");
+  H5Tset_size(mem, H5T_VARIABLE);
+  H5Tset_cset(mem, H5Tget_cset(type));
+  std::vector<char*> raw(size_t(n), nullptr);
+  if (H5Aread(a, mem, raw.data()) < 0) throw Error(path + ": /model q_names cannot be read");
+  std::vector<std::string> out;
+  for (char* p : raw) {
+    out.emplace_back(p ? p : "");
+    H5free_memory(p);
+  }
+  return out;
+}
+
+Table read_run_table(const std::string& path) {
+  h5::Id file(hid_t(open_run_file(path)), H5Fclose, path);
+  Table t;
+  t.path = path;
+  t.columns = q_names(file, path);
+  t.time = dataset(file, "/time", path).col(0);
+  t.values = dataset(file, "/q", path);
+  if (t.values.cols() != Eigen::Index(t.columns.size()))
+    throw Error(path + ": /q has " + std::to_string(t.values.cols()) + " columns, /model names " + std::to_string(t.columns.size()));
+  // a run stopped mid-write keeps whole rows only
+  const Eigen::Index rows = std::min(t.time.size(), t.values.rows());
+  t.time.conservativeResize(rows);
+  t.values.conservativeResize(rows, Eigen::NoChange);
+  return ordered(std::move(t), {});
+}
+
+}  // namespace
+
+Table read_table(const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
+  return H5Fis_hdf5(path.c_str()) > 0 ? read_run_table(path) : read_csv(path);
+}
+
+CubicSpline::CubicSpline(VecX t, VecX y) : t_(std::move(t)), y_(std::move(y)), m_(VecX::Zero(t_.size())) {
+  const Eigen::Index n = t_.size();
+  if (n < 2 || y_.size() != n) throw Error("CubicSpline: needs two samples or more, as many times as values");
+  for (Eigen::Index k = 1; k < n; ++k)
+    if (!(t_(k) > t_(k - 1))) throw Error("CubicSpline: times must increase");
+  // the second derivatives m: h_{i−1}/6 m_{i−1} + (h_{i−1} + h_i)/3 m_i + h_i/6 m_{i+1}
+  //   = (y_{i+1} − y_i)/h_i − (y_i − y_{i−1})/h_{i−1}, m_0 = m_{n−1} = 0 (tridiagonal, Thomas)
+  VecX c = VecX::Zero(n), d = VecX::Zero(n);
+  for (Eigen::Index i = 1; i + 1 < n; ++i) {
+    const double h0 = t_(i) - t_(i - 1), h1 = t_(i + 1) - t_(i);
+    const double rhs = (y_(i + 1) - y_(i)) / h1 - (y_(i) - y_(i - 1)) / h0;
+    const double pivot = (h0 + h1) / 3 - h0 / 6 * c(i - 1);
+    c(i) = h1 / 6 / pivot;
+    d(i) = (rhs - h0 / 6 * d(i - 1)) / pivot;
+  }
+  for (Eigen::Index i = n - 2; i >= 1; --i) m_(i) = d(i) - c(i) * m_(i + 1);
+}
+
+int CubicSpline::interval(double t) const {
+  const auto it = std::upper_bound(t_.data(), t_.data() + t_.size(), t);
+  return int(std::clamp<Eigen::Index>(it - t_.data() - 1, 0, t_.size() - 2));
+}
+
+// On [t_k, t_{k+1}], h = t_{k+1} − t_k, A = (t_{k+1} − t)/h, B = 1 − A:
+//   y = A y_k + B y_{k+1} + ((A³ − A) m_k + (B³ − B) m_{k+1}) h²/6
+//   ẏ = (y_{k+1} − y_k)/h − (3A² − 1) h m_k/6 + (3B² − 1) h m_{k+1}/6,   ÿ = A m_k + B m_{k+1}
+double CubicSpline::value(double t) const {
+  if (t <= t_(0)) return y_(0);
+  if (t >= t_(t_.size() - 1)) return y_(y_.size() - 1);
+  const int k = interval(t);
+  const double h = t_(k + 1) - t_(k), A = (t_(k + 1) - t) / h, B = 1 - A;
+  return A * y_(k) + B * y_(k + 1) + ((A * A * A - A) * m_(k) + (B * B * B - B) * m_(k + 1)) * h * h / 6;
+}
+
+double CubicSpline::rate(double t) const {
+  if (t < t_(0) || t > t_(t_.size() - 1)) return 0.0;
+  const int k = interval(t);
+  const double h = t_(k + 1) - t_(k), A = (t_(k + 1) - t) / h, B = 1 - A;
+  return (y_(k + 1) - y_(k)) / h - (3 * A * A - 1) * h * m_(k) / 6 + (3 * B * B - 1) * h * m_(k + 1) / 6;
+}
+
+double CubicSpline::acceleration(double t) const {
+  if (t < t_(0) || t > t_(t_.size() - 1)) return 0.0;
+  const int k = interval(t);
+  const double h = t_(k + 1) - t_(k), A = (t_(k + 1) - t) / h;
+  return A * m_(k) + (1 - A) * m_(k + 1);
+}
+
+}  // namespace soadyn
