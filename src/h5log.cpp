@@ -54,6 +54,14 @@ const char* kFrames =
     "joint or a scenario's frames: entry; position: the frame's origin, orientation: the unit quaternion [w x y z] "
     "of its attitude, frame to inertial, with w >= 0; all in inertial coordinates";
 
+const char* kSensitivities =
+    "forward sensitivities by CVODES under its error control: initial_state[t, i, j] = dx_i(t)/dx0_j, "
+    "parameters[t, i, j] = dx_i(t)/dpi_j, with x = [q along the tangent; v] (2 nv numbers, state_names): the "
+    "tangent increment of q is the coordinate's own on revolute, prismatic and planar joints, [dtheta; dp] on a free "
+    "joint (attitude turned about inertial axes, exp(dtheta) * Q, origin moved by dp) and dtheta in the child's axes "
+    "on a ball joint (Q * exp(dtheta)); pi the 10 inertial parameters of each body named (parameter_names: m, m c, "
+    "and the inertia about the body frame's origin in the body's axes, ordered Ixx Ixy Iyy Ixz Iyz Izz)";
+
 // "rad", or one unit per column when they differ
 void units_attribute(hid_t obj, const std::vector<std::string>& units) {
   if (std::all_of(units.begin(), units.end(), [&](const std::string& u) { return u == units.front(); }))
@@ -171,6 +179,8 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
   im.groups = groups;
   im.groups.impacts = settings.limits && sc.model.has_limits();
   im.groups.control = groups.control || !sc.inputs.controllers.empty();
+  if (settings.sensitivities.any())
+    im.groups.sensitivities = std::make_shared<const SensitivityPlan>(plan_sensitivities(sc.model, settings.sensitivities));
   const Model& m = sc.model;
   for (const std::string& name : sc.log_frames)
     if (const int f = m.frame_index(name);
@@ -302,6 +312,16 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
       std::vector<std::string> names;
       for (const int f : im.groups.frames) names.push_back(m.frame_names[size_t(f)]);
       h5::string_dataset(g, "names", names);
+    }
+    if (const SensitivityPlan* p = im.groups.sensitivities.get()) {
+      Id g(H5Gopen2(im.file, "sensitivities", H5P_DEFAULT), H5Gclose, "opening /sensitivities");
+      attribute(g, "description", std::string(kSensitivities));
+      attribute(g, "state_names", p->state_names);
+      attribute(g, "state_units", p->state_units);
+      if (p->np() > 0) {
+        attribute(g, "parameter_names", p->parameter_names);
+        attribute(g, "parameter_units", p->parameter_units);
+      }
     }
     for (const log::View& v : lay.views) create_view(im.file, v, im.width);
     check(H5Fstart_swmr_write(im.file), "H5Fstart_swmr_write");  // writes everything so far

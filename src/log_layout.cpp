@@ -98,6 +98,32 @@ Layout layout(const Model& m, const LogGroups& g) {
       b.view(std::string("/frames/") + kind, c, int(parts.size()), int(g.frames.size()));
     }
   }
+  if (g.sensitivities) {
+    // ∂x_i/∂p_j, row-major (i, j): a T × nx × (nx | np) view; its units x_i's over p_j's
+    const SensitivityPlan& p = *g.sensitivities;
+    b.out.groups.push_back("/sensitivities");
+    auto ratio = [](const std::string& a, const std::string& c) {
+      if (a == c) return std::string("1");
+      if (c == "1") return a;
+      return a + "/" + (c.find_first_of(" /") != std::string::npos ? "(" + c + ")" : c);
+    };
+    const std::pair<const char*, std::pair<const std::vector<std::string>*, const std::vector<std::string>*>> parts[] = {
+        {"initial_state", {&p.state_names, &p.state_units}}, {"parameters", {&p.parameter_names, &p.parameter_units}}};
+    for (const auto& [kind, by] : parts) {
+      const auto& [names, units] = by;
+      if (std::string(kind) == "initial_state" ? !p.initial_state : p.np() == 0) continue;
+      std::vector<Column> c;
+      std::vector<std::string> all_units;
+      for (int i = 0; i < p.nx; ++i)
+        for (size_t j = 0; j < names->size(); ++j) {
+          c.push_back({std::string("sensitivities.") + kind + "." + p.state_names[size_t(i)] + "." + (*names)[j],
+                       ratio(p.state_units[size_t(i)], (*units)[j])});
+          all_units.push_back(c.back().unit);
+        }
+      b.view(std::string("/sensitivities/") + kind, c, int(names->size()), p.nx);
+      b.out.views.back().units = std::move(all_units);
+    }
+  }
   return std::move(b.out);
 }
 
@@ -110,6 +136,11 @@ void append_row(const Model& m, Data& data, const LogGroups& g, const Sample& s,
   if (g.momentum) put(s.linear), put(s.angular);
   if (g.bodies) put(s.body_position), put(s.body_orientation), put(s.body_com);  // column-major: body by body
   if (g.control) put(s.control);
+  if (g.sensitivities) {
+    // row-major (∂x_i/∂p_j at i·cols + j): the transpose's column-major storage
+    if (g.sensitivities->initial_state) put(MatX(s.sensitivity_initial_state.transpose()));
+    if (g.sensitivities->np() > 0) put(MatX(s.sensitivity_parameters.transpose()));
+  }
   if (g.frames.empty()) return;
   // the frames' placements at q: every position, then every orientation (w ≥ 0)
   update_frames(m, data, s.q);

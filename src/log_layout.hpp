@@ -19,7 +19,7 @@ struct Column {
 struct View {
   std::string path;  // "/q", "/energy/kinetic", "/bodies/position"
   int first = 0, cols = 0, bodies = 0;
-  std::vector<std::string> units;  // one per column of the view's last dimension
+  std::vector<std::string> units;  // one per column of the view's last dimension (/sensitivities: per element)
 };
 
 struct Layout {

@@ -203,9 +203,10 @@ void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q
   }
 }
 
-void read_simulation(const Reader& rd, const YAML::Node& n, SimulationSettings& s) {
+void read_simulation(const Reader& rd, const YAML::Node& n, const Model& m, SimulationSettings& s) {
   rd.keys(n, "simulation", {"t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian", "newton",
-                            "limits", "restitution", "control_dt"});
+                            "limits", "restitution", "control_dt", "sensitivities"});
+  if (n["sensitivities"]) scenario_detail::read_sensitivities(rd, n["sensitivities"], m, s.sensitivities);
   if (n["limits"]) s.limits = rd.boolean(n["limits"], "simulation.limits");
   if (n["restitution"]) {
     s.restitution = rd.number(n["restitution"], "simulation.restitution");
@@ -509,7 +510,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     sc.inputs.springs = mjcf->springs;
   }
   if (root["initial"]) read_initial(rd, root["initial"], sc.model, sc.q0, sc.v0);
-  if (root["simulation"]) read_simulation(rd, root["simulation"], sc.simulation);
+  if (root["simulation"]) read_simulation(rd, root["simulation"], sc.model, sc.simulation);
   if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.q0, sc.inputs);
   return sc;
 }

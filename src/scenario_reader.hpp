@@ -4,6 +4,7 @@
 
 #include "soadyn/inputs.hpp"
 #include "soadyn/model.hpp"
+#include "soadyn/settings.hpp"
 #include "soadyn/text.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -144,5 +145,9 @@ inline int find_joint(const Reader& rd, const Model& m, const YAML::Node& key, c
 void read_limits(const Reader& rd, const YAML::Node& n, Model& m);
 void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0,
                       std::vector<ControllerInput>& out);
+
+// scenario_sensitivity.cpp: `simulation: sensitivities: {initial_state, parameters}`, the bodies
+// checked against the model's
+void read_sensitivities(const Reader& rd, const YAML::Node& n, const Model& m, SensitivitySettings& out);
 
 }  // namespace soadyn::scenario_detail

@@ -1,6 +1,7 @@
 #include "soadyn/simulate.hpp"
 
 #include "soadyn/kinematics.hpp"
+#include "soadyn/sensitivity.hpp"
 #include "soadyn/text.hpp"
 
 #include <csignal>
@@ -130,6 +131,7 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   }
   if (!(s.control_dt >= 0) || !std::isfinite(s.control_dt))
     throw Error("simulation settings: control_dt must be 0 (continuous) or a positive finite number, got " + short_number(s.control_dt));
+  check_sensitivities(sc, s, false);
   std::vector<std::string> warnings;
   if (s.control_dt > 0 && is_fixed_step(s.method) &&
       std::abs(s.control_dt / s.dt - std::round(s.control_dt / s.dt)) > 1e-9 * std::max(1.0, s.control_dt / s.dt))
@@ -176,6 +178,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
                     ControlFunction controller) {
   const Model& m = sc.model;
   check_run(sc, settings);
+  check_sensitivities(sc, settings, bool(controller));
   // the control law: the scenario's built-in controllers and the caller's, summed
   std::optional<BuiltinControllers> builtin;
   if (!sc.inputs.controllers.empty()) builtin.emplace(m, sc.inputs.controllers);
@@ -209,7 +212,21 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   VecX y = sys.state(sc.q0, sc.v0);
   m.normalize(y.head(m.nq));
   double t = 0.0;
-  auto integrator = make_integrator(settings.method, sys, settings, t, y);
+  // with sensitivities: CVODES carries ∂y/∂x₀ and ∂y/∂π along (sensitivity.hpp)
+  std::unique_ptr<Integrator> integrator;
+  SensitivitySource* sensitivities = nullptr;
+  if (settings.sensitivities.any()) {
+    SensitivityIntegrator si = make_sensitivity_integrator(sys, settings, plan_sensitivities(m, settings.sensitivities), t, y);
+    integrator = std::move(si.integrator);
+    sensitivities = si.source;
+  } else {
+    integrator = make_integrator(settings.method, sys, settings, t, y);
+  }
+  auto observed = [&] {
+    Sample s = observe(sys, t, y);
+    if (sensitivities) sensitivities->sensitivities(t, s.sensitivity_initial_state, s.sensitivity_parameters);
+    return s;
+  };
   if (limits) integrator->set_roots(limits->count(), [&](double tr, const double* yr, double* gr) { limits->roots(sys, tr, yr, gr); });
   if (sampled) integrator->set_exact_stops(true);
 
@@ -301,7 +318,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
     if (sampled) sample_control();
     if (limits) emit(limits->start(sys, t, y));
     if (sampled || limits) integrator->restart(t, y);
-    const Sample first = observe(sys, t, y);
+    const Sample first = observed();
     E0 = first.total + first.impact_loss;
     record(first);
     bool interrupted = false;
@@ -321,7 +338,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
         interrupted = true;
         if (t == t_before) break;  // no step since the last row
       }
-      record(observe(sys, t, y));  // not counted as the integrator's work
+      record(observed());  // not counted as the integrator's work
       update();
       if (observer) observer->on_progress(summary);
       if (stopped) break;

@@ -11,6 +11,10 @@
 //     /bodies/position, /bodies/com (T×N×3), /bodies/orientation (T×N×4, w x y z)  group "bodies"
 //     /frames/position (T×F×3), /frames/orientation (T×F×4)        a scenario's log: frames: [...]
 //   /frames/names    those F frames (frames.hpp), a string dataset, when there are any
+//     /sensitivities/initial_state (T×nx×nx), ∂x(t)/∂x₀      simulation: sensitivities: (sensitivity.hpp),
+//     /sensitivities/parameters (T×nx×np), ∂x(t)/∂π          x = [q along the tangent; v], nx = 2 nv;
+//                    `units` one per element (row-major) when they differ; the group's attributes
+//                    state_names, state_units (nx), parameter_names, parameter_units (np), convention
 //     /energy/impact_loss (T), L(t) (J)                            with joint limits on (limits.hpp)
 //     /control (T×nv), the controllers' τ, columns control.<v name>  with a controller
 //   /events (E×7): t, dof (into v), side (−1 lower, +1 upper), kind (0 impact, 1 hold, 2 release),
@@ -40,6 +44,7 @@
 #pragma once
 
 #include "soadyn/output_file.hpp"
+#include "soadyn/sensitivity.hpp"
 #include "soadyn/simulate.hpp"
 
 #include <chrono>
@@ -84,6 +89,8 @@ struct LogGroups {
   // (simulation: limits: true on a model with limits), the controllers' τ (built-in ones, or a
   // caller's controller when it says so)
   bool impacts = false, control = false;
+  // set by H5Log from settings.sensitivities (not part of parse() and str()): what /sensitivities holds
+  std::shared_ptr<const SensitivityPlan> sensitivities = nullptr;
   // "state,energy,momentum,bodies" (any subset, any order; "all"); throws soadyn::Error naming
   // the bad item
   static LogGroups parse(const std::string& text);

@@ -3,8 +3,17 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace soadyn {
+
+// Forward sensitivities of a run (sensitivity.hpp): ∂x(t)/∂x₀ and ∂x(t)/∂π at every output, x = [q; v]
+// along the tangent (2 nv numbers), π the inertial parameters (regressor.hpp) of the bodies named.
+struct SensitivitySettings {
+  bool initial_state = false;          // ∂x(t)/∂x₀, 2nv × 2nv
+  std::vector<std::string> parameters; // body names (Model::body_names), or {"all"}: ∂x(t)/∂π, 2nv × 10·bodies
+  bool any() const { return initial_state || !parameters.empty(); }
+};
 
 struct SimulationSettings {
   double t_end = 10.0;                 // s
@@ -25,6 +34,7 @@ struct SimulationSettings {
   bool limits = false;                 // each DOF's lower/upper an event: impact, hold, release (CVODE only)
   double restitution = 0.0;            // coefficient of restitution e at a limit, 0 ≤ e ≤ 1 (0: held there)
   double control_dt = 0.0;             // s between controller samples, zero-order hold (0: continuous)
+  SensitivitySettings sensitivities;   // none by default (CVODE methods only)
 };
 
 }  // namespace soadyn

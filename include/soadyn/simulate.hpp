@@ -30,6 +30,9 @@ struct Sample {
   // quaternion [w x y z], body → inertial, with w ≥ 0 (4×N); N bodies after fixed joints are merged
   Mat3X body_position, body_com;
   Eigen::Matrix<double, 4, Eigen::Dynamic> body_orientation;
+  // settings.sensitivities (sensitivity.hpp): ∂x(t)/∂x₀ (2nv × 2nv) and ∂x(t)/∂π (2nv × 10·bodies),
+  // x = [q along the tangent; v]; empty when not asked for
+  MatX sensitivity_initial_state, sensitivity_parameters;
 };
 
 struct RunSummary {

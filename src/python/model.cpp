@@ -183,6 +183,31 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
       .def_readwrite("restitution", &SimulationSettings::restitution, "coefficient of restitution at a limit, 0..1")
       .def_readwrite("control_dt", &SimulationSettings::control_dt,
                      "s between controller samples, zero-order hold (0: continuous)")
+      .def_property(
+          "sensitivities",
+          [](const SimulationSettings& s) {
+            return py::dict("initial_state"_a = s.sensitivities.initial_state, "parameters"_a = s.sensitivities.parameters);
+          },
+          [](SimulationSettings& s, const py::object& value) {
+            SensitivitySettings out;
+            if (!value.is_none()) {
+              const py::dict d = value.cast<py::dict>();
+              for (const auto& [k, v] : d) {
+                const std::string key = py::str(k);
+                if (key == "initial_state") out.initial_state = v.cast<bool>();
+                else if (key == "parameters" && py::isinstance<py::str>(v)) {
+                  if (v.cast<std::string>() != "all")
+                    throw Error("sensitivities: parameters: expected a list of body names or 'all', got '" + v.cast<std::string>() + "'");
+                  out.parameters = {"all"};
+                } else if (key == "parameters")
+                  out.parameters = v.cast<std::vector<std::string>>();
+                else
+                  throw Error("sensitivities: unknown key '" + key + "'" + did_you_mean(key, {"initial_state", "parameters"}));
+              }
+            }
+            s.sensitivities = out;
+          },
+          "forward sensitivities (CVODES): {'initial_state': bool, 'parameters': [body, ...] or 'all'}")
       .def("__repr__", [](const SimulationSettings& s) {
         return "SimulationSettings(method='" + s.method + "', t_end=" + py::repr(py::float_(s.t_end)).cast<std::string>() +
                ", output_dt=" + py::repr(py::float_(s.output_dt)).cast<std::string>() +

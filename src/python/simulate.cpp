@@ -6,6 +6,7 @@
 #include "common.hpp"
 
 #include "soadyn/h5log.hpp"
+#include "soadyn/sensitivity.hpp"
 #include "soadyn/simulate.hpp"
 #include "soadyn/version.hpp"
 
@@ -39,6 +40,10 @@ class Recorder : public RunObserver {
     com.insert(com.end(), s.body_com.data(), s.body_com.data() + s.body_com.size());
     linear.insert(linear.end(), s.linear.data(), s.linear.data() + 3);
     angular.insert(angular.end(), s.angular.data(), s.angular.data() + 3);
+    // sensitivities: each sample's matrix row-major, (T, nx, ·) arrays
+    const MatX x0 = s.sensitivity_initial_state.transpose(), pi = s.sensitivity_parameters.transpose();
+    dx_dx0.insert(dx_dx0.end(), x0.data(), x0.data() + x0.size());
+    dx_dpi.insert(dx_dpi.end(), pi.data(), pi.data() + pi.size());
     if (next_) next_->on_sample(s);
   }
   void on_progress(const RunSummary& r) override {
@@ -47,7 +52,7 @@ class Recorder : public RunObserver {
   void on_finish(const RunSummary& r) override {
     if (next_) next_->on_finish(r);
   }
-  std::vector<double> t, q, v, qdd, kinetic, potential, total, work, dissipated, impact_loss, control, linear, angular, position, orientation, com;
+  std::vector<double> t, q, v, qdd, kinetic, potential, total, work, dissipated, impact_loss, control, linear, angular, position, orientation, com, dx_dx0, dx_dpi;
 
  private:
   RunObserver* next_;
@@ -107,6 +112,7 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
               const py::object& controller) {
   // everything is checked before any file is touched, as `soadyn run` does
   const std::vector<std::string> warnings = check_run(sc, settings);
+  check_sensitivities(sc, settings, !controller.is_none());
   {
     System probe(sc.model, sc.inputs, parse_fd_method(settings.dynamics));
     const VecX y0 = probe.state(sc.q0, sc.v0);
@@ -175,6 +181,17 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
                   "body_com"_a = owned(std::move(rec.com), {T, nb, 3}),
                   "linear_momentum"_a = owned(std::move(rec.linear), {T, 3}),
                   "angular_momentum"_a = owned(std::move(rec.angular), {T, 3}));
+  if (settings.sensitivities.any()) {
+    // (T, nx, nx) and (T, nx, np), with the names of x and π (sensitivity.hpp)
+    const SensitivityPlan plan = plan_sensitivities(sc.model, settings.sensitivities);
+    const py::ssize_t nx = plan.nx;
+    arrays["sensitivity_initial_state"] =
+        plan.initial_state ? py::object(owned(std::move(rec.dx_dx0), {T, nx, nx})) : py::object(py::none());
+    arrays["sensitivity_parameters"] = plan.np() > 0 ? py::object(owned(std::move(rec.dx_dpi), {T, nx, py::ssize_t(plan.np())}))
+                                                     : py::object(py::none());
+    arrays["sensitivity_names"] = py::dict("state"_a = plan.state_names, "state_units"_a = plan.state_units,
+                                           "parameters"_a = plan.parameter_names, "parameter_units"_a = plan.parameter_units);
+  }
   py::list events;
   for (const LimitEvent& e : summary.events)
     events.append(py::dict("t"_a = e.t, "joint"_a = e.joint, "side"_a = e.side < 0 ? "lower" : "upper", "kind"_a = e.kind,

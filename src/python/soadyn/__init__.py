@@ -77,7 +77,7 @@ from ._soadyn import (forward_dynamics_parameter_derivative, parameters, regress
                       with_parameters)
 from . import _soadyn
 from ._soadyn import batch
-from ._trajectory import FramePoses, RunSummary, Trajectory, read_log, summary_from_dict
+from ._trajectory import FramePoses, RunSummary, Sensitivities, Trajectory, read_log, summary_from_dict
 from ._sweep import SweepResult, read_results, sweep
 from .ensemble import Sweep, load_sweep
 
@@ -86,13 +86,13 @@ __all__ = [
     "com", "com_jacobian", "com_velocity", "coriolis_matrix", "frame_acceleration", "frame_jacobian",
     "frame_jacobian_dot_times_v", "frame_placement", "frame_velocity", "operational_space_inertia", "point_jacobian",
     "forward_dynamics_parameter_derivative", "parameters", "regressor", "with_parameters",
-    "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "FramePoses", "Inputs", "Model", "RunSummary", "Scenario", "SimulationSettings", "Trajectory", "__version__",
+    "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "FramePoses", "Inputs", "Model", "RunSummary", "Scenario", "Sensitivities", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
     "potential_energy", "read_log", "rollout", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
 
-for _cls in (Data, Error, FramePoses, Inputs, Model, Scenario, SimulationSettings, RunSummary, Trajectory):
+for _cls in (Data, Error, FramePoses, Inputs, Model, Scenario, Sensitivities, SimulationSettings, RunSummary, Trajectory):
     _cls.__module__ = __name__  # soadyn.Model, not soadyn._soadyn.Model, in messages and help
 
 
@@ -100,7 +100,7 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
              atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
              output_dt: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
              newton: Optional[str] = None, output: Optional[str] = None,
-             controller: Optional[Callable] = None) -> Trajectory:
+             controller: Optional[Callable] = None, sensitivities: Optional[dict] = None) -> Trajectory:
     """Simulate a scenario and return its Trajectory: 𝓜(q) q̈ = τ(t, q, q̇) − bias(q, q̇) from (q0, v0).
 
     scene: a Scenario or the path of a scenario file.  Each keyword left None keeps the scene's
@@ -115,6 +115,10 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     the call only.  An exception it raises ends the run, finishes the file and is re-raised with
     the partial Trajectory as .trajectory; a tau of the wrong shape or not finite ends the run with
     one error naming the time (in the summary's status).
+    sensitivities: {"initial_state": True, "parameters": ["link2", "link3"] or "all"} (the scenario's
+    simulation: sensitivities: otherwise): forward sensitivities by CVODES, in .sensitivities (a
+    Sensitivities: initial_state (T, nx, nx), parameters (T, nx, np), their names); CVODE methods only,
+    no controller, no enforced joint limits (soadyn.Error otherwise).
 
     The integration runs without the GIL.  A run that fails midway does not raise: the summary
     says how it ended and the trajectory holds every sample up to then.  Ctrl-C (or any Python
@@ -127,8 +131,10 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
         scene = load_scenario(scene)
     s = SimulationSettings()
     for k in ("t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian",
-              "newton", "limits", "restitution", "control_dt"):
+              "newton", "limits", "restitution", "control_dt", "sensitivities"):
         setattr(s, k, getattr(scene.settings, k))
+    if sensitivities is not None:
+        s.sensitivities = sensitivities
     for k, value in dict(method=method, rtol=rtol, atol=atol, dt=dt, t_end=t_end, output_dt=output_dt,
                          dynamics=dynamics, jacobian=jacobian, newton=newton).items():
         if value is not None:
@@ -138,8 +144,15 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     for w in warns:  # e.g. an rtol below what double precision can deliver
         _warnings.warn(w, RuntimeWarning, stacklevel=2)
     model = scene.model
+    sens = None
+    if "sensitivity_names" in arrays:
+        names = arrays.pop("sensitivity_names")
+        sens = Sensitivities(initial_state=arrays.pop("sensitivity_initial_state"),
+                             parameters=arrays.pop("sensitivity_parameters"), state_names=list(names["state"]),
+                             state_units=list(names["state_units"]), parameter_names=list(names["parameters"]),
+                             parameter_units=list(names["parameter_units"]))
     traj = Trajectory(**arrays, summary=summary_from_dict(summary), joint_names=list(model.joint_names),
-                      parents=list(model.parents), scenario=scene.text)
+                      parents=list(model.parents), scenario=scene.text, sensitivities=sens)
     if interrupt is not None:
         try:
             interrupt.trajectory = traj

@@ -135,6 +135,14 @@ class FramePoses:
     @property
     def rotation(self) -> Vector: ...
 
+class Sensitivities:
+    initial_state: Optional[Vector]
+    parameters: Optional[Vector]
+    state_names: List[str]
+    state_units: List[str]
+    parameter_names: List[str]
+    parameter_units: List[str]
+
 class Trajectory:
     t: Vector
     q: Vector
@@ -155,6 +163,7 @@ class Trajectory:
     parents: List[int]
     scenario: str
     frames: Dict[str, FramePoses]
+    sensitivities: Optional[Sensitivities]
     ARRAYS: Tuple[str, ...]
     def __len__(self) -> int: ...
     @property
@@ -211,7 +220,8 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
              atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
              output_dt: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
              newton: Optional[str] = None, output: Optional[str] = None,
-             controller: Optional[Callable[[float, np.ndarray, np.ndarray], ArrayLike]] = None) -> Trajectory: ...
+             controller: Optional[Callable[[float, np.ndarray, np.ndarray], ArrayLike]] = None,
+             sensitivities: Optional[Dict[str, object]] = None) -> Trajectory: ...
 def read_log(path: str) -> Trajectory: ...
 def rollout(scene: Union[Model, Scenario, str], initial_states: ArrayLike, controls: Optional[object] = None, *,
             steps: Optional[int] = None, dt: Optional[float] = None, method: Optional[str] = None, threads: int = 1,

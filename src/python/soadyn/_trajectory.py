@@ -57,6 +57,22 @@ class FramePoses:
 
 
 @dataclass(frozen=True, eq=False)
+class Sensitivities:
+    """A run's forward sensitivities (CVODES, under its error control), at every sample:
+    initial_state (T, nx, nx), ∂x(t)/∂x₀, and parameters (T, nx, np), ∂x(t)/∂π (None when not
+    asked for), with x = [q along the tangent; v] (nx = 2 nv; a free root's q increment is
+    [δθ; δp], the attitude turned about inertial axes, a ball's δθ in the child's axes) and π the
+    inertial parameters of the bodies named (10 each: m, m c, the inertia about the body frame's
+    origin, as soadyn.parameters orders them).  state_names, parameter_names and their SI units."""
+    initial_state: Optional[np.ndarray]
+    parameters: Optional[np.ndarray]
+    state_names: List[str]
+    state_units: List[str]
+    parameter_names: List[str]
+    parameter_units: List[str]
+
+
+@dataclass(frozen=True, eq=False)
 class Trajectory:
     """A run's samples as numpy arrays, T samples at the output times.
 
@@ -93,6 +109,8 @@ class Trajectory:
     # controllers' torque at each sample (the held value when sampled)
     impact_loss: Optional[np.ndarray] = None
     control: Optional[np.ndarray] = None
+    # simulation: sensitivities (simulate and read_log): a Sensitivities, None without them
+    sensitivities: Optional[Sensitivities] = None
 
     ARRAYS = ("t", "q", "v", "qdd", "kinetic_energy", "potential_energy", "total_energy", "work_inputs", "dissipated",
               "linear_momentum", "angular_momentum", "body_position", "body_orientation", "body_com")
@@ -269,7 +287,17 @@ def read_log(path: str) -> Trajectory:
                 shape = (len(fnames),)
                 pos, att = series("frames/position", *shape, 3)[:T], series("frames/orientation", *shape, 4)[:T]
                 frames = {n: FramePoses(position=pos[:, k].copy(), orientation=att[:, k].copy()) for k, n in enumerate(fnames)}
+            # /sensitivities: initial_state (T, nx, nx), parameters (T, nx, np), names on the group
+            sensitivities = None
+            if "sensitivities" in f:
+                g = f["sensitivities"]
+                listed = lambda k: [text(n) for n in g.attrs[k]] if k in g.attrs else []  # noqa: E731
+                sensitivities = Sensitivities(
+                    initial_state=np.asarray(g["initial_state"][:T]) if "initial_state" in g else None,
+                    parameters=np.asarray(g["parameters"][:T]) if "parameters" in g else None,
+                    state_names=listed("state_names"), state_units=listed("state_units"),
+                    parameter_names=listed("parameter_names"), parameter_units=listed("parameter_units"))
             return Trajectory(**arrays, summary=summary, joint_names=names, parents=parents, scenario=scenario,
-                              frames=frames)
+                              frames=frames, sensitivities=sensitivities)
     except (OSError, RuntimeError, KeyError, ValueError, TypeError, IndexError) as e:  # a corrupt file's parts
         raise Error(f"{path}: cannot read the run file (corrupt or truncated?): {e}") from None

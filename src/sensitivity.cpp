@@ -1,0 +1,256 @@
+// Forward sensitivities by CVODES (sensitivity.hpp): the CVODE integrator of cvode.hpp with
+// CVodeSensInit, a sensitivity right-hand side from the analytic derivatives, and the tangent-space
+// conversion at both ends.
+#include "soadyn/sensitivity.hpp"
+
+#include "soadyn/simulate.hpp"
+#include "soadyn/text.hpp"
+
+#include "cvode.hpp"
+
+#include <Eigen/LU>
+
+#include <algorithm>
+
+namespace soadyn {
+
+namespace {
+
+const char* const kParameterNames[kParametersPerBody] = {"m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz"};
+const char* const kParameterUnits[kParametersPerBody] = {"kg", "kg m", "kg m", "kg m", "kg m^2",
+                                                         "kg m^2", "kg m^2", "kg m^2", "kg m^2", "kg m^2"};
+
+// "rad/s" → "rad": the unit of a tangent increment of q from the unit of v
+std::string without_rate(const std::string& unit) {
+  const std::string s = "/s";
+  return unit.size() > s.size() && unit.compare(unit.size() - s.size(), s.size(), s) == 0 ? unit.substr(0, unit.size() - s.size())
+                                                                                          : unit;
+}
+
+// dq = P dδ, the coordinates' change along a tangent increment: the right inverse Tᵀ (T Tᵀ)⁻¹ of
+// joint_tangent_map's T, which for a unit quaternion is exactly ½ [0; δθ] ⊗ Q (free) or ½ Q ⊗ [0; δθ]
+// (ball): T annihilates only the change along Q, and this dQ is orthogonal to Q
+MatX coordinates_of_tangent(const Model& m, const VecX& q) {
+  MatX P = MatX::Zero(m.nq, m.nv);
+  for (int i = 0; i < m.nbodies; ++i) {
+    const int iq = m.idx_q[i], iv = m.idx_v[i], mi = m.nq_i[i], ni = m.nv_i[i];
+    if (joint_traits(m.joint_type[i]).quaternion < 0) {
+      P.block(iq, iv, mi, ni).setIdentity();
+      continue;
+    }
+    MatX T(ni, mi);
+    joint_tangent_map(m.joint_type[i], q.data() + iq, T);
+    P.block(iq, iv, mi, ni) = T.transpose() * (T * T.transpose()).inverse();
+  }
+  return P;
+}
+
+using cvode_impl::map;
+
+struct VectorArrayDeleter {
+  int n = 0;
+  void operator()(N_Vector* v) const { N_VDestroyVectorArray(v, n); }
+};
+using VectorArrayPtr = std::unique_ptr<N_Vector[], VectorArrayDeleter>;
+
+// CVODE (cvode.hpp) with the sensitivities s_k = ∂y/∂p_k of its state y = [q; v; W; D], in y's own
+// coordinates (the quaternions' four), converted to the tangent at the ends
+class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
+ public:
+  CvodeSensitivity(System& sys, const SimulationSettings& s, const SensitivityPlan& plan, double t0, const VecX& y0)
+      // no projection: CVODES projects the state, not its sensitivities; the quaternion is normalized in
+      // the dynamics and at every output instead, and its change along itself is no tangent increment
+      : Cvode(s.method == "cvode-bdf", sys, s, t0, y0, false), plan_(plan), ns_(plan.nx0() + plan.np()) {
+    const Model& m = sys.model;
+    const int n = sys.size(), nv = m.nv, nq = m.nq;
+    if (ns_ == 0) throw Error("sensitivities: nothing to differentiate (initial_state false, no parameters)");
+    sys.prepare_jacobian();
+    J_ = MatX::Zero(n, n);
+    S_ = MatX::Zero(n, ns_);
+    Sd_ = MatX::Zero(n, ns_);
+    if (plan.np() > 0) dqdd_dpi_ = MatX::Zero(nv, kParametersPerBody * m.nbodies);
+    // s(0): a tangent increment of q₀ moves the coordinates by P δ; one of v₀ moves v; π moves nothing
+    if (plan.initial_state) {
+      S_.block(0, 0, nq, nv) = coordinates_of_tangent(m, y0.head(nq));
+      S_.block(nq, nv, nv, nv).setIdentity();
+    }
+    S0_ = S_;
+    yS_ = VectorArrayPtr(N_VCloneVectorArray(ns_, y_.get()), VectorArrayDeleter{ns_});
+    if (!yS_) throw Error("CVODES: could not allocate the sensitivity vectors");
+    for (int k = 0; k < ns_; ++k) map(yS_[k]) = S_.col(k);
+    void* mem = mem_.get();
+    check(CVodeSensInit(mem, ns_, CV_STAGGERED, &CvodeSensitivity::sensitivity_rhs, yS_.get()), "CVodeSensInit");
+    // error control on every sensitivity, scaled by the parameter's size: CVODES tests s_k against
+    // rtol and atol / |p̄_k| (CVodeSensEEtolerances), so π_k s_k is held to the state's tolerances
+    std::vector<double> pbar(size_t(ns_), 1.0);
+    const VecX pi = parameters(m);
+    for (size_t b = 0; b < plan.bodies.size(); ++b)
+      for (int j = 0; j < kParametersPerBody; ++j) {
+        const auto group = [&](int lo, int hi) {  // the largest |π| of the same kind on the body: m c's, I's
+          double x = 0;
+          for (int k = lo; k < hi; ++k) x = std::max(x, std::abs(pi(kParametersPerBody * plan.bodies[b] + k)));
+          return x;
+        };
+        const double own = std::abs(pi(kParametersPerBody * plan.bodies[b] + j));
+        const double scale = own > 0 ? own : j == 0 ? 1.0 : j < 4 ? group(1, 4) : group(4, 10);
+        pbar[size_t(plan.nx0()) + b * kParametersPerBody + size_t(j)] = scale > 0 ? scale : 1.0;
+      }
+    check(CVodeSetSensParams(mem, nullptr, pbar.data(), nullptr), "CVodeSetSensParams");
+    check(CVodeSensEEtolerances(mem), "CVodeSensEEtolerances");
+    check(CVodeSetSensErrCon(mem, SUNTRUE), "CVodeSetSensErrCon");
+    if (!bdf_) {
+      // Adams' fixed-point iteration for the sensitivities too (BDF: CVODES' Newton on I − γJ, the
+      // state's linear solver)
+      nls_sens_.reset(SUNNonlinSol_FixedPointSens(ns_, y_.get(), 0, ctx_.get()));
+      if (!nls_sens_) throw Error("CVODES: could not allocate the sensitivities' fixed-point solver");
+      check(CVodeSetNonlinearSolverSensStg(mem, nls_sens_.get()), "CVodeSetNonlinearSolverSensStg");
+    }
+    y_out_.reset(N_VClone(y_.get()));
+    if (!y_out_) throw Error("CVODES: could not allocate a state vector");
+  }
+
+  // the sensitivity memory first, then the solver it uses (the base frees CVODE's memory last)
+  ~CvodeSensitivity() override { CVodeSensFree(mem_.get()); }
+  CvodeSensitivity(const CvodeSensitivity&) = delete;
+  CvodeSensitivity& operator=(const CvodeSensitivity&) = delete;
+
+  void sensitivities(double t, MatX& dx_dx0, MatX& dx_dpi) override {
+    const Model& m = sys_.model;
+    void* mem = mem_.get();
+    long steps = 0;
+    check(CVodeGetNumSteps(mem, &steps), "CVodeGetNumSteps");
+    VecX q;
+    if (steps == 0 && before_.steps == 0) {  // the start: what CVodeSensInit was given
+      S_ = S0_;
+      N_VScale(1.0, y_.get(), y_out_.get());
+    } else {
+      check(CVodeGetSensDky(mem, t, 0, yS_.get()), "CVodeGetSensDky");
+      check(CVodeGetDky(mem, t, 0, y_out_.get()), "CVodeGetDky");
+      for (int k = 0; k < ns_; ++k) S_.col(k) = map(yS_[k]);
+    }
+    q = map(y_out_.get()).head(m.nq);
+    // rows to the tangent: δ = T(q) s_q joint by joint (T = I without a quaternion); v's rows as they are
+    MatX X(2 * m.nv, ns_);
+    X.bottomRows(m.nv) = S_.middleRows(m.nq, m.nv);
+    for (int i = 0; i < m.nbodies; ++i) {
+      const int iq = m.idx_q[i], iv = m.idx_v[i], mi = m.nq_i[i], ni = m.nv_i[i];
+      if (joint_traits(m.joint_type[i]).quaternion < 0) {
+        X.middleRows(iv, ni) = S_.middleRows(iq, mi);
+        continue;
+      }
+      MatX T(ni, mi);
+      joint_tangent_map(m.joint_type[i], q.data() + iq, T);
+      X.middleRows(iv, ni) = T * S_.middleRows(iq, mi);
+    }
+    dx_dx0 = X.leftCols(plan_.nx0());
+    dx_dpi = X.rightCols(plan_.np());
+  }
+
+  void restart(double t, const VecX& y) override {
+    if (before_.steps + since_start().steps > 0) {
+      check(CVodeGetSensDky(mem_.get(), t, 0, yS_.get()), "CVodeGetSensDky");
+    }
+    Cvode::restart(t, y);
+    check(CVodeSensReInit(mem_.get(), CV_STAGGERED, yS_.get()), "CVodeSensReInit");
+  }
+
+ private:
+  // ṡ_k = A s_k + b_k for all k at once: A = ∂f/∂y by the analytic derivatives (System::jacobian:
+  // ∂q̈/∂q along the tangent chained to the coordinates, ∂q̈/∂v, ∂q̇/∂(q, v), the springs' and
+  // dampers' terms, the quadratures' rows) and b_k = [0; ∂q̈/∂π_k; 0] = [0; −(𝓜⁻¹ Y)_k; 0]
+  static int sensitivity_rhs(int ns, double t, N_Vector y, N_Vector, N_Vector* yS, N_Vector* ySdot, void* user,
+                             N_Vector, N_Vector) {
+    auto* self = static_cast<CvodeSensitivity*>(static_cast<Cvode*>(user));
+    try {
+      System& sys = self->sys_;
+      const Model& m = sys.model;
+      sys.jacobian(t, N_VGetArrayPointer(y), self->J_);
+      for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
+      self->Sd_.noalias() = self->J_ * self->S_;
+      if (self->plan_.np() > 0) {
+        // [kin] and [vel] at (q, v) and τ are jacobian's
+        forward_dynamics_parameter_derivative(m, sys.data, sys.tau, self->dqdd_dpi_);
+        const int first = self->plan_.nx0();
+        for (size_t b = 0; b < self->plan_.bodies.size(); ++b)
+          self->Sd_.block(m.nq, first + int(b) * kParametersPerBody, m.nv, kParametersPerBody) +=
+              self->dqdd_dpi_.middleCols(kParametersPerBody * self->plan_.bodies[b], kParametersPerBody);
+      }
+      if (!self->Sd_.allFinite()) return 1;  // recoverable: CVODES retries with a smaller step
+      for (int k = 0; k < ns; ++k) map(ySdot[k]) = self->Sd_.col(k);
+      return 0;
+    } catch (...) {
+      self->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  SensitivityPlan plan_;
+  int ns_;
+  MatX J_, S_, S0_, Sd_, dqdd_dpi_;
+  VectorArrayPtr yS_;
+  cvode_impl::VectorPtr y_out_;
+  cvode_impl::NonlinSolPtr nls_sens_;
+};
+
+}  // namespace
+
+SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s) {
+  SensitivityPlan plan;
+  plan.initial_state = s.initial_state;
+  plan.nx = 2 * m.nv;
+  const bool all = std::find(s.parameters.begin(), s.parameters.end(), "all") != s.parameters.end();
+  if (all && s.parameters.size() > 1)
+    throw Error("sensitivities: parameters: expected 'all' or a list of body names, not both");
+  for (const std::string& name : s.parameters) {
+    if (all) break;
+    const auto it = std::find(m.body_names.begin(), m.body_names.end(), name);
+    if (it == m.body_names.end())
+      throw Error("sensitivities: parameters: unknown body '" + name + "'" + did_you_mean(name, m.body_names) +
+                  " (bodies after fixed joints are merged)");
+    const int b = int(it - m.body_names.begin());
+    if (std::find(plan.bodies.begin(), plan.bodies.end(), b) != plan.bodies.end())
+      throw Error("sensitivities: parameters: body '" + name + "' is listed twice");
+    plan.bodies.push_back(b);
+  }
+  if (all)
+    for (int b = 0; b < m.nbodies; ++b) plan.bodies.push_back(b);
+  std::sort(plan.bodies.begin(), plan.bodies.end());
+  const std::vector<std::string> vn = m.v_names();
+  std::vector<std::string> vu;
+  for (int i = 0; i < m.nbodies; ++i)
+    for (const auto& u : joint_traits(m.joint_type[i]).v_units) vu.emplace_back(u);
+  for (int k = 0; k < m.nv; ++k) plan.state_names.push_back("q." + vn[size_t(k)]), plan.state_units.push_back(without_rate(vu[size_t(k)]));
+  for (int k = 0; k < m.nv; ++k) plan.state_names.push_back("qd." + vn[size_t(k)]), plan.state_units.push_back(vu[size_t(k)]);
+  for (const int b : plan.bodies)
+    for (int j = 0; j < kParametersPerBody; ++j) {
+      plan.parameter_names.push_back(m.body_names[size_t(b)] + "." + kParameterNames[j]);
+      plan.parameter_units.push_back(kParameterUnits[j]);
+    }
+  return plan;
+}
+
+void check_sensitivities(const Scenario& sc, const SimulationSettings& s, bool has_controller) {
+  if (!s.sensitivities.any()) return;
+  const std::string why = "sensitivities: ";
+  if (is_fixed_step(s.method))
+    throw Error(why + "need a CVODE method (cvode-adams or cvode-bdf): " + s.method +
+                " takes fixed steps and its variational equation is not stepped");
+  if (has_controller || !sc.inputs.controllers.empty())
+    throw Error(why + "a run with a controller is not differentiated (its dtau/dx is not): remove the controller");
+  if (s.limits && sc.model.has_limits())
+    throw Error(why + "enforced joint limits are events where the state jumps, not differentiated: set limits: false");
+  plan_sensitivities(sc.model, s.sensitivities);
+}
+
+SensitivityIntegrator make_sensitivity_integrator(System& system, const SimulationSettings& settings,
+                                                  const SensitivityPlan& plan, double t0, const VecX& y0) {
+  if (settings.method != "cvode-adams" && settings.method != "cvode-bdf")
+    throw Error("sensitivities: need cvode-adams or cvode-bdf, got " + settings.method);
+  auto p = std::make_unique<CvodeSensitivity>(system, settings, plan, t0, y0);
+  SensitivityIntegrator out;
+  out.source = p.get();
+  out.integrator = std::move(p);
+  return out;
+}
+
+}  // namespace soadyn
