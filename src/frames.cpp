@@ -107,17 +107,32 @@ void to_reference(Reference reference, const Placement& X, A&& a, B&& b) {
 
 // the Jacobian columns of the body's point p in inertial axes about p, into J (6×nv, zeroed)
 // then turned to the reference: column k of DOF k on body j is [g; u + g × (p − η_j)]
-void point_columns(const Model& model, const Data& data, int b, const Placement& X, Reference reference, MatX& J) {
-  J.setZero(6, model.nv);
+// (world: [g; u − g × η_j], local: both turned by Rᵀ); each column written as two 3-vectors
+template <Reference kReference>
+void point_columns_in(const Model& model, const Data& data, int b, const Placement& X, MatX& J) {
+  if (J.rows() != 6 || J.cols() != model.nv) J.resize(6, model.nv);
+  J.setZero();
+  const Mat3 Rt = X.R.transpose();
   for (int j = b; j >= 0; j = model.parent[j]) {
-    const Vec3 r = X.p - data.eta.col(j);
-    for (int k = model.idx_v[j]; k < model.idx_v[j] + model.nv_i[j]; ++k) {
+    const Vec3 eta = data.eta.col(j);
+    const Vec3 r = kReference == Reference::World ? Vec3(-eta) : Vec3(X.p - eta);
+    for (int k = model.idx_v[j], end = k + model.nv_i[j]; k < end; ++k) {
       const Vec3 g = data.G.col(k).head<3>();
-      Vec3 a = g, c = data.G.col(k).tail<3>() + g.cross(r);
-      to_reference(reference, X, a, c);
-      J.col(k) << a, c;
+      const Vec3 c = data.G.col(k).tail<3>() + g.cross(r);
+      Eigen::Map<Vec3> top(J.col(k).data()), bottom(J.col(k).data() + 3);
+      if constexpr (kReference == Reference::Local) top.noalias() = Rt * g, bottom.noalias() = Rt * c;
+      else top = g, bottom = c;
     }
   }
+}
+
+void point_columns(const Model& model, const Data& data, int b, const Placement& X, Reference reference, MatX& J) {
+  switch (reference) {
+    case Reference::LocalWorldAligned: return point_columns_in<Reference::LocalWorldAligned>(model, data, b, X, J);
+    case Reference::Local: return point_columns_in<Reference::Local>(model, data, b, X, J);
+    case Reference::World: return point_columns_in<Reference::World>(model, data, b, X, J);
+  }
+  throw Error("frames: unknown reference " + std::to_string(int(reference)));
 }
 
 }  // namespace

@@ -25,17 +25,16 @@ const Mat3 kIdentity = Mat3::Identity();
 
 }  // namespace
 
+namespace {
+
 // (cos θ, sin θ) of every revolute joint along a unit axis (Model::turn_body), four at a time
 // through glibc's vector math library where the library is built for AVX2, else one sincos each.
 // The four angles are gathered into a register, not stored and read back whole: a wide load of
 // narrow stores stalls the CPU (interleaved, chain N = 8: 50 → 16 ns; binary tree N = 15:
 // 100 → 38 ns; a lone angle too: bias on one body 34 → 30 ns against the scalar sincos).
-void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool roots) {
-  const int nt = int(model.turn_body.size());
-  const int* body = model.turn_body.data();
-  const int* iq = model.turn_q.data();
-  const double* x = q.data();
-  int t = roots ? 0 : model.turn_roots;
+// Here: (cos, sin) of x[iq[t]] into column body[t] of turn, t = from .. nt − 1.
+void turns_of(const int* body, const int* iq, int from, int nt, const double* x, Eigen::Matrix2Xd& turn) {
+  int t = from;
 #if SOADYN_HAVE_MVEC
   for (; t + 4 <= nt; t += 4) {
     const __m256d v = _mm256_setr_pd(x[iq[t]], x[iq[t + 1]], x[iq[t + 2]], x[iq[t + 3]]);
@@ -61,6 +60,13 @@ void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool
     const double a = x[iq[t]], c = std::cos(a), s = std::sin(a);  // one sincos
     turn.col(body[t]) << c, s;
   }
+}
+
+}  // namespace
+
+void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool roots) {
+  turns_of(model.turn_body.data(), model.turn_q.data(), roots ? 0 : model.turn_roots, int(model.turn_body.size()),
+           q.data(), turn);
 }
 
 namespace {
@@ -121,15 +127,21 @@ void kinematics_sweep(const Model& model, Data& data, const VecX& q) {
   for (int i = 0; i < model.nbodies; ++i) kinematics_step<kInertias>(model, data, q, i);
 }
 
-// the frames of body i's ancestors and then i's, parent first (a climb of depth(i) calls), each
-// revolute joint along a unit axis with a sincos of its own
-void frames_to(const Model& model, Data& data, const VecX& q, int i) {
-  if (model.parent[i] >= 0) frames_to(model, data, q, model.parent[i]);
-  if (model.unit_axis[i] != 0 && model.joint_type[i] == JointType::Revolute) {
-    const double a = q(model.idx_q[i]);
-    data.turn.col(i) << std::cos(a), std::sin(a);
+// the frames of body b's ancestors and then b's, parent first: the path up from b, its turned
+// joints' (cos θ, sin θ) four at a time as joint_turns does, then the sweep's step on each
+// (a path longer than kPath, on the stack, takes the whole sweep)
+void frames_to(const Model& model, Data& data, const VecX& q, int b) {
+  constexpr int kPath = 64;
+  int path[kPath], turn_body[kPath], turn_q[kPath];
+  int n = 0, nt = 0;
+  for (int i = b; i >= 0; i = model.parent[i]) {
+    if (n == kPath) return kinematics_sweep<false>(model, data, q);
+    path[n++] = i;
+    if (model.unit_axis[i] != 0 && model.joint_type[i] == JointType::Revolute)
+      turn_body[nt] = i, turn_q[nt++] = model.idx_q[i];
   }
-  kinematics_step<false>(model, data, q, i);
+  turns_of(turn_body, turn_q, 0, nt, q.data(), data.turn);
+  for (int k = n - 1; k >= 0; --k) kinematics_step<false>(model, data, q, path[k]);
 }
 
 }  // namespace

@@ -3,7 +3,10 @@
 //   peer/<shape>/mass/<lib>   soadyn mass_matrix(q) (the local-frame route, from q alone)
 //   peer/<shape>/bias/<lib>   soadyn bias_forces(q, v) (the body-axes route, from q and v alone)
 //   peer/<shape>/rhs/<lib>    soadyn update_kinematics + update_velocities + O(N) forward_dynamics
-// and each peer's calls for the same quantities (peer_<lib>.cpp says which).  The peers are
+// and each peer's calls for the same quantities (peer_<lib>.cpp says which), and on robots:
+//   peer/frame_jacobian/<robot>/<lib>   soadyn frame_jacobian(q, frame, local_world_aligned)
+//                                       against Pinocchio's computeFrameJacobian (nv as the arg)
+// for the robots of kFrameRobots (their URDFs in the models directory, tools/bench/run.sh).  The peers are
 // plugins (peer.hpp) that CMake built when it found the library: MuJoCo always looked up,
 // Pinocchio and RBDL under -DSOADYN_PEERS_PREFIX.
 // Before a peer is timed on a model it must agree with soadyn there: 𝓜 to 1e-9 of max|𝓜|, bias
@@ -14,6 +17,7 @@
 #include "peer.hpp"
 
 #include "soadyn/algorithms.hpp"
+#include "soadyn/frames.hpp"
 #include "soadyn/kinematics.hpp"
 #include "soadyn/scenario.hpp"
 
@@ -191,6 +195,104 @@ void run(benchmark::State& st, const std::string& shape, Quantity quantity, cons
   }
 }
 
+// The frame-Jacobian rows: a robot's URDF, whether its root floats, and the frame (a URDF link).
+struct FrameRobot {
+  const char* name;
+  const char* urdf;
+  bool free_root;
+  const char* frame;
+};
+const FrameRobot kFrameRobots[] = {
+    {"arm7", "arm7.urdf", false, "link_7"},                       // tests/data/arm7.urdf: the 7-DOF arm's flange
+    {"humanoid", "humanoid.urdf", true, "left_index_tip"},        // tools/humanoid_urdf.py: 50 DOF on a free root
+};
+
+// soadyn on the robot at a random state, and the same problem for a peer: the free root's q, then
+// the 1-DOF joints in soadyn's body order
+struct FrameSetup {
+  Model model;
+  Data data;
+  VecX q;
+  int frame;
+  MatX J;
+  PeerProblem problem;
+  explicit FrameSetup(const FrameRobot& r)
+      : model(load_urdf(models_dir() + "/" + r.urdf, r.free_root, Vec3(0, 0, -9.81))), data(model), J(6, model.nv) {
+    q = random_vector(model.nq, 5, 1.5);
+    model.normalize(q);
+    frame = model.frame_index(r.frame);
+    if (frame < 0) throw std::runtime_error(std::string(r.urdf) + ": no frame " + r.frame);
+    problem.urdf = models_dir() + "/" + r.urdf;
+    problem.free_root = r.free_root;
+    problem.frame = r.frame;
+    for (int i = 0; i < model.nbodies; ++i) {
+      if (r.free_root && i == 0) {
+        for (int k = 0; k < 7; ++k) problem.root_q[size_t(k)] = q(k);
+        continue;
+      }
+      if (model.nv_i[i] != 1 || model.nq_i[i] != 1) throw std::runtime_error(std::string(r.urdf) + ": a joint without one dof");
+      problem.joints.push_back(model.joint_names[i]);
+      problem.links.push_back(model.body_names[i]);
+      problem.q.push_back(q(model.idx_q[i]));
+      problem.v.push_back(0.0);
+      problem.tau.push_back(0.0);
+    }
+  }
+  // from q alone: the frame's body's ancestors' frames, then its Jacobian (frames.hpp)
+  void jacobian() { frame_jacobian(model, data, q, frame, Reference::LocalWorldAligned, J); }
+};
+
+void run_frame(benchmark::State& st, const FrameRobot* robot, const Entry* entry) {
+  FrameSetup s(*robot);
+  st.counters["N"] = double(s.model.nv);
+  if (!entry) {
+    for (auto _ : st) {
+      s.jacobian();
+      benchmark::ClobberMemory();
+    }
+    return;
+  }
+  std::string error;
+  s.problem.variant = entry->variant;
+  std::unique_ptr<Peer> peer(entry->plugin->make(s.problem, error));
+  if (!peer) {
+    st.SkipWithError((entry->name + " cannot load " + robot->urdf + ": " + error).c_str());
+    return;
+  }
+  if (!peer->frame_jacobian) {
+    st.SkipWithError((entry->name + ": no frame Jacobian call").c_str());
+    return;
+  }
+  // the same quantity: the peer's J against soadyn's, to 1e-10 of max|J| (the staged route's:
+  // update_frames then frame_jacobian, not the timed one)
+  update_frames(s.model, s.data, s.q);
+  MatX J;
+  frame_jacobian(s.model, s.data, s.frame, Reference::LocalWorldAligned, J);
+  peer->frame_jacobian();
+  const std::vector<double> pj = peer->frame_jacobian_out();
+  if (pj.size() != size_t(J.size())) {
+    st.SkipWithError((entry->name + ": frame Jacobian of " + std::to_string(pj.size()) + " entries").c_str());
+    return;
+  }
+  MatX Jp(6, s.model.nv);
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < s.model.nv; ++j) Jp(i, j) = pj[size_t(i * s.model.nv + j)];
+  // soadyn's body order is the problem's column order after the root (1-DOF joints)
+  const double dJ = (Jp - J).cwiseAbs().maxCoeff() / J.cwiseAbs().maxCoeff();
+  st.counters["dJ"] = dJ;
+  if (!(dJ <= 1e-10)) {
+    std::ostringstream os;
+    os.precision(2);
+    os << entry->name << " disagrees with soadyn on " << robot->urdf << ": frame Jacobian " << dJ << " (limit 1e-10)";
+    st.SkipWithError(os.str().c_str());
+    return;
+  }
+  for (auto _ : st) {
+    peer->frame_jacobian();
+    benchmark::ClobberMemory();
+  }
+}
+
 }  // namespace
 
 // Loads the plugins CMake built and registers the peer benchmarks, N-major so that soadyn and its
@@ -222,6 +324,18 @@ void register_peers() {
         entries.push_back({p.get(), v, p->name + "-" + v});
         benchmark::AddCustomContext("peer_" + entries.back().name, p->version + ", variant " + v);
       }
+  }
+  for (const FrameRobot& r : kFrameRobots) {
+    const std::string base = std::string("peer/frame_jacobian/") + r.name + "/";
+    int nv = 0;
+    try {
+      nv = load_urdf(models_dir() + "/" + r.urdf, r.free_root, Vec3(0, 0, -9.81)).nv;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "frame-Jacobian row %s left out: %s\n", r.name, e.what());
+      continue;
+    }
+    benchmark::RegisterBenchmark((base + "soadyn").c_str(), run_frame, &r, nullptr)->Arg(nv);
+    for (const Entry& e : entries) benchmark::RegisterBenchmark((base + e.name).c_str(), run_frame, &r, &e)->Arg(nv);
   }
   const std::vector<int> chain{1, 2, 4, 8, 16, 32, 64, 128, 256}, tree{1, 3, 7, 15, 31, 63, 127, 255};
   for (const std::string shape : {"chain", "tree"}) {

@@ -30,6 +30,12 @@ struct PeerProblem {
   std::vector<double> q, v, tau;
   std::array<double, 3> gravity{0, 0, -9.81};
   std::string variant;  // one of the plugin's soadyn_bench_peer_variants(), "" for its default
+  // the frame-Jacobian rows: a free root before `joints` (q = [x y z qw qx qy qz] in root_q, its 6
+  // DOFs first in every output, in soadyn's v = [ω; ṗ], both inertial), and the URDF link whose
+  // frame is asked for ("" for the mass, bias and forward rows)
+  bool free_root = false;
+  std::array<double, 7> root_q{0, 0, 0, 1, 0, 0, 0};
+  std::string frame;
 };
 
 // The three timed calls; each recomputes everything it needs from (q, v, tau), as soadyn's do.
@@ -40,6 +46,10 @@ struct Peer {
   std::function<void()> forward;   // q̈ from (q, v, tau) by the peer's O(N) recursion
   // untimed, after the matching call: 𝓜 row-major with both triangles, C, q̈
   std::function<std::vector<double>()> mass_out, bias_out, forward_out;
+  // the frame's Jacobian from q, about the frame's origin in inertial axes (Pinocchio's
+  // LOCAL_WORLD_ALIGNED); empty in a peer without the call.  Out: 6 × nv row-major, rows [ω; ṗ]
+  std::function<void()> frame_jacobian;
+  std::function<std::vector<double>()> frame_jacobian_out;
 };
 
 // x in the problem's order, from a peer's own: r[k] = x[idx[k]] (any indexable vector)

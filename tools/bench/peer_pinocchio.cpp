@@ -5,11 +5,15 @@
 //   forward  aba(q, v, tau)             (the articulated-body algorithm)
 // crba and aba in Pinocchio's default convention (LOCAL), or in the variant "world" in its WORLD
 // convention (the faster on long chains).  The URDF is read by Pinocchio's own
-// parser with a fixed base; a `continuous` joint has q = (cos θ, sin θ).
+// parser with a fixed base, or a free-flyer root for a problem with free_root; a `continuous`
+// joint has q = (cos θ, sin θ).
+//   frame_jacobian  computeFrameJacobian(q, frame, LOCAL_WORLD_ALIGNED)  (one pass over the
+//                   frame's supporting joints), when the problem names a frame
 #include "peer.hpp"
 
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody/data.hpp>
 #include <pinocchio/multibody/model.hpp>
@@ -25,7 +29,8 @@ using soadyn::bench::PeerProblem;
 
 pin::Model load(const PeerProblem& p) {
   pin::Model m;
-  pin::urdf::buildModel(p.urdf, m);  // fixed base
+  if (p.free_root) pin::urdf::buildModel(p.urdf, pin::JointModelFreeFlyer(), m);
+  else pin::urdf::buildModel(p.urdf, m);  // fixed base
   m.gravity.linear(Eigen::Vector3d(p.gravity[0], p.gravity[1], p.gravity[2]));
   return m;
 }
@@ -35,12 +40,18 @@ struct Pinocchio : soadyn::bench::Peer {
   pin::Data data;
   Eigen::VectorXd q, v, tau;
   std::vector<int> idx;  // problem order k -> Pinocchio v index
+  pin::Data::Matrix6x J;
 
   explicit Pinocchio(const PeerProblem& p) : model(load(p)), data(model) {
-    const int n = int(p.joints.size());
-    if (model.nv != n) throw std::runtime_error("nv = " + std::to_string(model.nv) + ", soadyn has " + std::to_string(n));
+    const int n = int(p.joints.size()), root = p.free_root ? 6 : 0;
+    if (model.nv != n + root)
+      throw std::runtime_error("nv = " + std::to_string(model.nv) + ", soadyn has " + std::to_string(n + root));
     q = pin::neutral(model);
-    v = tau = Eigen::VectorXd::Zero(n);
+    v = tau = Eigen::VectorXd::Zero(n + root);
+    if (p.free_root) {  // Pinocchio's free flyer: q = [x y z qx qy qz qw], v = [Rᵀ ṗ; Rᵀ ω]
+      q.head<3>() << p.root_q[0], p.root_q[1], p.root_q[2];
+      q.segment<4>(3) << p.root_q[4], p.root_q[5], p.root_q[6], p.root_q[3];
+    }
     for (int k = 0; k < n; ++k) {
       if (!model.existJointName(p.joints[k])) throw std::runtime_error("no joint " + p.joints[k]);
       const auto j = model.getJointId(p.joints[k]);
@@ -70,6 +81,28 @@ struct Pinocchio : soadyn::bench::Peer {
     };
     bias_out = [this] { return soadyn::bench::permuted(data.nle, idx); };
     forward_out = [this] { return soadyn::bench::permuted(data.ddq, idx); };
+    if (p.frame.empty()) return;
+    if (!model.existFrame(p.frame)) throw std::runtime_error("no frame " + p.frame);
+    const pin::FrameIndex f = model.getFrameId(p.frame);
+    J = pin::Data::Matrix6x::Zero(6, model.nv);  // the call writes the frame's supporting columns only
+    frame_jacobian = [this, f] { pin::computeFrameJacobian(model, data, q, f, pin::LOCAL_WORLD_ALIGNED, J); };
+    frame_jacobian_out = [this, root] {
+      // rows [v; ω] -> [ω; ṗ]; the free flyer's columns from its local v to soadyn's inertial
+      // [ω; ṗ]: J [Rᵀ ṗ; Rᵀ ω] = J_s [ω; ṗ] gives J_s = [J_ω Rᵀ, J_v Rᵀ]
+      Eigen::MatrixXd Js(6, int(idx.size()) + root);
+      Eigen::MatrixXd Jr(6, model.nv);
+      Jr << J.bottomRows<3>(), J.topRows<3>();
+      if (root) {
+        const Eigen::Matrix3d R = Eigen::Quaterniond(q[6], q[3], q[4], q[5]).normalized().toRotationMatrix();
+        Js.leftCols<3>() = Jr.middleCols<3>(3) * R.transpose();
+        Js.middleCols<3>(3) = Jr.leftCols<3>() * R.transpose();
+      }
+      for (size_t k = 0; k < idx.size(); ++k) Js.col(root + int(k)) = Jr.col(idx[k]);
+      std::vector<double> r(size_t(Js.size()));
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < Js.cols(); ++j) r[size_t(i * Js.cols() + j)] = Js(i, j);
+      return r;
+    };
   }
 };
 

@@ -23,6 +23,9 @@ tools/setup.sh -DSOADYN_BUILD_BENCH=ON "-DSOADYN_PEERS_PREFIX=${PEERS_PREFIX:-}"
 out=tools/results
 mkdir -p "$out" build/bench_models
 tools/bench/make_models.py build/bench_models
+# the frame-Jacobian rows' robots (bench_peers.cpp kFrameRobots)
+cp tests/data/arm7.urdf build/bench_models/
+tools/humanoid_urdf.py -o build/bench_models/humanoid.urdf
 SOADYN_BENCH_MODELS=build/bench_models build/soadyn_bench --benchmark_min_time="${BENCH_MIN_TIME:-0.1}" ${BENCH_FILTER:+"--benchmark_filter=$BENCH_FILTER"} \
   --benchmark_repetitions="${BENCH_REPETITIONS:-3}" --benchmark_enable_random_interleaving=true \
   --benchmark_report_aggregates_only=false --benchmark_display_aggregates_only=true \
