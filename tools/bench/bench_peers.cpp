@@ -165,6 +165,15 @@ std::string disagreement(Setup& s, Peer& p, benchmark::State& st) {
   return os.str();
 }
 
+// entry's peer on the problem (its variant set), or nullptr with the benchmark skipped, naming file
+std::unique_ptr<Peer> make_peer(benchmark::State& st, const Entry& entry, PeerProblem& problem, const std::string& file) {
+  std::string error;
+  problem.variant = entry.variant;
+  std::unique_ptr<Peer> peer(entry.plugin->make(problem, error));
+  if (!peer) st.SkipWithError((entry.name + " cannot load " + file + ": " + error).c_str());
+  return peer;
+}
+
 void run(benchmark::State& st, const std::string& shape, Quantity quantity, const Entry* entry) {
   Setup s(shape, int(st.range(0)));
   st.counters["N"] = double(st.range(0));
@@ -177,13 +186,8 @@ void run(benchmark::State& st, const std::string& shape, Quantity quantity, cons
     }
     return;
   }
-  std::string error;
-  s.problem.variant = entry->variant;
-  std::unique_ptr<Peer> peer(entry->plugin->make(s.problem, error));
-  if (!peer) {
-    st.SkipWithError((entry->name + " cannot load " + s.file + ": " + error).c_str());
-    return;
-  }
+  std::unique_ptr<Peer> peer = make_peer(st, *entry, s.problem, s.file);
+  if (!peer) return;
   if (const std::string why = disagreement(s, *peer, st); !why.empty()) {
     st.SkipWithError((entry->name + " disagrees with soadyn on " + s.file + ":" + why + " (limit 1e-9)").c_str());
     return;
@@ -252,13 +256,8 @@ void run_frame(benchmark::State& st, const FrameRobot* robot, const Entry* entry
     }
     return;
   }
-  std::string error;
-  s.problem.variant = entry->variant;
-  std::unique_ptr<Peer> peer(entry->plugin->make(s.problem, error));
-  if (!peer) {
-    st.SkipWithError((entry->name + " cannot load " + robot->urdf + ": " + error).c_str());
-    return;
-  }
+  std::unique_ptr<Peer> peer = make_peer(st, *entry, s.problem, robot->urdf);
+  if (!peer) return;
   if (!peer->frame_jacobian) {
     st.SkipWithError((entry->name + ": no frame Jacobian call").c_str());
     return;
