@@ -19,10 +19,20 @@ using namespace soadyn;
 
 namespace {
 
+// the test's own directory under the system's temporary one, removed with everything in it when the
+// test program ends (a test leaves nothing behind)
+struct ScratchDir {
+  std::filesystem::path dir = std::filesystem::temp_directory_path() / ("soadyn_table_" + std::to_string(getpid()));
+  ScratchDir() { std::filesystem::create_directories(dir); }
+  ~ScratchDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(dir, ec);
+  }
+};
+
 std::string scratch(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("soadyn_table_" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
+  static const ScratchDir scratch_dir;
+  return (scratch_dir.dir / name).string();
 }
 
 void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
