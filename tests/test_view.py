@@ -6,7 +6,8 @@ For every scenario in scenarios/ (and a URDF arm with visual primitives): run it
 bodies shown and hidden (the bodies must cover part of it), move to #t=b and screenshot again (the
 bodies must have moved), and check that the console logged no error and that the page requested
 nothing.  The frames a run logged (view_visuals.yaml's log: frames:) are drawn as named triads
-where the run file puts them, and move.  Then: keyboard and plot clicks drive playback; a missing
+where the run file puts them, and move.  The joint limits' events (panda_gripper.yaml) are marked over
+the timeline where the slider means their times, listed, dashed on the plots, and seek on a click.  Then: keyboard and plot clicks drive playback; a missing
 URDF and bad files are refused with one clear line; and the checks themselves catch an error and a network request injected into
 a copy of a page.
 
@@ -168,6 +169,64 @@ def check_named_frames(b, page, h5):
     check(moved_px > 0.0005, f"view_visuals: {100 * moved_px:.3f}% of the scene changed with only the triads drawn "
                              f"between t = {t[0]:.3g} s and {t[last]:.3g} s (> 0.05%: they moved)")
     act(b, "soadynView.showBodies(true)")
+
+
+def check_events(b, page, h5):
+    """The joint limits' events of a run (panda_gripper.yaml: both fingers reach their stops and
+    hold) are marked over the timeline where they happened, listed, drawn on the plots, and a click
+    on a mark seeks to the event; the energy balance counts what the impacts took."""
+    import h5py
+    with h5py.File(h5, "r") as f:
+        ev, t = f["events"][:], f["time"][:]
+    b.navigate("file://" + os.path.abspath(page) + "#t=0")
+    b.wait_for("window.soadynView && soadynView.ready", timeout=60)
+    wait_render(b, float(t[0]))
+    drawn = b.evaluate("soadynView.events()")
+    check(len(drawn) == len(ev) > 0, f"panda_gripper: {len(drawn)} events drawn, the run file has {len(ev)}")
+    t0, t1 = float(t[0]), float(t[-1])
+    # each mark sits where the slider means its time: a click on the slider at the mark's x (marks
+    # made transparent to the mouse) seeks to the event's time, to within two pixels of the slider
+    line = b.evaluate("soadynView.timeline()")
+    b.evaluate("document.getElementById('event-marks').querySelectorAll('.event-mark').forEach((m) => { m.style.pointerEvents = 'none'; })")
+    for d, row in zip(drawn, ev):
+        b.evaluate("soadynView.seek(" + repr(t1) + ")")
+        wait_render(b, t1)
+        for kind in ("mousePressed", "mouseReleased"):
+            b.send("Input.dispatchMouseEvent", {"type": kind, "x": d["x"], "y": d["y"], "button": "left", "clickCount": 1})
+        b.wait_for("soadynView.state().t < " + repr(t1 / 2), timeout=30)
+        got = b.evaluate("soadynView.state().t")
+        tol = 2 * (t1 - t0) / line["width"]
+        check(abs(d["t"] - row[0]) < 1e-9 and abs(got - row[0]) < tol,
+              f"panda_gripper: {d['joint']} {d['side']} {d['kind']} at t = {d['t']:.9g} s marked at x = {d['x']:.1f}; "
+              f"the slider clicked there seeks to {got:.5f} s (within {tol:.5f} s)")
+    b.evaluate("document.getElementById('event-marks').querySelectorAll('.event-mark').forEach((m) => { m.style.pointerEvents = ''; })")
+    title = b.evaluate("document.getElementById('events-title').textContent")
+    rows = b.evaluate("document.querySelectorAll('#events-list .event-row').length")
+    check(str(len(ev)) in title and rows == len(ev), f"panda_gripper: the list says {title!r} and has {rows} rows")
+    energy = b.evaluate("document.getElementById('energy-title').textContent")
+    check("+ L" in energy, f"panda_gripper: the energy balance counts the impacts' loss ({energy!r})")
+    # the dashed mark on the energy plot, at the event's time
+    area = b.evaluate("soadynView.plotArea('energy')")
+    shot = pixels(b.screenshot())
+    y0, y1 = int(area["top"]) + 2, int(area["top"] + area["h"]) - 2
+
+    def dashed(frac):  # share of the plot's height with the mark's colour (not the cursor's orange) at frac
+        x = int(round(area["left"] + area["w"] * frac))
+        strip = shot[y0:y1, x - 1:x + 2]
+        return x, float(((strip[..., 0] > 150) & (strip[..., 1] < 130) & (strip[..., 2] > 90)).any(axis=1).mean())
+    x, marked = dashed((ev[0][0] - t0) / (t1 - t0))
+    xo, other = dashed(0.6)
+    check(marked > 0.3 and other < 0.05, f"panda_gripper: the energy plot has a dashed mark at x = {x} ({100 * marked:.0f}% "
+                                          f"of its height, > 30%) and none at x = {xo} ({100 * other:.0f}%)")
+    # a click on the mark seeks there
+    b.evaluate("soadynView.seek(" + repr(t1) + ")")
+    wait_render(b, t1)
+    n = b.evaluate("soadynView.renders")
+    for kind in ("mousePressed", "mouseReleased"):
+        b.send("Input.dispatchMouseEvent", {"type": kind, "x": drawn[0]["x"], "y": drawn[0]["y"], "button": "left", "clickCount": 1})
+    b.wait_for(f"soadynView.renders > {n}", timeout=30)
+    now = b.evaluate("soadynView.state().t")
+    check(abs(now - ev[0][0]) < 1e-9, f"panda_gripper: a click on the first mark seeks to t = {now:.9g} s (event at {ev[0][0]:.9g} s)")
 
 
 def check_controls(b, page):
@@ -344,6 +403,7 @@ def main():
             # box on the world-welded base, cylinder on link1, sphere on the welded tool; the mesh is not a primitive
             check(counts["visuals"] == 3, f"view_visuals: 3 URDF primitives drawn (got {counts['visuals']})")
             check_named_frames(b, pages["view_visuals"], os.path.join(tmp, "view_visuals.h5"))
+            check_events(b, pages["panda_gripper"], os.path.join(tmp, "panda_gripper.h5"))
             check_controls(b, pages["double_pendulum"])
             check_detectors(b, pages["double_pendulum"], tmp)
         check_cli_errors(tmp)

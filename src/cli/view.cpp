@@ -199,11 +199,7 @@ int run_view(const ViewOptions& o) {
   if (finite < run.q.rows()) {
     std::fprintf(stderr, "soadyn: note: %s: /q is not finite from t = %g s on; the page ends at t = %g s\n", o.run.c_str(),
                  run.time(finite), run.time(finite - 1));
-    run.time.conservativeResize(finite);
-    run.q.conservativeResize(finite, Eigen::NoChange);
-    if (run.kinetic.size()) run.kinetic.conservativeResize(finite);
-    if (run.total.size()) run.total.conservativeResize(finite);
-    if (run.work.size()) run.work.conservativeResize(finite);
+    view::keep_rows(run, finite);
   }
   const view::RunModel rm = view::rebuild_model(run);
   const Model& m = rm.model;
@@ -258,18 +254,33 @@ int run_view(const ViewOptions& o) {
     for (int c = 0; c < m.nq; ++c) qs[f * size_t(m.nq) + c] = float(run.q(k, c));
   }
 
-  // the energy-balance error (E − E0 − W) / max(|E0|, peak T), as soadyn run reports it (files
-  // before layout 3 hold no W: the energy error)
+  // the energy-balance error (E − E0 − W + L) / max(|E0|, peak T), as soadyn run reports it, L the
+  // energy the limits' impacts took (files before layout 3 hold no W: the energy error)
   std::string energy = "null";
   if (run.total.size()) {
-    const double E0 = run.total(0);
+    const bool balance = run.work.size() > 0, impacts = run.impact_loss.size() > 0;
+    const auto L = [&](Eigen::Index k) { return impacts ? run.impact_loss(k) : 0.0; };
+    const double E0 = run.total(0) + L(0);
     const double scale = std::max({std::abs(E0), run.kinetic.size() ? run.kinetic.maxCoeff() : 0.0, 1e-300});
-    const bool balance = run.work.size() > 0;
     std::vector<float> err(K);
-    for (size_t f = 0; f < K; ++f) err[f] = float((run.total(keep[f]) - E0 - (balance ? run.work(keep[f]) : 0.0)) / scale);
+    for (size_t f = 0; f < K; ++f)
+      err[f] = float((run.total(keep[f]) - E0 - (balance ? run.work(keep[f]) : 0.0) + L(keep[f])) / scale);
     energy = "{\"error\":" + base64(err) + ",\"E0\":" + num(E0) + ",\"scale\":" + num(scale) +
-             ",\"work_inputs\":" + (rm.has_work_inputs ? "true" : "false") + ",\"balance\":" + (balance ? "true" : "false") + "}";
+             ",\"work_inputs\":" + (rm.has_work_inputs ? "true" : "false") + ",\"balance\":" + (balance ? "true" : "false") +
+             ",\"impacts\":" + (impacts ? "true" : "false") + "}";
   }
+
+  // the joint limits' events, for the timeline: time, joint, side, kind and velocities
+  std::string events = "[";
+  const std::vector<std::string> vn = run.v_names.empty() ? m.v_names() : run.v_names;
+  for (size_t k = 0; k < run.events.size(); ++k) {
+    const view::RunFile::Event& e = run.events[k];
+    const char* kind = e.kind == 0 ? "impact" : e.kind == 1 ? "hold" : e.kind == 2 ? "release" : "event";
+    events += std::string(k ? "," : "") + "{\"t\":" + num(e.t) + ",\"joint\":" + quote(size_t(e.dof) < vn.size() ? vn[size_t(e.dof)] : "dof " + std::to_string(e.dof)) +
+              ",\"side\":" + quote(e.side < 0 ? "lower" : "upper") + ",\"kind\":" + quote(kind) + ",\"v_before\":" + num(e.v_before) +
+              ",\"v_after\":" + num(e.v_after) + ",\"energy_lost\":" + num(e.energy_lost) + "}";
+  }
+  events += "]";
 
   // the scene: bodies as the model knows them
   std::string bodies = "[";
@@ -312,7 +323,7 @@ int run_view(const ViewOptions& o) {
       ",\"bounds\":{\"min\":" + vec(lo) + ",\"max\":" + vec(hi) + "},\"frames\":{\"n\":" + std::to_string(K) +
       ",\"nb\":" + std::to_string(N) + ",\"t\":" + base64(times) + ",\"pose\":" + base64(pose) + ",\"rule\":" +
       quote(rule) + "},\"coords\":" + coords + ",\"nq\":" + std::to_string(m.nq) + ",\"q\":" + base64(qs) +
-      ",\"energy\":" + energy + ",\"named_frames\":" + named + "}";
+      ",\"energy\":" + energy + ",\"events\":" + events + ",\"named_frames\":" + named + "}";
 
   const std::string title = html_escape(rm.name);
   const std::string page = fill_template(assets::page_html, {{"TITLE", title},

@@ -23,7 +23,19 @@ struct RunFile {
   VecX kinetic, total;                   // T (empty if absent)
   VecX work;                             // T: the inputs' work W(t) (empty in files before layout 3)
   std::vector<std::string> frame_names;  // the frames a scenario's log: frames: logged (/frames/names)
+  VecX impact_loss;                      // T: L(t), the energy the limits' impacts took (empty without limits)
+  std::vector<std::string> v_names;      // /model v_names (empty if the file has none)
+  // the joint limits' events (/events, h5log.hpp), in time order
+  struct Event {
+    double t = 0.0;
+    int dof = -1, side = 0, kind = 0;  // dof into v; side −1 lower, +1 upper; kind 0 impact, 1 hold, 2 release
+    double v_before = 0.0, v_after = 0.0, energy_lost = 0.0;
+  };
+  std::vector<Event> events;
 };
+
+// Keeps the first `rows` samples of every series (a run stopped mid-write, or one gone non-finite).
+void keep_rows(RunFile& run, Eigen::Index rows);
 
 // Reads `path`; throws soadyn::Error naming the file and what is missing or malformed.
 RunFile read_run(const std::string& path);

@@ -9,6 +9,7 @@
 #include <hdf5.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 
@@ -59,6 +60,27 @@ std::string string_attribute(hid_t obj, const char* name, const std::string& whe
   if (H5Aexists(obj, name) <= 0) return {};
   Id a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
   return read_string(a, true, where + ": attribute '" + name + "'");
+}
+
+// the strings of an attribute of variable-length strings (empty if it holds anything else)
+std::vector<std::string> string_list_attribute(hid_t file, const char* object, const char* name) {
+  std::vector<std::string> out;
+  Id a(H5Aopen_by_name(file, object, name, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  if (!a.ok()) return out;
+  Id type(H5Aget_type(a), H5Tclose);
+  Id space(H5Aget_space(a), H5Sclose);
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  if (H5Tget_class(type) != H5T_STRING || H5Tis_variable_str(type) <= 0 || n <= 0) return out;
+  Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(mem, H5T_VARIABLE);
+  H5Tset_cset(mem, H5Tget_cset(type));
+  std::vector<char*> names(size_t(n), nullptr);
+  if (H5Aread(a, mem, names.data()) < 0) return out;
+  for (char* p : names) {
+    out.push_back(p ? p : "");
+    H5free_memory(p);
+  }
+  return out;
 }
 
 // a T or T×cols dataset of numbers, as a row-major T×cols matrix
@@ -113,38 +135,20 @@ RunFile read_run(const std::string& path) {
   if (exists(file, "/energy/kinetic")) r.kinetic = read_matrix(file, "/energy/kinetic", path).col(0);
   if (exists(file, "/energy/total")) r.total = read_matrix(file, "/energy/total", path).col(0);
   if (exists(file, "/energy/work_inputs")) r.work = read_matrix(file, "/energy/work_inputs", path).col(0);
+  if (exists(file, "/energy/impact_loss")) r.impact_loss = read_matrix(file, "/energy/impact_loss", path).col(0);
 
   // rows: as many as every series has (a run stopped mid-write keeps whole rows only)
   Eigen::Index rows = std::min(r.time.size(), r.q.rows());
-  if (r.kinetic.size()) rows = std::min(rows, r.kinetic.size());
-  if (r.total.size()) rows = std::min(rows, r.total.size());
-  if (r.work.size()) rows = std::min(rows, r.work.size());
+  for (const VecX* s : {&r.kinetic, &r.total, &r.work, &r.impact_loss})
+    if (s->size()) rows = std::min(rows, s->size());
   if (rows == 0) throw Error(path + ": the run logged no samples");
-  r.time.conservativeResize(rows);
-  r.q.conservativeResize(rows, Eigen::NoChange);
-  if (r.kinetic.size()) r.kinetic.conservativeResize(rows);
-  if (r.total.size()) r.total.conservativeResize(rows);
-  if (r.work.size()) r.work.conservativeResize(rows);
+  keep_rows(r, rows);
   for (Eigen::Index k = 1; k < rows; ++k)
     if (!(r.time(k) >= r.time(k - 1))) throw Error(path + ": /time decreases at row " + std::to_string(k));
 
   if (exists(file, "/model") && H5Aexists_by_name(file, "/model", "joint_names", H5P_DEFAULT) > 0) {
     // layout 3: an attribute of variable-length strings
-    Id a(H5Aopen_by_name(file, "/model", "joint_names", H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
-    Id type(H5Aget_type(a), H5Tclose);
-    Id space(H5Aget_space(a), H5Sclose);
-    const hssize_t n = H5Sget_simple_extent_npoints(space);
-    if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0 && n > 0) {
-      Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
-      H5Tset_size(mem, H5T_VARIABLE);
-      H5Tset_cset(mem, H5Tget_cset(type));
-      std::vector<char*> names(size_t(n), nullptr);
-      if (H5Aread(a, mem, names.data()) >= 0)
-        for (char* p : names) {
-          r.joint_names.push_back(p ? p : "");
-          H5free_memory(p);
-        }
-    }
+    r.joint_names = string_list_attribute(file, "/model", "joint_names");
   } else if (exists(file, "/model/joint_names")) {  // layout 2: a dataset of fixed-length strings
     Id d(H5Dopen2(file, "/model/joint_names", H5P_DEFAULT), H5Dclose);
     Id type(H5Dget_type(d), H5Tclose);
@@ -158,6 +162,20 @@ RunFile read_run(const std::string& path) {
           std::string s(buf.data() + i * width, width);
           r.joint_names.push_back(s.substr(0, s.find('\0')));
         }
+    }
+  }
+  if (exists(file, "/model") && H5Aexists_by_name(file, "/model", "v_names", H5P_DEFAULT) > 0)
+    r.v_names = string_list_attribute(file, "/model", "v_names");
+  if (exists(file, "/events")) {  // E×7: t, dof, side, kind, v_before, v_after, energy_lost
+    const MatX e = read_matrix(file, "/events", path);
+    if (e.rows() > 0 && e.cols() != 7)
+      throw Error(path + ": dataset /events: expected 7 columns, got " + std::to_string(e.cols()));
+    for (Eigen::Index k = 0; k < e.rows(); ++k) {
+      const bool dof_ok = std::isfinite(e(k, 1)) && e(k, 1) >= 0 && (r.v_names.empty() || e(k, 1) < double(r.v_names.size()));
+      if (!std::isfinite(e(k, 0)) || !dof_ok)
+        throw Error(path + ": dataset /events: row " + std::to_string(k) + " names no time or joint of the model");
+      r.events.push_back({e(k, 0), int(e(k, 1)), e(k, 2) < 0 ? -1 : 1, std::isfinite(e(k, 3)) ? int(e(k, 3)) : -1, e(k, 4),
+                          e(k, 5), e(k, 6)});
     }
   }
   if (exists(file, "/frames/names")) {  // a dataset of variable-length strings (h5log.cpp)
@@ -182,6 +200,13 @@ RunFile read_run(const std::string& path) {
     }
   }
   return r;
+}
+
+void keep_rows(RunFile& run, Eigen::Index rows) {
+  run.time.conservativeResize(rows);
+  run.q.conservativeResize(rows, Eigen::NoChange);
+  for (VecX* s : {&run.kinetic, &run.total, &run.work, &run.impact_loss})
+    if (s->size()) s->conservativeResize(rows);
 }
 
 RunModel rebuild_model(const RunFile& run) {

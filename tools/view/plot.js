@@ -44,6 +44,7 @@ window.SoadynPlot = (function () {
     window.addEventListener('mouseup', () => { dragging = false; });
   }
   Plot.prototype.set = function (y) { this.y = y; this.draw(); };
+  // this.marks: times drawn as dashed vertical lines (the joint limits' events)
   Plot.prototype.resize = function () {
     const dpr = window.devicePixelRatio || 1;
     this.cw = this.canvas.clientWidth;
@@ -79,6 +80,11 @@ window.SoadynPlot = (function () {
       c.beginPath(); c.moveTo(px, this.top); c.lineTo(px, this.top + this.h); c.stroke();
       c.fillText(xt.label(v) + (v === xt.ticks[xt.ticks.length - 1] ? ' s' : ''), px, this.top + this.h + 4);
     });
+    if (this.marks && this.marks.length) {
+      c.save(); c.strokeStyle = 'rgba(194, 37, 92, 0.7)'; c.setLineDash([3, 3]); c.beginPath();
+      this.marks.forEach((tm) => { const px = this.px(tm); c.moveTo(px, this.top); c.lineTo(px, this.top + this.h); });
+      c.stroke(); c.restore();
+    }
     c.strokeStyle = '#9aa3ad'; c.strokeRect(this.left, this.top, this.w, this.h);
     c.strokeStyle = '#2f6fb0'; c.lineWidth = 1.3; c.beginPath();
     for (let k = 0; k < K; ++k) {

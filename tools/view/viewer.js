@@ -360,8 +360,10 @@
   const plots = [plotEnergy, plotJoint];
   if (RUN.energy) {
     plotEnergy.y = decode(RUN.energy.error, Float32Array);
+    const L = RUN.energy.impacts;
     document.getElementById('energy-title').textContent = RUN.energy.balance
-      ? 'energy-balance error (E \u2212 E\u2080 \u2212 W) / max(|E\u2080|, peak T), W the work of torques and dampers'
+      ? 'energy-balance error (E \u2212 E\u2080 \u2212 W' + (L ? ' + L' : '') + ') / max(|E\u2080|, peak T), W the work of torques and dampers' +
+        (L ? ', L the energy the limits\u2019 impacts took' : '')
       : 'energy error (E \u2212 E\u2080) / max(|E\u2080|, peak T)' + (RUN.energy.work_inputs ? ': inputs do work, E is not conserved' : '');
   } else {
     document.getElementById('energy-title').textContent = 'energy: not in this run file';
@@ -380,6 +382,40 @@
     coordSel.value = String(c);
     plotJoint.set(y);
     dirty = true;
+  }
+
+  // --- the joint limits' events: marks over the slider and on both plots, and a list; a click seeks
+  const events = RUN.events || [];
+  const marks = document.getElementById('event-marks');
+  const markOf = [];
+  if (events.length) {
+    const lost = events.reduce((a, e) => a + (e.energy_lost || 0), 0);
+    document.getElementById('events-box').style.display = 'block';
+    document.getElementById('events-title').textContent = events.length + ' joint-limit event' + (events.length > 1 ? 's' : '') +
+      (lost > 0 ? ' (impacts took ' + lost.toPrecision(3) + ' J)' : '');
+    const list = document.getElementById('events-list');
+    const shown = Math.min(events.length, 200);  // the marks show all; the list the first 200
+    events.forEach((e, j) => {
+      const what = 't = ' + e.t.toPrecision(9) + ' s \u00b7 ' + e.joint + ' at its ' + e.side + ' limit \u00b7 ' + e.kind +
+        (e.kind === 'impact' ? ', v ' + Number(e.v_before).toPrecision(3) + ' \u2192 ' + Number(e.v_after).toPrecision(3) : '');
+      const mark = document.createElement('div');
+      mark.className = 'event-mark';
+      mark.style.left = (100 * (e.t - t0) / Math.max(1e-300, t1 - t0)) + '%';
+      mark.title = what;
+      mark.addEventListener('click', () => onSeek(e.t));
+      marks.appendChild(mark);
+      markOf.push(mark);
+      if (j < shown) {
+        const row = document.createElement('div');
+        row.className = 'event-row';
+        row.textContent = what;
+        row.addEventListener('click', () => onSeek(e.t));
+        list.appendChild(row);
+      }
+    });
+    if (shown < events.length) list.appendChild(document.createTextNode('\u2026 and ' + (events.length - shown) + ' more (marked on the timeline)'));
+    const times = events.map((e) => e.t);
+    plots.forEach((p) => { p.marks = times; });
   }
 
   // --- options ----------------------------------------------------------------------------------
@@ -491,6 +527,12 @@
     const p = which === 'joint' ? plotJoint : plotEnergy, r = p.canvas.getBoundingClientRect();
     return { left: r.left + p.left, top: r.top + p.top, w: p.w, h: p.h };
   };
+  // the events as drawn: time, joint, kind, and the page x of the mark on the timeline
+  api.events = () => events.map((e, j) => {
+    const r = markOf[j].getBoundingClientRect();
+    return { t: e.t, joint: e.joint, side: e.side, kind: e.kind, x: r.left + r.width / 2, y: r.top + r.height / 2 };
+  });
+  api.timeline = () => { const r = slider.getBoundingClientRect(); return { left: r.left, width: r.width }; };
   api.counts = () => ({ bodies: NB, frames: K, visuals: visualCount, trailBody: trailBody, namedFrames: named.F });
   api.namedFrames = () => named.state();
   api.showNamedFrames = (on) => { named.group.visible = on; framesBox.checked = on; dirty = true; };
