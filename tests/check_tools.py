@@ -57,6 +57,10 @@ def check_plot(run_file, exact_csv, binned_csv, joints_csv, joint, svg):
         q_names = [str(n) for n in f["model"].attrs["q_names"]]
         E, T = f["energy/total"][:], f["energy/kinetic"][:]
         W = f["energy/work_inputs"][:] if "work_inputs" in f["energy"] else None
+        L = f["energy/impact_loss"][:] if "impact_loss" in f["energy"] else None
+        control = f["control"][:] if "control" in f else None
+        v_names = [str(n) for n in f["model"].attrs["v_names"]]
+        events = f["events"][:, 0] if "events" in f else np.empty(0)
         lin, ang = f["momentum/linear"][:], f["momentum/angular"][:]
         scenario = str(f.attrs["scenario_path"])
         units = dict(zip(f["samples"].attrs["column_names"], f["samples"].attrs["column_units"]))
@@ -81,11 +85,20 @@ def check_plot(run_file, exact_csv, binned_csv, joints_csv, joint, svg):
         expect(abs(c["q.left"][0] - 0.3) < 1e-15 and abs(c["q.right"][0] + 0.2) < 1e-15,
                "plot: the array angles do not start at the scenario's 0.3 and -0.2")
         expect(np.ptp(c["q.left"]) > 0.05, "plot: the left array did not move (a vacuous run)")
-    # the energy-balance error, recomputed: |E − E0 − W| / max(|E0|, max T); small for every scene
+    # the controllers' torques: one curve per DOF, the file's /control columns
+    if control is not None:
+        for k, n in enumerate(v_names):
+            expect(np.array_equal(c.get("control." + n, np.nan), control[:, k]),
+                   f"plot {name}: curve 'control.{n}' is not /control[:, {k}]")
+        expect(np.ptp(control) > 1e-3, f"plot {name}: the controllers' torques are constant (a vacuous check)")
+    # the energy-balance error, recomputed: |E − E0 − W + L| / max(|E0|, max T); small for every scene
     scale = max(abs(E[0]), T.max())
-    balance = np.abs(E - E[0] - (W - W[0] if W is not None else 0)) / scale
+    balance = np.abs(E - E[0] - (W - W[0] if W is not None else 0) + (L - L[0] if L is not None else 0)) / scale
     expect(np.allclose(c["energy error"], np.maximum(balance, 1e-17), rtol=1e-12, atol=0),
-           f"plot {name}: the energy curve is not |E - E0 - W| / max(|E0|, max T) of the file")
+           f"plot {name}: the energy curve is not |E - E0 - W + L| / max(|E0|, max T) of the file")
+    if name == "arm_control_limits":  # the elbow's impact took energy: the balance closes only with it counted
+        expect(L is not None and L[-1] > 1e-2 * scale and len(events) >= 1,
+               f"plot {name}: no impact logged (L = {L[-1] if L is not None else None}, {len(events)} events)")
     expect(c["energy error"].max() < 1e-5, f"plot {name}: energy-balance error {c['energy error'].max():.2e}")
     if name == "stiff_arm":  # damped: the balance closes only with the work of the damper counted
         expect(W is not None and np.abs(W).max() > 1e-2 * scale, f"plot {name}: no work logged by the damper")
@@ -131,6 +144,8 @@ def check_plot(run_file, exact_csv, binned_csv, joints_csv, joint, svg):
         labels.append("rotation vector θ·u [rad]")
     if free:
         labels += ["|linear momentum − initial| [kg m/s]", "|angular momentum − initial| [kg m^2/s]"]
+    if control is not None:
+        labels += [f"control {'force' if u == 'N' else 'torque'} [{u}]" for u in {units["control." + n] for n in v_names}]
     for label in labels:
         expect(label in text, f"plot {name}: no axis labelled '{label}' in {svg}")
     # a change that is exactly 0 at every row is drawn at the floor and said so in the legend
@@ -143,6 +158,12 @@ def check_plot(run_file, exact_csv, binned_csv, joints_csv, joint, svg):
                                      f"conserved, but the legend says {'so' if said else 'nothing'}")
     axes = text.count('<g id="axes_')
     expect(axes == len(labels) - 1, f"plot {name}: {axes} axes in {svg}, expected {len(labels) - 1}")
+    # the joint limits' events: one group of dashed lines on every panel, as many lines as events
+    marks = text.count('<g id="limit-events')
+    expect(marks == (axes if len(events) else 0), f"plot {name}: {marks} panels mark the {len(events)} limit events, "
+                                                  f"expected {axes if len(events) else 0}")
+    if len(events):
+        expect(f"joint-limit events ({len(events)})" in text, f"plot {name}: the legend does not count the {len(events)} events")
 
 
 def read_csv(path):

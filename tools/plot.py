@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Plot a soadyn run: joint coordinates by unit, the orientation of free and ball joints, the
-energy-balance error on a log axis and, for a free-floating model, the change of momentum.
+controllers' torques and forces, the energy-balance error on a log axis and, for a free-floating
+model, the change of momentum; the joint limits' events (/events) as dashed lines on every panel.
 
     tools/plot.py RUN.h5 [-o fig.png|.svg|.pdf] [--joints a,b] [--bins N] [--show] [--data curves.csv]
 
@@ -124,9 +125,20 @@ def plan(names, units, model, chosen):
         panels.append((f"orientation: rotation vector θ·u [{rad}]\n(free/ball joints, quaternion with q_w ≥ 0)",
                        rotations, False))
 
+    # the controllers' output, one panel per unit (N m for revolute DOFs, N for prismatic ones)
+    by_unit = {}
+    for k, n in enumerate(names):
+        if n.startswith("control."):
+            by_unit.setdefault(units[k], []).append(Curve(n, column(k)))
+    for u, curves in by_unit.items():
+        panels.append((f"control {'force' if u == 'N' else 'torque'} [{u}]", curves, False))
+
     if "energy.total" in idx and "energy.kinetic" in idx:
-        e, w = idx["energy.total"], idx.get("energy.work_inputs")
-        if w is not None:
+        e, w, loss = idx["energy.total"], idx.get("energy.work_inputs"), idx.get("energy.impact_loss")
+        if w is not None and loss is not None:  # impacts at the joint limits took L
+            f = lambda b, ctx: np.abs(b[:, e] - ctx["E0"] - (b[:, w] - ctx["W0"]) + (b[:, loss] - ctx["L0"]))  # noqa: E731
+            label = "energy-balance error\n|E − E0 − W + L| / max(|E0|, max T) [1]"
+        elif w is not None:
             f = lambda b, ctx: np.abs(b[:, e] - ctx["E0"] - (b[:, w] - ctx["W0"]))  # noqa: E731
             label = "energy-balance error\n|E − E0 − W| / max(|E0|, max T) [1]"
         else:
@@ -162,8 +174,10 @@ def reduce(d, t_col, curves, bins, rows):
     k_E = next((k for k, n in enumerate(names) if text(n) == "energy.total"), None)
     k_T = next((k for k, n in enumerate(names) if text(n) == "energy.kinetic"), None)
     k_W = next((k for k, n in enumerate(names) if text(n) == "energy.work_inputs"), None)
+    k_L = next((k for k, n in enumerate(names) if text(n) == "energy.impact_loss"), None)
     ctx["E0"] = first[k_E] if k_E is not None else 0.0
     ctx["W0"] = first[k_W] if k_W is not None else 0.0
+    ctx["L0"] = first[k_L] if k_L is not None else 0.0
     peak_T = 0.0  # for the energy error's scale max(|E0|, max T)
 
     def finish(x, y):
@@ -249,6 +263,14 @@ def main():
         method = text(solver.attrs.get("method", "?")) if solver is not None else "?"
         status = text(solver["status"][()]) if solver is not None and "status" in solver else "?"
 
+        events = np.empty(0)
+        if "events" in f:  # rows (t, dof, side, kind, v_before, v_after, energy_lost)
+            ev = f["events"]
+            if ev.ndim != 2 or ev.shape[1] < 1 or (ev.shape[0] and not np.all(np.isfinite(ev[:, 0]))):
+                fail(f"{args.run}: /events: expected rows of (t, dof, side, kind, v_before, v_after, energy_lost), "
+                     f"got shape {ev.shape}")
+            events = ev[:, 0] if ev.shape[0] else events
+
         width_in, dpi = 10.0, 100
         bins = args.bins or int(0.8 * width_in * dpi)
         curves = [c for _, cs, _ in panels for c in cs]
@@ -272,9 +294,15 @@ def main():
             vals = y[:, col - len(cs):col]
             if np.isfinite(vals).any():
                 ax.set_ylim(bottom=min(max(FLOOR, 0.3 * float(np.nanpercentile(vals, 1))), 0.3 * float(np.nanmax(vals))))
+        if len(events):  # dashed lines at the joint limits' events, under the curves (the y range kept)
+            ylim = ax.get_ylim()
+            ax.vlines(events, 0, 1, transform=ax.get_xaxis_transform(), colors="#c2255c", linestyles=(0, (3, 3)),
+                      lw=0.8, alpha=0.7, zorder=0.5, gid="limit-events",
+                      label=f"joint-limit events ({len(events)})" if ax is axes[0] else None)
+            ax.set_ylim(ylim)
         ax.set_ylabel(label, fontsize=8)
         ax.grid(alpha=0.3, which="both")
-        if len(cs) > 1:
+        if len(cs) > 1 or (len(events) and ax is axes[0]):
             if len(cs) > 4:  # crowded: outside the axes, on the right
                 ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0)
             else:
