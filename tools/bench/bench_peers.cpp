@@ -49,20 +49,23 @@ struct Plugin {
   std::string name;
   void* handle = nullptr;
   Factory make = nullptr;
-  std::string version, variants;
+  std::string version, variants, extra_calls;
   Plugin(std::string n, const std::string& path) : name(std::move(n)) {
     handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle) throw std::runtime_error(dlerror());
     make = reinterpret_cast<Factory>(dlsym(handle, "soadyn_bench_make_peer"));
     const auto v = reinterpret_cast<Text>(dlsym(handle, "soadyn_bench_peer_version"));
     const auto w = reinterpret_cast<Text>(dlsym(handle, "soadyn_bench_peer_variants"));
-    if (!make || !v || !w) {
+    const auto x = reinterpret_cast<Text>(dlsym(handle, "soadyn_bench_peer_extra_calls"));
+    if (!make || !v || !w || !x) {
       dlclose(handle);
       throw std::runtime_error(path + " is not a soadyn_bench peer");
     }
     version = v();
     variants = w();
+    extra_calls = x();
   }
+  bool has(const std::string& call) const { return ("," + extra_calls + ",").find("," + call + ",") != std::string::npos; }
   Plugin(const Plugin&) = delete;
   Plugin& operator=(const Plugin&) = delete;
   ~Plugin() { dlclose(handle); }
@@ -334,8 +337,14 @@ void register_peers() {
       continue;
     }
     benchmark::RegisterBenchmark((base + "soadyn").c_str(), run_frame, &r, nullptr)->Arg(nv);
-    for (const Entry& e : entries) benchmark::RegisterBenchmark((base + e.name).c_str(), run_frame, &r, &e)->Arg(nv);
+    for (const Entry& e : entries)
+      if (e.plugin->has("frame_jacobian"))
+        benchmark::RegisterBenchmark((base + e.name).c_str(), run_frame, &r, &e)->Arg(nv);
   }
+  std::string no_frames;
+  for (const auto& p : plugins())
+    if (!p->has("frame_jacobian")) no_frames += (no_frames.empty() ? "" : ", ") + p->name;
+  if (!no_frames.empty()) std::fprintf(stderr, "frame-Jacobian rows without %s (their plugins do not time that call)\n", no_frames.c_str());
   const std::vector<int> chain{1, 2, 4, 8, 16, 32, 64, 128, 256}, tree{1, 3, 7, 15, 31, 63, 127, 255};
   for (const std::string shape : {"chain", "tree"}) {
     for (int n : shape == "chain" ? chain : tree) {

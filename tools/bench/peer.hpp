@@ -80,10 +80,12 @@ Peer* make_peer(const PeerProblem& problem, std::string& error, const std::strin
 
 // The symbols a plugin exports: a new Peer for the problem (the caller owns it), or nullptr with a
 // one-line reason in `error`; the library's name, version and compiler, e.g. "Pinocchio 3.7.0
-// (Clang 14.0.6)"; and its variants beside the default, comma-separated (e.g. Pinocchio's "world"
-// convention), each timed as a peer of its own.
+// (Clang 14.0.6)"; its variants beside the default, comma-separated (e.g. Pinocchio's "world"
+// convention), each timed as a peer of its own; and the calls its Peers fill beyond mass, bias and
+// forward, comma-separated ("frame_jacobian"), so that soadyn_bench registers only rows it can time.
 #define SOADYN_BENCH_PEER_API extern "C" __attribute__((visibility("default")))
 SOADYN_BENCH_PEER_API soadyn::bench::Peer* soadyn_bench_make_peer(const soadyn::bench::PeerProblem& problem,
                                                                   std::string& error);
 SOADYN_BENCH_PEER_API const char* soadyn_bench_peer_version();
 SOADYN_BENCH_PEER_API const char* soadyn_bench_peer_variants();
+SOADYN_BENCH_PEER_API const char* soadyn_bench_peer_extra_calls();

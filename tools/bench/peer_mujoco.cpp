@@ -96,3 +96,5 @@ const char* soadyn_bench_peer_version() {
 }
 
 const char* soadyn_bench_peer_variants() { return ""; }
+
+const char* soadyn_bench_peer_extra_calls() { return ""; }

@@ -115,3 +115,5 @@ soadyn::bench::Peer* soadyn_bench_make_peer(const PeerProblem& problem, std::str
 const char* soadyn_bench_peer_version() { return "Pinocchio " PINOCCHIO_VERSION " (" SOADYN_PEER_COMPILER ")"; }
 
 const char* soadyn_bench_peer_variants() { return "world"; }
+
+const char* soadyn_bench_peer_extra_calls() { return "frame_jacobian"; }
