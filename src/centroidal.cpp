@@ -44,6 +44,28 @@ void com_jacobian(const Model& model, Data& data, MatX& J) {
       J.col(k) = (data.K[i] * data.G.col(k)).tail<3>() / m;
 }
 
+void com_jacobian(const Model& model, Data& data, const VecX& q, MatX& J) {
+  update_frames(model, data, q);
+  // tip to base, the subtree's mass m_j and first moment h_j about η_j alone (K_j without its
+  // rotational inertia, which J_c does not need): h_i = m_i C_i com_i, then h_p += h_i + m_i d_i
+  for (int i = 0; i < model.nbodies; ++i) {
+    data.K[i].m = model.mass[i];
+    data.K[i].h.noalias() = model.mass[i] * (data.R[i] * model.com[i]);
+  }
+  for (int i = model.nbodies - 1; i >= 0; --i) {
+    const int p = model.parent[i];
+    if (p < 0) continue;
+    data.K[p].m += data.K[i].m;
+    data.K[p].h += data.K[i].h + data.K[i].m * data.d.col(i);
+  }
+  J.resize(3, model.nv);
+  const double m = moving_mass(model);
+  // f of K_j G_k for G_k = [g; u]: m_j u − h_j × g
+  for (int i = 0; i < model.nbodies; ++i)
+    for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k)
+      J.col(k) = (data.K[i].m * data.G.col(k).tail<3>() - data.K[i].h.cross(Vec3(data.G.col(k).head<3>()))) / m;
+}
+
 void centroidal_momentum_matrix(const Model& model, Data& data, MatX& AG) {
   composite_inertias(model, data);
   const Vec3 c = com(model, data);

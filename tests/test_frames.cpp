@@ -258,6 +258,11 @@ TEST_P(Frames, CentreOfMassAndCentroidalMomentum) {
     worst_jc = std::max(worst_jc, (Jc * v - cd).cwiseAbs().maxCoeff());
     EXPECT_TRUE(near_rel(Jc * v, cd, 1e-7));
     EXPECT_TRUE(near_rel(com_velocity(m, d), Jc * v, 1e-12));
+    // from q alone (frames, subtree masses and first moments): the same J_c on a fresh Data
+    Data fresh(m);
+    MatX Jq;
+    com_jacobian(m, fresh, q, Jq);
+    EXPECT_TRUE(near_rel(Jq, Jc, 1e-12));
     // h_G = A_G v against momentum(): l = p, k_G = L_O − c × p
     MatX AG;
     centroidal_momentum_matrix(m, d, AG);

@@ -82,6 +82,10 @@ Vec3 com_velocity(const Model& model, const Data& data);
 // [kin] J_c, 3×nv, ċ = J_c v: column k of DOF k on body j is f_k / m, with K_j G_k = [n_k; f_k]
 // (K_j the composite inertia of j's subtree about η_j).  Fills data.K.
 void com_jacobian(const Model& model, Data& data, MatX& J);
+// The same from q alone, as Pinocchio's jacobianCenterOfMass(q): the frames (update_frames, [kin]
+// without the inertias), then each subtree's mass and first moment only; fills data.K's m and h
+// (not its rotational inertia) and leaves [kin]'s inertias and r as they were.
+void com_jacobian(const Model& model, Data& data, const VecX& q, MatX& J);
 
 // Centroidal momentum h_G = [k_G; l] (angular first): l = Σ m_i ṙ_i and k_G = Σ I_i ω_i +
 // (r_i − c) × m_i ṙ_i, the angular momentum about the centre of mass c.

@@ -166,9 +166,9 @@ void bind_frames(py::module_& m) {
         return vec(com_velocity(mo, *d.data));
       }, "model"_a, "data"_a, "q"_a, "v"_a, "ċ = Σ m_i ṙ_i / m (3,).");
   m.def("com_jacobian", [](const Model& mo, PyData& d, const py::object& q) {
-        kin(mo, d, "com_jacobian", q);
+        read_vector(mo, *d.data, "com_jacobian", "q", q, mo.nq, d.q);
         MatX J;
-        com_jacobian(mo, *d.data, J);
+        com_jacobian(mo, *d.data, d.q, J);  // from q alone: frames, subtree masses and first moments
         return owned(std::move(J));
       }, "model"_a, "data"_a, "q"_a, "J_c (3, nv) with ċ = J_c @ v.");
   m.def("centroidal_momentum_matrix", [](const Model& mo, PyData& d, const py::object& q) {

@@ -6,6 +6,9 @@
 // and each peer's calls for the same quantities (peer_<lib>.cpp says which), and on robots:
 //   peer/frame_jacobian/<robot>/<lib>   soadyn frame_jacobian(q, frame, local_world_aligned)
 //                                       against Pinocchio's computeFrameJacobian (nv as the arg)
+//   peer/com_jacobian/<robot>/<lib>     com_jacobian(q) against jacobianCenterOfMass(q)
+//   peer/centroidal_map/<robot>/<lib>   update_kinematics + centroidal_momentum_matrix against
+//                                       computeCentroidalMap(q)
 // for the robots of kFrameRobots (their URDFs in the models directory, tools/bench/run.sh).  The peers are
 // plugins (peer.hpp) that CMake built when it found the library: MuJoCo always looked up,
 // Pinocchio and RBDL under -DSOADYN_PEERS_PREFIX.
@@ -221,7 +224,7 @@ struct FrameSetup {
   Data data;
   VecX q;
   int frame;
-  MatX J;
+  MatX J;  // soadyn's output of the timed call
   PeerProblem problem;
   explicit FrameSetup(const FrameRobot& r)
       : model(load_urdf(models_dir() + "/" + r.urdf, r.free_root, Vec3(0, 0, -9.81))), data(model), J(6, model.nv) {
@@ -245,52 +248,75 @@ struct FrameSetup {
       problem.tau.push_back(0.0);
     }
   }
-  // from q alone: the frame's body's ancestors' frames, then its Jacobian (frames.hpp)
-  void jacobian() { frame_jacobian(model, data, q, frame, Reference::LocalWorldAligned, J); }
 };
 
-void run_frame(benchmark::State& st, const FrameRobot* robot, const Entry* entry) {
+// The task-space rows: one matrix from q, by soadyn and by a peer (peer.hpp says each's layout)
+enum TaskCall { kFrameJacobian, kComJacobian, kCentroidalMap };
+const char* const kTaskCall[] = {"frame_jacobian", "com_jacobian", "centroidal_map"};
+
+// soadyn's, from q alone, as the peers' calls: the frame's ancestors' frames then its Jacobian;
+// the frames then J_c from the subtrees' masses and first moments; the kinematics then A_G (frames.hpp)
+void task_call(FrameSetup& s, TaskCall call) {
+  switch (call) {
+    case kFrameJacobian: frame_jacobian(s.model, s.data, s.q, s.frame, Reference::LocalWorldAligned, s.J); return;
+    case kComJacobian: com_jacobian(s.model, s.data, s.q, s.J); return;
+    case kCentroidalMap: update_kinematics(s.model, s.data, s.q); centroidal_momentum_matrix(s.model, s.data, s.J); return;
+  }
+}
+
+void run_task(benchmark::State& st, const FrameRobot* robot, TaskCall call, const Entry* entry) {
   FrameSetup s(*robot);
   st.counters["N"] = double(s.model.nv);
   if (!entry) {
     for (auto _ : st) {
-      s.jacobian();
+      task_call(s, call);
       benchmark::ClobberMemory();
     }
     return;
   }
   std::unique_ptr<Peer> peer = make_peer(st, *entry, s.problem, robot->urdf);
   if (!peer) return;
-  if (!peer->frame_jacobian) {
-    st.SkipWithError((entry->name + ": no frame Jacobian call").c_str());
+  const std::function<void()>& timed = call == kFrameJacobian ? peer->frame_jacobian
+                                       : call == kComJacobian  ? peer->com_jacobian
+                                                               : peer->centroidal_map;
+  const std::function<std::vector<double>()>& out = call == kFrameJacobian ? peer->frame_jacobian_out
+                                                    : call == kComJacobian  ? peer->com_jacobian_out
+                                                                            : peer->centroidal_map_out;
+  if (!timed || !out) {
+    st.SkipWithError((entry->name + ": no " + kTaskCall[call] + " call").c_str());
     return;
   }
-  // the same quantity: the peer's J against soadyn's, to 1e-10 of max|J| (the staged route's:
-  // update_frames then frame_jacobian, not the timed one)
-  update_frames(s.model, s.data, s.q);
+  // the same quantity: the peer's matrix against soadyn's, to 1e-10 of its largest entry (the
+  // frame Jacobian by the staged route, update_frames then frame_jacobian, not the timed one)
   MatX J;
-  frame_jacobian(s.model, s.data, s.frame, Reference::LocalWorldAligned, J);
-  peer->frame_jacobian();
-  const std::vector<double> pj = peer->frame_jacobian_out();
+  if (call == kFrameJacobian) {
+    update_frames(s.model, s.data, s.q);
+    frame_jacobian(s.model, s.data, s.frame, Reference::LocalWorldAligned, J);
+  } else {
+    task_call(s, call);
+    J = s.J;
+  }
+  timed();
+  const std::vector<double> pj = out();
   if (pj.size() != size_t(J.size())) {
-    st.SkipWithError((entry->name + ": frame Jacobian of " + std::to_string(pj.size()) + " entries").c_str());
+    st.SkipWithError((entry->name + ": " + kTaskCall[call] + " of " + std::to_string(pj.size()) + " entries, soadyn's " +
+                      std::to_string(J.size())).c_str());
     return;
   }
-  MatX Jp(6, s.model.nv);
-  for (int i = 0; i < 6; ++i)
-    for (int j = 0; j < s.model.nv; ++j) Jp(i, j) = pj[size_t(i * s.model.nv + j)];
-  // soadyn's body order is the problem's column order after the root (1-DOF joints)
+  MatX Jp(J.rows(), J.cols());
+  for (Eigen::Index i = 0; i < J.rows(); ++i)
+    for (Eigen::Index j = 0; j < J.cols(); ++j) Jp(i, j) = pj[size_t(i * J.cols() + j)];
   const double dJ = (Jp - J).cwiseAbs().maxCoeff() / J.cwiseAbs().maxCoeff();
   st.counters["dJ"] = dJ;
   if (!(dJ <= 1e-10)) {
     std::ostringstream os;
     os.precision(2);
-    os << entry->name << " disagrees with soadyn on " << robot->urdf << ": frame Jacobian " << dJ << " (limit 1e-10)";
+    os << entry->name << " disagrees with soadyn on " << robot->urdf << ": " << kTaskCall[call] << " " << dJ << " (limit 1e-10)";
     st.SkipWithError(os.str().c_str());
     return;
   }
   for (auto _ : st) {
-    peer->frame_jacobian();
+    timed();
     benchmark::ClobberMemory();
   }
 }
@@ -328,23 +354,25 @@ void register_peers() {
       }
   }
   for (const FrameRobot& r : kFrameRobots) {
-    const std::string base = std::string("peer/frame_jacobian/") + r.name + "/";
     int nv = 0;
     try {
       nv = load_urdf(models_dir() + "/" + r.urdf, r.free_root, Vec3(0, 0, -9.81)).nv;
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "frame-Jacobian row %s left out: %s\n", r.name, e.what());
+      std::fprintf(stderr, "task-space rows on %s left out: %s\n", r.name, e.what());
       continue;
     }
-    benchmark::RegisterBenchmark((base + "soadyn").c_str(), run_frame, &r, nullptr)->Arg(nv);
-    for (const Entry& e : entries)
-      if (e.plugin->has("frame_jacobian"))
-        benchmark::RegisterBenchmark((base + e.name).c_str(), run_frame, &r, &e)->Arg(nv);
+    for (TaskCall call : {kFrameJacobian, kComJacobian, kCentroidalMap}) {
+      const std::string base = std::string("peer/") + kTaskCall[call] + "/" + r.name + "/";
+      benchmark::RegisterBenchmark((base + "soadyn").c_str(), run_task, &r, call, nullptr)->Arg(nv);
+      for (const Entry& e : entries)
+        if (e.plugin->has(kTaskCall[call]))
+          benchmark::RegisterBenchmark((base + e.name).c_str(), run_task, &r, call, &e)->Arg(nv);
+    }
   }
-  std::string no_frames;
+  std::string no_tasks;
   for (const auto& p : plugins())
-    if (!p->has("frame_jacobian")) no_frames += (no_frames.empty() ? "" : ", ") + p->name;
-  if (!no_frames.empty()) std::fprintf(stderr, "frame-Jacobian rows without %s (their plugins do not time that call)\n", no_frames.c_str());
+    if (p->extra_calls.empty()) no_tasks += (no_tasks.empty() ? "" : ", ") + p->name;
+  if (!no_tasks.empty()) std::fprintf(stderr, "task-space rows without %s (their plugins do not time those calls)\n", no_tasks.c_str());
   const std::vector<int> chain{1, 2, 4, 8, 16, 32, 64, 128, 256}, tree{1, 3, 7, 15, 31, 63, 127, 255};
   for (const std::string shape : {"chain", "tree"}) {
     for (int n : shape == "chain" ? chain : tree) {

@@ -46,10 +46,14 @@ struct Peer {
   std::function<void()> forward;   // q̈ from (q, v, tau) by the peer's O(N) recursion
   // untimed, after the matching call: 𝓜 row-major with both triangles, C, q̈
   std::function<std::vector<double>()> mass_out, bias_out, forward_out;
-  // the frame's Jacobian from q, about the frame's origin in inertial axes (Pinocchio's
-  // LOCAL_WORLD_ALIGNED); empty in a peer without the call.  Out: 6 × nv row-major, rows [ω; ṗ]
-  std::function<void()> frame_jacobian;
-  std::function<std::vector<double>()> frame_jacobian_out;
+  // task-space calls from q, empty in a peer without them; out row-major, columns soadyn's v
+  // (a free root's [ω; ṗ] first, inertial):
+  //   frame_jacobian  the frame's Jacobian about its origin in inertial axes (Pinocchio's
+  //                   LOCAL_WORLD_ALIGNED), 6 × nv, rows [ω; ṗ]
+  //   com_jacobian    J_c, 3 × nv, ċ = J_c v
+  //   centroidal_map  A_G, 6 × nv, h_G = A_G v about the centre of mass, rows [k_G; l]
+  std::function<void()> frame_jacobian, com_jacobian, centroidal_map;
+  std::function<std::vector<double>()> frame_jacobian_out, com_jacobian_out, centroidal_map_out;
 };
 
 // x in the problem's order, from a peer's own: r[k] = x[idx[k]] (any indexable vector)
@@ -82,7 +86,7 @@ Peer* make_peer(const PeerProblem& problem, std::string& error, const std::strin
 // one-line reason in `error`; the library's name, version and compiler, e.g. "Pinocchio 3.7.0
 // (Clang 14.0.6)"; its variants beside the default, comma-separated (e.g. Pinocchio's "world"
 // convention), each timed as a peer of its own; and the calls its Peers fill beyond mass, bias and
-// forward, comma-separated ("frame_jacobian"), so that soadyn_bench registers only rows it can time.
+// forward, comma-separated ("frame_jacobian,com_jacobian,centroidal_map"), so that soadyn_bench registers only rows it can time.
 #define SOADYN_BENCH_PEER_API extern "C" __attribute__((visibility("default")))
 SOADYN_BENCH_PEER_API soadyn::bench::Peer* soadyn_bench_make_peer(const soadyn::bench::PeerProblem& problem,
                                                                   std::string& error);

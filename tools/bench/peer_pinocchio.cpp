@@ -9,9 +9,13 @@
 // joint has q = (cos θ, sin θ).
 //   frame_jacobian  computeFrameJacobian(q, frame, LOCAL_WORLD_ALIGNED)  (one pass over the
 //                   frame's supporting joints), when the problem names a frame
+//   com_jacobian    jacobianCenterOfMass(q, false)
+//   centroidal_map  computeCentroidalMap(q)  (A_G, rows [l; k_G] there)
 #include "peer.hpp"
 
 #include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/center-of-mass.hpp>
+#include <pinocchio/algorithm/centroidal.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
@@ -86,23 +90,28 @@ struct Pinocchio : soadyn::bench::Peer {
     const pin::FrameIndex f = model.getFrameId(p.frame);
     J = pin::Data::Matrix6x::Zero(6, model.nv);  // the call writes the frame's supporting columns only
     frame_jacobian = [this, f] { pin::computeFrameJacobian(model, data, q, f, pin::LOCAL_WORLD_ALIGNED, J); };
-    frame_jacobian_out = [this, root] {
-      // rows [v; ω] -> [ω; ṗ]; the free flyer's columns from its local v to soadyn's inertial
-      // [ω; ṗ]: J [Rᵀ ṗ; Rᵀ ω] = J_s [ω; ṗ] gives J_s = [J_ω Rᵀ, J_v Rᵀ]
-      Eigen::MatrixXd Js(6, int(idx.size()) + root);
-      Eigen::MatrixXd Jr(6, model.nv);
-      Jr << J.bottomRows<3>(), J.topRows<3>();
-      if (root) {
-        const Eigen::Matrix3d R = Eigen::Quaterniond(q[6], q[3], q[4], q[5]).normalized().toRotationMatrix();
-        Js.leftCols<3>() = Jr.middleCols<3>(3) * R.transpose();
-        Js.middleCols<3>(3) = Jr.leftCols<3>() * R.transpose();
-      }
-      for (size_t k = 0; k < idx.size(); ++k) Js.col(root + int(k)) = Jr.col(idx[k]);
-      std::vector<double> r(size_t(Js.size()));
-      for (int i = 0; i < 6; ++i)
-        for (int j = 0; j < Js.cols(); ++j) r[size_t(i * Js.cols() + j)] = Js(i, j);
-      return r;
-    };
+    frame_jacobian_out = [this] { return out((Eigen::MatrixXd(6, model.nv) << J.bottomRows<3>(), J.topRows<3>()).finished()); };
+    com_jacobian = [this] { pin::jacobianCenterOfMass(model, data, q, false); };
+    com_jacobian_out = [this] { return out(data.Jcom); };
+    centroidal_map = [this] { pin::computeCentroidalMap(model, data, q); };
+    centroidal_map_out = [this] { return out((Eigen::MatrixXd(6, model.nv) << data.Ag.bottomRows<3>(), data.Ag.topRows<3>()).finished()); };
+  }
+  // A (rows in soadyn's order, columns Pinocchio's v) row-major with soadyn's columns: the free
+  // flyer's from its local v to soadyn's inertial [ω; ṗ] (A [Rᵀ ṗ; Rᵀ ω] = A_s [ω; ṗ] gives
+  // A_s = [A_ω Rᵀ, A_v Rᵀ]), then the joints in the problem's order
+  std::vector<double> out(const Eigen::MatrixXd& A) const {
+    const int root = model.nv - int(idx.size());
+    Eigen::MatrixXd As(A.rows(), model.nv);
+    if (root) {
+      const Eigen::Matrix3d R = Eigen::Quaterniond(q[6], q[3], q[4], q[5]).normalized().toRotationMatrix();
+      As.leftCols<3>() = A.middleCols<3>(3) * R.transpose();
+      As.middleCols<3>(3) = A.leftCols<3>() * R.transpose();
+    }
+    for (size_t k = 0; k < idx.size(); ++k) As.col(root + int(k)) = A.col(idx[k]);
+    std::vector<double> r(size_t(As.size()));
+    for (int i = 0; i < As.rows(); ++i)
+      for (int j = 0; j < As.cols(); ++j) r[size_t(i * As.cols() + j)] = As(i, j);
+    return r;
   }
 };
 
@@ -116,4 +125,4 @@ const char* soadyn_bench_peer_version() { return "Pinocchio " PINOCCHIO_VERSION 
 
 const char* soadyn_bench_peer_variants() { return "world"; }
 
-const char* soadyn_bench_peer_extra_calls() { return "frame_jacobian"; }
+const char* soadyn_bench_peer_extra_calls() { return "frame_jacobian,com_jacobian,centroidal_map"; }
