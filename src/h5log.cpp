@@ -1,6 +1,7 @@
 #include "soadyn/h5log.hpp"
 
 #include "soadyn/data.hpp"
+#include "soadyn/limits.hpp"
 #include "soadyn/text.hpp"
 
 #include "h5_util.hpp"
@@ -355,9 +356,8 @@ void H5Log::on_sample(const Sample& s) {
 }
 
 void H5Log::on_event(const LimitEvent& e) {
-  const double kind = e.kind == "impact" ? 0 : e.kind == "hold" ? 1 : 2;
-  impl_->event_rows.insert(impl_->event_rows.end(),
-                           {e.t, double(e.dof), double(e.side), kind, e.v_before, e.v_after, e.energy_lost});
+  impl_->event_rows.insert(impl_->event_rows.end(), {e.t, double(e.dof), double(e.side), double(limit_event_code(e.kind)),
+                                                     e.v_before, e.v_after, e.energy_lost});
 }
 
 void H5Log::flush(const RunSummary* summary) {

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 
 namespace soadyn {
 
@@ -159,6 +160,12 @@ std::vector<LimitEvent> JointLimits::on_roots(System& sys, double t, VecX& y, co
     if (sd.sign * y(model_.nq + sd.dof) < 0) contact(sys, t, y, s, out);  // else grazing: nothing to stop
   }
   return out;
+}
+
+int limit_event_code(const std::string& kind) {
+  for (int k = 0; k < int(std::size(kLimitEventKinds)); ++k)
+    if (kind == kLimitEventKinds[k]) return k;
+  return -1;
 }
 
 }  // namespace soadyn

@@ -26,6 +26,11 @@ namespace soadyn {
 // a rebound slower than this (rad/s or m/s) ends in a hold
 inline constexpr double kRestSpeed = 1e-6;
 
+// LimitEvent::kind's words; a run file's /events stores each as its index here (h5log.hpp)
+inline constexpr const char* kLimitEventKinds[] = {"impact", "hold", "release"};
+// the index of `kind` in kLimitEventKinds, −1 for another word
+int limit_event_code(const std::string& kind);
+
 struct LimitEvent {
   double t = 0.0;
   int dof = -1;

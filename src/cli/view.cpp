@@ -10,6 +10,7 @@
 
 #include "soadyn/frames.hpp"
 #include "soadyn/h5log.hpp"
+#include "soadyn/limits.hpp"
 #include "soadyn/kinematics.hpp"
 #include "soadyn/text.hpp"
 
@@ -18,6 +19,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string_view>
 
 namespace soadyn::cli {
@@ -275,7 +277,7 @@ int run_view(const ViewOptions& o) {
   const std::vector<std::string> vn = run.v_names.empty() ? m.v_names() : run.v_names;
   for (size_t k = 0; k < run.events.size(); ++k) {
     const view::RunFile::Event& e = run.events[k];
-    const char* kind = e.kind == 0 ? "impact" : e.kind == 1 ? "hold" : e.kind == 2 ? "release" : "event";
+    const char* kind = e.kind >= 0 && e.kind < int(std::size(kLimitEventKinds)) ? kLimitEventKinds[e.kind] : "event";
     events += std::string(k ? "," : "") + "{\"t\":" + num(e.t) + ",\"joint\":" + quote(size_t(e.dof) < vn.size() ? vn[size_t(e.dof)] : "dof " + std::to_string(e.dof)) +
               ",\"side\":" + quote(e.side < 0 ? "lower" : "upper") + ",\"kind\":" + quote(kind) + ",\"v_before\":" + num(e.v_before) +
               ",\"v_after\":" + num(e.v_after) + ",\"energy_lost\":" + num(e.energy_lost) + "}";
