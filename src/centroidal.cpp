@@ -20,6 +20,16 @@ void composite_inertias(const Model& model, Data& data) {
     if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(data.K[i], data.d.col(i));
 }
 
+// J_c from each body's K_j = (m_j, h_j, ·), only its mass and first moment read:
+// Σ_{i ≥ j} m_i (u + g × (r_i − η_j)) = m_j u − h_j × g for G_k = [g; u], f of K_j G_k, over m
+void com_columns(const Model& model, const Data& data, MatX& J) {
+  J.resize(3, model.nv);
+  const double m = moving_mass(model);
+  for (int i = 0; i < model.nbodies; ++i)
+    for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k)
+      J.col(k) = (data.K[i].m * data.G.col(k).tail<3>() - data.K[i].h.cross(Vec3(data.G.col(k).head<3>()))) / m;
+}
+
 }  // namespace
 
 Vec3 com(const Model& model, const Data& data) {
@@ -36,12 +46,7 @@ Vec3 com_velocity(const Model& model, const Data& data) {
 
 void com_jacobian(const Model& model, Data& data, MatX& J) {
   composite_inertias(model, data);
-  J.resize(3, model.nv);
-  const double m = moving_mass(model);
-  // Σ_{i ≥ j} m_i (u + g × (r_i − η_j)) = m_j u + g × h_j for K_j = (m_j, h_j, ·): f of K_j G_k
-  for (int i = 0; i < model.nbodies; ++i)
-    for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k)
-      J.col(k) = (data.K[i] * data.G.col(k)).tail<3>() / m;
+  com_columns(model, data, J);
 }
 
 void com_jacobian(const Model& model, Data& data, const VecX& q, MatX& J) {
@@ -58,12 +63,7 @@ void com_jacobian(const Model& model, Data& data, const VecX& q, MatX& J) {
     data.K[p].m += data.K[i].m;
     data.K[p].h += data.K[i].h + data.K[i].m * data.d.col(i);
   }
-  J.resize(3, model.nv);
-  const double m = moving_mass(model);
-  // f of K_j G_k for G_k = [g; u]: m_j u − h_j × g
-  for (int i = 0; i < model.nbodies; ++i)
-    for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k)
-      J.col(k) = (data.K[i].m * data.G.col(k).tail<3>() - data.K[i].h.cross(Vec3(data.G.col(k).head<3>()))) / m;
+  com_columns(model, data, J);
 }
 
 void centroidal_momentum_matrix(const Model& model, Data& data, MatX& AG) {
