@@ -62,9 +62,11 @@ std::string string_attribute(hid_t obj, const char* name, const std::string& whe
   return read_string(a, true, where + ": attribute '" + name + "'");
 }
 
-// the strings of an attribute of variable-length strings (empty if it holds anything else)
+// the strings of an attribute of variable-length strings (empty if the object or the attribute is
+// absent, or it holds anything else)
 std::vector<std::string> string_list_attribute(hid_t file, const char* object, const char* name) {
   std::vector<std::string> out;
+  if (!exists(file, object) || H5Aexists_by_name(file, object, name, H5P_DEFAULT) <= 0) return out;
   Id a(H5Aopen_by_name(file, object, name, H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
   if (!a.ok()) return out;
   Id type(H5Aget_type(a), H5Tclose);
@@ -164,8 +166,7 @@ RunFile read_run(const std::string& path) {
         }
     }
   }
-  if (exists(file, "/model") && H5Aexists_by_name(file, "/model", "v_names", H5P_DEFAULT) > 0)
-    r.v_names = string_list_attribute(file, "/model", "v_names");
+  r.v_names = string_list_attribute(file, "/model", "v_names");
   if (exists(file, "/events")) {  // E×7: t, dof, side, kind, v_before, v_after, energy_lost
     const MatX e = read_matrix(file, "/events", path);
     if (e.rows() > 0 && e.cols() != 7)
