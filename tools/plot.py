@@ -134,16 +134,16 @@ def plan(names, units, model, chosen):
         panels.append((f"control {'force' if u == 'N' else 'torque'} [{u}]", curves, False))
 
     if "energy.total" in idx and "energy.kinetic" in idx:
-        e, w, loss = idx["energy.total"], idx.get("energy.work_inputs"), idx.get("energy.impact_loss")
-        if w is not None and loss is not None:  # impacts at the joint limits took L
-            f = lambda b, ctx: np.abs(b[:, e] - ctx["E0"] - (b[:, w] - ctx["W0"]) + (b[:, loss] - ctx["L0"]))  # noqa: E731
-            label = "energy-balance error\n|E − E0 − W + L| / max(|E0|, max T) [1]"
-        elif w is not None:
-            f = lambda b, ctx: np.abs(b[:, e] - ctx["E0"] - (b[:, w] - ctx["W0"]))  # noqa: E731
-            label = "energy-balance error\n|E − E0 − W| / max(|E0|, max T) [1]"
-        else:
-            f = lambda b, ctx: np.abs(b[:, e] - ctx["E0"])  # noqa: E731
+        w, loss = idx.get("energy.work_inputs"), idx.get("energy.impact_loss")
+        # E − E0, less the work W of the inputs when logged, plus the energy L the joint limits'
+        # impacts took when logged: (column, sign) of each term, from the first row
+        terms = [(idx["energy.total"], 1.0)] + ([(w, -1.0)] if w is not None else []) + \
+            ([(loss, 1.0)] if w is not None and loss is not None else [])
+        f = lambda b, ctx: np.abs(sum(s * (b[:, k] - ctx["row0"][k]) for k, s in terms))  # noqa: E731
+        if w is None:
             label = "energy error (no work logged)\n|E − E0| / max(|E0|, max T) [1]"
+        else:
+            label = f"energy-balance error\n|E − E0 − W{' + L' if loss is not None else ''}| / max(|E0|, max T) [1]"
         # the scale needs the whole run's peak kinetic energy: applied after the reduction
         panels.append((label, [Curve("energy error", f, lambda y, ctx: np.maximum(y / ctx["scale"], FLOOR))], True))
 
@@ -173,11 +173,7 @@ def reduce(d, t_col, curves, bins, rows):
     names = d.attrs["column_names"]
     k_E = next((k for k, n in enumerate(names) if text(n) == "energy.total"), None)
     k_T = next((k for k, n in enumerate(names) if text(n) == "energy.kinetic"), None)
-    k_W = next((k for k, n in enumerate(names) if text(n) == "energy.work_inputs"), None)
-    k_L = next((k for k, n in enumerate(names) if text(n) == "energy.impact_loss"), None)
     ctx["E0"] = first[k_E] if k_E is not None else 0.0
-    ctx["W0"] = first[k_W] if k_W is not None else 0.0
-    ctx["L0"] = first[k_L] if k_L is not None else 0.0
     peak_T = 0.0  # for the energy error's scale max(|E0|, max T)
 
     def finish(x, y):
