@@ -82,25 +82,36 @@ Model with_parameters(const Model& model, const VecX& pi) {
   return out;
 }
 
+namespace {
+
+// W_i (6×10) in body i's axes with [n; f] = W_i π_i (the header comment), from [kin], [vel] and data.A
+Mat610 body_regressor(const Data& data, int i) {
+  const Mat3& R = data.R[i];
+  const Vec3 w = R.transpose() * data.V.col(i).head<3>();
+  const Vec3 al = R.transpose() * data.A.col(i).head<3>(), a = R.transpose() * data.A.col(i).tail<3>();
+  // columns m, h (3), I (6); rows [n; f]
+  Mat610 W = Mat610::Zero();
+  W.block<3, 1>(3, 0) = a;
+  for (int k = 0; k < 3; ++k) {
+    const Vec3 e = Vec3::Unit(k);
+    W.block<3, 1>(0, 1 + k) = e.cross(a);
+    W.block<3, 1>(3, 1 + k) = al.cross(e) + w.cross(w.cross(e));
+  }
+  for (int k = 0; k < 6; ++k) {
+    const Mat3 E = inertia_basis(k);
+    W.block<3, 1>(0, 4 + k) = E * al + w.cross(E * w);
+  }
+  return W;
+}
+
+}  // namespace
+
 void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y) {
   inverse_dynamics(model, data, qdd);  // data.A: [α_i; a_i] of every body, inertial axes
   Y.setZero(model.nv, kParametersPerBody * model.nbodies);
   for (int i = 0; i < model.nbodies; ++i) {
     const Mat3& R = data.R[i];
-    const Vec3 w = R.transpose() * data.V.col(i).head<3>();
-    const Vec3 al = R.transpose() * data.A.col(i).head<3>(), a = R.transpose() * data.A.col(i).tail<3>();
-    // W_i in body axes: columns m, h (3), I (6); rows [n; f]
-    Mat610 W = Mat610::Zero();
-    W.block<3, 1>(3, 0) = a;
-    for (int k = 0; k < 3; ++k) {
-      const Vec3 e = Vec3::Unit(k);
-      W.block<3, 1>(0, 1 + k) = e.cross(a);
-      W.block<3, 1>(3, 1 + k) = al.cross(e) + w.cross(w.cross(e));
-    }
-    for (int k = 0; k < 6; ++k) {
-      const Mat3 E = inertia_basis(k);
-      W.block<3, 1>(0, 4 + k) = E * al + w.cross(E * w);
-    }
+    const Mat610 W = body_regressor(data, i);
     // to inertial axes, then up the chain of ancestors: G_jᵀ B, B ← D_jᵀ B = [n + d_j × f; f]
     Mat610 B;
     B.topRows<3>() = R * W.topRows<3>();
@@ -112,6 +123,29 @@ void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y) {
       const Vec3 d = data.d.col(j);
       for (int c = 0; c < kParametersPerBody; ++c) B.block<3, 1>(0, c) += d.cross(Vec3(B.block<3, 1>(3, c)));
     }
+  }
+}
+
+void regressor_transpose_times(const Model& model, Data& data, const VecX& qdd, const VecX& mu, Eigen::Ref<VecX> out) {
+  data.check(model, "regressor_transpose_times", "mu", mu.size(), model.nv);
+  data.check(model, "regressor_transpose_times", "out", out.size(), kParametersPerBody * model.nbodies);
+  inverse_dynamics(model, data, qdd);  // data.A
+  // (Yᵀ μ)_i = Σ_{j ⪯ i} (G_j μ_j)ᵀ D_{i:j}ᵀ R_i W_i = w_iᵀ R_i W_i with w_i = D_i w_p + G_i μ_i, the
+  // dual of carrying B up the ancestors: D [ω; u] = [ω; u + ω × d_i].  Base to tip, in data.Vb's columns
+  Mat6X& w = data.Vb;
+  for (int i = 0; i < model.nbodies; ++i) {
+    const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
+    Vec6 wi = data.G.middleCols(iv, n) * mu.segment(iv, n);
+    if (p >= 0) {
+      const Vec3 om = w.col(p).head<3>();
+      wi.head<3>() += om;
+      wi.tail<3>() += w.col(p).tail<3>() + om.cross(Vec3(data.d.col(i)));
+    }
+    w.col(i) = wi;
+    const Mat3& R = data.R[i];
+    Vec6 body;
+    body << R.transpose() * wi.head<3>(), R.transpose() * wi.tail<3>();
+    out.segment<kParametersPerBody>(kParametersPerBody * i).noalias() = body_regressor(data, i).transpose() * body;
   }
 }
 

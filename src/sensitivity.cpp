@@ -27,24 +27,6 @@ std::string without_rate(const std::string& unit) {
                                                                                           : unit;
 }
 
-// dq = P dδ, the coordinates' change along a tangent increment: the right inverse Tᵀ (T Tᵀ)⁻¹ of
-// joint_tangent_map's T, which for a unit quaternion is exactly ½ [0; δθ] ⊗ Q (free) or ½ Q ⊗ [0; δθ]
-// (ball): T annihilates only the change along Q, and this dQ is orthogonal to Q
-MatX coordinates_of_tangent(const Model& m, const VecX& q) {
-  MatX P = MatX::Zero(m.nq, m.nv);
-  for (int i = 0; i < m.nbodies; ++i) {
-    const int iq = m.idx_q[i], iv = m.idx_v[i], mi = m.nq_i[i], ni = m.nv_i[i];
-    if (joint_traits(m.joint_type[i]).quaternion < 0) {
-      P.block(iq, iv, mi, ni).setIdentity();
-      continue;
-    }
-    MatX T(ni, mi);
-    joint_tangent_map(m.joint_type[i], q.data() + iq, T);
-    P.block(iq, iv, mi, ni) = T.transpose() * (T * T.transpose()).inverse();
-  }
-  return P;
-}
-
 using cvode_impl::map;
 
 struct VectorArrayDeleter {
@@ -71,7 +53,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     if (plan.np() > 0) dqdd_dpi_ = MatX::Zero(nv, kParametersPerBody * m.nbodies);
     // s(0): a tangent increment of q₀ moves the coordinates by P δ; one of v₀ moves v; π moves nothing
     if (plan.initial_state) {
-      S_.block(0, 0, nq, nv) = coordinates_of_tangent(m, y0.head(nq));
+      S_.block(0, 0, nq, nv) = tangent_to_coordinates(m, y0.head(nq));
       S_.block(nq, nv, nv, nv).setIdentity();
     }
     S0_ = S_;
@@ -193,6 +175,24 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
 };
 
 }  // namespace
+
+// dq = P dδ, the coordinates' change along a tangent increment: the right inverse Tᵀ (T Tᵀ)⁻¹ of
+// joint_tangent_map's T, which for a unit quaternion is exactly ½ [0; δθ] ⊗ Q (free) or ½ Q ⊗ [0; δθ]
+// (ball): T annihilates only the change along Q, and this dQ is orthogonal to Q
+MatX tangent_to_coordinates(const Model& m, const VecX& q) {
+  MatX P = MatX::Zero(m.nq, m.nv);
+  for (int i = 0; i < m.nbodies; ++i) {
+    const int iq = m.idx_q[i], iv = m.idx_v[i], mi = m.nq_i[i], ni = m.nv_i[i];
+    if (joint_traits(m.joint_type[i]).quaternion < 0) {
+      P.block(iq, iv, mi, ni).setIdentity();
+      continue;
+    }
+    MatX T(ni, mi);
+    joint_tangent_map(m.joint_type[i], q.data() + iq, T);
+    P.block(iq, iv, mi, ni) = T.transpose() * (T * T.transpose()).inverse();
+  }
+  return P;
+}
 
 SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s) {
   SensitivityPlan plan;

@@ -1,6 +1,6 @@
 // The joint-torque regressor and the inertial parameters: Y π against inverse dynamics on seeded
 // random trees of every joint type, τ linear in π (Y of a model with other parameters unchanged),
-// the round trip parameters → with_parameters, ∂q̈/∂π against central differences of forward
+// Yᵀ μ by the O(N) sweep against the formed Y, the round trip parameters → with_parameters, ∂q̈/∂π against central differences of forward
 // dynamics, and the refusal of physically inconsistent parameters.
 #include "soadyn/regressor.hpp"
 
@@ -46,6 +46,25 @@ TEST_P(Regressor, TimesParametersIsInverseDynamics) {
     update_velocities(heavier, d2, v);
     inverse_dynamics(heavier, d2, qdd);
     EXPECT_TRUE(near_rel(Y * pi2, d2.tau, 1e-12)) << trial;
+  }
+}
+
+// the O(N) sweep against the formed regressor (two independent routes: carried down as velocities,
+// up as forces)
+TEST_P(Regressor, TransposeTimesVectorEqualsTheFormedRegressors) {
+  Rng rng(43);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Model model = random_model(rng, GetParam().options);
+    Data data(model);
+    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
+    const VecX mu = random_v(rng, model);
+    update_kinematics(model, data, q);
+    update_velocities(model, data, v);
+    MatX Y;
+    regressor(model, data, qdd, Y);
+    VecX got(10 * model.nbodies);
+    regressor_transpose_times(model, data, qdd, mu, got);
+    EXPECT_TRUE(near_rel(got, Y.transpose() * mu, 1e-12)) << trial;
   }
 }
 

@@ -1,0 +1,402 @@
+// Gradients of a run's cost by CVODES' adjoint (adjoint.hpp): the CVODE integrator of cvode.hpp run
+// forward with checkpoints (CVodeAdjInit, CVodeF), then the adjoint backward (CVodeB) with the
+// parameter gradient as its quadrature.
+#include "soadyn/adjoint.hpp"
+
+#include "soadyn/derivatives.hpp"
+#include "soadyn/kinematics.hpp"
+#include "soadyn/sensitivity.hpp"
+#include "soadyn/simulate.hpp"
+#include "soadyn/table.hpp"
+#include "soadyn/text.hpp"
+
+#include "cvode.hpp"
+
+#include <ctime>
+#include <optional>
+
+namespace soadyn {
+
+namespace {
+
+using cvode_impl::map;
+
+double thread_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// CVODE (cvode.hpp) run forward with checkpoints, then its adjoint.  The adjoint's state is
+// λ = [λ_q; λ_v] (nq + nv: the quadratures W, D feed nothing back and the cost does not read them).
+class CvodeAdjoint : public cvode_impl::Cvode {
+ public:
+  CvodeAdjoint(System& sys, const SimulationSettings& s, const SensitivityPlan& plan, const Cost& cost, const VecX& y0)
+      // no projection: the quaternion is normalized in the dynamics and the adjoint differentiates
+      // the coordinates CVODE integrates (as the forward sensitivities do)
+      : Cvode(s.method == "cvode-bdf", sys, s, 0.0, y0, false),
+        settings_(s),
+        plan_(plan),
+        cost_(cost),
+        data_(sys.model),
+        dd_(sys.model),
+        nb_(sys.model.nq + sys.model.nv) {
+    const Model& m = sys.model;
+    q_ = VecX::Zero(m.nq);
+    v_ = VecX::Zero(m.nv);
+    tau_ = VecX::Zero(m.nv);
+    Jqq_ = MatX::Zero(7, 7);
+    Jqv_ = MatX::Zero(7, 6);
+    mu_ = VecX::Zero(m.nv);
+    g_ = VecX::Zero(m.nv);
+    dq_ = VecX::Zero(m.nq);
+    dv_ = VecX::Zero(m.nv);
+    Kq_ = MatX::Zero(m.nv, m.nv);
+    Kv_ = MatX::Zero(m.nv, m.nv);
+    ytmu_ = VecX::Zero(kParametersPerBody * m.nbodies);
+  }
+
+  // CVODES' memory (the backward problems with it: CVodeFree frees the adjoint) before the backward
+  // problems' solvers, this class's members, and the base's
+  ~CvodeAdjoint() override { mem_.reset(); }
+  CvodeAdjoint(const CvodeAdjoint&) = delete;
+  CvodeAdjoint& operator=(const CvodeAdjoint&) = delete;
+
+  CostGradient run(long steps_per_checkpoint) {
+    const Model& m = sys_.model;
+    void* mem = mem_.get();
+    const double T = settings_.t_end;
+    CostGradient out;
+    // forward: y and, when there is a running cost, the quadrature ∫ ℓ dt with error control
+    cvode_impl::VectorPtr yq;
+    if (cost_.running) {
+      yq.reset(N_VNew_Serial(1, ctx_.get()));
+      if (!yq) throw Error("CVODES: could not allocate the cost's quadrature");
+      N_VConst(0.0, yq.get());
+      check(CVodeQuadInit(mem, &CvodeAdjoint::running_cost, yq.get()), "CVodeQuadInit");
+      check(CVodeSetQuadErrCon(mem, SUNTRUE), "CVodeSetQuadErrCon");
+      check(CVodeQuadSStolerances(mem, settings_.rtol, settings_.atol), "CVodeQuadSStolerances");
+    }
+    check(CVodeAdjInit(mem, std::max(1L, steps_per_checkpoint), CV_HERMITE), "CVodeAdjInit");
+    check(CVodeSetMaxNumSteps(mem, settings_.max_steps), "CVodeSetMaxNumSteps");
+    double t = 0.0;
+    int ncheck = 0;
+    int flag = CVodeF(mem, T, y_.get(), &t, CV_NORMAL, &ncheck);
+    rethrow_pending();
+    if (flag < 0) fail(t, cvode_impl::flag_name(flag) + (error_message_.empty() ? "" : ": " + error_message_));
+    out.checkpoints = ncheck;
+    const IntegratorStats fwd = since_start();
+    out.forward_steps = fwd.steps;
+    out.forward_rhs_evals = fwd.rhs_evals;
+    if (yq) {
+      check(CVodeGetQuad(mem, &t, yq.get()), "CVodeGetQuad");
+      out.cost = N_VGetArrayPointer(yq.get())[0];
+    }
+    // λ(T) = (∂Φ/∂y)ᵀ at y(T)
+    const VecX yT = map(y_.get());
+    cvode_impl::VectorPtr yb(N_VNew_Serial(nb_, ctx_.get()));
+    if (!yb) throw Error("CVODES: could not allocate the adjoint");
+    N_VConst(0.0, yb.get());
+    if (cost_.terminal) {
+      dq_.setZero();
+      dv_.setZero();
+      out.cost += cost_.terminal(yT.head(m.nq), yT.segment(m.nq, m.nv), dq_, dv_);
+      map(yb.get()) << dq_, dv_;
+    }
+    // backward: λ̇ = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ from T to 0, and q_B = ∫ Yᵀ μ dt so that q_B(0) = ∂G/∂π
+    check(CVodeCreateB(mem, bdf_ ? CV_BDF : CV_ADAMS, &which_), "CVodeCreateB");
+    check(CVodeInitB(mem, which_, &CvodeAdjoint::adjoint_rhs, T, yb.get()), "CVodeInitB");
+    check(CVodeSStolerancesB(mem, which_, settings_.rtol, settings_.atol), "CVodeSStolerancesB");
+    check(CVodeSetUserDataB(mem, which_, static_cast<Cvode*>(this)), "CVodeSetUserDataB");
+    check(CVodeSetMaxNumStepsB(mem, which_, settings_.max_steps), "CVodeSetMaxNumStepsB");
+    if (settings_.max_step > 0) check(CVodeSetMaxStepB(mem, which_, settings_.max_step), "CVodeSetMaxStepB");
+    if (bdf_) {
+      // Newton on I − γ ∂f_B/∂λ with ∂f_B/∂λ = −(∂f/∂y)ᵀ (System::jacobian), CVODE's dense LU
+      AB_.reset(SUNDenseMatrix(nb_, nb_, ctx_.get()));
+      if (AB_) lsB_.reset(SUNLinSol_Dense(yb.get(), AB_.get(), ctx_.get()));
+      if (!AB_ || !lsB_) throw Error("CVODES: could not allocate the adjoint's linear solver");
+      check(CVodeSetLinearSolverB(mem, which_, lsB_.get(), AB_.get()), "CVodeSetLinearSolverB");
+      check(CVodeSetJacFnB(mem, which_, &CvodeAdjoint::adjoint_jacobian), "CVodeSetJacFnB");
+      J_ = MatX::Zero(sys_.size(), sys_.size());
+    } else {
+      nlsB_.reset(SUNNonlinSol_FixedPoint(yb.get(), 0, ctx_.get()));
+      if (!nlsB_) throw Error("CVODES: could not allocate the adjoint's fixed-point solver");
+      check(CVodeSetNonlinearSolverB(mem, which_, nlsB_.get()), "CVodeSetNonlinearSolverB");
+    }
+    cvode_impl::VectorPtr qb;
+    if (plan_.np() > 0) {
+      qb.reset(N_VNew_Serial(plan_.np(), ctx_.get()));
+      if (!qb) throw Error("CVODES: could not allocate the parameter gradient");
+      N_VConst(0.0, qb.get());
+      check(CVodeQuadInitB(mem, which_, &CvodeAdjoint::parameter_rhs, qb.get()), "CVodeQuadInitB");
+      check(CVodeSetQuadErrConB(mem, which_, SUNTRUE), "CVodeSetQuadErrConB");
+      check(CVodeQuadSStolerancesB(mem, which_, settings_.rtol, settings_.atol), "CVodeQuadSStolerancesB");
+    }
+    flag = CVodeB(mem, 0.0, CV_NORMAL);
+    rethrow_pending();
+    if (flag < 0)
+      throw SimulationError("CVODES adjoint failed: " + cvode_impl::flag_name(flag) +
+                                (error_message_.empty() ? "" : ": " + error_message_),
+                            0.0);
+    check(CVodeGetB(mem, which_, &t, yb.get()), "CVodeGetB");
+    if (qb) {
+      check(CVodeGetQuadB(mem, which_, &t, qb.get()), "CVodeGetQuadB");
+      out.d_parameters = map(qb.get());
+    }
+    if (void* memB = CVodeGetAdjCVodeBmem(mem, which_)) {
+      long steps = 0, evals = 0;
+      CVodeGetNumSteps(memB, &steps);
+      CVodeGetNumRhsEvals(memB, &evals);
+      out.backward_steps = steps;
+      out.backward_rhs_evals = evals;
+    }
+    // ∂G/∂x₀ = [Pᵀ λ_q(0); λ_v(0)]
+    if (plan_.initial_state) {
+      const VecX lam = map(yb.get());
+      out.d_initial_state.resize(2 * m.nv);
+      out.d_initial_state.head(m.nv) = tangent_to_coordinates(m, y0q_).transpose() * lam.head(m.nq);
+      out.d_initial_state.tail(m.nv) = lam.tail(m.nv);
+    }
+    return out;
+  }
+
+  VecX y0q_;  // the initial coordinates (normalized)
+
+ private:
+  void rethrow_pending() {
+    if (pending_) {
+      auto e = pending_;
+      pending_ = nullptr;
+      std::rethrow_exception(e);
+    }
+  }
+
+  static CvodeAdjoint& self(void* user) { return *static_cast<CvodeAdjoint*>(static_cast<Cvode*>(user)); }
+
+  // q_Q̇ = ℓ(t, q, v)
+  static int running_cost(double t, N_Vector y, N_Vector yqdot, void* user) {
+    CvodeAdjoint& a = self(user);
+    try {
+      const Model& m = a.sys_.model;
+      const auto yy = map(y);
+      a.dq_.setZero();
+      a.dv_.setZero();
+      const double l = a.cost_.running(t, yy.head(m.nq), yy.segment(m.nq, m.nv), a.dq_, a.dv_);
+      N_VGetArrayPointer(yqdot)[0] = l;
+      return std::isfinite(l) ? 0 : 1;
+    } catch (...) {
+      a.pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  // at (t, y): q̈ and 𝓜 factored (data_.L), kept while (t, y) stays (Newton's iterations, the parameter
+  // quadrature); then μ = 𝓜⁻¹ λ_v.  The adjoint's own Data: CVODES re-runs the forward problem between checkpoints, through
+  // the System's
+  void solve_at(double t, const double* y, const double* lam) {
+    const Model& m = sys_.model;
+    if (!(have_point_ && t == t_point_ && Eigen::Map<const VecX>(y, nb_) == y_point_)) {
+      q_ = Eigen::Map<const VecX>(y, m.nq);
+      v_ = Eigen::Map<const VecX>(y + m.nq, m.nv);
+      update_kinematics(m, data_, q_);
+      update_velocities(m, data_, v_);
+      sys_.inputs.evaluate(t, q_, v_, tau_);
+      forward_dynamics(m, data_, tau_, FdMethod::Sparse);
+      have_point_ = true;
+      id_done_ = false;
+      t_point_ = t;
+      y_point_ = Eigen::Map<const VecX>(y, nb_);
+    }
+    mu_ = Eigen::Map<const VecX>(lam + m.nq, m.nv);
+    ltdl_solve(m, data_, mu_);
+  }
+
+  // f_B = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ, (∂f/∂y)ᵀ λ by the vector–Jacobian product of the header comment
+  static int adjoint_rhs(double t, N_Vector y, N_Vector yB, N_Vector yBdot, void* user) {
+    CvodeAdjoint& a = self(user);
+    try {
+      System& s = a.sys_;
+      const Model& m = s.model;
+      ++s.rhs_evals;
+      const double* yy = N_VGetArrayPointer(y);
+      const auto lam = map(yB);
+      auto out = map(yBdot);
+      a.solve_at(t, yy, N_VGetArrayPointer(yB));
+      // g = (∂τ_in/∂x − ∂ID/∂x)ᵀ μ for x = δ (tangent) and x = v
+      if (!a.id_done_) {
+        inverse_dynamics_derivatives(m, a.data_, a.v_, a.data_.qdd, a.dd_);
+        a.id_done_ = true;
+      }
+      a.Kq_.setZero();
+      a.Kv_.setZero();
+      s.inputs.add_derivatives(a.Kq_, a.Kv_);
+      a.Kq_ -= a.dd_.dtau_dq;
+      a.Kv_ -= a.dd_.dtau_dv;
+      a.g_.noalias() = a.Kq_.transpose() * a.mu_;
+      out.segment(m.nq, m.nv).noalias() = a.Kv_.transpose() * a.mu_;
+      out.head(m.nq).setZero();
+      // the q̇(q, v) rows joint by joint, and the tangent's chain rule to the coordinates
+      for (int i = 0; i < m.nbodies; ++i) {
+        const JointType type = m.joint_type[i];
+        const int iq = m.idx_q[i], iv = m.idx_v[i], ni = m.nv_i[i], mi = m.nq_i[i];
+        auto Jqq = a.Jqq_.topLeftCorner(mi, mi);
+        auto Jqv = a.Jqv_.topLeftCorner(mi, ni);
+        joint_qdot_jacobian(type, a.q_.data() + iq, a.v_.data() + iv, Jqq, Jqv);
+        out.segment(iq, mi).noalias() += Jqq.transpose() * lam.segment(iq, mi);
+        out.segment(m.nq + iv, ni).noalias() += Jqv.transpose() * lam.segment(iq, mi);
+        if (joint_traits(type).quaternion < 0) {
+          out.segment(iq, mi) += a.g_.segment(iv, ni);
+        } else {
+          auto Ti = s.T.topLeftCorner(ni, mi);
+          joint_tangent_map(type, a.q_.data() + iq, Ti);
+          out.segment(iq, mi).noalias() += Ti.transpose() * a.g_.segment(iv, ni);
+        }
+      }
+      out = -out;
+      if (a.cost_.running) {
+        a.dq_.setZero();
+        a.dv_.setZero();
+        a.cost_.running(t, a.q_, a.v_, a.dq_, a.dv_);
+        out.head(m.nq) -= a.dq_;
+        out.segment(m.nq, m.nv) -= a.dv_;
+      }
+      return out.allFinite() ? 0 : 1;
+    } catch (...) {
+      a.pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  // q̇_B = −(∂f/∂π)ᵀ λ = Yᵀ μ (∂q̈/∂π = −𝓜⁻¹ Y), the columns of the bodies asked for
+  static int parameter_rhs(double t, N_Vector y, N_Vector yB, N_Vector qBdot, void* user) {
+    CvodeAdjoint& a = self(user);
+    try {
+      System& s = a.sys_;
+      const Model& m = s.model;
+      a.solve_at(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yB));
+      regressor_transpose_times(m, a.data_, a.data_.qdd, a.mu_, a.ytmu_);  // O(N), Y never formed
+      auto out = map(qBdot);
+      for (size_t b = 0; b < a.plan_.bodies.size(); ++b)
+        out.segment(int(b) * kParametersPerBody, kParametersPerBody) =
+            a.ytmu_.segment(kParametersPerBody * a.plan_.bodies[b], kParametersPerBody);
+      return out.allFinite() ? 0 : 1;
+    } catch (...) {
+      a.pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  // ∂f_B/∂λ = −(∂f/∂y)ᵀ on [q; v] (the quadratures' rows and columns left out)
+  static int adjoint_jacobian(double t, N_Vector y, N_Vector, N_Vector, SUNMatrix JB, void* user, N_Vector, N_Vector,
+                              N_Vector) {
+    CvodeAdjoint& a = self(user);
+    try {
+      a.sys_.jacobian(t, N_VGetArrayPointer(y), a.J_);
+      Eigen::Map<MatX> out(SUNDenseMatrix_Data(JB), a.nb_, a.nb_);
+      out = -a.J_.topLeftCorner(a.nb_, a.nb_).transpose();
+      return out.allFinite() ? 0 : 1;
+    } catch (...) {
+      a.pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  const SimulationSettings& settings_;
+  const SensitivityPlan& plan_;
+  const Cost& cost_;
+  Data data_;
+  DerivativeData dd_;
+  int nb_;
+  int which_ = -1;
+  VecX q_, v_, tau_, mu_, g_, dq_, dv_, ytmu_;
+  MatX Kq_, Kv_, J_, Jqq_, Jqv_;  // Jqq_, Jqv_: one joint's ∂q̇/∂q, ∂q̇/∂v (≤ 7×7, 7×6)
+  bool have_point_ = false, id_done_ = false;
+  double t_point_ = 0.0;
+  VecX y_point_;
+  cvode_impl::MatrixPtr AB_;
+  cvode_impl::LinSolPtr lsB_;
+  cvode_impl::NonlinSolPtr nlsB_;
+};
+
+}  // namespace
+
+Cost tracking_cost(const Model& m, const VecX& t, const MatX& q, const MatX& v, const TrackingWeights& w) {
+  const Eigen::Index n = t.size();
+  if (n < 2) throw Error("tracking cost: the reference needs at least 2 samples, got " + std::to_string(n));
+  for (Eigen::Index k = 1; k < n; ++k)
+    if (!(t(k) > t(k - 1))) throw Error("tracking cost: the reference's times must increase (sample " + std::to_string(k) + ")");
+  if (q.rows() != n || q.cols() != m.nq)
+    throw Error("tracking cost: q has shape (" + std::to_string(q.rows()) + ", " + std::to_string(q.cols()) + "), expected (" +
+                std::to_string(n) + ", " + std::to_string(m.nq) + ")");
+  if (v.rows() != n || v.cols() != m.nv)
+    throw Error("tracking cost: v has shape (" + std::to_string(v.rows()) + ", " + std::to_string(v.cols()) + "), expected (" +
+                std::to_string(n) + ", " + std::to_string(m.nv) + ")");
+  const auto weights = [](const VecX& x, int size, const char* what) {
+    if (x.size() != 0 && x.size() != size)
+      throw Error(std::string("tracking cost: ") + what + " has " + std::to_string(x.size()) + " weights, expected " +
+                  std::to_string(size));
+    if (!x.allFinite() || (x.size() > 0 && x.minCoeff() < 0))
+      throw Error(std::string("tracking cost: ") + what + " weights must be finite and ≥ 0");
+  };
+  weights(w.q, m.nq, "q"), weights(w.v, m.nv, "v"), weights(w.q_final, m.nq, "q_final"), weights(w.v_final, m.nv, "v_final");
+  // the reference: one natural cubic spline per column
+  struct Reference {
+    std::vector<CubicSpline> q, v;
+    std::vector<int> quaternion;  // first coordinate of each quaternion
+  };
+  auto ref = std::make_shared<Reference>();
+  for (int c = 0; c < m.nq; ++c) ref->q.emplace_back(t, q.col(c));
+  for (int c = 0; c < m.nv; ++c) ref->v.emplace_back(t, v.col(c));
+  for (int i = 0; i < m.nbodies; ++i)
+    if (const int o = joint_traits(m.joint_type[i]).quaternion; o >= 0) ref->quaternion.push_back(m.idx_q[i] + o);
+  // Σ ½ w (x − x̂)² and its gradient w (x − x̂), x̂ = the reference at t (a quaternion's sign matched to x's)
+  const auto term = [ref](double t, const VecX& x, const VecX& wx, bool is_q, Eigen::Ref<VecX> grad) {
+    if (wx.size() == 0) return 0.0;
+    const auto& splines = is_q ? ref->q : ref->v;
+    VecX r(x.size());
+    for (Eigen::Index c = 0; c < x.size(); ++c) r(c) = splines[size_t(c)].value(t);
+    if (is_q)
+      for (const int k : ref->quaternion)
+        if (r.segment<4>(k).dot(x.segment<4>(k)) < 0) r.segment<4>(k) = -r.segment<4>(k);
+    const VecX e = x - r;
+    grad += wx.cwiseProduct(e);
+    return 0.5 * e.dot(wx.cwiseProduct(e));
+  };
+  Cost cost;
+  if (w.q.size() + w.v.size() > 0)
+    cost.running = [term, w](double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> dq, Eigen::Ref<VecX> dv) {
+      return term(t, q, w.q, true, dq) + term(t, v, w.v, false, dv);
+    };
+  if (w.q_final.size() + w.v_final.size() > 0) {
+    const double t_last = t(n - 1);
+    cost.terminal = [term, w, t_last](const VecX& q, const VecX& v, Eigen::Ref<VecX> dq, Eigen::Ref<VecX> dv) {
+      return term(t_last, q, w.q_final, true, dq) + term(t_last, v, w.v_final, false, dv);
+    };
+  }
+  return cost;
+}
+
+CostGradient gradient(const Scenario& sc, const SimulationSettings& settings, const Cost& cost,
+                      const SensitivitySettings& wrt, long steps_per_checkpoint) {
+  const Model& m = sc.model;
+  SimulationSettings s = settings;
+  s.sensitivities = wrt;
+  check_run(sc, s);
+  if (!wrt.any()) throw Error("gradient: nothing to differentiate (initial_state false, no parameters)");
+  check_sensitivities(sc, s, false);
+  if (!cost.running && !cost.terminal) throw Error("gradient: the cost has neither a running nor a terminal part");
+  const SensitivityPlan plan = plan_sensitivities(m, wrt);
+  System sys(m, sc.inputs, parse_fd_method(s.dynamics));
+  VecX y = sys.state(sc.q0, sc.v0);
+  m.normalize(y.head(m.nq));
+  const double cpu0 = thread_seconds();
+  CvodeAdjoint adjoint(sys, s, plan, cost, y);
+  adjoint.y0q_ = y.head(m.nq);
+  CostGradient out = adjoint.run(steps_per_checkpoint);
+  out.cpu_seconds = thread_seconds() - cpu0;
+  if (plan.initial_state) out.state_names = plan.state_names;
+  out.parameter_names = plan.parameter_names;
+  return out;
+}
+
+}  // namespace soadyn
