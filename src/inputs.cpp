@@ -46,6 +46,12 @@ void Inputs::add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const {
   for (const auto& d : dampers) dv(d.dof, d.dof) -= d.damping;
 }
 
+void Inputs::add_derivatives_transpose_times(const VecX& mu, Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv) const {
+  // the diagonal of add_derivatives: (∂τ/∂q)ᵀ μ and (∂τ/∂v)ᵀ μ
+  for (const auto& s : springs) gq(s.dof) -= s.stiffness * mu(s.dof);
+  for (const auto& d : dampers) gv(d.dof) -= d.damping * mu(d.dof);
+}
+
 void Inputs::power_derivatives(double t, const VecX& v, Eigen::Ref<VecX> dP, Eigen::Ref<VecX> dD) const {
   // P = Σ τ_u(t) q̇_u − Σ c q̇²,  D = Σ c q̇²
   dP.setZero();

@@ -65,8 +65,9 @@ struct CostGradient {
 // initial state, the parameters of bodies or "all").  steps_per_checkpoint: CVODES' Nd, the steps
 // between checkpoints; memory holds one interpolation point per step of one interval plus one
 // checkpoint per interval.  Throws soadyn::Error for what forward sensitivities refuse, for nothing
-// to differentiate, and SimulationError when either run fails.
+// to differentiate, and SimulationError when either run fails.  The parameter quadrature has no error
+// test of its own (CVodeSetQuadErrConB off): it rides on the adjoint's controlled steps.
 CostGradient gradient(const Scenario& sc, const SimulationSettings& settings, const Cost& cost,
-                      const SensitivitySettings& wrt, long steps_per_checkpoint = 200);
+                      const SensitivitySettings& wrt, long steps_per_checkpoint = 1000);
 
 }  // namespace soadyn

@@ -72,6 +72,8 @@ struct Inputs {
   // dq += ∂τ/∂q (along the tangent, derivatives.hpp; springs act on 1-DOF joints, where the
   // coordinate is the tangent) and dv += ∂τ/∂v: both nv×nv, constant (torques depend on t only)
   void add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const;
+  // gq += (∂τ/∂q)ᵀ μ and gv += (∂τ/∂v)ᵀ μ, the same derivatives as vector products (the adjoint's)
+  void add_derivatives_transpose_times(const VecX& mu, Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv) const;
   // ∂P/∂v and ∂D/∂v of power(t, v) (the quadratures' rates; neither depends on q): nv each
   void power_derivatives(double t, const VecX& v, Eigen::Ref<VecX> dP, Eigen::Ref<VecX> dD) const;
   // the inputs' potential energy (springs), so E = T + V_gravity + V_springs is conserved

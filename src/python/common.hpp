@@ -63,5 +63,6 @@ void bind_simulate(py::module_& m);
 void bind_batch(py::module_& m);  // soadyn.batch and soadyn._rollout (batch.cpp)
 void bind_frames(py::module_& m);  // after bind_model: it adds Model's frame members
 void bind_regressor(py::module_& m);  // parameters, with_parameters, regressor (regressor.cpp)
+void bind_adjoint(py::module_& m);  // Cost, _tracking_cost, _gradient (adjoint.cpp)
 
 }  // namespace soadyn::python

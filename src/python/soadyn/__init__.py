@@ -49,6 +49,9 @@ Many states per call (soadyn.batch: (K, nq), (K, nv) in, (K, nv) or (K, nv, nv) 
     batch.forward_dynamics, mass_matrix, bias, inverse_dynamics, id_derivatives, fd_derivatives;
     batch.Pool(model, threads) keeps one Data per thread between calls: pool.forward_dynamics(q, v, tau), …
     read_log(path) -> Trajectory
+Gradients of a whole run (adjoint, CVODES)
+    gradient(scene, cost, wrt=("initial_state", "parameters"), parameters="all", …) -> Gradient
+    Cost(running=f, terminal=phi);  tracking_cost(model, reference, q=1.0, v=0.0, q_final=0.0, v_final=0.0)
 Ensembles (soadyn.ensemble: the sweep file's format)
     sweep(path, out=None, scheduler=None, workers=None, …) -> SweepResult   on Dask, resumable
     load_sweep(path) -> Sweep;  read_results(path) -> {column: array}
@@ -76,8 +79,8 @@ from ._soadyn import (centroidal_inertia, centroidal_momentum, centroidal_moment
 from ._soadyn import (forward_dynamics_parameter_derivative, parameters, regressor,  # regressor.hpp
                       with_parameters)
 from . import _soadyn
-from ._soadyn import batch
-from ._trajectory import FramePoses, RunSummary, Sensitivities, Trajectory, read_log, summary_from_dict
+from ._soadyn import Cost, batch
+from ._trajectory import FramePoses, Gradient, RunSummary, Sensitivities, Trajectory, read_log, summary_from_dict
 from ._sweep import SweepResult, read_results, sweep
 from .ensemble import Sweep, load_sweep
 
@@ -86,14 +89,27 @@ __all__ = [
     "com", "com_jacobian", "com_velocity", "coriolis_matrix", "frame_acceleration", "frame_jacobian",
     "frame_jacobian_dot_times_v", "frame_placement", "frame_velocity", "operational_space_inertia", "point_jacobian",
     "forward_dynamics_parameter_derivative", "parameters", "regressor", "with_parameters",
+    "Cost", "Gradient", "gradient", "tracking_cost",
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "FramePoses", "Inputs", "Model", "RunSummary", "Scenario", "Sensitivities", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
     "potential_energy", "read_log", "rollout", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
 
-for _cls in (Data, Error, FramePoses, Inputs, Model, Scenario, Sensitivities, SimulationSettings, RunSummary, Trajectory):
+for _cls in (Cost, Data, Error, FramePoses, Inputs, Model, Scenario, Sensitivities, SimulationSettings, RunSummary, Trajectory):
     _cls.__module__ = __name__  # soadyn.Model, not soadyn._soadyn.Model, in messages and help
+
+
+def _settings(scene: Scenario, overrides: dict) -> SimulationSettings:
+    """The scene's own simulation settings, each override that is not None put over them."""
+    s = SimulationSettings()
+    for k in ("t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian",
+              "newton", "limits", "restitution", "control_dt", "sensitivities"):
+        setattr(s, k, getattr(scene.settings, k))
+    for k, value in overrides.items():
+        if value is not None:
+            setattr(s, k, value)
+    return s
 
 
 def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol: Optional[float] = None,
@@ -129,16 +145,8 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     """
     if isinstance(scene, str):
         scene = load_scenario(scene)
-    s = SimulationSettings()
-    for k in ("t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian",
-              "newton", "limits", "restitution", "control_dt", "sensitivities"):
-        setattr(s, k, getattr(scene.settings, k))
-    if sensitivities is not None:
-        s.sensitivities = sensitivities
-    for k, value in dict(method=method, rtol=rtol, atol=atol, dt=dt, t_end=t_end, output_dt=output_dt,
-                         dynamics=dynamics, jacobian=jacobian, newton=newton).items():
-        if value is not None:
-            setattr(s, k, value)
+    s = _settings(scene, dict(method=method, rtol=rtol, atol=atol, dt=dt, t_end=t_end, output_dt=output_dt,
+                              dynamics=dynamics, jacobian=jacobian, newton=newton, sensitivities=sensitivities))
     arrays, summary, interrupt, warns = _soadyn._simulate(scene, s, None if output is None else str(output),
                                                           controller)
     for w in warns:  # e.g. an rtol below what double precision can deliver
@@ -160,6 +168,47 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
             pass
         raise interrupt
     return traj
+
+
+def tracking_cost(model: Model, reference, q=1.0, v=0.0, q_final=0.0, v_final=0.0) -> Cost:
+    """The cost of tracking a reference motion, for soadyn.gradient:
+    G = ∫ ½ Σ q_k (q_k − q̂_k(t))² + ½ Σ v_k (v_k − v̂_k(t))² dt + the same with q_final, v_final at T,
+    q̂ and v̂ natural cubic splines through the reference's samples.  reference: a Trajectory (simulate,
+    read_log; anything with arrays t, q and v) or the path of a run file.  Each weight: a number for every column, or one per column
+    (nq for q, a quaternion's four coordinates included; nv for v); 0 or None: no such term."""
+    if isinstance(reference, str):
+        reference = read_log(reference)
+    return _soadyn._tracking_cost(model, reference.t, reference.q, reference.v, q, v, q_final, v_final)
+
+
+def gradient(scene: Union[Scenario, str], cost: Cost, wrt=("initial_state", "parameters"), *, parameters="all",
+             method: Optional[str] = None, rtol: Optional[float] = None, atol: Optional[float] = None,
+             t_end: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
+             steps_per_checkpoint: int = 1000) -> Gradient:
+    """The gradient of a whole run's cost by the adjoint method (CVODES: one forward run with
+    checkpoints, one backward run, whatever the number of parameters).
+
+    cost: a soadyn.Cost (Cost(running=f, terminal=phi) from Python callables, or tracking_cost).
+    wrt: "initial_state" and/or "parameters"; parameters: the bodies whose 10 inertial parameters
+    each are differentiated, a list of names or "all".  The keywords override the scene's settings
+    as in simulate (CVODE methods only; no controller, no enforced joint limits).  Returns a Gradient:
+    cost, initial_state (2 nv, ∂G/∂x₀ along the tangent, as Sensitivities), parameters (10 per body),
+    their names and the runs' counters.  The runs go without the GIL; an exception a cost callable
+    raises is re-raised."""
+    if isinstance(scene, str):
+        scene = load_scenario(scene)
+    wrt = [wrt] if isinstance(wrt, str) else list(wrt)
+    unknown = [w for w in wrt if w not in ("initial_state", "parameters")]
+    if unknown:
+        raise Error(f"gradient: wrt: expected 'initial_state' and/or 'parameters', got {unknown[0]!r}")
+    bodies = [] if "parameters" not in wrt else (["all"] if parameters == "all" else list(parameters))
+    s = _settings(scene, dict(method=method, rtol=rtol, atol=atol, t_end=t_end, dynamics=dynamics, jacobian=jacobian))
+    out = _soadyn._gradient(scene, s, cost, "initial_state" in wrt, bodies, int(steps_per_checkpoint))
+    return Gradient(cost=out["cost"], initial_state=out["initial_state"] if "initial_state" in wrt else None,
+                    parameters=out["parameters"] if bodies else None, state_names=list(out["state_names"]),
+                    parameter_names=list(out["parameter_names"]),
+                    stats={k: out[k] for k in ("forward_steps", "backward_steps", "checkpoints", "forward_rhs_evals",
+                                               "backward_rhs_evals", "cpu_seconds")})
 
 
 def rollout(scene, initial_states, controls=None, *, steps: Optional[int] = None, dt: Optional[float] = None,

@@ -143,6 +143,22 @@ class Sensitivities:
     parameter_names: List[str]
     parameter_units: List[str]
 
+class Gradient:
+    cost: float
+    initial_state: Optional[Vector]
+    parameters: Optional[Vector]
+    state_names: List[str]
+    parameter_names: List[str]
+    stats: Dict[str, float]
+
+class Cost:
+    def __init__(self, running: Optional[Callable[[float, Vector, Vector], Tuple[float, ArrayLike, ArrayLike]]] = None,
+                 terminal: Optional[Callable[[Vector, Vector], Tuple[float, ArrayLike, ArrayLike]]] = None) -> None: ...
+    @property
+    def has_running(self) -> bool: ...
+    @property
+    def has_terminal(self) -> bool: ...
+
 class Trajectory:
     t: Vector
     q: Vector
@@ -223,6 +239,12 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
              controller: Optional[Callable[[float, np.ndarray, np.ndarray], ArrayLike]] = None,
              sensitivities: Optional[Dict[str, object]] = None) -> Trajectory: ...
 def read_log(path: str) -> Trajectory: ...
+def tracking_cost(model: Model, reference: Union[Trajectory, str], q: object = 1.0, v: object = 0.0,
+                  q_final: object = 0.0, v_final: object = 0.0) -> Cost: ...
+def gradient(scene: Union[Scenario, str], cost: Cost, wrt: Union[str, Sequence[str]] = ("initial_state", "parameters"), *,
+             parameters: Union[str, Sequence[str]] = "all", method: Optional[str] = None, rtol: Optional[float] = None,
+             atol: Optional[float] = None, t_end: Optional[float] = None, dynamics: Optional[str] = None,
+             jacobian: Optional[str] = None, steps_per_checkpoint: int = 1000) -> Gradient: ...
 def rollout(scene: Union[Model, Scenario, str], initial_states: ArrayLike, controls: Optional[object] = None, *,
             steps: Optional[int] = None, dt: Optional[float] = None, method: Optional[str] = None, threads: int = 1,
             dynamics: Optional[str] = None, rtol: Optional[float] = None, atol: Optional[float] = None,

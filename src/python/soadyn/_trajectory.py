@@ -73,6 +73,20 @@ class Sensitivities:
 
 
 @dataclass(frozen=True, eq=False)
+class Gradient:
+    """A run's cost G and its gradient by the adjoint (soadyn.gradient): initial_state (2 nv,),
+    ∂G/∂x₀ with x = [q along the tangent; v] as in Sensitivities, and parameters (10 per body
+    asked for), ∂G/∂π; None when not asked for.  stats: the forward and backward runs' steps and
+    right-hand-side evaluations, the checkpoints, the CPU seconds of both."""
+    cost: float
+    initial_state: Optional[np.ndarray]
+    parameters: Optional[np.ndarray]
+    state_names: List[str]
+    parameter_names: List[str]
+    stats: dict
+
+
+@dataclass(frozen=True, eq=False)
 class Trajectory:
     """A run's samples as numpy arrays, T samples at the output times.
 

@@ -1,0 +1,87 @@
+#!/usr/bin/python3
+"""What a whole run's derivatives cost against one plain run of the same scene and tolerance: the
+adjoint gradient (soadyn.gradient: x₀ and all 10·N inertial parameters at once), forward
+sensitivities (simulate(sensitivities=…)) for one body's 10 parameters and for x₀, and the
+baseline of central differences of whole runs, 2·(10·N + 2·nv) + 1 plain runs.  Not a test: a
+benchmark.
+
+    tools/bench/gradient.py [--build build] [--repeat 3] [--t-end 1.0] [--rtol 1e-8]
+
+Models: the 7-DOF arm (tests/data/arm7.urdf) and the 50-DOF humanoid of tools/humanoid_urdf.py
+(fixed root), gravity on, a seeded initial state, CVODE Adams.  The cost tracks a run of the same
+robot from another initial state (∫ ½|q − q̂|² + ½·0.1|v − v̂|² dt, soadyn.tracking_cost).  CPU
+seconds of the calling thread (time.thread_time), best of --repeat.  The bars of the issue: the
+adjoint ≤ 5× a plain run; forward sensitivities for k parameters ≤ (1 + 0.5 k)×.  Prints a
+Markdown table.
+"""
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+
+ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
+
+
+def best(repeat, f):
+    out, t = None, float("inf")
+    for _ in range(repeat):
+        t0 = time.thread_time()
+        out = f()
+        t = min(t, time.thread_time() - t0)
+    return t, out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--t-end", type=float, default=1.0)
+    ap.add_argument("--rtol", type=float, default=1e-8)
+    args = ap.parse_args()
+    sys.path.insert(0, os.path.join(args.build, "python"))
+    import numpy as np
+    import soadyn
+    warnings.simplefilter("ignore", RuntimeWarning)  # limits not enforced: the robots swing through them
+
+    folder = tempfile.mkdtemp(prefix="soadyn_bench_gradient_")
+    humanoid = os.path.join(folder, "humanoid.urdf")
+    subprocess.run([sys.executable, os.path.join(ROOT, "tools", "humanoid_urdf.py"), "-o", humanoid], check=True,
+                   stdout=subprocess.DEVNULL)
+    settings = dict(method="cvode-adams", rtol=args.rtol, atol=args.rtol * 1e-2, t_end=args.t_end)
+    print(f"CVODE Adams, rtol {args.rtol:g}, t_end {args.t_end:g} s; CPU seconds, best of {args.repeat}\n")
+    print("| model | nv | N | plain run | adjoint: x₀ + 10·N parameters | ratio | forward sens. 10 parameters (k = 10) "
+          "| ratio (bar 6) | forward sens. x₀ (k = 2nv) | ratio (bar 1 + nv) | central differences (runs) | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for name, path in (("7-DOF arm", os.path.join(ROOT, "tests", "data", "arm7.urdf")), ("humanoid", humanoid)):
+        scene = soadyn.load_scenario(path)
+        model = scene.model
+        rng = np.random.default_rng(3)
+        lo = np.where(np.isfinite(model.lower), model.lower, -1.0)
+        hi = np.where(np.isfinite(model.upper), model.upper, 1.0)
+        mid, half = (lo + hi) / 2, (hi - lo) / 2
+        scene.q0 = mid + 0.3 * half * rng.uniform(-1, 1, model.nv)
+        scene.v0 = 0.3 * rng.uniform(-1, 1, model.nv)
+        reference = soadyn.load_scenario(path)
+        reference.q0 = mid + 0.3 * half * rng.uniform(-1, 1, model.nv)
+        reference.v0 = np.zeros(model.nv)
+        ref = soadyn.simulate(reference, output_dt=0.01, **settings)
+        cost = soadyn.tracking_cost(model, ref, q=1.0, v=0.1)
+        plain, _ = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end, **settings))
+        adj, g = best(args.repeat, lambda: soadyn.gradient(scene, cost, **settings))
+        body = model.body_names[model.nbodies // 2]
+        fwd_p, _ = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
+                                                              sensitivities={"parameters": [body]}, **settings))
+        fwd_x, _ = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
+                                                              sensitivities={"initial_state": True}, **settings))
+        runs = 2 * (10 * model.nbodies + 2 * model.nv) + 1
+        print(f"| {name} | {model.nv} | {model.nbodies} | {plain * 1e3:.2f} ms | {adj * 1e3:.2f} ms "
+              f"({g.stats['forward_steps']} + {g.stats['backward_steps']} steps) | {adj / plain:.2f} | "
+              f"{fwd_p * 1e3:.2f} ms | {fwd_p / plain:.2f} | {fwd_x * 1e3:.2f} ms | {fwd_x / plain:.2f} | "
+              f"{runs} × plain = {runs * plain * 1e3:.0f} ms | {runs:.0f} |")
+
+
+if __name__ == "__main__":
+    main()
