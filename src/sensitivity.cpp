@@ -150,12 +150,17 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
       self->Sd_.noalias() = self->J_ * self->S_;
       if (self->plan_.np() > 0) {
-        // [kin] and [vel] at (q, v) and τ are jacobian's
-        forward_dynamics_parameter_derivative(m, sys.data, sys.tau, self->dqdd_dpi_);
+        // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.L) at (q, v) are jacobian's; ∂q̈/∂π = −𝓜⁻¹ Y solved
+        // for the plan's bodies' columns only
+        regressor(m, sys.data, sys.data.qdd, self->dqdd_dpi_);
         const int first = self->plan_.nx0();
         for (size_t b = 0; b < self->plan_.bodies.size(); ++b)
-          self->Sd_.block(m.nq, first + int(b) * kParametersPerBody, m.nv, kParametersPerBody) +=
-              self->dqdd_dpi_.middleCols(kParametersPerBody * self->plan_.bodies[b], kParametersPerBody);
+          for (int j = 0; j < kParametersPerBody; ++j) {
+            auto col = self->dqdd_dpi_.col(kParametersPerBody * self->plan_.bodies[b] + j);
+            col = -col;
+            ltdl_solve(m, sys.data, col);
+            self->Sd_.block(m.nq, first + int(b) * kParametersPerBody + j, m.nv, 1) += col;
+          }
       }
       if (!self->Sd_.allFinite()) return 1;  // recoverable: CVODES retries with a smaller step
       for (int k = 0; k < ns; ++k) map(ySdot[k]) = self->Sd_.col(k);
