@@ -189,7 +189,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     }
   }
 
-  // at (t, y): q̈ and 𝓜 factored (data_.L), kept while (t, y) stays (Newton's iterations, the parameter
+  // at (t, y): q̈, 𝓜 factored (data_.L) and the derivative sweeps, kept while (t, y) stays (Newton's iterations, the parameter
   // quadrature); then μ = 𝓜⁻¹ λ_v.  The adjoint's own Data: CVODES re-runs the forward problem between checkpoints, through
   // the System's
   void solve_at(double t, const double* y, const double* lam) {
@@ -201,8 +201,8 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       update_velocities(m, data_, v_);
       sys_.inputs.evaluate(t, q_, v_, tau_);
       forward_dynamics(m, data_, tau_, FdMethod::Sparse);
+      inverse_dynamics_derivative_sweeps(m, data_, v_, data_.qdd, dd_);
       have_point_ = true;
-      id_done_ = false;
       t_point_ = t;
       y_point_ = Eigen::Map<const VecX>(y, nb_);
     }
@@ -221,14 +221,11 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       const auto lam = map(yB);
       auto out = map(yBdot);
       a.solve_at(t, yy, N_VGetArrayPointer(yB));
-      // g = (∂τ_in/∂x − ∂ID/∂x)ᵀ μ for x = δ (tangent) and x = v
-      if (!a.id_done_) {
-        inverse_dynamics_derivatives(m, a.data_, a.v_, a.data_.qdd, a.dd_);
-        a.id_done_ = true;
-      }
+      // g = (∂τ_in/∂x − ∂ID/∂x)ᵀ μ for x = δ (tangent) and x = v, by the O(N) vector products
       auto gv = out.segment(m.nq, m.nv);
-      a.g_.noalias() = -a.dd_.dtau_dq.transpose() * a.mu_;
-      gv.noalias() = -a.dd_.dtau_dv.transpose() * a.mu_;
+      inverse_dynamics_derivatives_transpose_times(m, a.dd_, a.mu_, a.g_, gv);
+      a.g_ = -a.g_;
+      gv = -gv;
       s.inputs.add_derivatives_transpose_times(a.mu_, a.g_, gv);
       out.head(m.nq).setZero();
       // the q̇(q, v) rows joint by joint, and the tangent's chain rule to the coordinates
@@ -306,7 +303,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
   int which_ = -1;
   VecX q_, v_, tau_, mu_, g_, dq_, dv_, ytmu_;
   MatX J_, Jqq_, Jqv_;  // Jqq_, Jqv_: one joint's ∂q̇/∂q, ∂q̇/∂v (≤ 7×7, 7×6)
-  bool have_point_ = false, id_done_ = false;
+  bool have_point_ = false;
   double t_point_ = 0.0;
   VecX y_point_;
   cvode_impl::MatrixPtr AB_;

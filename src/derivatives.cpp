@@ -39,7 +39,10 @@ DerivativeData::DerivativeData(const Model& m)
       dqdd_dq(MatX::Zero(m.nv, m.nv)),
       dqdd_dv(MatX::Zero(m.nv, m.nv)),
       Minv(MatX::Zero(m.nv, m.nv)),
-      solve(MatX::Zero(2 * m.nv, m.nv)) {}
+      solve(MatX::Zero(2 * m.nv, m.nv)),
+      w(Mat6X::Zero(6, m.nbodies)),
+      T1(Mat6X::Zero(6, m.nbodies)),
+      T2(Mat6X::Zero(6, m.nbodies)) {}
 
 namespace {
 
@@ -85,12 +88,16 @@ void add(SpatialInertia& to, const SpatialInertia& K) {
 
 }  // namespace
 
-void inverse_dynamics_derivatives(const Model& model, const Data& data, const VecX& qd, const VecX& qdd,
-                                  DerivativeData& dd) {
-  data.check(model, "inverse_dynamics_derivatives", "v", qd.size(), model.nv);
-  data.check(model, "inverse_dynamics_derivatives", "qdd", qdd.size(), model.nv);
+namespace {
+
+// The O(N) sweeps both the matrices and their vector products are made of: S, v, a, f, the
+// composites Y and B, τ, the rows [Y_i S_r; B_iᵀ S_r] and per column κ, β, λ, φ, ψ, ρ
+void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, const VecX& qdd, DerivativeData& dd,
+                       const char* where) {
+  data.check(model, where, "v", qd.size(), model.nv);
+  data.check(model, where, "qdd", qdd.size(), model.nv);
   if (dd.S.cols() != model.nv || int(dd.Y.size()) != model.nbodies)
-    throw Error("inverse_dynamics_derivatives: this DerivativeData was built for another model");
+    throw Error(std::string(where) + ": this DerivativeData was built for another model");
   const int N = model.nbodies;
   Vec6 gravity_acc;
   gravity_acc << Vec3::Zero(), -model.gravity;
@@ -181,6 +188,14 @@ void inverse_dynamics_derivatives(const Model& model, const Data& data, const Ve
     }
   }
 
+}
+
+}  // namespace
+
+void inverse_dynamics_derivatives(const Model& model, const Data& data, const VecX& qd, const VecX& qdd,
+                                  DerivativeData& dd) {
+  derivative_sweeps(model, data, qd, qdd, dd, "inverse_dynamics_derivatives");
+  const int N = model.nbodies;
   // fill: the joint's own block, then every (body, ancestor) pair both ways; the rest is zero
   dd.dtau_dq.setZero();
   dd.dtau_dv.setZero();
@@ -204,6 +219,47 @@ void inverse_dynamics_derivatives(const Model& model, const Data& data, const Ve
           dd.dtau_dq(c, r) = dd.S.col(c).dot(dd.psi.col(r));
           dd.dtau_dv(c, r) = dd.S.col(c).dot(dd.rho.col(r));
         }
+    }
+  }
+}
+
+void inverse_dynamics_derivative_sweeps(const Model& model, const Data& data, const VecX& qd, const VecX& qdd,
+                                        DerivativeData& dd) {
+  derivative_sweeps(model, data, qd, qdd, dd, "inverse_dynamics_derivative_sweeps");
+}
+
+void inverse_dynamics_derivatives_transpose_times(const Model& model, DerivativeData& dd, const VecX& mu,
+                                                  Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv) {
+  if (mu.size() != model.nv || gq.size() != model.nv || gv.size() != model.nv || dd.S.cols() != model.nv)
+    throw Error("inverse_dynamics_derivatives_transpose_times: mu, gq, gv: expected " + std::to_string(model.nv) +
+                " entries each, for a DerivativeData of this model");
+  const int N = model.nbodies;
+  // The fill's sums, column by column, with μ folded in: s_i = Σ_{r ∈ i} S_r μ_r; the ancestors' rows
+  // give w_p·ψ_c (w_i = w_p + s_i, base to tip), body i's and its descendants' rows [T1; T2]·col with
+  // T1_i = Σ_{k ⪰ i} Y_k s_k and T2_i = Σ_{k ⪰ i} B_kᵀ s_k (Y, B composite; tip to base), so that
+  //   (∂τ/∂q)ᵀμ at c = T1_j·κ_c + T2_j·β_c + w_p·ψ_c + Σ_{r ∈ j, c does not carry r} μ_r S_r·φ_c
+  //   (∂τ/∂q̇)ᵀμ at c = −T1_j·λ_c + T2_j·S_c + w_p·ρ_c
+  Mat6X &w = dd.w, &T1 = dd.T1, &T2 = dd.T2;
+  for (int i = 0; i < N; ++i) {
+    const int p = model.parent[i], vi = model.idx_v[i], ni = model.nv_i[i];
+    const Vec6 si = dd.S.middleCols(vi, ni) * mu.segment(vi, ni);
+    w.col(i) = (p < 0 ? Vec6::Zero() : Vec6(w.col(p))) + si;
+    T1.col(i) = dd.Y[i] * si;
+    T2.col(i).noalias() = dd.B[i].transpose() * si;
+  }
+  for (int i = N - 1; i >= 0; --i)
+    if (const int p = model.parent[i]; p >= 0) T1.col(p) += T1.col(i), T2.col(p) += T2.col(i);
+  for (int j = 0; j < N; ++j) {
+    const int p = model.parent[j], vj = model.idx_v[j], nj = model.nv_i[j];
+    const JointType t = model.joint_type[j];
+    const Vec6 wp = p < 0 ? Vec6::Zero() : Vec6(w.col(p));
+    for (int k = 0; k < nj; ++k) {
+      const int c = vj + k;
+      double q = T1.col(j).dot(dd.colq.col(c).head<6>()) + T2.col(j).dot(dd.colq.col(c).tail<6>()) + wp.dot(dd.psi.col(c));
+      for (int r = 0; r < nj; ++r)
+        if (!joint_carries(t, k, r)) q += mu(vj + r) * dd.S.col(vj + r).dot(dd.phi.col(c));
+      gq(c) = q;
+      gv(c) = T1.col(j).dot(dd.colv.col(c).head<6>()) + T2.col(j).dot(dd.colv.col(c).tail<6>()) + wp.dot(dd.rho.col(c));
     }
   }
 }

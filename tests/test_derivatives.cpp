@@ -100,6 +100,31 @@ TEST_P(Derivatives, InverseDynamicsAgainstCentralDifferences) {
   }
 }
 
+// the O(N) vector products against the O(N·depth) matrices they leave out (and so, through the test
+// above, against central differences), on every joint type
+TEST_P(Derivatives, TransposeTimesVectorEqualsTheMatrices) {
+  const Case& c = GetParam();
+  for (int seed = 0; seed < 3; ++seed) {
+    Rng rng(103 * seed + 5 * c.options.n);
+    const Model model = random_model(rng, c.options);
+    Data data(model);
+    DerivativeData full(model), vjp(model);
+    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
+    const VecX mu = random_v(rng, model);
+    update_kinematics(model, data, q);
+    inverse_dynamics_derivatives(model, data, v, qdd, full);
+    VecX gq(model.nv), gv(model.nv);
+    inverse_dynamics_derivative_sweeps(model, data, v, qdd, vjp);
+    for (int k = 0; k < 2; ++k) {  // two vectors at one state share the sweeps
+      const VecX m = k == 0 ? mu : random_v(rng, model);
+      inverse_dynamics_derivatives_transpose_times(model, vjp, m, gq, gv);
+      EXPECT_TRUE(near_rel(gq, full.dtau_dq.transpose() * m, 1e-12)) << c.name << " seed " << seed << ": (∂τ/∂q)ᵀμ";
+      EXPECT_TRUE(near_rel(gv, full.dtau_dv.transpose() * m, 1e-12)) << c.name << " seed " << seed << ": (∂τ/∂v)ᵀμ";
+    }
+    EXPECT_TRUE(near_rel(vjp.tau, full.tau, 1e-14)) << c.name;
+  }
+}
+
 TEST_P(Derivatives, ForwardDynamicsAgainstCentralDifferencesWithInputs) {
   const Case& c = GetParam();
   for (int seed = 0; seed < 3; ++seed) {

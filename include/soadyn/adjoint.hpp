@@ -9,7 +9,8 @@
 //   λ̇ = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ,   λ(T) = (∂Φ/∂y)ᵀ               (backward, T → 0)
 //   ∂G/∂y₀ = λ(0),   ∂G/∂π = ∫₀ᵀ (∂f/∂π)ᵀ λ dt                      (a quadrature of the backward run)
 // (∂f/∂y)ᵀ λ is a vector–Jacobian product, never the Jacobian: with μ = 𝓜⁻¹ λ_v (one LᵀDL solve),
-//   λ_vᵀ ∂q̈/∂x = μᵀ (∂τ_in/∂x − ∂ID/∂x |_q̈)   (x = q along the tangent, or v; derivatives.hpp)
+//   λ_vᵀ ∂q̈/∂x = μᵀ (∂τ_in/∂x − ∂ID/∂x |_q̈)   (x = q along the tangent, or v: the inverse-dynamics
+//                                              derivatives as O(N) vector products, derivatives.hpp)
 //   λ_vᵀ ∂q̈/∂π = −μᵀ Y(q, v, q̈)               (the regressor; Yᵀ μ by an O(N) sweep)
 // plus the q̇(q, v) rows joint by joint, and the chain rule from the tangent to the coordinates.
 // ∂G/∂x₀ = [Pᵀ λ_q(0); λ_v(0)] with P = ∂q/∂δ (tangent_to_coordinates).

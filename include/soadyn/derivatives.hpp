@@ -55,12 +55,22 @@ struct DerivativeData {
   MatX dqdd_dq, dqdd_dv;            // ∂q̈/∂q (tangent), ∂q̈/∂v of forward dynamics, nv×nv
   MatX Minv;                        // ∂q̈/∂τ = 𝓜⁻¹ (when asked for)
   MatX solve;                       // 2nv×nv: [∂q̈/∂q, ∂q̈/∂v]ᵀ while 𝓜⁻¹ is applied
+  Mat6X w, T1, T2;                  // 6×N: the vector products' sums (…_transpose_times)
 };
 
 // ∂τ/∂q and ∂τ/∂v of τ = 𝓜(q) q̈ + bias(q, v) at (q, v, q̈), q̈ held fixed.  Needs [kin] at q; v and
 // q̈ have size nv.  Fills dd.dtau_dq, dd.dtau_dv and dd.tau.  O(N·depth).
 void inverse_dynamics_derivatives(const Model& model, const Data& data, const VecX& v, const VecX& qdd,
                                   DerivativeData& dd);
+
+// gq = (∂τ/∂q)ᵀ μ and gv = (∂τ/∂v)ᵀ μ (nv each) for vectors μ, without the matrices, in two steps so
+// that many μ at one state share the first: the O(N) sweeps inverse_dynamics_derivatives begins
+// with (at (q, v, q̈); needs [kin]; fills dd.tau), then per μ one more pair of O(N) sweeps in place of
+// its O(N·depth) fill (derivatives.cpp).  The adjoint's vector–Jacobian products (adjoint.hpp).
+void inverse_dynamics_derivative_sweeps(const Model& model, const Data& data, const VecX& v, const VecX& qdd,
+                                        DerivativeData& dd);
+void inverse_dynamics_derivatives_transpose_times(const Model& model, DerivativeData& dd, const VecX& mu,
+                                                  Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv);
 
 // ∂q̈/∂q and ∂q̈/∂v of q̈ = 𝓜⁻¹ (τ − bias) at (q, v), where τ is the generalized force at this state
 // and `inputs` (may be null) says how it changes with q and v (springs, dampers).  Needs [kin] and
