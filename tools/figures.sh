@@ -5,6 +5,7 @@
 #   stability.{png,md,csv}    where each method fails (tools/stability.py)
 #   run_<scenario>.png        trajectories, energy error and momentum of the demo runs (tools/plot.py)
 #   ensemble_{wp,stability}.{png,csv}   charts over ensembles (soadyn sweep, tools/ensemble_charts.py)
+#   gradient.md               a whole run's derivatives against a plain run (tools/bench/gradient.py)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/bench/run.sh
@@ -23,4 +24,5 @@ cp out/ensemble_wp/ensemble_wp.{png,csv} tools/results/
 build/soadyn sweep scenarios/double_pendulum_stability.sweep.yaml -o out/ensemble_stability -q
 tools/ensemble_charts.py out/ensemble_stability/results.h5 -o out/ensemble_stability
 cp out/ensemble_stability/ensemble_stability.{png,csv} tools/results/
+tools/bench/gradient.py >tools/results/gradient.md
 echo "figures and tables written to tools/results/"

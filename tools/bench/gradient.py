@@ -51,7 +51,7 @@ def main():
     subprocess.run([sys.executable, os.path.join(ROOT, "tools", "humanoid_urdf.py"), "-o", humanoid], check=True,
                    stdout=subprocess.DEVNULL)
     settings = dict(method="cvode-adams", rtol=args.rtol, atol=args.rtol * 1e-2, t_end=args.t_end)
-    print(f"CVODE Adams, rtol {args.rtol:g}, t_end {args.t_end:g} s; CPU seconds, best of {args.repeat}\n")
+    print(f"CVODE Adams, rtol {args.rtol:g}, t_end {args.t_end:g} s; CPU time of the calling thread, best of {args.repeat}\n")
     print("| model | nv | N | plain run | adjoint: x₀ + 10·N parameters | ratio | forward sens. 10 parameters (k = 10) "
           "| ratio (bar 6) | forward sens. x₀ (k = 2nv) | ratio (bar 1 + nv) | central differences (runs) | ratio |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
