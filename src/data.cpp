@@ -71,7 +71,8 @@ Data::Data(const Model& m)
       U1(Mat6X::Zero(6, m.nbodies)),
       Dinv1(VecX::Zero(m.nbodies)),
       Dinv(m.nbodies),
-      u(VecX::Zero(m.nv)) {
+      u(VecX::Zero(m.nv)),
+      Zminv(Mat6X::Zero(6, m.nv)) {
   U.reserve(m.nbodies);
   for (int i = 0; i < m.nbodies; ++i) {
     U.emplace_back(Mat6G::Zero(6, m.nv_i[i]));

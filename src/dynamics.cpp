@@ -271,6 +271,88 @@ void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod 
   }
 }
 
+void minverse(const Model& model, Data& data, MatX& Minv) {
+  const int N = model.nbodies;
+  if (Minv.rows() != model.nv || Minv.cols() != model.nv) Minv.resize(model.nv, model.nv);
+  const DOperator D{data.d};
+  // The articulated-body recursion for every unit force at once (τ = e_k, no velocity, no gravity):
+  // column k of 𝓜⁻¹ is that q̈.  Tip to base, the bias forces of all unit forces are the columns Z of
+  // a 6×nv block in depth-first positions (body i's subtree at dfs_begin[i] … dfs_end[i] − 1, its own
+  // DOFs first): u_i = E_i − G_iᵀ Z_i over the subtree's columns (E_i: 1 at i's own DOFs), kept in
+  // 𝓜⁻¹'s rows of i; then Z_p = D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i) in place (p's children's subtrees are
+  // disjoint; p's own columns stay 0) and P_p += D_iᵀ (P_i − U_i 𝒟_i⁻¹ U_iᵀ) D_i.  O(N·depth).
+  Mat6X& Z = data.Zminv;
+  Z.setZero();
+  for (int i = 0; i < N; ++i) data.P[i] = data.M[i].matrix();
+  for (int i = N - 1; i >= 0; --i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    const int b = model.dfs_begin[i], n = model.dfs_end[i] - b;
+    Mat6& P = data.P[i];
+    if (ni == 1) {  // U = P g, 𝒟⁻¹ a number
+      const Vec6 g = data.G.col(vi);
+      const Vec6 U = P * g;
+      const double Dinv = 1.0 / g.dot(U);
+      data.U1.col(i) = U;
+      data.Dinv1(i) = Dinv;
+      for (int x = 0; x < n; ++x) {
+        auto z = Z.col(b + x);
+        const double u = (x == 0 ? 1.0 : 0.0) - g.dot(z);
+        Minv(vi, model.dfs_dof[size_t(b + x)]) = u;
+        if (p < 0) continue;
+        const Vec6 zp = z + (Dinv * u) * U;
+        z.setZero();
+        D.add_apply_transpose(i, zp, z);
+      }
+      if (p < 0) continue;
+      const Vec6 UD = Dinv * U;
+      for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;
+    } else {
+      const auto Gi = data.G.middleCols(vi, ni);
+      data.U[i].noalias() = P * Gi;
+      const MatGG joint_inertia = Gi.transpose() * data.U[i];
+      data.Dinv[i] = joint_inertia.inverse();
+      const Mat6G UD = data.U[i] * data.Dinv[i];
+      for (int x = 0; x < n; ++x) {
+        auto z = Z.col(b + x);
+        VecG u = -(Gi.transpose() * z);
+        if (x < ni) u(x) += 1.0;
+        Minv.block(vi, model.dfs_dof[size_t(b + x)], ni, 1) = u;
+        if (p < 0) continue;
+        Vec6 zp = z;
+        zp.noalias() += UD * u;
+        z.setZero();
+        D.add_apply_transpose(i, zp, z);
+      }
+      if (p < 0) continue;
+      P.noalias() -= UD * data.U[i].transpose();
+    }
+    add_congruence_D(data.P[p], P, data.d.col(i));
+  }
+  // Base to tip, one column at a time: A'_i = D_i A_p, q̈_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i), A_i = A'_i + G_i q̈_i,
+  // u_i nonzero only where column k's joint lies in i's subtree.  O(N) per column.
+  for (int k = 0; k < model.nv; ++k) {
+    const int at = model.dfs_begin[model.dof_body[size_t(k)]];
+    for (int i = 0; i < N; ++i) {
+      const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+      const bool carries = model.dfs_begin[i] <= at && at < model.dfs_end[i];
+      Vec6 A = Vec6::Zero();
+      if (p >= 0) D.add_apply(i, data.A.col(p), A);
+      if (ni == 1) {
+        const double qdd = data.Dinv1(i) * ((carries ? Minv(vi, k) : 0.0) - data.U1.col(i).dot(A));
+        Minv(vi, k) = qdd;
+        A += qdd * data.G.col(vi);
+      } else {
+        VecG u = -(data.U[i].transpose() * A);
+        if (carries) u += Minv.block(vi, k, ni, 1);
+        const VecG qdd = data.Dinv[i] * u;
+        Minv.block(vi, k, ni, 1) = qdd;
+        A.noalias() += data.G.middleCols(vi, ni) * qdd;
+      }
+      data.A.col(i) = A;
+    }
+  }
+}
+
 double kinetic_energy(const Model& model, const Data& data) {
   double T = 0.0;
   for (int i = 0; i < model.nbodies; ++i) {

@@ -55,6 +55,31 @@ TEST_P(Routes, ThreeForwardRoutesAgreeAndInvertInverseDynamics) {
   }
 }
 
+// 𝓜⁻¹ by the articulated-body recursion against the composite 𝓜: 𝓜 𝓜⁻¹ = e to the conditioning,
+// symmetric, and each column the O(N) route's q̈ for a unit force without velocity or gravity
+TEST_P(Routes, MinverseInvertsTheCompositeMassMatrix) {
+  const Case& c = GetParam();
+  for (int seed = 0; seed < 3; ++seed) {
+    Rng rng(37 * seed + c.options.n);
+    const Model model = random_model(rng, c.options);
+    Data data(model);
+    update_kinematics(model, data, random_q(rng, model));
+    mass_matrix(model, data);
+    const MatX Mass = data.Mass;
+    MatX Minv;
+    minverse(model, data, Minv);
+    const Eigen::JacobiSVD<MatX> svd(Mass);
+    const double cond = svd.singularValues()(0) / svd.singularValues().tail<1>()(0);
+    const double tol = std::max(1e-11, 1e-15 * cond);
+    EXPECT_LE((Mass * Minv - MatX::Identity(model.nv, model.nv)).cwiseAbs().maxCoeff(), tol) << c.name << ", cond " << cond;
+    EXPECT_TRUE(near_rel(Minv, Minv.transpose(), tol)) << c.name;
+    // a second call on the same Data gives the same bits (no state carried over)
+    MatX again(model.nv, model.nv);
+    minverse(model, data, again);
+    EXPECT_EQ((again - Minv).cwiseAbs().maxCoeff(), 0.0) << c.name;
+  }
+}
+
 // 𝓜 e_i = τ(q̈ = e_i) − bias
 TEST_P(Routes, MassMatrixColumnsFromInverseDynamics) {
   const Case& c = GetParam();

@@ -68,6 +68,13 @@ FdMethod parse_fd_method(std::string_view s);  // a name of fd_methods(); throws
 // data.Mass and data.bias).
 void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method);
 
+// 𝓜⁻¹ (nv×nv) without forming 𝓜, as Pinocchio's computeMinverse: the articulated-body recursion
+// for every unit force at once, O(N·depth) tip to base and O(N) per column base to tip (O(N²) on a
+// chain).  Needs [kin]; fills Minv (nv×nv, full, symmetric to rounding; allocates only when Minv has
+// another size); overwrites the articulated-body route's workspace (data.P, U1, Dinv1, U, Dinv, A)
+// and data.Zminv.
+void minverse(const Model& model, Data& data, MatX& Minv);
+
 // The tree-sparse route in two parts, for reuse: factor data.Mass into data.L, then solve in place.
 void ltdl_factor(const Model& model, Data& data);
 void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x);

@@ -1,7 +1,7 @@
 // Per-state arrays, sized once from a Model.  Each field names the stage that fills it:
 //   [kin]  update_kinematics(q)      [vel] update_velocities(v)
 //   [crb]  mass_matrix               [rne] bias_forces / inverse_dynamics
-//   [fd]   forward_dynamics
+//   [fd]   forward_dynamics          [minv] minverse's workspace
 // No algorithm allocates once a Data exists.
 #pragma once
 
@@ -78,6 +78,10 @@ struct Data {
   VecX Dinv1;                          // 1 / (g_iᵀ P_i g_i) (1-DOF joints)
   std::vector<MatGG> Dinv;             // (G_iᵀ P_i G_i)⁻¹ (multi-DOF joints)
   VecX u;                              // τ_i − G_iᵀ z_i
+
+  // [minv] minverse's bias forces of every unit force at once (6×nv, depth-first columns:
+  // Model::dfs_begin)
+  Mat6X Zminv;
 };
 
 }  // namespace soadyn
