@@ -59,6 +59,7 @@ class Model:
 
 class Data:
     def __init__(self, model: Model) -> None: ...
+    model: Model
     M: Vector
     bias: Vector
     tau: Vector
