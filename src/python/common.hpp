@@ -64,7 +64,7 @@ void bind_simulate(py::module_& m);
 void bind_batch(py::module_& m);  // soadyn.batch and soadyn._rollout (batch.cpp)
 void bind_frames(py::module_& m);  // after bind_model: it adds Model's frame members
 void bind_regressor(py::module_& m);  // parameters, with_parameters, regressor (regressor.cpp)
-void bind_pickle(py::module_& m);
-void bind_identify(py::module_& m);  // soadyn._identify (identify.cpp)  // after bind_model: pickle and deepcopy of Model and Data (pickle.cpp)
+void bind_pickle(py::module_& m);  // after bind_model: pickle and deepcopy of Model and Data (pickle.cpp)
+void bind_identify(py::module_& m);  // soadyn._identify (identify.cpp)
 
 }  // namespace soadyn::python

@@ -160,4 +160,5 @@ PYBIND11_MODULE(_soadyn, m) {
   sp::bind_frames(m);
   sp::bind_regressor(m);
   sp::bind_pickle(m);
+  sp::bind_identify(m);
 }
