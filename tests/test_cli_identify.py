@@ -123,6 +123,32 @@ class Identify(unittest.TestCase):
         self.assertEqual(again.returncode, 0, again.stderr)
         self.assertRegex(again.stdout, r"RMS \S+e-1\d at the scene's values")
 
+    def test_plot_compares_the_fitted_run_with_the_logged_one(self):
+        """tools/plot.py --compare (tools/figures.sh's identify_arm.png): the fitted scene's run stays
+        on the logged one, the scene's own does not; a run compared with itself deviates by 0"""
+        fitted, fitted_run = os.path.join(self.dir, "plot_fitted.yaml"), os.path.join(self.dir, "plot_fitted.h5")
+        off_run = os.path.join(self.dir, "plot_off.h5")
+        self.assertEqual(soadyn("identify", self.start, "--data", self.data, "--parameters", "forearm", "-o", fitted,
+                                "-q").returncode, 0)
+        for scene, out in ((fitted, fitted_run), (self.start, off_run)):
+            self.assertEqual(soadyn("run", scene, "-o", out, "-q").returncode, 0)
+        png, csv = os.path.join(self.dir, "plot.png"), os.path.join(self.dir, "plot.csv")
+        p = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "tools", "plot.py"), self.data, "--compare",
+                            f"{off_run},{fitted_run},{self.data}", "-o", png, "--data", csv, "--bins", "10000"],
+                           capture_output=True, text=True, timeout=300, env=dict(os.environ, MPLBACKEND="Agg"))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        import numpy as np
+        with open(csv) as f:
+            header = f.readline().strip().split(",")
+        table_ = np.loadtxt(csv, delimiter=",", skiprows=1)
+        dev = {h.split(" − ")[0]: table_[:, k] for k, h in enumerate(header) if " − " in h}
+        self.assertEqual(sorted(dev), ["plot_fitted", "plot_off", "run"])
+        self.assertGreater(dev["plot_off"].max(), 1.0)      # rad: 30 % off drifts away
+        self.assertLess(dev["plot_fitted"].max(), 1e-5)     # the fit stays on the data
+        self.assertLessEqual(dev["run"].max(), 1e-17)       # itself: 0 (drawn at the log floor)
+        for f in (fitted, fitted_run, off_run, png, csv):
+            os.remove(f)
+
     def refused(self, args, message, out=None):
         before = sorted(os.listdir(self.dir))
         p = soadyn("identify", *args)
