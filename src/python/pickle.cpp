@@ -9,9 +9,14 @@
 // about the origin, which with_parameters sets directly; each checked against the rebuilt one), and
 // the fields no BodySpec carries are restored: the frames (the
 // welded bodies' and add_frame's), merged names, the world's mass and first moment, the warnings.
-// A Data's state is its Model and its result arrays.  An unknown tag or version, a missing or
-// mistyped field: one soadyn.Error naming it.
+// A Data's state is its Model and its result arrays.  A Scenario's: its Model, initial state,
+// settings, torques, springs and dampers, log frames, name, path and text; its controllers (which
+// may hold tables read from files) are parsed again from its text, so a scene with controllers
+// unpickles only where its files are.  An unknown tag or version, a missing or mistyped field: one
+// soadyn.Error naming it.
 #include "common.hpp"
+
+#include "soadyn/scenario.hpp"
 
 #include <string>
 #include <vector>
@@ -22,6 +27,7 @@ namespace {
 
 constexpr int kModelStateVersion = 1;
 constexpr int kDataStateVersion = 1;
+constexpr int kScenarioStateVersion = 1;
 
 py::list doubles(const double* x, int n) {
   py::list out;
@@ -247,6 +253,84 @@ PyData data_from_fields(const py::dict& fields, const py::object& model) {
   return out;
 }
 
+py::tuple scenario_state(const py::object& self) {
+  const Scenario& sc = self.cast<const Scenario&>();
+  py::dict f;
+  f["path"] = sc.path;
+  f["text"] = sc.text;
+  f["name"] = sc.name;
+  f["description"] = sc.description;
+  f["model"] = py::cast(sc.model);  // a copy, pickled as a Model
+  f["q0"] = doubles(sc.q0.data(), int(sc.q0.size()));
+  f["v0"] = doubles(sc.v0.data(), int(sc.v0.size()));
+  const SimulationSettings& s = sc.simulation;
+  f["settings"] = py::dict("t_end"_a = s.t_end, "output_dt"_a = s.output_dt, "method"_a = s.method, "rtol"_a = s.rtol,
+                           "atol"_a = s.atol, "dt"_a = s.dt, "max_step"_a = s.max_step, "max_steps"_a = s.max_steps,
+                           "dynamics"_a = s.dynamics, "jacobian"_a = s.jacobian, "newton"_a = s.newton,
+                           "limits"_a = s.limits, "restitution"_a = s.restitution, "control_dt"_a = s.control_dt,
+                           "sensitivities_initial_state"_a = s.sensitivities.initial_state,
+                           "sensitivities_parameters"_a = s.sensitivities.parameters);
+  py::list torques, springs, dampers;
+  for (const auto& u : sc.inputs.torques) torques.append(py::make_tuple(u.joint, u.dof, u.constant, u.amplitude, u.frequency, u.phase));
+  for (const auto& u : sc.inputs.springs) springs.append(py::make_tuple(u.joint, u.dof, u.coord, u.stiffness, u.rest));
+  for (const auto& u : sc.inputs.dampers) dampers.append(py::make_tuple(u.joint, u.dof, u.damping));
+  f["torques"] = torques;
+  f["springs"] = springs;
+  f["dampers"] = dampers;
+  f["controllers"] = sc.inputs.controllers.size();
+  f["log_frames"] = sc.log_frames;
+  return py::make_tuple("soadyn.Scenario", kScenarioStateVersion, f);
+}
+
+Scenario scenario_from_state(const py::object& state) {
+  const char* where = "Scenario.__setstate__";
+  const Reader r{where, unpack(state, where, "soadyn.Scenario", kScenarioStateVersion)};
+  Scenario sc;
+  sc.path = r.as<std::string>("path");
+  sc.text = r.as<std::string>("text");
+  sc.name = r.as<std::string>("name");
+  sc.description = r.as<std::string>("description");
+  const py::object model = r.get("model");
+  if (!py::isinstance<Model>(model)) r.refuse("model", "expected a soadyn.Model");
+  sc.model = model.cast<const Model&>();
+  const Model& m = sc.model;
+  const auto q0 = r.list<double>("q0", size_t(m.nq)), v0 = r.list<double>("v0", size_t(m.nv));
+  sc.q0 = Eigen::Map<const VecX>(q0.data(), m.nq);
+  sc.v0 = Eigen::Map<const VecX>(v0.data(), m.nv);
+  const Reader s{where, r.as<py::dict>("settings")};
+  SimulationSettings& o = sc.simulation;
+  o.t_end = s.as<double>("t_end"), o.output_dt = s.as<double>("output_dt"), o.method = s.as<std::string>("method");
+  o.rtol = s.as<double>("rtol"), o.atol = s.as<double>("atol"), o.dt = s.as<double>("dt");
+  o.max_step = s.as<double>("max_step"), o.max_steps = s.as<long>("max_steps"), o.dynamics = s.as<std::string>("dynamics");
+  o.jacobian = s.as<std::string>("jacobian"), o.newton = s.as<std::string>("newton"), o.limits = s.as<bool>("limits");
+  o.restitution = s.as<double>("restitution"), o.control_dt = s.as<double>("control_dt");
+  o.sensitivities.initial_state = s.as<bool>("sensitivities_initial_state");
+  o.sensitivities.parameters = s.as<std::vector<std::string>>("sensitivities_parameters");
+  // the inputs, their indices checked against the model (evaluate() indexes q and v with them)
+  const auto in_range = [&](const char* key, int k, int n) {
+    if (k < 0 || k >= n) r.refuse(key, "an index " + std::to_string(k) + " outside 0.." + std::to_string(n - 1));
+  };
+  for (const auto& t : r.as<std::vector<std::tuple<std::string, int, double, double, double, double>>>("torques")) {
+    in_range("torques", std::get<1>(t), m.nv);
+    sc.inputs.torques.push_back({std::get<0>(t), std::get<1>(t), std::get<2>(t), std::get<3>(t), std::get<4>(t), std::get<5>(t)});
+  }
+  for (const auto& t : r.as<std::vector<std::tuple<std::string, int, int, double, double>>>("springs")) {
+    in_range("springs", std::get<1>(t), m.nv);
+    in_range("springs", std::get<2>(t), m.nq);
+    sc.inputs.springs.push_back({std::get<0>(t), std::get<1>(t), std::get<2>(t), std::get<3>(t), std::get<4>(t)});
+  }
+  for (const auto& t : r.as<std::vector<std::tuple<std::string, int, double>>>("dampers")) {
+    in_range("dampers", std::get<1>(t), m.nv);
+    sc.inputs.dampers.push_back({std::get<0>(t), std::get<1>(t), std::get<2>(t)});
+  }
+  sc.log_frames = r.as<std::vector<std::string>>("log_frames");
+  for (const auto& name : sc.log_frames)
+    if (m.frame_index(name) < 0) r.refuse("log_frames", "a frame the model does not have");
+  if (r.as<size_t>("controllers") > 0)  // from the text, where its tables are
+    sc.inputs.controllers = parse_scenario(sc.text, sc.path).inputs.controllers;
+  return sc;
+}
+
 }  // namespace
 
 void bind_pickle(py::module_& m) {
@@ -271,6 +355,12 @@ void bind_pickle(py::module_& m) {
         return data_from_fields(unpack(data_state(self), "Data.__deepcopy__", "soadyn.Data", kDataStateVersion), model);
       }, "memo"_a)
       .def_readonly("model", &PyData::model, "the Model this Data was made for");
+
+  auto scenario = py::reinterpret_borrow<py::class_<Scenario>>(m.attr("Scenario"));
+  scenario.def(py::pickle([](const py::object& self) -> py::object { return scenario_state(self); },
+                          [](const py::object& state) { return scenario_from_state(state); }))
+      .def("__copy__", [](const Scenario& self) { return Scenario(self); })
+      .def("__deepcopy__", [](const Scenario& self, const py::dict&) { return Scenario(self); }, "memo"_a);
 }
 
 }  // namespace soadyn::python

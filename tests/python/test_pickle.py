@@ -141,3 +141,37 @@ def test_foreign_and_corrupted_states_are_refused():
         soadyn.Data.__new__(soadyn.Data).__setstate__((tag, version, {**f, "M": np.zeros(3)}))
     with pytest.raises(soadyn.Error, match="state field 'model': expected a soadyn.Model"):
         soadyn.Data.__new__(soadyn.Data).__setstate__((tag, version, {**f, "model": 3}))
+
+
+def simulate_in_worker(scene):
+    return soadyn.simulate(scene).q
+
+
+def test_scenarios_round_trip_and_run_the_same(rng):
+    """torques and dampers (driven_pendulum), controllers and limits (arm_control_limits), a URDF
+    robot with table targets (panda_gripper), a free body (tumbling_t_handle): the copy's run is the
+    original's to the bit, with q0, v0 and settings changed before pickling"""
+    for name in ("driven_pendulum", "arm_control_limits", "panda_gripper", "tumbling_t_handle"):
+        scene = soadyn.load_scenario(os.path.join(SCENARIOS, name + ".yaml"))
+        if not np.isfinite(scene.model.lower).any():  # away from a limit the scene starts at
+            scene.q0 = scene.model.normalize(scene.q0 + rng.uniform(-0.05, 0.05, scene.model.nq))
+        scene.v0 = scene.v0 + rng.uniform(-0.1, 0.1, scene.model.nv)
+        scene.settings.t_end = 0.2
+        scene.settings.rtol = 1e-9
+        for clone in (pickle.loads(pickle.dumps(scene)), copy.deepcopy(scene)):
+            assert (clone.name, clone.path, clone.text) == (scene.name, scene.path, scene.text)
+            assert np.array_equal(clone.q0, scene.q0) and np.array_equal(clone.v0, scene.v0)
+            assert len(clone.inputs) == len(scene.inputs)
+            a, b = soadyn.simulate(scene), soadyn.simulate(clone)
+            assert np.array_equal(a.q, b.q) and np.array_equal(a.v, b.v), name
+    scene = soadyn.load_scenario(os.path.join(SCENARIOS, "driven_pendulum.yaml"))
+    scene.settings.t_end = 0.5
+    with multiprocessing.get_context("spawn").Pool(1) as pool:
+        q = pool.apply(simulate_in_worker, (scene,))
+    assert np.array_equal(q, soadyn.simulate(scene).q)
+    tag, version, f = scene.__getstate__()
+    bad = soadyn.Scenario.__new__(soadyn.Scenario)
+    with pytest.raises(soadyn.Error, match="state field 'torques': an index 7 outside 0..1"):
+        bad.__setstate__((tag, version, {**f, "torques": [("shoulder", 7, 0.0, 1.0, 1.0, 0.0)]}))
+    with pytest.raises(soadyn.Error, match="state field 'q0': expected 2 entries, got 1"):
+        bad.__setstate__((tag, version, {**f, "q0": [0.0]}))
