@@ -207,9 +207,9 @@ IdentifyResult identify(const Scenario& sc, const Measurements& d, const Identif
     throw Error("identify: window: expected a positive number of seconds, got " + short_number(o.window));
   if (!(o.rank_tolerance > 0 && o.rank_tolerance < 1))
     throw Error("identify: rank tolerance: expected a number in (0, 1), got " + short_number(o.rank_tolerance));
-  if (!sc.inputs.controllers.empty())
-    throw Error("identify: " + sc.path + ": the scene has controllers, whose torques identify does not model; remove them "
-                "(the data's torques then come from the inputs) or give the measured torques");
+  if (!sc.inputs.controllers.empty() && !d.tau.size())
+    throw Error("identify: " + sc.path + ": the scene has controllers, whose torques the run file does not give; remove "
+                "them (the torques then come from the inputs) or give the measured torques");
   check_measurements(m, d);
   const SensitivityPlan plan = plan_sensitivities(m, {false, o.bodies});
 

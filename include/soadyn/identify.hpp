@@ -49,7 +49,8 @@ struct Measurements {
   std::string path;  // named in messages
   VecX t;            // T
   MatX q, v, qdd;    // T × nq, T × nv, T × nv (qdd empty: not measured)
-  MatX tau;          // T × nv measured generalized forces (empty: the scene's inputs give them)
+  MatX tau;          // T × nv measured generalized forces (empty: the scene's inputs give them);
+                     // least squares only: Gauss–Newton simulates the scene's inputs
 };
 // The run file's samples; refuses (soadyn::Error naming the file) a run whose joints (/q's names)
 // are not the model's, or one without /qd.
@@ -69,8 +70,8 @@ struct IdentifyResult {
 };
 
 // Throws soadyn::Error (one line) for an unknown body, measurements of the wrong size, a method
-// the data cannot have (least squares without q̈), a scene with controllers (their torques are
-// not logged), Gauss–Newton on quaternion joints or on samples that are not the output grid
+// the data cannot have (least squares without q̈), a scene with controllers and no measured
+// torques (the run file does not log theirs), Gauss–Newton on quaternion joints or on samples that are not the output grid
 // t_k = t_0 + k Δt, and a fit that is no rigid body (with_parameters's message).
 IdentifyResult identify(const Scenario& sc, const Measurements& data, const IdentifyOptions& options);
 
