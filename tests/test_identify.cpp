@@ -329,3 +329,32 @@ TEST(Identify, Refusals) {
   o.method = IdentifyMethod::GaussNewton;
   EXPECT_THAT(message(sc, jittered, o), HasSubstr("expected samples at t_0 + k"));
 }
+
+TEST(Identify, TheInertialKeyOverridesABodyAndRefusesWhatIsNoBody) {
+  // the forearm's values as the bodies: section would give them, over any body's (here the scene's own)
+  const std::string over = "inertial:\n  forearm: {mass: 1.3, com: [0.01, 0.02, 0.3], inertia: {ixx: 0.03, iyy: 0.029, izz: 0.004, ixy: 0.001}}\n";
+  const Scenario sc = parse_scenario(std::string(kArm) + over, "over.yaml");
+  std::string inline_body = kArm;
+  const size_t at = inline_body.find("    mass: 1.0\n    com: [0.015");
+  inline_body.replace(at, inline_body.find("initial:") - at,
+                      "    mass: 1.3\n    com: [0.01, 0.02, 0.3]\n    inertia: {ixx: 0.03, iyy: 0.029, izz: 0.004, ixy: 0.001}\n");
+  const Scenario ref = parse_scenario(inline_body, "inline.yaml");
+  const int i = ref.model.body_index("forearm");
+  EXPECT_EQ(sc.model.mass[i], ref.model.mass[i]);
+  EXPECT_EQ(sc.model.com[i], ref.model.com[i]);
+  EXPECT_EQ(sc.model.inertia[i], ref.model.inertia[i]);
+  EXPECT_EQ(sc.model.inertia_origin[i], ref.model.inertia_origin[i]);  // the same arithmetic as build's
+  const auto refusal = [&](const std::string& entry) {
+    try {
+      parse_scenario(std::string(kArm) + "inertial:\n  " + entry + "\n", "bad.yaml");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_THAT(refusal("forarm: {mass: 1, com: [0, 0, 0], inertia: [1, 1, 1]}"), HasSubstr("bad.yaml:39:3: inertial: no body named 'forarm'"));
+  EXPECT_THAT(refusal("forearm: {mass: -1, com: [0, 0, 0], inertia: [1, 1, 1]}"), HasSubstr("inertial.forearm.mass: expected a positive number"));
+  EXPECT_THAT(refusal("forearm: {mass: 1, com: [0, 0, 0], inertia: [1, 1, 3]}"),
+              HasSubstr("inertial.forearm: body 'forearm': inertia about the centre of mass: expected principal moments obeying the triangle inequality"));
+  EXPECT_THAT(refusal("forearm: {mass: 1, inertia: [1, 1, 1]}"), HasSubstr("inertial.forearm: missing required field 'com'"));
+}
