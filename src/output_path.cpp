@@ -24,6 +24,7 @@ const char* to_string(OutputKind kind) {
     case OutputKind::Page: return "page";
     case OutputKind::Csv: return "CSV export";
     case OutputKind::Json: return "JSON export";
+    case OutputKind::Scenario: return "fitted scenario";
   }
   return "output";
 }
@@ -108,6 +109,7 @@ bool made_by_this_writer(const std::string& path, int fd, std::uint64_t size, Ou
       return h.rfind("time [s]", 0) == 0 && h.find('\0') == std::string::npos;
     }
     case OutputKind::Json: return head(fd, 9) == "{\"file\": ";
+    case OutputKind::Scenario: return head(fd, 4096).rfind(kFittedScenarioHeader, 0) == 0;
   }
   return false;
 }

@@ -455,7 +455,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     rd.fail(e.mark, "YAML syntax", e.msg);
   }
   if (!root || root.IsNull()) throw Error(path + ": the file is empty");
-  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "model", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits"});
+  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "model", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits", "inertial"});
 
   Scenario sc;
   sc.path = path;
@@ -500,6 +500,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     sc.model = build_located(rd, bodies, gravity, check);
   }
 
+  if (root["inertial"]) scenario_detail::read_inertial(rd, root["inertial"], sc.model);
   if (root["limits"]) scenario_detail::read_limits(rd, root["limits"], sc.model);
   if (root["frames"]) read_frames(rd, root["frames"], sc.model);
   if (root["log"]) read_log_section(rd, root["log"], sc.model, sc.log_frames);

@@ -150,4 +150,7 @@ void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, con
 // checked against the model's
 void read_sensitivities(const Reader& rd, const YAML::Node& n, const Model& m, SensitivitySettings& out);
 
+// scenario_inertial.cpp: `inertial: {body: {mass, com, inertia}}` over the model's mass properties
+void read_inertial(const Reader& rd, const YAML::Node& n, Model& m);
+
 }  // namespace soadyn::scenario_detail

@@ -167,6 +167,15 @@ std::vector<std::string> q_names(hid_t file, const std::string& path) {
   return out;
 }
 
+// rows of `m` kept where ordered() kept the times: by matching each kept time in order
+MatX rows_at(const MatX& m, const VecX& all, const VecX& kept) {
+  MatX out(kept.size(), m.cols());
+  Eigen::Index k = 0;
+  for (Eigen::Index r = 0; r < all.size() && k < kept.size(); ++r)
+    if (all(r) == kept(k) && (r + 1 == all.size() || all(r + 1) != all(r))) out.row(k++) = m.row(r);
+  return out;
+}
+
 Table read_run_table(const std::string& path) {
   h5::Id file(hid_t(open_run_file(path)), H5Fclose, path);
   Table t;
@@ -184,6 +193,27 @@ Table read_run_table(const std::string& path) {
 }
 
 }  // namespace
+
+RunState read_run_state(const std::string& path) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not a run file (HDF5) from soadyn run");
+  const Table t = read_run_table(path);  // /time and /q, ordered
+  RunState s;
+  s.path = path;
+  s.time = t.time;
+  s.q = t.values;
+  s.q_names = t.columns;
+  h5::Id file(hid_t(open_run_file(path)), H5Fclose, path);
+  const VecX all = dataset(file, "/time", path).col(0);
+  for (auto [name, out] : {std::pair{"/qd", &s.qd}, std::pair{"/qdd", &s.qdd}}) {
+    if (H5Lexists(file, name, H5P_DEFAULT) <= 0) continue;
+    const MatX m = dataset(file, name, path);
+    if (m.rows() < std::min(all.size(), Eigen::Index(t.time.size())))
+      throw Error(path + ": " + name + " has " + std::to_string(m.rows()) + " rows, /q " + std::to_string(t.time.size()));
+    *out = rows_at(m.topRows(std::min(m.rows(), all.size())), all.head(std::min(m.rows(), all.size())), s.time);
+  }
+  return s;
+}
 
 Table read_table(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps

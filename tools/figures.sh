@@ -6,6 +6,7 @@
 #   run_<scenario>.png        trajectories, energy error and momentum of the demo runs (tools/plot.py)
 #   ensemble_{wp,stability}.{png,csv}   charts over ensembles (soadyn sweep, tools/ensemble_charts.py)
 #   gradient.md               a whole run's derivatives against a plain run (tools/bench/gradient.py)
+#   identify_arm.png          soadyn identify: the logged arm, the scene 30 % off and the fitted scene (tools/plot.py --compare)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/bench/run.sh
@@ -17,6 +18,14 @@ for s in pendulum_on_cart double_pendulum satellite_two_arrays three_link_arm st
   build/soadyn run "scenarios/$s.yaml" -q -o "out/$s.h5"
   tools/plot.py "out/$s.h5" -o "tools/results/run_$s.png"
 done
+# identification: a run with known parameters, the forearm fitted back from a scene 30 % off, the
+# three runs compared
+build/soadyn run tests/data/identify_arm.yaml -q -o out/identify_arm.h5
+build/soadyn run tests/data/identify_arm_off.yaml -q -o out/identify_arm_off.h5
+build/soadyn identify tests/data/identify_arm_off.yaml --data out/identify_arm.h5 --parameters forearm -q \
+  -o out/identify_arm_fitted.yaml
+build/soadyn run out/identify_arm_fitted.yaml -q -o out/identify_arm_fitted.h5
+tools/plot.py out/identify_arm.h5 --compare out/identify_arm_off.h5,out/identify_arm_fitted.h5 -o tools/results/identify_arm.png
 # ensembles: 9000 work-precision runs (1000 initial states), 8000 stability runs; resumable in out/
 build/soadyn sweep scenarios/double_pendulum_wp.sweep.yaml -o out/ensemble_wp -q
 tools/ensemble_charts.py out/ensemble_wp/results.h5 -o out/ensemble_wp

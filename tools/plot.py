@@ -4,6 +4,7 @@ controllers' torques and forces, the energy-balance error on a log axis and, for
 model, the change of momentum; the joint limits' events (/events) as dashed lines on every panel.
 
     tools/plot.py RUN.h5 [-o fig.png|.svg|.pdf] [--joints a,b] [--bins N] [--show] [--data curves.csv]
+                  [--compare OTHER.h5,...]
 
 Every axis carries the unit the file gives its columns (/samples' column_units).  A free or ball
 joint's orientation is drawn as its rotation vector θ·u (the quaternion taken with q_w ≥ 0, so
@@ -11,6 +12,9 @@ joint's orientation is drawn as its rotation vector θ·u (the quaternion taken 
 default the axes' width in pixels), to the minimum and maximum of each curve, so any length of
 run plots in bounded time and memory and narrow spikes stay visible; a run with fewer rows than
 twice the bins is drawn point by point.  A running or killed run's file is read in SWMR mode.
+--compare: other runs of the same joints (a fitted scene's run against the logged one, soadyn
+identify) drawn dashed over the joint panels in the same colours, and per run a log panel of
+max_j |q_j − q_j(RUN)| at RUN's sample times (the other run's q linearly interpolated there).
 """
 import argparse
 import csv
@@ -227,6 +231,8 @@ def main():
     ap.add_argument("--bins", type=int, help="time bins (min and max of each); default: the axes' width in pixels")
     ap.add_argument("--show", action="store_true", help="open a window instead of writing a file")
     ap.add_argument("--data", help="also write every curve drawn to this CSV (x first, then one column per curve)")
+    ap.add_argument("--compare", help="comma-separated runs of the same joints drawn over RUN's joint panels, with "
+                                      "each one's largest |q - q(RUN)| on a log panel")
     args = ap.parse_args()
     out = args.output or os.path.splitext(args.run)[0] + ".png"
     ext = os.path.splitext(out)[1].lower()
@@ -271,6 +277,38 @@ def main():
         bins = args.bins or int(0.8 * width_in * dpi)
         curves = [c for _, cs, _ in panels for c in cs]
         x, y = reduce(d, names.index("time"), curves, bins, rows)
+        q_cols = [k for k, n in enumerate(names) if n.startswith("q.") and n.split(".")[-1] not in QUAT]
+        t_main = d[:, names.index("time")]
+        q_main = d[:, q_cols] if q_cols else np.empty((rows, 0))
+    others = []  # (label, t, {column name: values})
+    for path in (p for p in (args.compare or "").split(",") if p):
+        with open_run(path) as g:
+            if "samples" not in g or "column_names" not in g["samples"].attrs:
+                fail(f"--compare {path}: no /samples with column_names (not a run file from this soadyn)")
+            gn = [text(n) for n in g["samples"].attrs["column_names"]]
+            missing = [names[k] for k in q_cols if names[k] not in gn]
+            if missing or "time" not in gn:
+                fail(f"--compare {path}: no column {(missing or ['time'])[0]} (a run of other joints?)")
+            gd = g["samples"][...]
+            others.append((os.path.splitext(os.path.basename(path))[0], gd[:, gn.index("time")],
+                           {names[k]: gd[:, gn.index(names[k])] for k in q_cols}))
+    for label, t, qs in others:  # max_j |q_j − q_j(RUN)| at RUN's times
+        dev = np.max(np.abs(np.column_stack([np.interp(t_main, t, qs[names[k]]) for k in q_cols]) - q_main), axis=1) \
+            if q_cols else np.zeros(rows)
+        panels.append((f"max |q − q(run)|, {label}\n[{units[q_cols[0]] if q_cols else '1'}]",
+                       [Curve(f"{label} − {os.path.splitext(os.path.basename(args.run))[0]}", None)], True))
+        curves.append(panels[-1][1][0])
+        yd = np.maximum(dev, FLOOR)
+        if len(x) == rows:
+            y = np.column_stack([y, yd])
+        else:  # per bin, as the other curves: min and max
+            which = np.clip(((t_main - t_main[0]) / (t_main[-1] - t_main[0]) * bins).astype(np.int64), 0, bins - 1)
+            lo, hi = np.full(bins, np.nan), np.full(bins, np.nan)
+            np.fmin.at(lo, which, yd)
+            np.fmax.at(hi, which, yd)
+            col_ = np.empty(2 * bins)
+            col_[0::2], col_[1::2] = lo, hi
+            y = np.column_stack([y, col_])
 
     fig, axes = plt.subplots(len(panels), 1, figsize=(width_in, 2.6 * len(panels) + 0.6), sharex=True, squeeze=False,
                              layout="constrained")
@@ -282,8 +320,12 @@ def main():
         for i, c in enumerate(cs):  # past the 10 colours of the cycle, dashed then dotted
             # a log curve at the 1e-17 floor all along is an exact zero: the legend says so
             zero = log and bool(np.all(y[:, col][np.isfinite(y[:, col])] <= FLOOR))
-            ax.plot(x, y[:, col], label=c.label + (" (0 at every row)" if zero else ""), lw=0.8,
-                    ls=("-", "--", ":")[i // 10 % 3])
+            line, = ax.plot(x, y[:, col], label=c.label + (" (0 at every row)" if zero else ""), lw=0.8,
+                            ls=("-", "--", ":")[i // 10 % 3])
+            for j, (name, t, qs) in enumerate(others):  # the compared runs over this joint's curve
+                if c.label in qs:
+                    ax.plot(t, qs[c.label], color=line.get_color(), lw=1.2, ls=((0, (4, 3)), (0, (1, 2)))[j % 2],
+                            alpha=0.8, label=f"{c.label} ({name})")
             col += 1
         if log:  # from just below the bulk of the curve, not from the floor of an exact zero at t = 0,
             ax.set_yscale("log")  # and below the floor itself when that is all there is

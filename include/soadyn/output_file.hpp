@@ -28,7 +28,10 @@ enum class OutputKind {
   Page,  // a soadyn view page: <meta name="generator" content="soadyn view"> in its head
   Csv,   // a soadyn export: a header line starting "time [s]"
   Json,  // a soadyn export: starting {"file":
+  Scenario,  // a fitted scenario (soadyn identify): starting with kFittedScenarioHeader
 };
+// the first line of every scenario soadyn identify writes (what tells it may replace the file)
+inline constexpr const char* kFittedScenarioHeader = "# fitted by soadyn identify";
 const char* to_string(OutputKind kind);
 
 // How an output path is written, once checked.

@@ -28,6 +28,18 @@ struct Table {
 // file, line and column: `traj.csv:7: column 'elbow': expected a number, got 'x'`.
 Table read_table(const std::string& path);
 
+// A run file's /time and state: /q (columns named by /model's q_names), /qd and /qdd, each rows
+// as read_table keeps them (time increasing, a repeated time's last row); /qd or /qdd absent from
+// the file (a run logged without them) is left empty.  Throws soadyn::Error naming the file for a
+// file that is not a run, a missing /time or /q, or datasets whose sizes disagree.
+struct RunState {
+  std::string path;
+  VecX time;                         // T, s
+  MatX q, qd, qdd;                   // T × nq, T × nv, T × nv (qd, qdd: 0 × 0 when not logged)
+  std::vector<std::string> q_names;  // /model's
+};
+RunState read_run_state(const std::string& path);
+
 // The natural cubic spline through (t_i, y_i) (second derivative 0 at both ends): value, rate and
 // acceleration continuous inside [t_0, t_{n−1}]; before and after, the end values held (rate and
 // acceleration 0).  Two samples give the straight line.  O(n) to build, O(log n) to evaluate.

@@ -121,6 +121,18 @@ struct ExportOptions {
 void add_export(CLI::App& app, ExportOptions& o);
 int run_export(const ExportOptions& o);
 
+struct IdentifyCommand {
+  std::string scenario, data, parameters, output;
+  std::string method = "auto";     // auto | least-squares | gauss-newton
+  double rank_tolerance = 1e-8;
+  int max_iterations = 20;
+  double window = 0.1;             // Gauss-Newton: s simulated from each logged state
+  bool force = false;              // replace an output that is not a fitted scenario
+  bool quiet = false;
+};
+void add_identify(CLI::App& app, IdentifyCommand& o);
+int run_identify(const IdentifyCommand& o);
+
 // soadyn sweep …: replaces this process with python3 -m soadyn sweep … (returns only on failure)
 void add_sweep(CLI::App& app);
 int exec_sweep(int argc, char** argv);

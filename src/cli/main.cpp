@@ -3,6 +3,7 @@
 //   soadyn run MODEL ...       simulate, log to HDF5
 //   soadyn view RUN.h5 ...     one self-contained web page that plays the run in 3D
 //   soadyn export RUN.h5 ...   the run's samples as CSV or JSON, with names and units
+//   soadyn identify SCENE ...  inertial parameters fitted to a run's motion
 //   soadyn help [COMMAND]      what a command takes
 //   soadyn sweep SWEEP ...     an ensemble of runs on Dask (python3 -m soadyn sweep)
 #include "cli.hpp"
@@ -36,6 +37,8 @@ int main(int argc, char** argv) {
   soadyn::cli::add_view(app, view);
   soadyn::cli::ExportOptions export_options;
   soadyn::cli::add_export(app, export_options);
+  soadyn::cli::IdentifyCommand identify;
+  soadyn::cli::add_identify(app, identify);
   soadyn::cli::add_sweep(app);
   try {
     std::vector<std::string> reversed(args.rbegin(), args.rend() - 1);
@@ -69,6 +72,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("run")) return soadyn::cli::run_simulation(run);
     if (app.got_subcommand("view")) return soadyn::cli::run_view(view);
     if (app.got_subcommand("export")) return soadyn::cli::run_export(export_options);
+    if (app.got_subcommand("identify")) return soadyn::cli::run_identify(identify);
   } catch (const soadyn::Error& e) {
     std::cerr << "soadyn: error: " << e.what() << "\n";
     return 2;

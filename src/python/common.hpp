@@ -43,6 +43,7 @@ struct PyData {
   explicit PyData(const Model& model);
 
   std::shared_ptr<Data> data;
+  py::object model;  // the Python Model it was made for (pickle and deepcopy carry it)
   int nq, nv, nbodies;
   VecX q, v, x;  // arguments copied here: the library takes VecX, this copy does not allocate
   py::array M, bias, tau, qdd;          // the results the algorithms fill
@@ -64,5 +65,7 @@ void bind_batch(py::module_& m);  // soadyn.batch and soadyn._rollout (batch.cpp
 void bind_frames(py::module_& m);  // after bind_model: it adds Model's frame members
 void bind_regressor(py::module_& m);  // parameters, with_parameters, regressor (regressor.cpp)
 void bind_adjoint(py::module_& m);  // Cost, _tracking_cost, _gradient (adjoint.cpp)
+void bind_pickle(py::module_& m);  // after bind_model: pickle and deepcopy of Model and Data (pickle.cpp)
+void bind_identify(py::module_& m);  // soadyn._identify (identify.cpp)
 
 }  // namespace soadyn::python

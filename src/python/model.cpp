@@ -98,7 +98,11 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
                              "inertia about each body's centre of mass, body frame, shape (N, 3, 3)")
       .def_property_readonly("axes", [](const Model& self) { return rows3(self.axis); },
                              "unit joint axis of each body in its joint frame, shape (N, 3)")
-      .def("create_data", [](const Model& self) { return PyData(self); },
+      .def("create_data", [](const py::object& self) {
+            PyData d(self.cast<const Model&>());
+            d.model = self;
+            return d;
+          },
            "A Data sized for this model: the per-state arrays every algorithm fills (allocated once).")
       .def("neutral", [](const Model& self) { return owned(self.neutral_configuration()); },
            "The neutral configuration: zero angles and displacements, identity quaternions; shape (nq,).")
@@ -147,7 +151,11 @@ body, inertial coordinates: R (N, 3, 3) body → inertial, eta (N, 3) joint poin
 d (N, 3) d_i = η_i − η_parent(i), s (N, 3) s_i = r_i − η_i, r (N, 3) centres of mass,
 G (6, nv) the columns of the joint maps G_i; V (N, 6) v_i = [ω_i; η̇_i] and Vbar (N, 6)
 v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared between threads.)")
-      .def(py::init<const Model&>(), "model"_a)
+      .def(py::init([](const py::object& model) {
+             PyData d(model.cast<const Model&>());
+             d.model = model;
+             return d;
+           }), "model"_a)
       .def_readonly("M", &PyData::M, "𝓜(q), shape (nv, nv): filled by mass_matrix (and forward_dynamics 'dense'/'sparse')")
       .def_readonly("bias", &PyData::bias, "bias(q, q̇), shape (nv,)")
       .def_readonly("tau", &PyData::tau, "inverse-dynamics result τ, shape (nv,)")

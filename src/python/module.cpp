@@ -160,4 +160,6 @@ PYBIND11_MODULE(_soadyn, m) {
   sp::bind_frames(m);
   sp::bind_regressor(m);
   sp::bind_adjoint(m);
+  sp::bind_pickle(m);
+  sp::bind_identify(m);
 }

@@ -52,6 +52,9 @@ Many states per call (soadyn.batch: (K, nq), (K, nv) in, (K, nv) or (K, nv, nv) 
 Gradients of a whole run (adjoint, CVODES)
     gradient(scene, cost, wrt=("initial_state", "parameters"), parameters="all", …) -> Gradient
     Cost(running=f, terminal=phi);  tracking_cost(model, reference, q=1.0, v=0.0, q_final=0.0, v_final=0.0)
+Identification (include/soadyn/identify.hpp)
+    identify(scene, data, parameters=[body, ...] | "all") -> Identification   fitted π, standard
+        errors, the unidentifiable directions, the fitted model and scene
 Ensembles (soadyn.ensemble: the sweep file's format)
     sweep(path, out=None, scheduler=None, workers=None, …) -> SweepResult   on Dask, resumable
     load_sweep(path) -> Sweep;  read_results(path) -> {column: array}
@@ -83,6 +86,7 @@ from ._soadyn import Cost, batch
 from ._trajectory import FramePoses, Gradient, RunSummary, Sensitivities, Trajectory, read_log, summary_from_dict
 from ._sweep import SweepResult, read_results, sweep
 from .ensemble import Sweep, load_sweep
+from ._identify import Identification, identify
 
 __all__ = [
     "centroidal_inertia", "centroidal_momentum", "centroidal_momentum_matrix", "centroidal_momentum_matrix_dot_times_v",
@@ -93,7 +97,7 @@ __all__ = [
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "FramePoses", "Inputs", "Model", "RunSummary", "Scenario", "Sensitivities", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
-    "potential_energy", "read_log", "rollout", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
+    "potential_energy", "read_log", "Identification", "identify", "rollout", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
 
 for _cls in (Cost, Data, Error, FramePoses, Inputs, Model, Scenario, Sensitivities, SimulationSettings, RunSummary, Trajectory):

@@ -59,6 +59,7 @@ class Model:
 
 class Data:
     def __init__(self, model: Model) -> None: ...
+    model: Model
     M: Vector
     bias: Vector
     tau: Vector
@@ -274,3 +275,30 @@ def sweep(path: Union[str, Sweep], out: Optional[str] = None, *, scheduler: obje
           workers: Optional[int] = None, batch_size: Optional[int] = None, keep_logs: bool = False,
           quiet: bool = False, drop_bad_parts: bool = False) -> SweepResult: ...
 def read_results(path: str) -> dict: ...
+
+# identification (include/soadyn/identify.hpp)
+class Identification:
+    method: str
+    names: List[str]
+    units: List[str]
+    prior: Vector
+    fitted: Vector
+    standard_errors: Vector
+    rows: int
+    rank: int
+    iterations: int
+    singular_values: Vector
+    unidentifiable: Vector
+    unidentifiable_text: List[str]
+    sigma2: float
+    rms_prior: float
+    rms_fitted: float
+    model: Model
+    scenario_text: str
+    scenario: Scenario
+    def value(self, name: str) -> float: ...
+
+def identify(scene: Union[Scenario, str], data: Union[str, Trajectory, Dict[str, ArrayLike]],
+             parameters: Union[str, Sequence[str]], *, method: str = "auto", tau: Optional[ArrayLike] = None,
+             rank_tolerance: float = 1e-8, max_iterations: int = 20, window: float = 0.1,
+             output: Optional[str] = None) -> Identification: ...
