@@ -114,6 +114,22 @@ O(N²), the readable reference for mass_matrix.  q: (nq,).  Returns a new array 
   }
 };
 
+struct Minverse {
+  static constexpr const char* name = "minverse";
+  static constexpr std::array<const char*, 1> params{"q"};
+  static constexpr const char* doc = R"(minverse(model, data, q)
+--
+
+𝓜(q)⁻¹ without forming 𝓜: the articulated-body recursion for every unit force at once, O(N²) on a
+chain (C++ minverse, as Pinocchio's computeMinverse).  q: (nq,).  Returns a new array (nv, nv).)";
+  static py::object run(const Model& m, PyData& d, PyObject** a) {
+    kin(m, d, name, a[0]);
+    MatX Minv(m.nv, m.nv);
+    minverse(m, *d.data, Minv);
+    return owned(std::move(Minv));
+  }
+};
+
 struct Bias {
   static constexpr const char* name = "bias";
   static constexpr std::array<const char*, 3> params{"q", "v", "kinematics"};
@@ -354,7 +370,7 @@ PyMethodDef method() {
 void bind_algorithms(py::module_& m) {
   // CPython keeps pointers to these definitions for the life of the functions
   static PyMethodDef defs[] = {method<UpdateKinematics>(), method<UpdateVelocities>(), method<MassMatrix>(),
-                               method<MassMatrixLiteral>(), method<Bias>(), method<InverseDynamics>(),
+                               method<MassMatrixLiteral>(), method<Minverse>(), method<Bias>(), method<InverseDynamics>(),
                                method<ForwardDynamics>(), method<Jacobian>(),
                                method<IdDerivatives>(), method<FdDerivatives>(), method<KineticEnergy>(),
                                method<PotentialEnergy>(), method<MomentumFn>()};

@@ -56,7 +56,7 @@ def test_random_trees_equal_the_cpp_library(tmp_path, rng, free_root):
 
 
 def test_independent_routes_agree(tmp_path, rng):
-    """inverse ∘ forward dynamics, the literal procedure, Jᵀ M̄ J, ½ vᵀ𝓜v and Σ m ṙ from Python"""
+    """inverse ∘ forward dynamics, the literal procedure, 𝓜⁻¹ 𝓜 = e, Jᵀ M̄ J, ½ vᵀ𝓜v and Σ m ṙ from Python"""
     for trial in range(5):
         path = tmp_path / f"tree{trial}.yaml"
         path.write_text(random_tree_yaml(rng, int(rng.integers(2, 15)), free_root=trial % 2 == 1))
@@ -65,6 +65,7 @@ def test_independent_routes_agree(tmp_path, rng):
         q, v, tau = random_state(rng, model)
         M = soadyn.mass_matrix(model, data, q).copy()
         assert_close(soadyn.mass_matrix_literal(model, data, q), M, 1e-12)
+        assert_close(soadyn.minverse(model, data, q) @ M, np.eye(model.nv), 1e-10)  # the articulated-body 𝓜⁻¹
         qdd = soadyn.forward_dynamics(model, data, q, v, tau).copy()
         assert_close(soadyn.inverse_dynamics(model, data, q, v, qdd), tau, 1e-10)
         assert_close(M @ qdd + soadyn.bias(model, data, q, v), tau, 1e-10)

@@ -5,6 +5,8 @@
 //   id_deriv    kinematics + ∂τ/∂q, ∂τ/∂v (inverse_dynamics_derivatives)
 //   fd_deriv    kinematics + velocities + ∂q̈/∂q, ∂q̈/∂v (forward_dynamics_derivatives)
 //   fd_deriv_minv  the same and 𝓜⁻¹ = ∂q̈/∂τ
+//   minverse       kinematics + 𝓜⁻¹ by the articulated-body recursion (minverse, O(N²) on a chain)
+//   minverse_ltdl  kinematics + 𝓜 + its LᵀDL factor solved against the identity (O(N³) on a chain)
 //   jac_analytic   System::jacobian: ∂f/∂y of ẏ = f(y) (what CVODE BDF and the midpoint rule use)
 //   jac_dq         System::jacobian_dq: the same by nq + nv forward differences of f
 #include "models.hpp"
@@ -67,6 +69,23 @@ template <bool B, bool Minv> void FdDeriv(benchmark::State& st) {
     benchmark::DoNotOptimize(f.dd.dqdd_dq.data());
   });
 }
+template <bool B> void Minverse(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    update_kinematics(f.model, f.data, f.q);
+    minverse(f.model, f.data, f.dd.Minv);
+    benchmark::DoNotOptimize(f.dd.Minv.data());
+  });
+}
+template <bool B> void MinverseLtdl(benchmark::State& st) {
+  run<B>(st, [](Fixture& f) {
+    update_kinematics(f.model, f.data, f.q);
+    mass_matrix(f.model, f.data);
+    ltdl_factor(f.model, f.data);
+    f.dd.Minv.setIdentity();
+    for (int c = 0; c < f.model.nv; ++c) ltdl_solve(f.model, f.data, f.dd.Minv.col(c));
+    benchmark::DoNotOptimize(f.dd.Minv.data());
+  });
+}
 template <bool B, bool Analytic> void Jacobian(benchmark::State& st) {
   const Model model = bench::make_tree(int(st.range(0)), B);
   const Inputs none;
@@ -96,12 +115,16 @@ BENCHMARK(Fd<false>)->Name("chain/fd")->Apply(sizes);
 BENCHMARK(IdDeriv<false>)->Name("chain/id_deriv")->Apply(sizes);
 BENCHMARK(FdDeriv<false, false>)->Name("chain/fd_deriv")->Apply(sizes);
 BENCHMARK(FdDeriv<false, true>)->Name("chain/fd_deriv_minv")->Apply(sizes);
+BENCHMARK(Minverse<false>)->Name("chain/minverse")->Apply(sizes);
+BENCHMARK(MinverseLtdl<false>)->Name("chain/minverse_ltdl")->Apply(sizes);
 BENCHMARK(Jacobian<false, true>)->Name("chain/jac_analytic")->Apply(sizes);
 BENCHMARK(Jacobian<false, false>)->Name("chain/jac_dq")->Apply(sizes);
 BENCHMARK(Fd<true>)->Name("tree/fd")->Apply(tree_sizes);
 BENCHMARK(IdDeriv<true>)->Name("tree/id_deriv")->Apply(tree_sizes);
 BENCHMARK(FdDeriv<true, false>)->Name("tree/fd_deriv")->Apply(tree_sizes);
 BENCHMARK(FdDeriv<true, true>)->Name("tree/fd_deriv_minv")->Apply(tree_sizes);
+BENCHMARK(Minverse<true>)->Name("tree/minverse")->Apply(tree_sizes);
+BENCHMARK(MinverseLtdl<true>)->Name("tree/minverse_ltdl")->Apply(tree_sizes);
 BENCHMARK(Jacobian<true, true>)->Name("tree/jac_analytic")->Apply(tree_sizes);
 BENCHMARK(Jacobian<true, false>)->Name("tree/jac_dq")->Apply(tree_sizes);
 

@@ -26,6 +26,7 @@ Model
 Algorithms (model, data, …), each first updating the kinematics at q (and velocities at v)
     mass_matrix(q)            𝓜 = Gᵀ Ψ_Dᵀ M Ψ_D G (eq. 14)      -> view of data.M      (nv, nv)
     mass_matrix_literal(q)    J = Ψ_D G, Q = M J, 𝓜 = Jᵀ Q       -> new array            (nv, nv)
+    minverse(q)               𝓜⁻¹ by the articulated-body recursion -> new array        (nv, nv)
     bias(q, v)                Gᵀ Ψ_Dᵀ (M Ψ_D a + b)              -> view of data.bias   (nv,)
     inverse_dynamics(q, v, qdd)   τ = 𝓜 q̈ + bias                 -> view of data.tau    (nv,)
     forward_dynamics(q, v, tau, method="on")  q̈ = 𝓜⁻¹(τ − bias) -> view of data.qdd    (nv,)
@@ -73,7 +74,7 @@ from typing import Callable, Optional, Union
 from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model, Scenario, SimulationSettings,
                       __version__, bias, body_poses, fd_derivatives, forward_dynamics, id_derivatives, inverse_dynamics,
                       jacobian, kinetic_energy, load,
-                      load_scenario, mass_matrix, mass_matrix_literal, momentum, parse_scenario, potential_energy,
+                      load_scenario, mass_matrix, mass_matrix_literal, minverse, momentum, parse_scenario, potential_energy,
                       update_kinematics, update_velocities)
 from ._soadyn import (centroidal_inertia, centroidal_momentum, centroidal_momentum_matrix,  # frames.hpp
                       centroidal_momentum_matrix_dot_times_v, com, com_jacobian, com_velocity, coriolis_matrix,
@@ -96,7 +97,7 @@ __all__ = [
     "Cost", "Gradient", "gradient", "tracking_cost",
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "FramePoses", "Inputs", "Model", "RunSummary", "Scenario", "Sensitivities", "SimulationSettings", "Trajectory", "__version__",
     "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
-    "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "momentum", "parse_scenario",
+    "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "minverse", "momentum", "parse_scenario",
     "potential_energy", "read_log", "Identification", "identify", "rollout", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
 
