@@ -332,23 +332,33 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
   // u_i nonzero only where column k's joint lies in i's subtree.  O(N) per column.
   for (int k = 0; k < model.nv; ++k) {
     const int at = model.dfs_begin[model.dof_body[size_t(k)]];
+    double* col = Minv.col(k).data();
     for (int i = 0; i < N; ++i) {
       const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
       const bool carries = model.dfs_begin[i] <= at && at < model.dfs_end[i];
+      if (ni == 1) {
+        // in 3-vector halves, which stay in registers (as aba's forward sweep): A' = [ω; u]
+        Vec3 w = Vec3::Zero(), v = Vec3::Zero();
+        if (p >= 0) {
+          w = data.A.col(p).head<3>();
+          v = data.A.col(p).tail<3>() + w.cross(Vec3(data.d.col(i)));
+        }
+        const double qdd =
+            data.Dinv1(i) * ((carries ? col[vi] : 0.0) - data.U1.col(i).head<3>().dot(w) - data.U1.col(i).tail<3>().dot(v));
+        col[vi] = qdd;
+        data.A.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
+        data.A.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
+        continue;
+      }
       Vec6 A = Vec6::Zero();
       if (p >= 0) D.add_apply(i, data.A.col(p), A);
-      if (ni == 1) {
-        const double qdd = data.Dinv1(i) * ((carries ? Minv(vi, k) : 0.0) - data.U1.col(i).dot(A));
-        Minv(vi, k) = qdd;
-        A += qdd * data.G.col(vi);
-      } else {
-        VecG u = -(data.U[i].transpose() * A);
-        if (carries) u += Minv.block(vi, k, ni, 1);
-        const VecG qdd = data.Dinv[i] * u;
-        Minv.block(vi, k, ni, 1) = qdd;
-        A.noalias() += data.G.middleCols(vi, ni) * qdd;
-      }
-      data.A.col(i) = A;
+      VecG u = -(data.U[i].transpose() * A);
+      if (carries) u += Minv.block(vi, k, ni, 1);
+      const VecG qdd = data.Dinv[i] * u;
+      Minv.block(vi, k, ni, 1) = qdd;
+      A.noalias() += data.G.middleCols(vi, ni) * qdd;
+      data.A.col(i).head<3>() = A.head<3>();
+      data.A.col(i).tail<3>() = A.tail<3>();
     }
   }
 }
