@@ -9,6 +9,7 @@
 #include "soadyn/sensitivity.hpp"
 #include "soadyn/simulate.hpp"
 #include "test_util.hpp"
+#include "whole_run_util.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -18,16 +19,6 @@ using namespace soadyn::test;
 using ::testing::HasSubstr;
 
 namespace {
-
-SimulationSettings tight(const std::string& method, double t_end) {
-  SimulationSettings s;
-  s.method = method;
-  s.t_end = t_end;
-  s.output_dt = t_end;
-  s.rtol = 1e-11;
-  s.atol = 1e-13;
-  return s;
-}
 
 // Φ = ½ Σ w_k (y_k − c_k)² + aᵀ y on the coordinates at T, seeded weights and centres
 Cost seeded_terminal(Rng& rng, const Model& m) {
@@ -187,18 +178,7 @@ TEST(Adjoint, TrackingCostMatchesCentralDifferencesOfWholeRuns) {
 // a ball falling freely, no spin: G = ∫₀ᵀ z dt + z(T) + v_z(T), so ∂G/∂z₀ = T + 1, ∂G/∂v_z0 = T²/2 + T + 1,
 // nothing else (gravity accelerates every mass alike)
 TEST(Adjoint, FreeFallingBallInClosedForm) {
-  BodySpec b;
-  b.name = "ball";
-  b.joint = JointType::Free;
-  b.mass = 2.0;
-  b.inertia = Vec3(0.1, 0.1, 0.1).asDiagonal();
-  Scenario sc;
-  sc.path = "ball";
-  sc.model = Model::build({b}, Vec3(0, 0, -9.81));
-  sc.q0 = sc.model.neutral_configuration();
-  sc.q0.head(3) = Vec3(0.5, -1.0, 3.0);
-  sc.v0 = VecX::Zero(6);
-  sc.v0.tail(3) = Vec3(1.0, 0.0, 2.0);
+  const Scenario sc = falling_ball();
   const double T = 1.5;
   Cost cost;
   cost.running = [](double, const VecX& q, const VecX&, Eigen::Ref<VecX> dq, Eigen::Ref<VecX>) {

@@ -9,6 +9,7 @@
 #include "soadyn/h5log.hpp"
 #include "soadyn/simulate.hpp"
 #include "test_util.hpp"
+#include "whole_run_util.hpp"
 
 #include <hdf5.h>
 
@@ -21,16 +22,6 @@ using namespace soadyn::test;
 using ::testing::HasSubstr;
 
 namespace {
-
-SimulationSettings tight(const std::string& method, double t_end) {
-  SimulationSettings s;
-  s.method = method;
-  s.t_end = t_end;
-  s.output_dt = t_end / 4;
-  s.rtol = 1e-11;
-  s.atol = 1e-13;
-  return s;
-}
 
 std::vector<Sample> run(const Scenario& sc, const SimulationSettings& s) {
   std::vector<Sample> out;
@@ -212,18 +203,7 @@ TEST(Sensitivity, PendulumAtRestIsTheLinearOscillator) {
 // a ball on a free joint, its centre of mass at the frame's origin, no spin: δp(T) = δp₀ + T δv₀,
 // δθ(T) = δθ₀ + T δω₀, and gravity accelerates it the same whatever its mass and inertia
 TEST(Sensitivity, FreeFallingBallInClosedForm) {
-  BodySpec b;
-  b.name = "ball";
-  b.joint = JointType::Free;
-  b.mass = 2.0;
-  b.inertia = Vec3(0.1, 0.1, 0.1).asDiagonal();
-  Scenario sc;
-  sc.path = "ball";
-  sc.model = Model::build({b}, Vec3(0, 0, -9.81));
-  sc.q0 = sc.model.neutral_configuration();
-  sc.q0.head(3) = Vec3(0.5, -1.0, 3.0);
-  sc.v0 = VecX::Zero(6);
-  sc.v0.tail(3) = Vec3(1.0, 0.0, 2.0);
+  const Scenario sc = falling_ball();
   SimulationSettings s = tight("cvode-bdf", 1.5);
   s.sensitivities = {true, {"all"}};
   for (const Sample& x : run(sc, s)) {
