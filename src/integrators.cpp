@@ -30,6 +30,8 @@ System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
       f0(m.nq + m.nv + nquad),
       f1(m.nq + m.nv + nquad),
       T(MatX::Zero(6, 7)),
+      Tq(MatX::Zero(7, 7)),
+      Tv(MatX::Zero(7, 6)),
       dP(m.nv),
       dD(m.nv) {}
 
@@ -113,6 +115,61 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
     if (control_work && controlled) dP += control;  // ∂(control · v)/∂v
     J.row(nq + nv).segment(nq, nv) = dP.transpose();
     J.row(nq + nv + 1).segment(nq, nv) = dD.transpose();
+  }
+}
+
+void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out) {
+  prepare_jacobian();
+  const int nq = model.nq, nv = model.nv;
+  const Eigen::Index ns = S.cols();
+  q = Eigen::Map<const VecX>(y, nq);
+  v = Eigen::Map<const VecX>(y + nq, nv);
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  inputs.evaluate(t, q, v, tau);
+  if (controlled) tau += control;
+  if (feedback) {
+    feedback_tau.setZero();
+    feedback(t, q, v, feedback_tau);
+    tau += feedback_tau;
+  }
+  forward_dynamics(model, data, tau, FdMethod::Sparse);  // q̈ and 𝓜's LᵀDL factor
+  DerivativeData& dd = *derivatives;
+  inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
+  // K_x = ∂τ_in/∂x − ∂ID/∂x, in the forward derivatives' blocks (unused here otherwise)
+  dd.dqdd_dq = -dd.dtau_dq;
+  dd.dqdd_dv = -dd.dtau_dv;
+  inputs.add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
+  if (out.rows() != size() || out.cols() != ns) out.resize(size(), ns);
+  if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns);
+  // q̇(q, v) joint by joint, and S's q rows moved onto the tangent: δ = T(q) s_q
+  for (int i = 0; i < model.nbodies; ++i) {
+    const JointType type = model.joint_type[i];
+    const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
+    auto Jq = Tq.topLeftCorner(mi, mi);
+    auto Jv = Tv.topLeftCorner(mi, ni);
+    joint_qdot_jacobian(type, q.data() + iq, v.data() + iv, Jq, Jv);
+    out.middleRows(iq, mi).noalias() = Jq * S.middleRows(iq, mi);
+    out.middleRows(iq, mi).noalias() += Jv * S.middleRows(nq + iv, ni);
+    if (joint_traits(type).quaternion < 0) {
+      delta.middleRows(iv, ni) = S.middleRows(iq, mi);
+    } else {
+      auto Ti = T.topLeftCorner(ni, mi);
+      joint_tangent_map(type, q.data() + iq, Ti);
+      delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
+    }
+  }
+  // ∂q̈/∂y S = 𝓜⁻¹ (K_q δ + K_v s_v), one LᵀDL solve per column
+  auto qdd_rows = out.middleRows(nq, nv);
+  qdd_rows.noalias() = dd.dqdd_dq * delta;
+  qdd_rows.noalias() += dd.dqdd_dv * S.middleRows(nq, nv);
+  for (Eigen::Index c = 0; c < ns; ++c) ltdl_solve(model, data, out.col(c).segment(nq, nv));
+  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
+  if (nquad > 0) {
+    inputs.power_derivatives(t, v, dP, dD);
+    if (control_work && controlled) dP += control;
+    out.row(nq + nv).noalias() = dP.transpose() * S.middleRows(nq, nv);
+    out.row(nq + nv + 1).noalias() = dD.transpose() * S.middleRows(nq, nv);
   }
 }
 

@@ -47,7 +47,6 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     const int n = sys.size(), nv = m.nv, nq = m.nq;
     if (ns_ == 0) throw Error("sensitivities: nothing to differentiate (initial_state false, no parameters)");
     sys.prepare_jacobian();
-    J_ = MatX::Zero(n, n);
     S_ = MatX::Zero(n, ns_);
     Sd_ = MatX::Zero(n, ns_);
     if (plan.np() > 0) dqdd_dpi_ = MatX::Zero(nv, kParametersPerBody * m.nbodies);
@@ -137,20 +136,20 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
   }
 
  private:
-  // ṡ_k = A s_k + b_k for all k at once: A = ∂f/∂y by the analytic derivatives (System::jacobian:
-  // ∂q̈/∂q along the tangent chained to the coordinates, ∂q̈/∂v, ∂q̇/∂(q, v), the springs' and
-  // dampers' terms, the quadratures' rows) and b_k = [0; ∂q̈/∂π_k; 0] = [0; −(𝓜⁻¹ Y)_k; 0]
+  // ṡ_k = A s_k + b_k for all k at once: A s by the analytic derivatives without forming A
+  // (System::jacobian_times: ∂q̈/∂q along the tangent chained to the coordinates, ∂q̈/∂v, ∂q̇/∂(q, v),
+  // the springs' and dampers' terms, the quadratures' rows; one LᵀDL solve per column) and
+  // b_k = [0; ∂q̈/∂π_k; 0] = [0; −(𝓜⁻¹ Y)_k; 0]
   static int sensitivity_rhs(int ns, double t, N_Vector y, N_Vector, N_Vector* yS, N_Vector* ySdot, void* user,
                              N_Vector, N_Vector) {
     auto* self = static_cast<CvodeSensitivity*>(static_cast<Cvode*>(user));
     try {
       System& sys = self->sys_;
       const Model& m = sys.model;
-      sys.jacobian(t, N_VGetArrayPointer(y), self->J_);
       for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
-      self->Sd_.noalias() = self->J_ * self->S_;
+      sys.jacobian_times(t, N_VGetArrayPointer(y), self->S_, self->Sd_);
       if (self->plan_.np() > 0) {
-        // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.L) at (q, v) are jacobian's; ∂q̈/∂π = −𝓜⁻¹ Y solved
+        // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.L) at (q, v) are jacobian_times's; ∂q̈/∂π = −𝓜⁻¹ Y solved
         // for the plan's bodies' columns only
         regressor(m, sys.data, sys.data.qdd, self->dqdd_dpi_);
         const int first = self->plan_.nx0();
@@ -173,7 +172,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
 
   SensitivityPlan plan_;
   int ns_;
-  MatX J_, S_, S0_, Sd_, dqdd_dpi_;
+  MatX S_, S0_, Sd_, dqdd_dpi_;
   VectorArrayPtr yS_;
   cvode_impl::VectorPtr y_out_;
   cvode_impl::NonlinSolPtr nls_sens_;

@@ -69,6 +69,11 @@ TEST(SystemJacobian, AgainstCentralDifferencesOfTheRightHandSide) {
     MatX Jdq(sys.size(), sys.size());
     sys.jacobian_dq(0.7, y.data(), Jdq);
     EXPECT_TRUE(near_rel(Jdq, ref, 1e-4)) << "case " << k;
+    // the product without the matrix (forward sensitivities) against the matrix times random columns
+    MatX S(sys.size(), 5), JS;
+    for (Eigen::Index c = 0; c < S.size(); ++c) S.data()[c] = rng.uniform();
+    sys.jacobian_times(0.7, y.data(), S, JS);
+    EXPECT_TRUE(near_rel(JS, J * S, 1e-11)) << "case " << k;
   }
 }
 

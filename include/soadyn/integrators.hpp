@@ -69,6 +69,11 @@ class System {
   // prepare_jacobian) allocates the derivatives' workspace, 7 nv² doubles: a run that never asks for
   // ∂f/∂y (CVODE Adams, the explicit methods) keeps memory linear in nv beyond Data's 𝓜
   void jacobian(double t, const double* y, Eigen::Ref<MatX> J);
+  // out = (∂f/∂y) S for the columns of S (size() rows) without forming ∂f/∂y: the inverse-dynamics
+  // derivatives, then ∂q̈/∂y S = 𝓜⁻¹ ((∂τ/∂q − ∂ID/∂q) T S_q + (∂τ/∂v − ∂ID/∂v) S_v) by one LᵀDL solve
+  // per column (forward sensitivities, sensitivity.hpp).  Leaves data at (q, v): [kin], [vel],
+  // data.qdd and 𝓜's factor data.L.  Allocates out and its scratch on the first call of a width.
+  void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
   void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
   void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
@@ -97,6 +102,7 @@ class System {
   JointLimits* limits = nullptr;
   VecX y_work, f0, f1;             // jacobian_dq's scratch
   MatX T;                          // one joint's tangent map (≤ 6×7)
+  MatX Tq, Tv, delta;              // jacobian_times: one joint's ∂q̇/∂q, ∂q̇/∂v; S's q rows on the tangent
   VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
   long rhs_evals = 0;
   long jac_evals = 0;

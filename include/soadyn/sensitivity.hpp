@@ -1,7 +1,7 @@
 // Forward sensitivities of a whole run by SUNDIALS CVODES: ∂x(t)/∂x₀ and ∂x(t)/∂π at every output,
 // integrated with the state under the same error control (CVodeSetSensErrCon), from the analytic
-// derivatives: ṡ = A s + b with A = [[∂q̇/∂q, ∂q̇/∂v], [∂q̈/∂q, ∂q̈/∂v]] (System::jacobian:
-// derivatives.hpp, springs and dampers included) and b = [0; ∂q̈/∂π] = [0; −𝓜⁻¹ Y(q, v, q̈)]
+// derivatives: ṡ = A s + b with A = [[∂q̇/∂q, ∂q̇/∂v], [∂q̈/∂q, ∂q̈/∂v]] applied to the columns
+// without forming it (System::jacobian_times: derivatives.hpp, springs and dampers included) and b = [0; ∂q̈/∂π] = [0; −𝓜⁻¹ Y(q, v, q̈)]
 // (regressor.hpp).  No finite differences.
 //
 // Tangent-space convention.  x = [δq; v] has 2 nv numbers: δq the increment along the tangent,
