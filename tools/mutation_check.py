@@ -125,6 +125,18 @@ MUTATIONS = [
      "Gi = b.lu.solve(Jqv);", "Gi = Jqv;",
      "BDF's structured Newton solve forgets P⁻¹ = (I − γ ∂q̇/∂q)⁻¹ on a quaternion's rows (issue 14)",
      gtest("test_newton_solver", "NewtonSolver.*")),
+    (36, "vjp-forgets-ancestor-rows", "src/derivatives.cpp",
+     "+ wp.dot(dd.psi.col(c));", ";",
+     "(∂τ/∂q)ᵀμ without the ancestors' rows w_p·ψ_c (issue 36)",
+     gtest("test_derivatives", "RandomTrees/Derivatives.TransposeTimes*")),
+    (36, "regressor-transpose-not-carried", "src/regressor.cpp",
+     "wi.tail<3>() += w.col(p).tail<3>() + om.cross(Vec3(data.d.col(i)));", "wi.tail<3>() += w.col(p).tail<3>();",
+     "Yᵀμ carries w to the child's joint point without ω × d (issue 36)",
+     gtest("test_regressor", "Trees/Regressor.TransposeTimes*")),
+    (36, "adjoint-vjp-sign", "src/adjoint.cpp",
+     "      a.g_ = -a.g_;", "",
+     "the adjoint's λ_vᵀ ∂q̈/∂q with the wrong sign (issue 36)",
+     gtest("test_adjoint", "Adjoint.*")),
 ]
 
 

@@ -1,0 +1,200 @@
+// The system the integrators step (integrators.hpp): ẏ = f(t, y) for a model with its inputs and
+// controllers, its Jacobian ∂f/∂y by the analytic derivatives (and by forward differences), and the
+// Jacobian applied to columns without forming it.
+#include "soadyn/integrators.hpp"
+
+#include "soadyn/algorithms.hpp"
+#include "soadyn/kinematics.hpp"
+#include "soadyn/limits.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace soadyn {
+
+System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
+    : model(m),
+      inputs(in),
+      method(fd),
+      nquad(in.does_work() || control_work ? 2 : 0),
+      data(m),
+      q(m.nq),
+      v(m.nv),
+      tau(m.nv),
+      qd(m.nq),
+      control(VecX::Zero(m.nv)),
+      feedback_tau(VecX::Zero(m.nv)),
+      control_work(control_work),
+      y_work(m.nq + m.nv + nquad),
+      f0(m.nq + m.nv + nquad),
+      f1(m.nq + m.nv + nquad),
+      T(MatX::Zero(6, 7)),
+      Tq(MatX::Zero(7, 7)),
+      Tv(MatX::Zero(7, 6)),
+      dP(m.nv),
+      dD(m.nv) {}
+
+VecX System::state(const VecX& q0, const VecX& v0) const {
+  VecX y = VecX::Zero(size());
+  y.head(model.nq) = q0;
+  y.segment(model.nq, model.nv) = v0;
+  return y;
+}
+
+void System::rhs(double t, const double* y, double* ydot) {
+  ++rhs_evals;
+  q = Eigen::Map<const VecX>(y, model.nq);
+  v = Eigen::Map<const VecX>(y + model.nq, model.nv);
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  inputs.evaluate(t, q, v, tau);
+  if (controlled) tau += control;
+  if (feedback) {
+    feedback_tau.setZero();
+    feedback(t, q, v, feedback_tau);
+    tau += feedback_tau;
+  }
+  forward_dynamics(model, data, tau, method);
+  if (limits) limits->constrain(*this);  // held DOFs: their constraint forces
+  model.qdot(q, v, qd);
+  Eigen::Map<VecX>(ydot, model.nq) = qd;
+  Eigen::Map<VecX>(ydot + model.nq, model.nv) = data.qdd;
+  if (nquad > 0) {
+    // Ẇ = (τ_torques + τ_dampers) · q̇,  Ḋ = Σ c q̇²
+    const Inputs::Power p = inputs.power(t, v);
+    double controller = 0.0;  // (control + τ_c) · v, the controllers' power (v · τ is power on every joint)
+    if (control_work) controller = feedback_tau.dot(v) + (controlled ? control.dot(v) : 0.0);
+    ydot[model.nq + model.nv] = p.inputs + controller;
+    ydot[model.nq + model.nv + 1] = p.dissipated;
+  }
+}
+
+void System::prepare_jacobian() {
+  if (!derivatives) derivatives.emplace(model);
+}
+
+void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
+  prepare_jacobian();
+  ++jac_evals;
+  const int nq = model.nq, nv = model.nv;
+  q = Eigen::Map<const VecX>(y, nq);
+  v = Eigen::Map<const VecX>(y + nq, nv);
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  inputs.evaluate(t, q, v, tau);
+  if (controlled) tau += control;
+  if (feedback) {
+    feedback_tau.setZero();
+    feedback(t, q, v, feedback_tau);
+    tau += feedback_tau;
+  }
+  forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
+  const MatX& dq = derivatives->dqdd_dq;
+  J.setZero();
+  for (int i = 0; i < model.nbodies; ++i) {
+    const JointType type = model.joint_type[i];
+    const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
+    // ∂q̇/∂q and ∂q̇/∂v: block diagonal, joint by joint
+    joint_qdot_jacobian(type, q.data() + iq, v.data() + iv, J.block(iq, iq, mi, mi), J.block(iq, nq + iv, mi, ni));
+    // ∂q̈/∂q_coords = ∂q̈/∂δ · ∂δ/∂q_coords (T = 1 without a quaternion)
+    if (joint_traits(type).quaternion < 0) {
+      J.block(nq, iq, nv, ni) = dq.middleCols(iv, ni);
+      continue;
+    }
+    auto Ti = T.topLeftCorner(ni, mi);
+    joint_tangent_map(type, q.data() + iq, Ti);
+    for (int c = 0; c < mi; ++c)
+      for (int k = 0; k < ni; ++k)
+        if (Ti(k, c) != 0.0) J.block(nq, iq + c, nv, 1) += Ti(k, c) * dq.col(iv + k);
+  }
+  J.block(nq, nq, nv, nv) = derivatives->dqdd_dv;
+  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v); nothing depends on W or D
+  if (nquad > 0) {
+    inputs.power_derivatives(t, v, dP, dD);
+    if (control_work && controlled) dP += control;  // ∂(control · v)/∂v
+    J.row(nq + nv).segment(nq, nv) = dP.transpose();
+    J.row(nq + nv + 1).segment(nq, nv) = dD.transpose();
+  }
+}
+
+void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out) {
+  prepare_jacobian();
+  const int nq = model.nq, nv = model.nv;
+  const Eigen::Index ns = S.cols();
+  q = Eigen::Map<const VecX>(y, nq);
+  v = Eigen::Map<const VecX>(y + nq, nv);
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  inputs.evaluate(t, q, v, tau);
+  if (controlled) tau += control;
+  if (feedback) {
+    feedback_tau.setZero();
+    feedback(t, q, v, feedback_tau);
+    tau += feedback_tau;
+  }
+  forward_dynamics(model, data, tau, FdMethod::Sparse);  // q̈ and 𝓜's LᵀDL factor
+  DerivativeData& dd = *derivatives;
+  inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
+  // K_x = ∂τ_in/∂x − ∂ID/∂x, in the forward derivatives' blocks (unused here otherwise)
+  dd.dqdd_dq = -dd.dtau_dq;
+  dd.dqdd_dv = -dd.dtau_dv;
+  inputs.add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
+  if (out.rows() != size() || out.cols() != ns) out.resize(size(), ns);
+  if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns);
+  // q̇(q, v) joint by joint, and S's q rows moved onto the tangent: δ = T(q) s_q
+  for (int i = 0; i < model.nbodies; ++i) {
+    const JointType type = model.joint_type[i];
+    const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
+    auto Jq = Tq.topLeftCorner(mi, mi);
+    auto Jv = Tv.topLeftCorner(mi, ni);
+    joint_qdot_jacobian(type, q.data() + iq, v.data() + iv, Jq, Jv);
+    out.middleRows(iq, mi).noalias() = Jq * S.middleRows(iq, mi);
+    out.middleRows(iq, mi).noalias() += Jv * S.middleRows(nq + iv, ni);
+    if (joint_traits(type).quaternion < 0) {
+      delta.middleRows(iv, ni) = S.middleRows(iq, mi);
+    } else {
+      auto Ti = T.topLeftCorner(ni, mi);
+      joint_tangent_map(type, q.data() + iq, Ti);
+      delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
+    }
+  }
+  // ∂q̈/∂y S = 𝓜⁻¹ (K_q δ + K_v s_v), one LᵀDL solve per column
+  auto qdd_rows = out.middleRows(nq, nv);
+  qdd_rows.noalias() = dd.dqdd_dq * delta;
+  qdd_rows.noalias() += dd.dqdd_dv * S.middleRows(nq, nv);
+  for (Eigen::Index c = 0; c < ns; ++c) ltdl_solve(model, data, out.col(c).segment(nq, nv));
+  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
+  if (nquad > 0) {
+    inputs.power_derivatives(t, v, dP, dD);
+    if (control_work && controlled) dP += control;
+    out.row(nq + nv).noalias() = dP.transpose() * S.middleRows(nq, nv);
+    out.row(nq + nv + 1).noalias() = dD.transpose() * S.middleRows(nq, nv);
+  }
+}
+
+void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {
+  ++jac_evals;
+  const int n = size();
+  y_work = Eigen::Map<const VecX>(y, n);
+  rhs(t, y_work.data(), f0.data());
+  for (int c = 0; c < n; ++c) {
+    const double e = 1e-7 * std::max(1.0, std::abs(y_work(c)));
+    const double keep = y_work(c);
+    y_work(c) += e;
+    rhs(t, y_work.data(), f1.data());
+    J.col(c) = (f1 - f0) / e;
+    y_work(c) = keep;
+  }
+}
+
+std::string System::component_name(int k) const {
+  if (k == model.nq + model.nv && nquad > 0) return "the inputs' work W (quadrature)";
+  if (k == model.nq + model.nv + 1 && nquad > 0) return "the dampers' dissipated energy D (quadrature)";
+  const bool is_q = k < model.nq;
+  const int idx = is_q ? k : k - model.nq;
+  const std::vector<std::string> names = is_q ? model.q_names() : model.v_names();
+  if (idx < 0 || idx >= int(names.size())) return "component " + std::to_string(k);
+  return "joint '" + names[idx] + "' (" + (is_q ? "q" : "qd") + ")";
+}
+
+}  // namespace soadyn
