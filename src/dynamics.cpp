@@ -159,7 +159,7 @@ const std::vector<FdMethodInfo>& fd_methods() {
   static const std::vector<FdMethodInfo> table = {
       {FdMethod::Dense, "dense", "composite mass matrix, then Cholesky"},
       {FdMethod::Sparse, "sparse", "composite mass matrix, tree-sparse LᵀDL"},
-      {FdMethod::ArticulatedBody, "on", "O(N) articulated-body recursion"},
+      {FdMethod::ArticulatedBody, "aba", "O(N) articulated-body recursion"},
   };
   return table;
 }
@@ -179,6 +179,7 @@ std::string_view to_string(FdMethod m) {
 FdMethod parse_fd_method(std::string_view s) {
   for (const auto& info : fd_methods())
     if (info.name == s) return info.method;
+  if (s == kFdMethodAliasOn) return FdMethod::ArticulatedBody;
   std::string all;
   for (const auto& n : fd_method_names()) all += (all.empty() ? "" : ", ") + n;
   throw Error("forward-dynamics method: expected one of " + all + "; got '" + std::string(s) + "'");

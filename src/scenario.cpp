@@ -238,6 +238,7 @@ void read_simulation(const Reader& rd, const YAML::Node& n, const Model& m, Simu
   if (n["dynamics"]) {
     s.dynamics = rd.string(n["dynamics"], "simulation.dynamics");
     const std::vector<std::string> routes = fd_method_names();
+    if (s.dynamics == kFdMethodAliasOn) s.dynamics = std::string(to_string(FdMethod::ArticulatedBody));  // the old word
     if (std::find(routes.begin(), routes.end(), s.dynamics) == routes.end())
       rd.fail(n["dynamics"], "simulation.dynamics",
               "unknown route '" + s.dynamics + "'" + did_you_mean(s.dynamics, routes));

@@ -158,9 +158,10 @@ class ScenarioMassMatrices(unittest.TestCase):
         self.assertEqual(set(out["momentum"]), {"linear", "angular"})
 
     def test_tau_and_methods(self):
-        for method in ("dense", "sparse", "on"):
+        for method in ("dense", "sparse", "aba", "on"):  # "on": the O(N) route's old word, printed as aba
             out = inspect(f"{SCENARIOS}/three_link_arm.yaml", "--tau", "1,-2,0.5", "--qd", "0.3,-0.1,2",
                           "--method", method)
+            self.assertEqual(out["method"], "aba" if method == "on" else method)
             self.check_eom(out)
             self.assertEqual(out["tau"], [1, -2, 0.5])
 
@@ -344,17 +345,17 @@ class ForwardDynamicsRoutes(unittest.TestCase):
                 M_ne, bias_ne = newton_euler(mech, q, qd)
                 args = ["--q", ",".join(repr(float(x)) for x in q), "--qd", ",".join(repr(float(x)) for x in qd),
                         "--tau", ",".join(repr(float(x)) for x in tau)]
-                outs = {m: inspect(f"{SCENARIOS}/{name}.yaml", *args, "--method", m) for m in ("dense", "sparse", "on")}
-                self.assertEqual({o["method"] for o in outs.values()}, {"dense", "sparse", "on"})
-                M = np.asarray(outs["on"]["M"])
+                outs = {m: inspect(f"{SCENARIOS}/{name}.yaml", *args, "--method", m) for m in ("dense", "sparse", "aba")}
+                self.assertEqual({o["method"] for o in outs.values()}, {"dense", "sparse", "aba"})
+                M = np.asarray(outs["aba"]["M"])
                 self.close(M, M_ne, 1e-12, f"{name}: M against Newton–Euler")
-                self.close(outs["on"]["bias"], bias_ne, 1e-9, f"{name}: bias against Newton–Euler")
+                self.close(outs["aba"]["bias"], bias_ne, 1e-9, f"{name}: bias against Newton–Euler")
                 qdd_py = np.linalg.solve(M_ne, tau - bias_ne)
                 for m, o in outs.items():
                     self.close(o["qdd"], qdd_py, 1e-8, f"{name}: {m} against Python")
                     self.close(o["qdd"], outs["dense"]["qdd"], 1e-11, f"{name}: {m} against dense")
-                    self.assertEqual(o["M"], outs["on"]["M"])
-                    self.assertEqual(o["bias"], outs["on"]["bias"])
+                    self.assertEqual(o["M"], outs["aba"]["M"])
+                    self.assertEqual(o["bias"], outs["aba"]["bias"])
 
     def test_newton_euler_reference_matches_closed_forms(self):
         """the Python reference itself, at points with known closed forms (Examples 1 and 2)"""

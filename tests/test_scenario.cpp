@@ -439,3 +439,17 @@ TEST(BadUrdf, UnsupportedJointType) {
 }
 
 }  // namespace
+
+// the O(N) route's word is aba; on, its old word (YAML 1.1 and PyYAML read a bare on as true), is
+// still taken and stored as aba; anything else is refused with the words allowed
+TEST(ScenarioFiles, DynamicsRouteWordAndItsOldAlias) {
+  const std::string head =
+      "bodies:\n  - {name: a, joint: {type: revolute, axis: [0, 0, 1]}, mass: 1, inertia: [1, 1, 1]}\nsimulation:\n  dynamics: ";
+  EXPECT_EQ(parse_scenario(head + "aba\n", "scene.yaml").simulation.dynamics, "aba");
+  EXPECT_EQ(parse_scenario(head + "on\n", "scene.yaml").simulation.dynamics, "aba");
+  EXPECT_EQ(parse_scenario(head + "sparse\n", "scene.yaml").simulation.dynamics, "sparse");
+  EXPECT_EQ(SimulationSettings().dynamics, "aba");
+  EXPECT_EQ(parse_fd_method("on"), FdMethod::ArticulatedBody);
+  EXPECT_THAT([&] { parse_scenario(head + "abb\n", "scene.yaml"); },
+              testing::ThrowsMessage<Error>(testing::HasSubstr("did you mean 'aba'")));
+}

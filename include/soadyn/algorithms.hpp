@@ -49,7 +49,7 @@ enum class FdMethod {
   Dense,           // "dense": composite 𝓜, then Cholesky
   Sparse,          // "sparse": composite 𝓜 factored in place as LᵀDL along the tree (no fill-in off
                    //   ancestor chains)
-  ArticulatedBody  // "on": the O(N) articulated-body recursion (the factored inverse mass matrix);
+  ArticulatedBody  // "aba": the O(N) articulated-body recursion (the factored inverse mass matrix);
                    //   𝓜 never formed
 };
 
@@ -60,9 +60,11 @@ struct FdMethodInfo {
   std::string_view description;
 };
 const std::vector<FdMethodInfo>& fd_methods();
-std::vector<std::string> fd_method_names();  // {"dense", "sparse", "on"}
+std::vector<std::string> fd_method_names();  // {"dense", "sparse", "aba"}
 std::string_view to_string(FdMethod m);
-FdMethod parse_fd_method(std::string_view s);  // a name of fd_methods(); throws soadyn::Error
+// "on", the O(N) route's word before "aba" (YAML 1.1 and PyYAML read a bare on as true): still taken
+inline constexpr std::string_view kFdMethodAliasOn = "on";
+FdMethod parse_fd_method(std::string_view s);  // a name of fd_methods() or "on"; throws soadyn::Error
 
 // q̈ = 𝓜⁻¹ (τ − bias).  Needs [kin] and [vel]; fills data.qdd (Dense and Sparse also fill
 // data.Mass and data.bias).

@@ -34,7 +34,7 @@ struct RolloutSettings {
   std::string method = "rk4";         // a name of integrators()
   double dt = 1e-3;                   // s: the step of fixed-step methods, the control and output interval
   long steps = 0;                     // T (with a control matrix: its T)
-  std::string dynamics = "on";        // forward-dynamics route: dense | sparse | on
+  std::string dynamics = "aba";       // forward-dynamics route: dense | sparse | aba ("on" taken too)
   double rtol = 1e-8, atol = 1e-10;   // CVODE
   double max_step = 0.0;              // CVODE (0: none)
   long max_steps = 100000000;         // CVODE, per rollout

@@ -25,7 +25,7 @@ struct SimulationSettings {
   double dt = 1e-3;                    // fixed-step methods' step, s: exactly (count_steps, integrators.hpp)
   double max_step = 0.0;               // CVODE maximum step, s (0: none)
   long max_steps = 100000000;          // CVODE steps allowed in the whole run
-  std::string dynamics = "on";         // forward-dynamics route: dense | sparse | on
+  std::string dynamics = "aba";        // forward-dynamics route: dense | sparse | aba ("on" taken too)
   std::string jacobian = "analytic";   // ∂f/∂y for cvode-bdf and implicit-midpoint: analytic | dq
                                        //   (analytic derivatives, derivatives.hpp; or difference quotients)
   std::string newton = "full";         // implicit-midpoint: full (the Jacobian at every iterate) | simplified

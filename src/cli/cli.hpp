@@ -76,7 +76,7 @@ struct InspectOptions {
   StateOptions state;
   std::string tau;
   bool json = false;
-  std::string method = "on";
+  std::string method = "aba";
   std::vector<std::string> frames;  // --frame: named frames whose pose and Jacobian are printed
 };
 void add_inspect(CLI::App& app, InspectOptions& o);

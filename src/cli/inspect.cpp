@@ -24,8 +24,10 @@ void add_inspect(CLI::App& app, InspectOptions& o) {
   add_state_options(c, o.state, "the state");
   c->add_option("--tau", o.tau, "joint forces for qdd, comma-separated, nv numbers (default zero)");
   c->add_flag("--json", o.json, "print one JSON object on stdout");
-  c->add_option("--method", o.method, "forward-dynamics route for qdd: " + join(fd_method_names(), " | ") + " (default on)")
-      ->transform(one_of(fd_method_names()));
+  std::vector<std::string> routes = fd_method_names();
+  routes.emplace_back(kFdMethodAliasOn);  // the O(N) route's old word, still taken
+  c->add_option("--method", o.method, "forward-dynamics route for qdd: " + join(fd_method_names(), " | ") + " (default aba)")
+      ->transform(one_of(routes));
   c->add_option("--frame", o.frames,
                 "a named frame (a body, a link merged by a fixed joint, a scenario's frames: entry) whose pose and "
                 "Jacobian J (6 x nv, [w; v] of the frame's origin, inertial axes) are printed; may be repeated");
@@ -204,8 +206,9 @@ void print_tables(const Scenario& sc, const Inspection& r, const std::string& me
 int run_inspect(const InspectOptions& o) {
   const Scenario sc = load_with_options(o.model, o.state);
   const Inspection r = inspect(sc, o);
-  if (o.json) print_json(sc.model, r, o.method);
-  else print_tables(sc, r, o.method);
+  const std::string method(to_string(parse_fd_method(o.method)));  // "on" printed as "aba"
+  if (o.json) print_json(sc.model, r, method);
+  else print_tables(sc, r, method);
   return 0;
 }
 

@@ -177,16 +177,16 @@ struct ForwardDynamics {
   static constexpr const char* name = "forward_dynamics";
   static constexpr std::array<const char*, 4> params{"q", "v", "tau", "method"};
   static constexpr int optional = 1;  // method
-  static constexpr const char* doc = R"(forward_dynamics(model, data, q, v, tau, method='on')
+  static constexpr const char* doc = R"(forward_dynamics(model, data, q, v, tau, method='aba')
 --
 
 q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)).
 
-method: 'on' (articulated-body recursion, O(N), 𝓜 never formed), 'dense' (composite 𝓜 and
+method: 'aba' (articulated-body recursion, O(N), 𝓜 never formed; 'on', its old word, is taken too), 'dense' (composite 𝓜 and
 Cholesky; also fills data.M and data.bias) or 'sparse' (𝓜 factored as LᵀDL along the tree).
 q: (nq,), v: (nv,), tau: (nv,).  Returns data.qdd, shape (nv,), a read-only view.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
-    FdMethod fd = parse_fd_method("on");
+    FdMethod fd = FdMethod::ArticulatedBody;
     if (a[3]) {
       Py_ssize_t n = 0;
       const char* s = PyUnicode_Check(a[3]) ? PyUnicode_AsUTF8AndSize(a[3], &n) : nullptr;
@@ -421,7 +421,7 @@ inertial.  Runs without the GIL.)");
           for (long k = 0; k < calls; ++k) {
             update_kinematics(model, data, qv);
             update_velocities(model, data, vv);
-            forward_dynamics(model, data, tv, parse_fd_method("on"));
+            forward_dynamics(model, data, tv, FdMethod::ArticulatedBody);
           }
         } else {
           throw Error("_time_cpp: which: expected mass_matrix or forward_dynamics, got '" + which + "'");

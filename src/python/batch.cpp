@@ -243,7 +243,7 @@ between calls, for small batches called often: pool.forward_dynamics(q, v, tau),
   auto pool = [](const Model& m, int threads) { return std::make_unique<PyPool>(m, threads_arg("batch", threads)); };
   b.def("forward_dynamics", [pool](const Model& m, py::handle q, py::handle v, py::handle tau, const std::string& method,
                                    int threads) { return forward_dynamics(*pool(m, threads), q, v, tau, method); },
-        "model"_a, "q"_a, "v"_a, "tau"_a, "method"_a = "on", "threads"_a = 1, doc.forward_dynamics);
+        "model"_a, "q"_a, "v"_a, "tau"_a, "method"_a = "aba", "threads"_a = 1, doc.forward_dynamics);
   b.def("mass_matrix", [pool](const Model& m, py::handle q, int threads) { return mass_matrix(*pool(m, threads), q); },
         "model"_a, "q"_a, "threads"_a = 1, doc.mass_matrix);
   b.def("bias", [pool](const Model& m, py::handle q, py::handle v, int threads) { return bias(*pool(m, threads), q, v); },
@@ -265,7 +265,7 @@ between calls, for small batches called often: pool.forward_dynamics(q, v, tau),
       .def(py::init([](const Model& m, int threads) { return new PyPool(m, threads_arg("batch.Pool", threads)); }),
            "model"_a, "threads"_a = 1, py::keep_alive<1, 2>())
       .def_property_readonly("threads", [](const PyPool& p) { return p.pool.threads(); })
-      .def("forward_dynamics", &forward_dynamics, "q"_a, "v"_a, "tau"_a, "method"_a = "on", doc.forward_dynamics)
+      .def("forward_dynamics", &forward_dynamics, "q"_a, "v"_a, "tau"_a, "method"_a = "aba", doc.forward_dynamics)
       .def("mass_matrix", &mass_matrix, "q"_a, doc.mass_matrix)
       .def("bias", &bias, "q"_a, "v"_a, doc.bias)
       .def("inverse_dynamics", &inverse_dynamics, "q"_a, "v"_a, "qdd"_a, doc.inverse_dynamics)

@@ -184,7 +184,7 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
       .def_readwrite("dt", &SimulationSettings::dt, "fixed-step methods' step, s")
       .def_readwrite("max_step", &SimulationSettings::max_step, "CVODE's largest step, s (0: none)")
       .def_readwrite("max_steps", &SimulationSettings::max_steps, "CVODE steps allowed in the whole run")
-      .def_readwrite("dynamics", &SimulationSettings::dynamics, "forward-dynamics route: dense | sparse | on")
+      .def_readwrite("dynamics", &SimulationSettings::dynamics, "forward-dynamics route: dense | sparse | aba (\"on\", the old word, is taken)")
       .def_readwrite("jacobian", &SimulationSettings::jacobian, "cvode-bdf and implicit-midpoint: analytic | dq")
       .def_readwrite("newton", &SimulationSettings::newton, "implicit-midpoint: full | simplified")
       .def_readwrite("limits", &SimulationSettings::limits, "joint limits as events (CVODE): impact, hold, release")

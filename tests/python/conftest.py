@@ -15,7 +15,7 @@ def cli(*args):
     return subprocess.run([SOADYN, *map(str, args)], capture_output=True, text=True, timeout=120)
 
 
-def inspect_json(path, q=None, qd=None, tau=None, method="on", free_root=False):
+def inspect_json(path, q=None, qd=None, tau=None, method="aba", free_root=False):
     """`soadyn inspect --json` at a state: 17 significant digits, so the numbers round-trip"""
     args = ["inspect", path, "--json", "--method", method]
     for name, x in (("--q", q), ("--qd", qd), ("--tau", tau)):

@@ -39,7 +39,7 @@ def test_random_trees_equal_the_cpp_library(tmp_path, rng, free_root):
         model = soadyn.load(str(path))
         data = model.create_data()
         q, v, tau = random_state(rng, model)
-        for method in ("on", "dense", "sparse"):
+        for method in ("aba", "dense", "sparse", "on"):  # "on": the old word for aba
             ref = inspect_json(str(path), q, v, tau, method=method)
             q = np.array(ref["q"])  # as the command line normalized it
             assert ref["joints"] == model.joint_names
@@ -410,7 +410,7 @@ def test_joint_types_and_a_ball_joint(rng):
     """the library's registries by name; the spherical pendulum's 𝓜 = I_pivot in the bob's frame"""
     assert soadyn.JOINT_TYPES == ("revolute", "prismatic", "ball", "planar", "free", "fixed")
     assert {"cvode-adams", "cvode-bdf", "rk4", "euler", "symplectic-euler", "implicit-midpoint"} <= set(soadyn.METHODS)
-    assert soadyn.DYNAMICS == ("dense", "sparse", "on")
+    assert soadyn.DYNAMICS == ("dense", "sparse", "aba")
     model = soadyn.load(f"{SCENARIOS}/spherical_pendulum.yaml")
     assert model.joint_types == ["ball"] and (model.nq, model.nv) == (4, 3)
     assert model.q_names == ["pivot.qw", "pivot.qx", "pivot.qy", "pivot.qz"]

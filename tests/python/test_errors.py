@@ -153,7 +153,7 @@ def test_arguments_by_position_and_name():
             call()
         assert message in str(e.value), str(e.value)
     import inspect
-    assert str(inspect.signature(soadyn.forward_dynamics)) == "(model, data, q, v, tau, method='on')"
+    assert str(inspect.signature(soadyn.forward_dynamics)) == "(model, data, q, v, tau, method='aba')"
     assert str(inspect.signature(soadyn.mass_matrix)) == "(model, data, q, kinematics=True)"
     assert str(inspect.signature(soadyn.bias)) == "(model, data, q, v, kinematics=True)"
 

@@ -41,8 +41,8 @@ def main():
     calls = [("mass_matrix(model, data, q)", "mass_matrix", "soadyn.mass_matrix(model, data, q)"),
              ("forward_dynamics(model, data, q, v, tau)", "forward_dynamics",
               "soadyn.forward_dynamics(model, data, q, v, tau)"),
-             ("forward_dynamics(…, method='on')", "forward_dynamics",
-              "soadyn.forward_dynamics(model, data, q, v, tau, method='on')"),
+             ("forward_dynamics(…, method='aba')", "forward_dynamics",
+              "soadyn.forward_dynamics(model, data, q, v, tau, method='aba')"),
              ("mass_matrix, q strided (q[::2] of a copy)", "mass_matrix", "soadyn.mass_matrix(model, data, qs)"),
              ("mass_matrix, q a Python list", "mass_matrix", "soadyn.mass_matrix(model, data, ql)")]
     n = args.calls

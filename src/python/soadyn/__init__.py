@@ -14,7 +14,7 @@ q (nq,) is the configuration and v (nv,) its rates (the note's q̇; ω for a fre
 
 Names
     JOINT_TYPES (revolute, prismatic, ball, planar, free, fixed), METHODS (the integrators),
-    DYNAMICS (the forward-dynamics routes: dense, sparse, on)
+    DYNAMICS (the forward-dynamics routes: dense, sparse, aba; "on", the old word for aba, is taken too)
 Loading
     load(path, free_root=False, gravity=None) -> Model        a URDF or a scenario's model
     load_scenario(path) -> Scenario                           .model .q0 .v0 .inputs .settings
@@ -29,7 +29,7 @@ Algorithms (model, data, …), each first updating the kinematics at q (and velo
     minverse(q)               𝓜⁻¹ by the articulated-body recursion -> new array        (nv, nv)
     bias(q, v)                Gᵀ Ψ_Dᵀ (M Ψ_D a + b)              -> view of data.bias   (nv,)
     inverse_dynamics(q, v, qdd)   τ = 𝓜 q̈ + bias                 -> view of data.tau    (nv,)
-    forward_dynamics(q, v, tau, method="on")  q̈ = 𝓜⁻¹(τ − bias) -> view of data.qdd    (nv,)
+    forward_dynamics(q, v, tau, method="aba") q̈ = 𝓜⁻¹(τ − bias) -> view of data.qdd    (nv,)
     jacobian(q)               J = S Ψ_D G (eq. 7)                -> new array            (6N, nv)
     kinetic_energy(q, v), potential_energy(q) -> float;  momentum(q, v) -> (linear, angular)
     update_kinematics(q), update_velocities(q, v): fill data.R, eta, d, s, r, G, V, Vbar
@@ -127,7 +127,7 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     scene: a Scenario or the path of a scenario file.  Each keyword left None keeps the scene's
     own setting (scene.settings): method (cvode-adams | cvode-bdf | rk4 | euler | semi-implicit-euler |
     symplectic-euler | implicit-midpoint), rtol, atol (CVODE), dt (fixed-step methods' step, s), t_end (s),
-    output_dt (s between samples), dynamics (forward-dynamics route: on | dense | sparse),
+    output_dt (s between samples), dynamics (forward-dynamics route: aba | dense | sparse),
     jacobian (CVODE BDF's Jacobian: analytic | dq), newton (implicit midpoint: full | simplified).
     output: an HDF5 file to log to as well (the layout of `soadyn run`; read_log reads it back).
     controller: f(t, q, v) -> tau, nv torques added to the inputs' (with the scene's built-in
