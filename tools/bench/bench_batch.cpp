@@ -1,6 +1,9 @@
 // States per second of q̈ and of ∂q̈ (forward_dynamics, forward_dynamics_derivatives without 𝓜⁻¹)
-// over K states: the plain C++ loop on one Data against soadyn::batch on 1 and 2 threads.  One JSON
-// object per line; tools/bench/batch.py runs it beside the Python side and makes the table.
+// over K states: the plain C++ loop on one Data against soadyn::batch on 1 and 2 threads; and, after
+// each K's rows, the machine's own 2-thread ceiling: a control loop that touches no memory and shares
+// nothing (independent multiply-add chains in registers), its fixed work on 1 std::thread and split
+// over 2, timed the same way.  One JSON object per line; tools/bench/batch.py runs it beside the
+// Python side and makes the table.
 //   soadyn_bench_batch MODEL.urdf FREE_ROOT(0|1) [MIN_SECONDS] [K …]
 #include "soadyn/batch.hpp"
 #include "soadyn/kinematics.hpp"
@@ -11,6 +14,7 @@
 #include <cstdlib>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 using namespace soadyn;
@@ -57,6 +61,34 @@ void print(const char* model, const char* what, long K, const char* how, double 
   std::printf("{\"model\": \"%s\", \"what\": \"%s\", \"K\": %ld, \"how\": \"%s\", \"states_per_second\": %.6g}\n", model,
               what, K, how, per_second);
   std::fflush(stdout);
+}
+
+// The control: n rounds of 8 independent multiply-add chains (FMA throughput, not one chain's
+// latency), nothing read or written but registers; the result is returned so the loop stays.
+double spin(long n, double seed) {
+  double x[8];
+  for (int j = 0; j < 8; ++j) x[j] = seed + j;
+  for (long i = 0; i < n; ++i)
+    for (int j = 0; j < 8; ++j) x[j] = x[j] * 0.999999999 + 1e-9;
+  double sum = 0;
+  for (double v : x) sum += v;
+  return sum;
+}
+
+// rounds per second of `spin` on `threads` std::threads, each its share of a fixed amount of work
+// (started and joined inside the timing, as Pool::run's threads are)
+double spin_rate(int threads, double min_seconds) {
+  const long rounds = 4'000'000;  // ~5 ms on one thread
+  volatile double sink = 0;
+  return rate(rounds, min_seconds, [&] {
+    std::vector<std::thread> others;
+    std::vector<double> result(size_t(threads) * 8, 0.0);  // each thread's result on its own cache line
+    for (int t = 1; t < threads; ++t)
+      others.emplace_back([&, t] { result[size_t(t) * 8] = spin(rounds / threads, t); });
+    result[0] = spin(rounds / threads, 0);
+    for (auto& t : others) t.join();
+    for (int t = 0; t < threads; ++t) sink = sink + result[size_t(t) * 8];
+  });
 }
 
 }  // namespace
@@ -107,6 +139,9 @@ int main(int argc, char** argv) {
       print(name.c_str(), "dqdd", K, how.c_str(),
             rate(K, min_seconds, [&] { batch::forward_dynamics_derivatives(pool, s.Q, s.V, s.TAU, DQ, DV); }));
     }
+    // the control, beside this K's rows: what 2 threads give on this machine at this moment
+    print("control", "spin", K, "1 thread", spin_rate(1, min_seconds));
+    print("control", "spin", K, "2 threads", spin_rate(2, min_seconds));
   }
   return 0;
 }
