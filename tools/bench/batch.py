@@ -16,7 +16,10 @@ best of three windows of at least --min-seconds.  Prints a Markdown table.
 
 The last column is the machine's own 2-thread ceiling at that moment: soadyn_bench_batch's control
 loop (independent multiply-add chains in registers: no memory traffic, nothing shared), its fixed
-work on one std::thread against split over two, timed right after that K's rows.
+work on one std::thread against split over two, timed right after that K's rows.  The one after
+it: the process's CPU time per state of the C++ batch on 2 threads over 1 thread, which the share
+of the CPUs the scheduler gives does not change: above 1, running on 2 threads costs work
+(cache lines moved between the threads, waiting, thread starts).
 """
 import argparse
 import json
@@ -61,6 +64,7 @@ def main():
               ("quadruped_18.urdf", os.path.join(folder, "quadruped_18.urdf"), True, "18-DOF free-floating quadruped")]
     rows = {}  # (model, what, K) -> {how: states/s}
     control = {}  # (model, K) -> {"1 thread": rounds/s, "2 threads": rounds/s}
+    cpu = {}  # (model, what, K, how) -> the process's CPU seconds per state (C++ rows)
     for key, path, free, _ in models:
         model = soadyn.load(path, free_root=free)
         rng = np.random.default_rng(5)
@@ -75,6 +79,7 @@ def main():
                     control[(key, r["K"])] = control.get((key, r["K"]), {}) | {r["how"]: r["states_per_second"]}
                 else:
                     rows.setdefault((r["model"], r["what"], r["K"]), {})[r["how"]] = r["states_per_second"]
+                    cpu[(r["model"], r["what"], r["K"], r["how"])] = r["cpu_seconds_per_state"]
             q = np.array([model.normalize(rng.uniform(-1, 1, model.nq)) for _ in range(K)])
             v = rng.uniform(-1, 1, (K, model.nv))
             tau = rng.uniform(-3, 3, (K, model.nv))
@@ -85,8 +90,9 @@ def main():
                 rows[(key, "dqdd", K)][how] = rate(K, args.min_seconds, lambda: pool.fd_derivatives(q, v, tau, minv=False))
     hows = ["C++ loop", "C++ batch, 1 thread", "C++ batch, 2 threads", "Python batch, 1 thread", "Python batch, 2 threads"]
     print(f"load average at the end: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
-    print("| model | | K | " + " | ".join(hows) + " | Python 1 t / C++ loop | 2 t / 1 t (C++) | 2 t / 1 t (control) |")
-    print("|---|---|---:|" + "---:|" * (len(hows) + 3))
+    print("| model | | K | " + " | ".join(hows) + " | Python 1 t / C++ loop | 2 t / 1 t (C++) | 2 t / 1 t (control) | "
+          "CPU per state 2 t / 1 t (C++) |")
+    print("|---|---|---:|" + "---:|" * (len(hows) + 4))
     for key, _, _, label in models:
         for what in ("qdd", "dqdd"):
             for K in Ks:
@@ -95,7 +101,8 @@ def main():
                 print(f"| {label} | {'q̈' if what == 'qdd' else '∂q̈'} | {K:,} | {cells} | "
                       f"{r['Python batch, 1 thread'] / r['C++ loop']:.2f} | "
                       f"{r['C++ batch, 2 threads'] / r['C++ batch, 1 thread']:.2f} | "
-                      f"{c['2 threads'] / c['1 thread']:.2f} |")
+                      f"{c['2 threads'] / c['1 thread']:.2f} | "
+                      f"{cpu[(key, what, K, 'C++ batch, 2 threads')] / cpu[(key, what, K, 'C++ batch, 1 thread')]:.2f} |")
 
 
 if __name__ == "__main__":

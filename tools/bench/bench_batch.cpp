@@ -10,6 +10,7 @@
 #include "soadyn/scenario.hpp"
 
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -39,12 +40,27 @@ States random_states(const Model& m, long K) {
   return s;
 }
 
-// the best of three windows, each repeating f until it has run min_seconds: states per second
+// CPU time of the whole process (every thread), s
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+}
+
+// states per second, and the process's CPU seconds per state in that window: what the threads
+// spent, whatever share of the CPUs the scheduler gave them (work added by running on 2 threads,
+// such as cache lines bounced between them, would show as more CPU per state than on 1)
+struct Rate {
+  double per_second = 0, cpu_per_state = 0;
+};
+
+// the best of three windows, each repeating f until it has run min_seconds
 template <class F>
-double rate(long K, double min_seconds, F&& f) {
-  double best = 0;
+Rate rate(long K, double min_seconds, F&& f) {
+  Rate best;
   for (int window = 0; window < 3; ++window) {
     long reps = 0;
+    const double c0 = process_cpu_seconds();
     const auto t0 = std::chrono::steady_clock::now();
     double elapsed = 0;
     do {
@@ -52,14 +68,16 @@ double rate(long K, double min_seconds, F&& f) {
       ++reps;
       elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     } while (elapsed < min_seconds);
-    best = std::max(best, double(K) * double(reps) / elapsed);
+    const double states = double(K) * double(reps);
+    if (states / elapsed > best.per_second) best = {states / elapsed, (process_cpu_seconds() - c0) / states};
   }
   return best;
 }
 
-void print(const char* model, const char* what, long K, const char* how, double per_second) {
-  std::printf("{\"model\": \"%s\", \"what\": \"%s\", \"K\": %ld, \"how\": \"%s\", \"states_per_second\": %.6g}\n", model,
-              what, K, how, per_second);
+void print(const char* model, const char* what, long K, const char* how, Rate r) {
+  std::printf("{\"model\": \"%s\", \"what\": \"%s\", \"K\": %ld, \"how\": \"%s\", \"states_per_second\": %.6g, "
+              "\"cpu_seconds_per_state\": %.6g}\n",
+              model, what, K, how, r.per_second, r.cpu_per_state);
   std::fflush(stdout);
 }
 
@@ -77,7 +95,7 @@ double spin(long n, double seed) {
 
 // rounds per second of `spin` on `threads` std::threads, each its share of a fixed amount of work
 // (started and joined inside the timing, as Pool::run's threads are)
-double spin_rate(int threads, double min_seconds) {
+Rate spin_rate(int threads, double min_seconds) {
   const long rounds = 4'000'000;  // ~5 ms on one thread
   volatile double sink = 0;
   return rate(rounds, min_seconds, [&] {
