@@ -131,3 +131,39 @@ def test_shapes_refused():
         soadyn._soadyn._simulate_states(scene, scene.settings, np.zeros((3, 3)), np.zeros((3, 2)))
     with pytest.raises(soadyn.Error, match=r"v0: expected shape \(3, 2\)"):
         soadyn._soadyn._simulate_states(scene, scene.settings, np.zeros((3, 2)), np.zeros((2, 2)))
+
+
+def test_ctrl_c_stops_a_batched_task_and_the_sweep_resumes(tmp_path):
+    """SIGINT in the middle of a task's batched call ends `soadyn sweep --scheduler serial` within a
+    fraction of the task (the call polls Python's signal handlers), writes no part for that task, and
+    the same command then runs only the cases left"""
+    import signal
+    import subprocess
+    import time
+    from conftest import SOADYN
+    sweep = tmp_path / "long.sweep.yaml"
+    sweep.write_text(f"""\
+scenario: {SCENARIOS}/double_pendulum.yaml
+set: {{simulation.t_end: 4.0, simulation.output_dt: 0.5, simulation.method: rk4, simulation.dt: 1.0e-4}}
+vary:
+  - {{path: initial.q.theta1, uniform: [-2.0, 2.0], count: 120}}
+""")
+    out = tmp_path / "out"
+    t_start = time.monotonic()
+    p = subprocess.Popen([SOADYN, "sweep", str(sweep), "-o", str(out), "--scheduler", "serial", "--batch-size", "40", "-q"],
+                         stderr=subprocess.PIPE, text=True)
+    parts = out / "parts"
+    while not (parts.is_dir() and any(n.endswith(".json") for n in os.listdir(parts))):
+        assert p.poll() is None and time.monotonic() - t_start < 300, "no task finished"
+        time.sleep(0.01)
+    first_task = time.monotonic() - t_start  # the process's start and one task of 40 cases
+    time.sleep(0.2)
+    t0 = time.monotonic()
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 130 and "sweep interrupted" in err, err
+    assert time.monotonic() - t0 < 0.5 * first_task  # not at the end of the task (~0.8 first_task away)
+    done = sorted(n for n in os.listdir(parts) if n.endswith(".json"))
+    assert 1 <= len(done) < 3
+    r = soadyn.sweep(str(sweep), str(out), scheduler="serial", quiet=True)
+    assert r.skipped == 40 * len(done) and r.ran == 120 - r.skipped and r.failed == 0
