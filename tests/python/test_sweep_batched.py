@@ -43,7 +43,7 @@ def both_ways(scenario, settings, cases, reference=None):
 def test_double_pendulum_rows_bit_for_bit():
     """two methods × 9 initial states (by name and by index, q and qd, ints, tiny, -0.0, the parser's
     bound) against a CVODE reference, and cases that run alone: values the parser refuses (beyond
-    its bound, a boolean, text), a mass varied (a group of one)"""
+    its bound, a boolean, text, an int no double holds, NaN), a mass varied (a group of one)"""
     rng = np.random.default_rng(3)
     states = [{"initial.q.theta1": float(a), "initial.q[1]": float(b), "initial.qd.theta2": float(c)}
               for a, b, c in rng.uniform(-2, 2, (5, 3))]
@@ -53,7 +53,8 @@ def test_double_pendulum_rows_bit_for_bit():
                {"initial.q.theta1": -1e-300, "initial.q[1]": 0.5, "initial.qd.theta2": 2.5}]
     alone = [{"initial.q.theta1": 2e6, "initial.q[1]": 0.1, "initial.qd.theta2": 0.0},
              {"initial.q.theta1": True, "initial.q[1]": 0.1, "initial.qd.theta2": 0.0},
-             {"initial.q.theta1": "0.5", "initial.q[1]": 0.1, "initial.qd.theta2": 0.0}]
+             {"initial.q.theta1": "0.5", "initial.q[1]": 0.1, "initial.qd.theta2": 0.0},
+             {"initial.q.theta1": 2 ** 1100, "initial.q[1]": 0.1, "initial.qd.theta2": math.nan}]
     cases = []
     for method in ("rk4", "cvode-adams"):
         for values in states + alone:

@@ -38,7 +38,9 @@ def _initial_path(path: str) -> bool:
 
 def _number(value) -> bool:
     """a value the parser reads as this same double for a one-DOF joint's initial q or qd"""
-    return type(value) in (int, float) and math.isfinite(value) and abs(value) <= MAX_STATE
+    # abs() first: an int too large for a double compares exactly instead of overflowing; NaN and
+    # infinities fail the comparison
+    return type(value) in (int, float) and abs(value) <= MAX_STATE
 
 
 def _slot(model, path: str) -> Optional[Tuple[int, int]]:
