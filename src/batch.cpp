@@ -34,31 +34,48 @@ void Pool::run(long K, const std::function<void(Worker&, long, long)>& f) {
     f(worker(0), 0, K);
     return;
   }
-  // chunks handed out in order from one counter: about 8 per thread, so a slow thread (the machine
-  // is shared) does not hold up the others; which thread takes a chunk changes no result
-  const long chunk = std::max(1L, K / (8L * n));
-  // the first chunk here, timed: is the rest worth starting threads for?
+  // the first states here, timed: is the rest worth starting threads for?  A few states only (1, 2,
+  // 4, … until kProbeSeconds), not a whole chunk: what runs before the threads start runs on one
+  // thread (a first chunk of K/16 held 2 threads to 16/8.5 = 1.88× at best)
   Worker& first = worker(0);
   const auto t0 = std::chrono::steady_clock::now();
-  f(first, 0, chunk);
-  const double per_state = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / double(chunk);
-  if (double(K - chunk) * per_state < worth_a_thread) {
-    f(first, chunk, K);
+  long probed = 0;
+  double elapsed = 0;
+  for (long m = 1; probed < K && elapsed < kProbeSeconds; m *= 2) {
+    const long end = std::min(K, probed + m);
+    f(first, probed, end);
+    probed = end;
+    elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  if (double(K - probed) * elapsed / double(probed) < worth_a_thread) {
+    f(first, probed, K);
     return;
   }
   for (int t = 1; t < n; ++t) worker(t);  // sized here, before the threads start
-  std::atomic<long> next{chunk};
+  // chunks handed out in order from one counter, guided: each a 1/(4n) share of the states not yet
+  // handed out, and at least ~kProbeSeconds of work: few grabs while much is left, a thread that
+  // stalls (the machine is shared) holds at most 1/(4n) of the rest, and the last chunks are
+  // small, so no thread idles long at the end (chunks of a fixed K/(8n) left up to one, 1/16 of
+  // the work on 2 threads, to a single thread); which thread takes a chunk changes no result
+  const long min_chunk = std::max(1L, long(double(probed) * kProbeSeconds / std::max(elapsed, 1e-9)));
+  std::atomic<long> next{probed};
+  auto grab = [&](long& begin, long& end) {
+    long b = next.load(std::memory_order_relaxed);
+    for (;;) {
+      if (b >= K) return false;
+      const long e = std::min(K, b + std::max(min_chunk, (K - b) / (4L * n)));
+      if (next.compare_exchange_weak(b, e, std::memory_order_relaxed)) {
+        begin = b, end = e;
+        return true;
+      }
+    }
+  };
   std::atomic<bool> failed{false};
   std::exception_ptr error;
   std::mutex error_mutex;
   auto work = [&](Worker& w) {
     try {
-      for (;;) {
-        if (failed.load(std::memory_order_relaxed)) return;
-        const long begin = next.fetch_add(chunk);
-        if (begin >= K) return;
-        f(w, begin, std::min(K, begin + chunk));
-      }
+      for (long begin, end; !failed.load(std::memory_order_relaxed) && grab(begin, end);) f(w, begin, end);
     } catch (...) {
       std::lock_guard<std::mutex> lock(error_mutex);
       if (!error) error = std::current_exception();

@@ -225,4 +225,86 @@ RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, co
   return report;
 }
 
+namespace {
+
+// What simulate_states keeps of each sample: the first one's energy, and with `states` t and [q; v].
+class StateRecorder : public RunObserver {
+ public:
+  StateRecorder(StateRun& run, bool states) : run_(run), states_(states) {}
+  void on_sample(const Sample& s) override {
+    if (first_) run_.initial_energy = s.total, first_ = false;
+    if (!states_) return;
+    run_.t.push_back(s.t);
+    run_.y.insert(run_.y.end(), s.q.data(), s.q.data() + s.q.size());
+    run_.y.insert(run_.y.end(), s.qd.data(), s.qd.data() + s.qd.size());
+  }
+  void on_finish(const RunSummary&) override {}
+
+ private:
+  StateRun& run_;
+  bool states_, first_ = true;
+};
+
+}  // namespace
+
+std::vector<StateRun> simulate_states(const Scenario& sc, const SimulationSettings& settings, batch::In Q0, batch::In V0,
+                                      int threads, bool record_states, const std::atomic<int>* stop,
+                                      std::function<void()> poll) {
+  const Model& m = sc.model;
+  const long K = Q0.cols();
+  check_shape("simulate_states: Q0", Q0.rows(), K, m.nq, K, "nq rows, one column per run");
+  check_shape("simulate_states: V0", V0.rows(), V0.cols(), m.nv, K, "nv rows, one column per run");
+  std::vector<StateRun> runs(static_cast<size_t>(K));
+  std::atomic<long> next{0};
+  // one thread's runs, taken one at a time from `next`, on its own copy of the scenario (simulate
+  // reads q₀ and v₀ from it); each run is simulate() itself, so nothing depends on which thread
+  // takes it
+  auto work = [&](const std::function<void()>& thread_poll) {
+    Scenario own = sc;
+    for (;;) {
+      const long k = next.fetch_add(1);
+      if (k >= K) return;
+      if (stop && stop->load(std::memory_order_relaxed) != 0) return;
+      StateRun& run = runs[size_t(k)];
+      own.q0 = Q0.col(k);
+      own.v0 = V0.col(k);
+      StateRecorder recorder(run, record_states);
+      try {
+        run.warnings = check_run(own, settings);  // what soadyn.simulate warns of, in its order
+        run.summary = simulate(own, settings, &recorder, nullptr, stop, thread_poll);
+      } catch (const Error& e) {
+        run.refused = e.what();
+        run.warnings.clear();
+        continue;
+      }
+      run.ran = true;
+      run.warnings.insert(run.warnings.end(), run.summary.warnings.begin(), run.summary.warnings.end());
+    }
+  };
+  const int n = int(std::min<long>(batch::resolve_threads(threads), std::max(1L, K)));
+  if (n == 1) {
+    work(poll);
+    return runs;
+  }
+  // the calling thread takes runs too, and is the one that polls
+  std::exception_ptr error;
+  std::mutex mutex;
+  std::vector<std::thread> others;
+  others.reserve(size_t(n - 1));
+  auto guarded = [&](const std::function<void()>& thread_poll) {
+    try {
+      work(thread_poll);
+    } catch (...) {  // not a refusal (those are kept per run): e.g. out of memory
+      std::lock_guard<std::mutex> lock(mutex);
+      if (!error) error = std::current_exception();
+      next = K;
+    }
+  };
+  for (int w = 1; w < n; ++w) others.emplace_back([&] { guarded({}); });
+  guarded(poll);
+  for (auto& t : others) t.join();
+  if (error) std::rethrow_exception(error);
+  return runs;
+}
+
 }  // namespace soadyn

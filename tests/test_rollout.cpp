@@ -242,5 +242,58 @@ TEST(Rollout, StopEndsTheCall) {
   EXPECT_EQ(rep.completed, 0);
 }
 
+// simulate_states (soadyn sweep's runs of one scenario from K initial states): each run is
+// simulate() from that state, to the last bit, on 1 and 2 threads; a start past an enforced limit
+// is that run's refusal alone
+TEST(SimulateStates, EachRunIsSimulateWhateverTheThreadCount) {
+  for (const char* name : {"double_pendulum.yaml", "arm_control_limits.yaml"}) {
+    Scenario sc = load_scenario(scenario_path(name));
+    sc.simulation.t_end = 0.3;
+    if (sc.simulation.method != "cvode-adams") sc.simulation.method = "rk4";
+    const Model& m = sc.model;
+    const long K = 5;
+    MatX Y0 = initial_states(sc, K);
+    Y0(m.idx_q[m.nbodies - 1], 2) = 2.6;  // past the arm's elbow limit (2.5); the pendulum just swings
+    const MatX Q0 = Y0.topRows(m.nq), V0 = Y0.bottomRows(m.nv);
+    for (int threads : {1, 2}) {
+      const std::vector<StateRun> runs = simulate_states(sc, sc.simulation, Q0, V0, threads, true);
+      ASSERT_EQ(runs.size(), size_t(K));
+      for (long k = 0; k < K; ++k) {
+        SCOPED_TRACE(std::string(name) + " run " + std::to_string(k) + ", " + std::to_string(threads) + " threads");
+        Scenario one = sc;
+        one.q0 = Q0.col(k);
+        one.v0 = V0.col(k);
+        std::vector<Sample> samples;
+        RunSummary expected;
+        try {
+          expected = simulate(one, one.simulation, nullptr, &samples);
+        } catch (const Error& e) {
+          EXPECT_FALSE(runs[k].ran);
+          EXPECT_EQ(runs[k].refused, e.what());
+          continue;
+        }
+        ASSERT_TRUE(runs[k].ran) << runs[k].refused;
+        EXPECT_EQ(runs[k].summary.status, expected.status);
+        EXPECT_EQ(runs[k].summary.stats.steps, expected.stats.steps);
+        EXPECT_EQ(runs[k].summary.stats.rhs_evals, expected.stats.rhs_evals);
+        EXPECT_EQ(runs[k].summary.max_energy_balance_error, expected.max_energy_balance_error);
+        EXPECT_EQ(runs[k].summary.final_energy_balance_error, expected.final_energy_balance_error);
+        EXPECT_EQ(runs[k].initial_energy, samples.front().total);
+        const long ny = m.nq + m.nv;
+        ASSERT_EQ(runs[k].t.size(), samples.size());
+        for (size_t j = 0; j < samples.size(); ++j) {
+          EXPECT_EQ(runs[k].t[j], samples[j].t);
+          const Eigen::Map<const VecX> y(runs[k].y.data() + long(j) * ny, ny);
+          EXPECT_EQ(y.head(m.nq), samples[j].q);
+          EXPECT_EQ(y.tail(m.nv), samples[j].qd);
+        }
+      }
+      if (std::string(name) == "arm_control_limits.yaml") {
+        EXPECT_FALSE(runs[2].ran);
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace soadyn

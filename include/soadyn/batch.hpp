@@ -13,7 +13,7 @@
 //
 // No allocation per state: the Pool sizes every per-thread array once, when a thread first needs it
 // (the derivatives' workspace on the first derivative call); a call allocates only the threads it
-// starts.  A thread costs ~0.1 ms to start and join: the calling thread times its first chunk and
+// starts.  A thread costs ~0.1 ms to start and join: the calling thread times its first states and
 // starts the others only when the rest of the work is worth it (kWorthAThread), so small batches
 // run on the calling thread alone.
 #pragma once
@@ -40,6 +40,9 @@ int resolve_threads(int threads);
 // work left (seconds on one thread) below which Pool::run starts no other thread: several thread
 // starts, so that a second thread at least halves what is left after paying for its start
 inline constexpr double kWorthAThread = 5e-4;
+// how long Pool::run times its first states for (seconds): enough states for a rate, few enough that
+// the one thread working meanwhile costs the others little
+inline constexpr double kProbeSeconds = 2e-5;
 
 // One Data (and, on demand, one DerivativeData) per thread, sized once from the model.
 class Pool {
@@ -59,8 +62,8 @@ class Pool {
   };
 
   // f(worker, begin, end) over [0, K) in chunks, each chunk on one thread with that thread's
-  // worker; the calling thread takes part and times its first chunk: the other threads start only
-  // when the states left would take it longer than kWorthAThread.  An exception in any chunk is rethrown here after
+  // worker; the calling thread takes part and times its first states (kProbeSeconds): the other
+  // threads start only when the states left would take it longer than kWorthAThread.  An exception in any chunk is rethrown here after
   // every thread has stopped (the remaining chunks are skipped).
   void run(long K, const std::function<void(Worker&, long begin, long end)>& f);
 

@@ -22,9 +22,11 @@
 #include "soadyn/inputs.hpp"
 #include "soadyn/integrators.hpp"
 #include "soadyn/settings.hpp"
+#include "soadyn/simulate.hpp"
 
 #include <atomic>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -69,5 +71,31 @@ RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, co
 
 // The model's settings of a scenario: method, dt, rtol, atol, dynamics, jacobian, newton, max_step
 RolloutSettings rollout_settings(const SimulationSettings& s);
+
+// One run of simulate_states: what simulate() gave from that initial state.
+struct StateRun {
+  bool ran = false;                   // false: refused (simulate threw soadyn::Error before its first
+                                      //   step, `refused` says why) or not run (a stop came first)
+  std::string refused;
+  RunSummary summary;
+  std::vector<std::string> warnings;  // check_run's about the settings, then the run's own
+  double initial_energy = std::numeric_limits<double>::quiet_NaN();  // E at the first sample (t = 0; NaN: none)
+  std::vector<double> t;              // with record_states: each sample's time
+  std::vector<double> y;              //   and [q; v] (nq + nv numbers per sample, in sample order)
+};
+
+// K runs of one scenario from K initial states (Q0 nq×K, V0 nv×K: column k = q₀, v₀ of run k),
+// each simulate(sc with that q₀ and v₀, settings): the same function as one run, so the same
+// samples and summary to the last bit (the CPU time aside), whatever the thread count; every
+// method, the scenario's controllers and limits included.  What a batch of scenarios that differ
+// only in their initial state saves over one simulate() each: parsing the scenarios and handing
+// each run's samples one by one to the caller (soadyn sweep, per Dask task).  The runs go to
+// `threads` threads (≤ 0: one per hardware thread), each with its own copy of the scenario;
+// `stop` is read before every step of every run and `poll` runs on the calling thread (before
+// every step of the runs it takes), as in simulate(); the runs a stop leaves unstarted have
+// ran = false and an empty `refused`.  Throws soadyn::Error for Q0 or V0 of the wrong shape.
+std::vector<StateRun> simulate_states(const Scenario& sc, const SimulationSettings& settings, batch::In Q0, batch::In V0,
+                                      int threads, bool record_states, const std::atomic<int>* stop = nullptr,
+                                      std::function<void()> poll = {});
 
 }  // namespace soadyn

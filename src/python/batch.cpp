@@ -281,6 +281,68 @@ unsigned long main_thread() {
 }
 
 
+// On Python's main thread: a poll that runs Python's signal handlers every 10 ms; one that raises
+// (Ctrl-C: KeyboardInterrupt) has its exception kept in `pending` and sets `stop`.  Elsewhere none
+// (handlers run on the main thread only).
+std::function<void()> signal_poll(std::atomic<int>& stop, py::object& pending) {
+  if (PyThread_get_thread_ident() != main_thread()) return {};
+  return [&stop, &pending, last = std::chrono::steady_clock::now()]() mutable {
+    if (stop.load(std::memory_order_relaxed) != 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last < std::chrono::milliseconds(10)) return;
+    last = now;
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) {
+      PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
+      PyErr_Fetch(&type, &value, &trace);
+      PyErr_NormalizeException(&type, &value, &trace);
+      if (trace) PyException_SetTraceback(value, trace);
+      pending = py::reinterpret_steal<py::object>(value);
+      Py_XDECREF(type);
+      Py_XDECREF(trace);
+      stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
+    }
+  };
+}
+
+// soadyn sweep's runs of one scenario from K initial states (simulate_states, rollout.hpp): per run
+// (refusal or None, summary dict, warnings, E at t = 0, t (T,) and [q v] (T, nq + nv) or None);
+// a Python signal handler's exception (Ctrl-C) is raised once the runs have stopped
+py::list run_states(const Scenario& sc, const SimulationSettings& settings, py::handle q0, py::handle v0, int threads,
+                    bool states) {
+  const char* where = "simulate_states";
+  py::ssize_t K = -1;
+  const Arg Q0 = read_states(where, "q0", q0, sc.model.nq, "nq", K, "");
+  const Arg V0 = read_states(where, "v0", v0, sc.model.nv, "nv", K, "q0");
+  std::atomic<int> stop{0};
+  py::object pending = py::none();
+  const std::function<void()> poll = signal_poll(stop, pending);
+  std::vector<StateRun> runs;
+  nogil([&] { runs = simulate_states(sc, settings, Q0.map, V0.map, threads_arg(where, threads), states, &stop, poll); });
+  if (!pending.is_none()) {  // the handler's exception as raised (KeyboardInterrupt): the runs are dropped
+    PyErr_SetObject(reinterpret_cast<PyObject*>(Py_TYPE(pending.ptr())), pending.ptr());
+    throw py::error_already_set();
+  }
+  const py::ssize_t ny = sc.model.nq + sc.model.nv;
+  py::list out;
+  for (StateRun& r : runs) {
+    if (!r.ran) {
+      out.append(py::make_tuple(r.refused, py::none(), py::list(), 0.0, py::none(), py::none()));
+      continue;
+    }
+    const RunSummary& s = r.summary;
+    py::dict summary("status"_a = s.status, "completed"_a = s.completed, "t_reached"_a = s.t_reached,
+                     "steps"_a = s.stats.steps, "rhs_evals"_a = s.stats.rhs_evals, "cpu_seconds"_a = s.cpu_seconds,
+                     "max_energy_balance_error"_a = s.max_energy_balance_error,
+                     "final_energy_balance_error"_a = s.final_energy_balance_error);
+    const py::ssize_t T = py::ssize_t(r.t.size());
+    out.append(py::make_tuple(py::none(), summary, r.warnings, r.initial_energy,
+                              states ? py::object(owned(std::move(r.t), {T})) : py::none(),
+                              states ? py::object(owned(std::move(r.y), {T, ny})) : py::none()));
+  }
+  return out;
+}
+
 // (states, energies or None, status list, exception raised by a signal handler or None)
 py::tuple run_rollout(py::object scene, py::handle initial_states, py::object controls, std::optional<long> steps,
                       std::optional<double> dt, std::optional<std::string> method, int threads,
@@ -370,27 +432,7 @@ py::tuple run_rollout(py::object scene, py::handle initial_states, py::object co
   // Ctrl-C: on Python's main thread the library polls Python's signal handlers every 10 ms
   std::atomic<int> stop{0};
   py::object pending = py::none();
-  std::function<void()> poll;
-  if (PyThread_get_thread_ident() == main_thread()) {
-    auto last = std::chrono::steady_clock::now();
-    poll = [&, last]() mutable {
-      if (stop.load(std::memory_order_relaxed) != 0) return;
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last < std::chrono::milliseconds(10)) return;
-      last = now;
-      py::gil_scoped_acquire gil;
-      if (PyErr_CheckSignals() != 0) {
-        PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
-        PyErr_Fetch(&type, &value, &trace);
-        PyErr_NormalizeException(&type, &value, &trace);
-        if (trace) PyException_SetTraceback(value, trace);
-        pending = py::reinterpret_steal<py::object>(value);
-        Py_XDECREF(type);
-        Py_XDECREF(trace);
-        stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
-      }
-    };
-  }
+  const std::function<void()> poll = signal_poll(stop, pending);
   RolloutReport report;
   nogil([&] {
     const batch::In Y(Y0.map);
@@ -411,6 +453,9 @@ void bind_batch(py::module_& m) {
         "atol"_a = py::none(), "energies"_a = true,
         "The rollouts behind soadyn.rollout: (states, energies or None, status per rollout, exception from a signal "
         "handler or None).");
+  m.def("_simulate_states", &run_states, "scene"_a, "settings"_a, "q0"_a, "v0"_a, "threads"_a = 1, "states"_a = false,
+        "soadyn sweep's runs of one scene from K initial states, each exactly soadyn.simulate's: per run (refusal or "
+        "None, summary, warnings, E(0), t or None, [q v] or None).");
 }
 
 }  // namespace soadyn::python

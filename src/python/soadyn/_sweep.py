@@ -332,7 +332,9 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
     'tcp://host:8786' or a distributed.Client for an existing cluster; 'serial' for a plain loop in
     this process without Dask.  batch_size: cases per Dask task (default: guided sizes, each a
     third of a worker's share of what is left, from at most 1000 down to 20).  keep_logs: each case's HDF5 log in out/logs/ (written by the worker:
-    a remote cluster needs out on a shared file system).  drop_bad_parts: set aside (as NAME.bad)
+    a remote cluster needs out on a shared file system; each case then runs alone, one
+    soadyn.simulate, instead of with the task's cases that differ from it only in their initial
+    state, which otherwise run as one library call: soadyn._batched).  drop_bad_parts: set aside (as NAME.bad)
     each part file in out/parts that this sweep did not write, instead of stopping at it.  Results
     are the same, bit for bit (CPU times aside), whichever way the cases run.  Raises soadyn.Error
     if out is in use by another sweep (out/sweep.lock)."""

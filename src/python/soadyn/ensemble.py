@@ -740,16 +740,37 @@ def _state(traj) -> np.ndarray:
     return np.hstack([traj.q, traj.v])
 
 
+def empty_row() -> Dict[str, Any]:
+    """A case's row before its run (a refused case keeps it so, with its status)."""
+    return {"status": "", "completed": False, "initial_energy": math.nan, "t_reached": math.nan, "steps": 0,
+            "rhs_evals": 0, "cpu_seconds": math.nan, "max_energy_balance_error": math.nan,
+            "final_energy_balance_error": math.nan, "state_error": math.nan, "final_state_error": math.nan,
+            "reference_status": ""}
+
+
+def compare_reference(row: Dict[str, Any], t: np.ndarray, y: np.ndarray, completed: bool, ref) -> None:
+    """The row's state errors: the run's samples (t, y = [q v] per row) against its reference run's
+    (t_ref, y_ref, whether it completed): the largest difference over the common output times,
+    and at t_end when both completed."""
+    t_ref, y_ref, ref_done = ref
+    # the samples at common times (a step that does not divide output_dt samples at step
+    # times; every run that completes has its last sample at t_end)
+    k = np.clip(np.searchsorted(t_ref, t), 0, len(t_ref) - 1)
+    same = np.abs(t_ref[k] - t) <= 1e-12 * np.maximum(1.0, np.abs(t))
+    if np.any(same):
+        diff = np.abs(y[same] - y_ref[k[same]])
+        row["state_error"] = float(np.max(diff)) if np.all(np.isfinite(diff)) else math.inf
+    if completed and ref_done:
+        row["final_state_error"] = float(np.max(np.abs(y[-1] - y_ref[-1])))
+
+
 def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any],
              reference: Optional[Dict[str, Any]] = None, log: Optional[str] = None,
              cache: Optional[dict] = None) -> Dict[str, Any]:
     """One case's row: status, steps, RHS evaluations, CPU time, energy errors, state error
     against the reference run (max over the common output samples, and at t_end)."""
     from . import simulate
-    row: Dict[str, Any] = {"status": "", "completed": False, "initial_energy": math.nan, "t_reached": math.nan,
-                           "steps": 0, "rhs_evals": 0,
-                           "cpu_seconds": math.nan, "max_energy_balance_error": math.nan, "final_energy_balance_error": math.nan,
-                           "state_error": math.nan, "final_state_error": math.nan, "reference_status": ""}
+    row = empty_row()
     try:
         tree = apply(sweep_tree, model, values)
         scene = parse_scenario(_text(tree), case_path(scenario_path))
@@ -778,30 +799,31 @@ def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any]
                 cache[key] = (rstatus, ref)
         row["reference_status"] = rstatus
         if ref is not None:
-            t_ref, y_ref, ref_done = ref
-            y = _state(traj)
-            # the samples at common times (a step that does not divide output_dt samples at step
-            # times; every run that completes has its last sample at t_end)
-            k = np.clip(np.searchsorted(t_ref, traj.t), 0, len(t_ref) - 1)
-            same = np.abs(t_ref[k] - traj.t) <= 1e-12 * np.maximum(1.0, np.abs(traj.t))
-            if np.any(same):
-                diff = np.abs(y[same] - y_ref[k[same]])
-                row["state_error"] = float(np.max(diff)) if np.all(np.isfinite(diff)) else math.inf
-            if s.completed and ref_done:
-                row["final_state_error"] = float(np.max(np.abs(y[-1] - y_ref[-1])))
+            compare_reference(row, traj.t, _state(traj), s.completed, ref)
     return row
 
 
 def run_batch(scenario_text: str, scenario_path: str, settings: Dict[str, Any],
               cases: List[Tuple[int, Dict[str, Any]]], reference: Optional[Dict[str, Any]],
-              logs_dir: Optional[str] = None) -> List[Dict[str, Any]]:
+              logs_dir: Optional[str] = None, together: bool = True) -> List[Dict[str, Any]]:
     """A Dask task: run the given (case id, values) and return their rows.  Pure: the same input
-    gives the same rows (CPU times aside), whichever worker runs it and however often."""
+    gives the same rows (CPU times aside), whichever worker runs it and however often.  Without
+    logs_dir (and with together), the cases that differ only in their initial state run together,
+    one library call per such group (soadyn._batched); the rest, and every case with logs_dir,
+    one soadyn.simulate each: the rows are the same, bit for bit, either way."""
     tree = yaml.load(scenario_text, Loader=_FastLoader)
     model = parse_scenario(scenario_text, case_path(scenario_path)).model
     cache: dict = {}
+    done: Dict[int, Dict[str, Any]] = {}
+    if together and not logs_dir:
+        from ._batched import run_together
+        done = run_together(tree, model, scenario_path, [(cid, dict(settings, **values)) for cid, values in cases],
+                            reference, cache)
     rows = []
     for cid, values in cases:
+        if cid in done:
+            rows.append(done[cid])
+            continue
         log = None
         if logs_dir:
             os.makedirs(logs_dir, exist_ok=True)
