@@ -41,8 +41,7 @@ VecX System::state(const VecX& q0, const VecX& v0) const {
   return y;
 }
 
-void System::rhs(double t, const double* y, double* ydot) {
-  ++rhs_evals;
+void System::at_state(double t, const double* y) {
   q = Eigen::Map<const VecX>(y, model.nq);
   v = Eigen::Map<const VecX>(y + model.nq, model.nv);
   update_kinematics(model, data, q);
@@ -54,6 +53,11 @@ void System::rhs(double t, const double* y, double* ydot) {
     feedback(t, q, v, feedback_tau);
     tau += feedback_tau;
   }
+}
+
+void System::rhs(double t, const double* y, double* ydot) {
+  ++rhs_evals;
+  at_state(t, y);
   forward_dynamics(model, data, tau, method);
   if (limits) limits->constrain(*this);  // held DOFs: their constraint forces
   model.qdot(q, v, qd);
@@ -77,17 +81,7 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   prepare_jacobian();
   ++jac_evals;
   const int nq = model.nq, nv = model.nv;
-  q = Eigen::Map<const VecX>(y, nq);
-  v = Eigen::Map<const VecX>(y + nq, nv);
-  update_kinematics(model, data, q);
-  update_velocities(model, data, v);
-  inputs.evaluate(t, q, v, tau);
-  if (controlled) tau += control;
-  if (feedback) {
-    feedback_tau.setZero();
-    feedback(t, q, v, feedback_tau);
-    tau += feedback_tau;
-  }
+  at_state(t, y);
   forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
   const MatX& dq = derivatives->dqdd_dq;
   J.setZero();
@@ -121,17 +115,7 @@ void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out)
   prepare_jacobian();
   const int nq = model.nq, nv = model.nv;
   const Eigen::Index ns = S.cols();
-  q = Eigen::Map<const VecX>(y, nq);
-  v = Eigen::Map<const VecX>(y + nq, nv);
-  update_kinematics(model, data, q);
-  update_velocities(model, data, v);
-  inputs.evaluate(t, q, v, tau);
-  if (controlled) tau += control;
-  if (feedback) {
-    feedback_tau.setZero();
-    feedback(t, q, v, feedback_tau);
-    tau += feedback_tau;
-  }
+  at_state(t, y);
   forward_dynamics(model, data, tau, FdMethod::Sparse);  // q̈ and 𝓜's LᵀDL factor
   DerivativeData& dd = *derivatives;
   inverse_dynamics_derivatives(model, data, v, data.qdd, dd);

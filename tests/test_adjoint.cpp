@@ -90,26 +90,11 @@ TEST(Adjoint, DoublePendulumMatchesForwardSensitivitiesBdf) {
 }
 
 TEST(Adjoint, RandomChainWithInputsMatchesForwardSensitivities) {
-  Rng rng(7);
-  Scenario sc;
-  sc.path = "random chain";
-  sc.model = random_model(rng, {.n = 4, .branching = 0.0, .prismatic = 0.25});
-  sc.q0 = random_q(rng, sc.model);
-  sc.v0 = random_v(rng, sc.model);
-  sc.inputs.springs.push_back({"", 0, 0, 3.0, 0.2});
-  sc.inputs.dampers.push_back({"", 1, 0.4});
-  sc.inputs.torques.push_back({"", 3, 0.3, 0.5, 1.5, 0.2});
-  check_against_forward(sc, tight("cvode-adams", 0.8), {true, {"b1", "b3"}}, 3);
+  check_against_forward(random_chain_with_inputs(), tight("cvode-adams", 0.8), {true, {"b1", "b3"}}, 3);
 }
 
 TEST(Adjoint, FreeRootTreeMatchesForwardSensitivitiesAlongTheTangent) {
-  Rng rng(11);
-  Scenario sc;
-  sc.path = "random free tree";
-  sc.model = random_model(rng, {.n = 3, .branching = 0.5, .ball = 0.34, .free_root = true});
-  sc.q0 = random_q(rng, sc.model);
-  sc.v0 = random_v(rng, sc.model);
-  check_against_forward(sc, tight("cvode-bdf", 0.6), {true, {"b0", "b2"}}, 4);
+  check_against_forward(random_free_tree(), tight("cvode-bdf", 0.6), {true, {"b0", "b2"}}, 4);
 }
 
 TEST(Adjoint, SevenDofArmMatchesForwardSensitivities) {

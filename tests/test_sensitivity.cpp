@@ -141,28 +141,14 @@ TEST(Sensitivity, DoublePendulumMatchesCentralDifferencesBdf) {
 }
 
 TEST(Sensitivity, RandomChainWithInputsMatchesCentralDifferences) {
-  Rng rng(7);
-  Scenario sc;
-  sc.path = "random chain";
-  sc.model = random_model(rng, {.n = 4, .branching = 0.0, .prismatic = 0.25});
-  sc.q0 = random_q(rng, sc.model);
-  sc.v0 = random_v(rng, sc.model);
-  // a spring and a damper on the first joint, a sinusoidal torque on the last: ∂τ/∂x from Inputs
-  sc.inputs.springs.push_back({"", 0, 0, 3.0, 0.2});
-  sc.inputs.dampers.push_back({"", 1, 0.4});
-  sc.inputs.torques.push_back({"", 3, 0.3, 0.5, 1.5, 0.2});
+  const Scenario sc = random_chain_with_inputs();
   SimulationSettings s = tight("cvode-adams", 0.8);
   s.sensitivities = {true, {"b1", "b3"}};
   check_against_differences(sc, s, 1e-6);
 }
 
 TEST(Sensitivity, FreeRootMatchesCentralDifferencesAlongTheTangent) {
-  Rng rng(11);
-  Scenario sc;
-  sc.path = "random free tree";
-  sc.model = random_model(rng, {.n = 3, .branching = 0.5, .ball = 0.34, .free_root = true});
-  sc.q0 = random_q(rng, sc.model);
-  sc.v0 = random_v(rng, sc.model);
+  const Scenario sc = random_free_tree();
   SimulationSettings s = tight("cvode-bdf", 0.6);
   s.sensitivities = {true, {"b0", "b2"}};
   check_against_differences(sc, s, 1e-6);

@@ -1,9 +1,10 @@
 // What the tests of a whole run's derivatives share (test_sensitivity, test_adjoint): tight CVODE
-// settings, and a ball falling freely, whose derivatives have closed forms.
+// settings, a ball falling freely (its derivatives have closed forms) and two seeded random scenes.
 #pragma once
 
 #include "soadyn/scenario.hpp"
 #include "soadyn/settings.hpp"
+#include "test_util.hpp"
 
 #include <string>
 
@@ -35,6 +36,32 @@ inline Scenario falling_ball() {
   sc.q0.head(3) = Vec3(0.5, -1.0, 3.0);
   sc.v0 = VecX::Zero(6);
   sc.v0.tail(3) = Vec3(1.0, 0.0, 2.0);
+  return sc;
+}
+
+// a seeded random chain of 4 (a quarter prismatic) with a spring and a damper on its first joints
+// and a sinusoidal torque on the last, so that ∂τ/∂x comes from Inputs too
+inline Scenario random_chain_with_inputs() {
+  Rng rng(7);
+  Scenario sc;
+  sc.path = "random chain";
+  sc.model = random_model(rng, {.n = 4, .branching = 0.0, .prismatic = 0.25});
+  sc.q0 = random_q(rng, sc.model);
+  sc.v0 = random_v(rng, sc.model);
+  sc.inputs.springs.push_back({"", 0, 0, 3.0, 0.2});
+  sc.inputs.dampers.push_back({"", 1, 0.4});
+  sc.inputs.torques.push_back({"", 3, 0.3, 0.5, 1.5, 0.2});
+  return sc;
+}
+
+// a seeded random tree of 3 on a free root, a third of its joints ball joints
+inline Scenario random_free_tree() {
+  Rng rng(11);
+  Scenario sc;
+  sc.path = "random free tree";
+  sc.model = random_model(rng, {.n = 3, .branching = 0.5, .ball = 0.34, .free_root = true});
+  sc.q0 = random_q(rng, sc.model);
+  sc.v0 = random_v(rng, sc.model);
   return sc;
 }
 

@@ -63,6 +63,9 @@ class System {
   VecX state(const VecX& q0, const VecX& v0) const;
   // ẏ = [q̇(q, v); q̈; P; D]; counts evaluations
   void rhs(double t, const double* y, double* ydot);
+  // q, v and [kin], [vel] at y, and τ: the inputs', the held control's and the feedback controller's
+  // (rhs, jacobian and jacobian_times begin with it)
+  void at_state(double t, const double* y);
   // ∂f/∂y (size()×size()) by the analytic derivatives: ∂q̈/∂q along the tangent, chained to the
   // coordinates y holds (joint_tangent_map), ∂q̈/∂v, and the Jacobian of q̇(q, v) (joint_qdot_jacobian);
   // the inputs' springs and dampers included.  Counts evaluations.  The first call (or
