@@ -9,7 +9,6 @@
 #include "soadyn/scenario.hpp"
 #include "soadyn/text.hpp"
 
-#include <chrono>
 #include <csignal>
 #include <cmath>
 #include <cstdio>
@@ -272,37 +271,6 @@ between calls, for small batches called often: pool.forward_dynamics(q, v, tau),
       .def("id_derivatives", &id_derivatives, "q"_a, "v"_a, "qdd"_a, doc.id_derivatives)
       .def("fd_derivatives", &fd_derivatives, "q"_a, "v"_a, "tau"_a, "minv"_a = true, doc.fd_derivatives)
       .def("frame_jacobian", &frame_jacobian, "q"_a, "frame"_a, "reference"_a = "local_world_aligned", doc.frame_jacobian);
-}
-
-// Python's main thread (where signal handlers run), as threading.main_thread().ident
-unsigned long main_thread() {
-  static const unsigned long ident = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
-  return ident;
-}
-
-
-// On Python's main thread: a poll that runs Python's signal handlers every 10 ms; one that raises
-// (Ctrl-C: KeyboardInterrupt) has its exception kept in `pending` and sets `stop`.  Elsewhere none
-// (handlers run on the main thread only).
-std::function<void()> signal_poll(std::atomic<int>& stop, py::object& pending) {
-  if (PyThread_get_thread_ident() != main_thread()) return {};
-  return [&stop, &pending, last = std::chrono::steady_clock::now()]() mutable {
-    if (stop.load(std::memory_order_relaxed) != 0) return;
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last < std::chrono::milliseconds(10)) return;
-    last = now;
-    py::gil_scoped_acquire gil;
-    if (PyErr_CheckSignals() != 0) {
-      PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
-      PyErr_Fetch(&type, &value, &trace);
-      PyErr_NormalizeException(&type, &value, &trace);
-      if (trace) PyException_SetTraceback(value, trace);
-      pending = py::reinterpret_steal<py::object>(value);
-      Py_XDECREF(type);
-      Py_XDECREF(trace);
-      stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
-    }
-  };
 }
 
 // soadyn sweep's runs of one scenario from K initial states (simulate_states, rollout.hpp): per run

@@ -11,6 +11,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -57,6 +59,11 @@ struct PyData {
 // for the entry points that bypass pybind11's dispatcher.
 void set_python_error();
 extern PyObject* error_type;  // soadyn.Error
+
+// On Python's main thread: a poll that runs Python's signal handlers every 10 ms; one that raises
+// (Ctrl-C: KeyboardInterrupt) has its exception kept in `pending` and sets `stop`.  Elsewhere none
+// (handlers run on the main thread only).  simulate.cpp
+std::function<void()> signal_poll(std::atomic<int>& stop, py::object& pending);
 
 void bind_model(py::module_& m);
 void bind_algorithms(py::module_& m);

@@ -68,11 +68,6 @@ py::dict summary_dict(const RunSummary& r) {
                   "final_energy_balance_error"_a = r.final_energy_balance_error);
 }
 
-// Python's main thread (where signal handlers run), as threading.main_thread().ident
-unsigned long main_thread_ident() {
-  static const unsigned long ident = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
-  return ident;
-}
 
 // (arrays, summary, exception raised by a signal handler or None, warnings)
 // A Python controller f(t, q, v) -> tau as a ControlFunction: the GIL taken for the call only.  An
@@ -132,30 +127,10 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   RunSummary summary;
   std::exception_ptr failure;
   py::object pending = py::none();
-  std::function<void()> poll;
+  std::function<void()> poll = signal_poll(stop, pending);
   py::object raised = py::none();  // the controller's exception
   ControlFunction control;
   if (!controller.is_none()) control = python_controller(controller, sc.model.nv, raised);
-  if (PyThread_get_thread_ident() == main_thread_ident()) {
-    auto last = std::chrono::steady_clock::now();
-    poll = [&] {
-      if (stop.load(std::memory_order_relaxed) != 0) return;  // already stopping
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last < std::chrono::milliseconds(10)) return;
-      last = now;
-      py::gil_scoped_acquire gil;
-      if (PyErr_CheckSignals() != 0) {  // a handler raised: keep its exception, stop the run
-        PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
-        PyErr_Fetch(&type, &value, &trace);
-        PyErr_NormalizeException(&type, &value, &trace);
-        if (trace) PyException_SetTraceback(value, trace);
-        pending = py::reinterpret_steal<py::object>(value);
-        Py_XDECREF(type);
-        Py_XDECREF(trace);
-        stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
-      }
-    };
-  }
   {
     py::gil_scoped_release nogil;
     try {
@@ -205,6 +180,40 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
 }
 
 }  // namespace
+
+namespace {
+
+// Python's main thread (where signal handlers run), as threading.main_thread().ident
+unsigned long main_thread() {
+  static const unsigned long ident = py::module_::import("threading").attr("main_thread")().attr("ident").cast<unsigned long>();
+  return ident;
+}
+
+}  // namespace
+
+// On Python's main thread: a poll that runs Python's signal handlers every 10 ms; one that raises
+// (Ctrl-C: KeyboardInterrupt) has its exception kept in `pending` and sets `stop`.  Elsewhere none
+// (handlers run on the main thread only).
+std::function<void()> signal_poll(std::atomic<int>& stop, py::object& pending) {
+  if (PyThread_get_thread_ident() != main_thread()) return {};
+  return [&stop, &pending, last = std::chrono::steady_clock::now()]() mutable {
+    if (stop.load(std::memory_order_relaxed) != 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last < std::chrono::milliseconds(10)) return;
+    last = now;
+    py::gil_scoped_acquire gil;
+    if (PyErr_CheckSignals() != 0) {
+      PyObject *type = nullptr, *value = nullptr, *trace = nullptr;
+      PyErr_Fetch(&type, &value, &trace);
+      PyErr_NormalizeException(&type, &value, &trace);
+      if (trace) PyException_SetTraceback(value, trace);
+      pending = py::reinterpret_steal<py::object>(value);
+      Py_XDECREF(type);
+      Py_XDECREF(trace);
+      stop = PyErr_GivenExceptionMatches(pending.ptr(), PyExc_KeyboardInterrupt) ? SIGINT : -1;
+    }
+  };
+}
 
 void bind_simulate(py::module_& m) {
   m.def("_simulate", &run, "scene"_a, "settings"_a, "output"_a = py::none(), "controller"_a = py::none(),
