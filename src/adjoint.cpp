@@ -8,24 +8,15 @@
 #include "soadyn/sensitivity.hpp"
 #include "soadyn/simulate.hpp"
 #include "soadyn/table.hpp"
-#include "soadyn/text.hpp"
 
 #include "cvode.hpp"
 
-#include <ctime>
-#include <optional>
 
 namespace soadyn {
 
 namespace {
 
 using cvode_impl::map;
-
-double thread_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
 
 // CVODE (cvode.hpp) run forward with checkpoints, then its adjoint.  The adjoint's state is
 // λ = [λ_q; λ_v] (nq + nv: the quadratures W, D feed nothing back and the cost does not read them).
@@ -40,13 +31,12 @@ class CvodeAdjoint : public cvode_impl::Cvode {
         cost_(cost),
         data_(sys.model),
         dd_(sys.model),
-        nb_(sys.model.nq + sys.model.nv) {
+        nb_(sys.model.nq + sys.model.nv),
+        y0q_(y0.head(sys.model.nq)) {
     const Model& m = sys.model;
     q_ = VecX::Zero(m.nq);
     v_ = VecX::Zero(m.nv);
     tau_ = VecX::Zero(m.nv);
-    Jqq_ = MatX::Zero(7, 7);
-    Jqv_ = MatX::Zero(7, 6);
     mu_ = VecX::Zero(m.nv);
     g_ = VecX::Zero(m.nv);
     dq_ = VecX::Zero(m.nq);
@@ -159,17 +149,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     return out;
   }
 
-  VecX y0q_;  // the initial coordinates (normalized)
-
  private:
-  void rethrow_pending() {
-    if (pending_) {
-      auto e = pending_;
-      pending_ = nullptr;
-      std::rethrow_exception(e);
-    }
-  }
-
   static CvodeAdjoint& self(void* user) { return *static_cast<CvodeAdjoint*>(static_cast<Cvode*>(user)); }
 
   // q_Q̇ = ℓ(t, q, v)
@@ -232,8 +212,8 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       for (int i = 0; i < m.nbodies; ++i) {
         const JointType type = m.joint_type[i];
         const int iq = m.idx_q[i], iv = m.idx_v[i], ni = m.nv_i[i], mi = m.nq_i[i];
-        auto Jqq = a.Jqq_.topLeftCorner(mi, mi);
-        auto Jqv = a.Jqv_.topLeftCorner(mi, ni);
+        auto Jqq = s.Tq.topLeftCorner(mi, mi);  // System's joint scratch: rhs, run by CVODES in between, leaves it
+        auto Jqv = s.Tv.topLeftCorner(mi, ni);
         joint_qdot_jacobian(type, a.q_.data() + iq, a.v_.data() + iv, Jqq, Jqv);
         out.segment(iq, mi).noalias() += Jqq.transpose() * lam.segment(iq, mi);
         out.segment(m.nq + iv, ni).noalias() += Jqv.transpose() * lam.segment(iq, mi);
@@ -300,9 +280,10 @@ class CvodeAdjoint : public cvode_impl::Cvode {
   Data data_;
   DerivativeData dd_;
   int nb_;
+  VecX y0q_;  // the initial coordinates (normalized), for ∂G/∂x₀ along the tangent
   int which_ = -1;
   VecX q_, v_, tau_, mu_, g_, dq_, dv_, ytmu_;
-  MatX J_, Jqq_, Jqv_;  // Jqq_, Jqv_: one joint's ∂q̇/∂q, ∂q̇/∂v (≤ 7×7, 7×6)
+  MatX J_;
   bool have_point_ = false;
   double t_point_ = 0.0;
   VecX y_point_;
@@ -382,11 +363,10 @@ CostGradient gradient(const Scenario& sc, const SimulationSettings& settings, co
   System sys(m, sc.inputs, parse_fd_method(s.dynamics));
   VecX y = sys.state(sc.q0, sc.v0);
   m.normalize(y.head(m.nq));
-  const double cpu0 = thread_seconds();
+  const double cpu0 = thread_cpu_seconds();
   CvodeAdjoint adjoint(sys, s, plan, cost, y);
-  adjoint.y0q_ = y.head(m.nq);
   CostGradient out = adjoint.run(steps_per_checkpoint);
-  out.cpu_seconds = thread_seconds() - cpu0;
+  out.cpu_seconds = thread_cpu_seconds() - cpu0;
   if (plan.initial_state) out.state_names = plan.state_names;
   out.parameter_names = plan.parameter_names;
   return out;

@@ -135,11 +135,7 @@ class Cvode : public Integrator {
       steps += before_.steps;
       if (steps >= max_steps_) fail(tn, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
       flag = CVode(mem, t_out, y_.get(), &tn, CV_ONE_STEP);
-      if (pending_) {
-        auto e = pending_;
-        pending_ = nullptr;
-        std::rethrow_exception(e);
-      }
+      rethrow_pending();
       if (flag < 0) break;
       if (flag == CV_ROOT_RETURN) {  // y_ holds y(t_root): the caller acts, then restarts here
         std::vector<int> found(size_t(nroots_), 0);
@@ -229,6 +225,15 @@ class Cvode : public Integrator {
   }
 
  protected:
+  // the exception a callback stored (no C++ exception crosses SUNDIALS' C frames), thrown here
+  void rethrow_pending() {
+    if (pending_) {
+      auto e = pending_;
+      pending_ = nullptr;
+      std::rethrow_exception(e);
+    }
+  }
+
   static int rhs(double t, N_Vector y, N_Vector ydot, void* user) {
     auto* self = static_cast<Cvode*>(user);
     try {

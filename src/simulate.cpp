@@ -14,14 +14,11 @@
 
 namespace soadyn {
 
-namespace {
-// CPU time of the calling thread: a run's own, also when other runs share the process
 double thread_cpu_seconds() {
   timespec ts{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
-}  // namespace
 
 Sample observe(System& sys, double t, const VecX& y) {
   const Model& m = sys.model;

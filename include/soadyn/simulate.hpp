@@ -111,6 +111,9 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
                     std::vector<Sample>* samples = nullptr, const std::atomic<int>* stop = nullptr,
                     std::function<void()> poll = {}, ControlFunction controller = {});
 
+// CPU time of the calling thread, s: a run's own, also when other runs share the process
+double thread_cpu_seconds();
+
 // "interrupted by SIGINT at t = 1.25" (stop > 0: a signal number), "interrupted at t = 1.25" (stop = −1)
 std::string interrupted_status(int stop, double t);
 

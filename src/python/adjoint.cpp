@@ -59,15 +59,6 @@ VecX weights(const py::object& w, int n, const char* what) {
   return read_vector("tracking_cost", what, ArrayIn::ensure(w), n);
 }
 
-MatX matrix(const py::object& a, const char* what) {
-  const ArrayIn x = ArrayIn::ensure(a);
-  if (!x || x.ndim() != 2) throw Error(std::string("tracking_cost: ") + what + " must be a 2-D array (samples, columns)");
-  MatX out(x.shape(0), x.shape(1));
-  for (py::ssize_t r = 0; r < x.shape(0); ++r)
-    for (py::ssize_t c = 0; c < x.shape(1); ++c) out(r, c) = x.at(r, c);
-  return out;
-}
-
 }  // namespace
 
 void bind_adjoint(py::module_& m) {
@@ -90,7 +81,9 @@ makes the tracking of a logged run.)")
         w.v = weights(wv, model.nv, "v weights");
         w.q_final = weights(wq_final, model.nq, "q_final weights");
         w.v_final = weights(wv_final, model.nv, "v_final weights");
-        return tracking_cost(model, read_vector("tracking_cost", "t", ta, int(ta.shape(0))), matrix(q, "q"), matrix(v, "v"), w);
+        return tracking_cost(model, read_vector("tracking_cost", "t", ta, int(ta.shape(0))),
+                             read_matrix("tracking_cost", "q", ArrayIn::ensure(q)),
+                             read_matrix("tracking_cost", "v", ArrayIn::ensure(v)), w);
       },
       "model"_a, "t"_a, "q"_a, "v"_a, "q_weights"_a, "v_weights"_a, "q_final_weights"_a, "v_final_weights"_a);
   m.def(

@@ -33,6 +33,8 @@ void read_vector(const Model& model, const Data& data, const char* where, const 
                  int expected, VecX& out);
 // The same for a function without a Data (the model's own methods): out is resized as needed.
 VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expected);
+// A 2-D array (samples × columns) as a MatX; soadyn::Error "where: what: expected a 2-D array …" otherwise.
+MatX read_matrix(const char* where, const char* what, const ArrayIn& a);
 
 // An array that owns `values` (moved, not copied), shaped `shape` (row-major).
 py::array owned(std::vector<double>&& values, std::vector<py::ssize_t> shape);

@@ -14,12 +14,7 @@ namespace {
 // a T × cols float64 array as a MatX (None or an empty array: 0 × 0)
 MatX matrix_arg(const char* what, const std::optional<py::array_t<double, py::array::forcecast>>& a) {
   if (!a || a->size() == 0) return MatX();
-  if (a->ndim() != 2) throw Error(std::string("identify: ") + what + ": expected a 2-D array (samples × columns)");
-  MatX out(a->shape(0), a->shape(1));
-  const auto u = a->unchecked<2>();
-  for (py::ssize_t r = 0; r < a->shape(0); ++r)
-    for (py::ssize_t c = 0; c < a->shape(1); ++c) out(r, c) = u(r, c);
-  return out;
+  return read_matrix("identify", what, *a);
 }
 
 }  // namespace

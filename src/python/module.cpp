@@ -64,6 +64,16 @@ VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expe
   return out;
 }
 
+MatX read_matrix(const char* where, const char* what, const ArrayIn& a) {
+  if (!a || a.ndim() != 2)
+    throw Error(std::string(where) + ": " + what + ": expected a 2-D array (samples × columns)");
+  MatX out(a.shape(0), a.shape(1));
+  const auto u = a.unchecked<2>();
+  for (py::ssize_t r = 0; r < a.shape(0); ++r)
+    for (py::ssize_t c = 0; c < a.shape(1); ++c) out(r, c) = u(r, c);
+  return out;
+}
+
 py::array owned(std::vector<double>&& values, std::vector<py::ssize_t> shape) {
   auto* keep = new std::vector<double>(std::move(values));
   py::capsule base(keep, [](void* p) { delete static_cast<std::vector<double>*>(p); });
