@@ -81,6 +81,9 @@ class Cvode : public Integrator {
     ctx_.reset(ctx);
     y_.reset(N_VNew_Serial(sys.size(), ctx_.get()));
     if (!y_) throw Error("CVODE: could not allocate the state vector");
+    // fused vector operations (one pass over memory for CVODE's linear combinations, and for all the
+    // sensitivities at once in CVODES); every vector cloned from y_ inherits them
+    check(N_VEnableFusedOps_Serial(y_.get(), SUNTRUE), "N_VEnableFusedOps_Serial");
     map(y_.get()) = y0;
     mem_.reset(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, ctx_.get()));
     if (!mem_) throw Error("CVODE: CVodeCreate failed");
