@@ -1,6 +1,6 @@
 // Gradients of a run's cost by CVODES' adjoint (adjoint.hpp): the CVODE integrator of cvode.hpp run
-// forward with checkpoints (CVodeAdjInit, CVodeF), then the adjoint backward (CVodeB) with the
-// parameter gradient as its quadrature.
+// forward with checkpoints (CVodeAdjInit, CVodeF), then the adjoint backward (CVodeB) a step at a
+// time, the parameter gradient integrated over its steps (step_quadrature.hpp).
 #include "soadyn/adjoint.hpp"
 
 #include "soadyn/derivatives.hpp"
@@ -10,6 +10,7 @@
 #include "soadyn/table.hpp"
 
 #include "cvode.hpp"
+#include "step_quadrature.hpp"
 
 
 namespace soadyn {
@@ -111,27 +112,36 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       if (!nlsB_) throw Error("CVODES: could not allocate the adjoint's fixed-point solver");
       check(CVodeSetNonlinearSolverB(mem, which_, nlsB_.get()), "CVodeSetNonlinearSolverB");
     }
-    cvode_impl::VectorPtr qb;
-    if (plan_.np() > 0) {
-      qb.reset(N_VNew_Serial(plan_.np(), ctx_.get()));
-      if (!qb) throw Error("CVODES: could not allocate the parameter gradient");
-      N_VConst(0.0, qb.get());
-      check(CVodeQuadInitB(mem, which_, &CvodeAdjoint::parameter_rhs, qb.get()), "CVodeQuadInitB");
-      // no error test of its own: the integrand Yᵀμ is smooth in λ, whose steps are controlled; measured
-      // the same gradient to 1e-9 (test_adjoint) in 20 % fewer backward steps than with the test
-      check(CVodeSetQuadErrConB(mem, which_, SUNFALSE), "CVodeSetQuadErrConB");
+    // backward one step at a time, each accepted step's Yᵀμ into ∂G/∂π = ∫_T^0 Yᵀμ dt (q̇_B = Yᵀμ from
+    // q_B(T) = 0): by StepQuadrature, not as a CVODES quadrature, whose 10·N numbers would ride through
+    // every step's Nordsieck history.  Its rule (degree 5 through the last samples) is below the local
+    // error of the λ steps it follows; measured against CVODES' own quadrature in test_adjoint
+    const bool parameters = plan_.np() > 0;
+    StepQuadrature quadrature(parameters ? plan_.np() : 0);
+    cvode_impl::VectorPtr yf(N_VClone(y_.get()));
+    if (!yf) throw Error("CVODES: could not allocate a state vector");
+    VecX integrand = VecX::Zero(plan_.np());
+    // (t, λ(t)) of the backward run just returned, in yb; the forward state at t from CVODES'
+    // interpolation, the same the backward right-hand side was given (its derivative sweeps are reused)
+    const auto sample = [&](double ts, bool at_end) {
+      if (!at_end) check(CVodeGetAdjY(mem, ts, yf.get()), "CVodeGetAdjY");
+      parameter_integrand(ts, N_VGetArrayPointer(at_end ? y_.get() : yf.get()), N_VGetArrayPointer(yb.get()), integrand);
+      quadrature.add(ts, integrand);
+    };
+    if (parameters) sample(T, true);  // y(T): CVodeF's last state (no interpolation set up before CVodeB)
+    for (t = T; t > 0.0;) {
+      const double before = t;
+      flag = CVodeB(mem, 0.0, CV_ONE_STEP);
+      rethrow_pending();
+      if (flag < 0)
+        throw SimulationError("CVODES adjoint failed: " + cvode_impl::flag_name(flag) +
+                                  (error_message_.empty() ? "" : ": " + error_message_),
+                              t);
+      check(CVodeGetB(mem, which_, &t, yb.get()), "CVodeGetB");
+      if (!(t < before)) throw SimulationError("CVODES adjoint: the backward run did not advance", t);
+      if (parameters) sample(t, false);
     }
-    flag = CVodeB(mem, 0.0, CV_NORMAL);
-    rethrow_pending();
-    if (flag < 0)
-      throw SimulationError("CVODES adjoint failed: " + cvode_impl::flag_name(flag) +
-                                (error_message_.empty() ? "" : ": " + error_message_),
-                            0.0);
-    check(CVodeGetB(mem, which_, &t, yb.get()), "CVodeGetB");
-    if (qb) {
-      check(CVodeGetQuadB(mem, which_, &t, qb.get()), "CVodeGetQuadB");
-      out.d_parameters = map(qb.get());
-    }
+    if (parameters) out.d_parameters = quadrature.integral();
     if (void* memB = CVodeGetAdjCVodeBmem(mem, which_)) {
       long steps = 0, evals = 0;
       CVodeGetNumSteps(memB, &steps);
@@ -240,23 +250,15 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     }
   }
 
-  // q̇_B = −(∂f/∂π)ᵀ λ = Yᵀ μ (∂q̈/∂π = −𝓜⁻¹ Y), the columns of the bodies asked for
-  static int parameter_rhs(double t, N_Vector y, N_Vector yB, N_Vector qBdot, void* user) {
-    CvodeAdjoint& a = self(user);
-    try {
-      System& s = a.sys_;
-      const Model& m = s.model;
-      a.solve_at(t, N_VGetArrayPointer(y), N_VGetArrayPointer(yB));
-      regressor_transpose_times(m, a.data_, a.data_.qdd, a.mu_, a.ytmu_);  // O(N), Y never formed
-      auto out = map(qBdot);
-      for (size_t b = 0; b < a.plan_.bodies.size(); ++b)
-        out.segment(int(b) * kParametersPerBody, kParametersPerBody) =
-            a.ytmu_.segment(kParametersPerBody * a.plan_.bodies[b], kParametersPerBody);
-      return out.allFinite() ? 0 : 1;
-    } catch (...) {
-      a.pending_ = std::current_exception();
-      return -1;
-    }
+  // q̇_B = −(∂f/∂π)ᵀ λ = Yᵀ μ (∂q̈/∂π = −𝓜⁻¹ Y), the columns of the bodies asked for, at the forward
+  // state y and the adjoint λ of time t
+  void parameter_integrand(double t, const double* y, const double* lam, VecX& out) {
+    solve_at(t, y, lam);
+    regressor_transpose_times(sys_.model, data_, data_.qdd, mu_, ytmu_);  // O(N), Y never formed
+    for (size_t b = 0; b < plan_.bodies.size(); ++b)
+      out.segment(int(b) * kParametersPerBody, kParametersPerBody) =
+          ytmu_.segment(kParametersPerBody * plan_.bodies[b], kParametersPerBody);
+    if (!out.allFinite()) throw SimulationError("CVODES adjoint: the parameter gradient's integrand is not finite", t);
   }
 
   // ∂f_B/∂λ = −(∂f/∂y)ᵀ on [q; v] (the quadratures' rows and columns left out)
