@@ -244,15 +244,15 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
     }
 
     Id g_solver = h5::group(im.file, "solver");
-    attribute(g_solver, "method", settings.method);
-    attribute(g_solver, "rtol", settings.rtol);
-    attribute(g_solver, "atol", settings.atol);
-    attribute(g_solver, "dt", settings.dt);
-    attribute(g_solver, "output_dt", output_interval(settings));
-    attribute(g_solver, "t_end", settings.t_end);
-    attribute(g_solver, "dynamics", settings.dynamics);
-    attribute(g_solver, "jacobian", settings.jacobian);  // cvode-bdf and implicit-midpoint
-    attribute(g_solver, "newton", settings.newton);      // implicit-midpoint
+    // every setting of the table (settings.hpp) under its own name: numbers as doubles, words as
+    // strings, flags as "true"/"false"; output_dt as the interval the rows really have
+    for (const SettingInfo& info : setting_table()) {
+      const std::string name(info.name);
+      if (name == "output_dt") attribute(g_solver, "output_dt", output_interval(settings));
+      else if (info.kind == SettingKind::Real || info.kind == SettingKind::Count)
+        attribute(g_solver, name.c_str(), std::strtod(setting_text(settings, info).c_str(), nullptr));
+      else attribute(g_solver, name.c_str(), setting_text(settings, info));
+    }
     im.status = h5::string_scalar(g_solver, "status", 1024);
     im.quaternion = h5::string_scalar(g_solver, "quaternion_handling", 256);
     im.t_reached = Scalar(g_solver, "t_reached", H5T_NATIVE_DOUBLE);

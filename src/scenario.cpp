@@ -204,55 +204,33 @@ void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q
 }
 
 void read_simulation(const Reader& rd, const YAML::Node& n, const Model& m, SimulationSettings& s) {
-  rd.keys(n, "simulation", {"t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian", "newton",
-                            "limits", "restitution", "control_dt", "sensitivities"});
+  std::vector<std::string> keys;
+  for (const SettingInfo& info : setting_table()) keys.emplace_back(info.name);
+  keys.emplace_back("sensitivities");
+  rd.keys(n, "simulation", keys);
   if (n["sensitivities"]) scenario_detail::read_sensitivities(rd, n["sensitivities"], m, s.sensitivities);
-  if (n["limits"]) s.limits = rd.boolean(n["limits"], "simulation.limits");
-  if (n["restitution"]) {
-    s.restitution = rd.number(n["restitution"], "simulation.restitution");
-    if (!(s.restitution >= 0 && s.restitution <= 1))
-      rd.fail(n["restitution"], "simulation.restitution", "expected a coefficient in [0, 1], got " + Reader::show(n["restitution"]));
+  // every other key by the table: its kind, its range or words (settings.cpp)
+  for (const SettingInfo& info : setting_table()) {
+    const std::string key(info.name), field = "simulation." + key;
+    const YAML::Node v = n[key];
+    if (!v) continue;
+    switch (info.kind) {
+      case SettingKind::Real:
+      case SettingKind::Count: {
+        const double x = rd.number(v, field);
+        if (const std::string p = setting_problem(info, x); !p.empty()) rd.fail(v, field, p + ", got " + Reader::show(v));
+        set_setting(s, info, x);
+        break;
+      }
+      case SettingKind::Word: {
+        const std::string w = rd.string(v, field);
+        if (const std::string p = setting_problem(info, w); !p.empty()) rd.fail(v, field, p);
+        set_setting(s, info, w);
+        break;
+      }
+      case SettingKind::Flag: set_setting(s, info, rd.boolean(v, field)); break;
+    }
   }
-  if (n["control_dt"]) {
-    s.control_dt = rd.number(n["control_dt"], "simulation.control_dt");
-    if (s.control_dt < 0)
-      rd.fail(n["control_dt"], "simulation.control_dt", "expected 0 (continuous) or a positive number, got " + Reader::show(n["control_dt"]));
-  }
-  if (n["t_end"]) s.t_end = rd.positive(n["t_end"], "simulation.t_end");
-  if (n["output_dt"]) s.output_dt = rd.positive(n["output_dt"], "simulation.output_dt");
-  if (n["rtol"]) s.rtol = rd.positive(n["rtol"], "simulation.rtol");
-  if (n["atol"]) s.atol = rd.positive(n["atol"], "simulation.atol");
-  if (n["dt"]) s.dt = rd.positive(n["dt"], "simulation.dt");
-  if (n["max_step"]) s.max_step = rd.positive(n["max_step"], "simulation.max_step");
-  if (n["max_steps"]) {
-    const double x = rd.positive(n["max_steps"], "simulation.max_steps");
-    if (x != std::floor(x) || x > 1e15) rd.fail(n["max_steps"], "simulation.max_steps", "expected a whole number");
-    s.max_steps = long(x);
-  }
-  if (n["method"]) {
-    s.method = rd.string(n["method"], "simulation.method");
-    if (!find_integrator(s.method))
-      rd.fail(n["method"], "simulation.method",
-              "unknown method '" + s.method + "'" + did_you_mean(s.method, integrator_names()));
-  }
-  if (n["dynamics"]) {
-    s.dynamics = rd.string(n["dynamics"], "simulation.dynamics");
-    const std::vector<std::string> routes = fd_method_names();
-    if (s.dynamics == kFdMethodAliasOn) s.dynamics = std::string(to_string(FdMethod::ArticulatedBody));  // the old word
-    if (std::find(routes.begin(), routes.end(), s.dynamics) == routes.end())
-      rd.fail(n["dynamics"], "simulation.dynamics",
-              "unknown route '" + s.dynamics + "'" + did_you_mean(s.dynamics, routes));
-  }
-  // one of a few words, said with the ones allowed
-  auto word = [&](const char* key, std::string& out, const std::vector<std::string>& allowed) {
-    if (!n[key]) return;
-    const std::string field = std::string("simulation.") + key;
-    out = rd.string(n[key], field);
-    if (std::find(allowed.begin(), allowed.end(), out) == allowed.end())
-      rd.fail(n[key], field, "expected " + allowed[0] + " or " + allowed[1] + ", got '" + out + "'" + did_you_mean(out, allowed));
-  };
-  word("jacobian", s.jacobian, {"analytic", "dq"});
-  word("newton", s.newton, {"full", "simplified"});
 }
 
 void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0, Inputs& in) {

@@ -204,6 +204,11 @@ void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& 
   c.number("/solver", "dt", s.dt, H5T_FLOAT);
   c.number("/solver", "t_end", s.t_end, H5T_FLOAT);
   c.number("/solver", "output_dt", r.output_dt, H5T_FLOAT);
+  c.number("/solver", "max_step", s.max_step, H5T_FLOAT);
+  c.number("/solver", "max_steps", double(s.max_steps), H5T_FLOAT);
+  c.text("/solver", "limits", s.limits ? "true" : "false");
+  c.number("/solver", "restitution", s.restitution, H5T_FLOAT);
+  c.number("/solver", "control_dt", s.control_dt, H5T_FLOAT);
   // rewritten at every flush: scalar datasets, here as the run ended
   c.scalar("/solver/status", r.status);
   c.scalar("/solver/quaternion_handling", r.quaternion_handling);

@@ -1,8 +1,10 @@
 // How a run is integrated and logged: the `simulation` section of a scenario, overridable from the
-// command line.  Plain numerics: no file format is involved here.
+// command line, and the table that says each setting once.  No file format is involved here.
 #pragma once
 
 #include <string>
+#include <string_view>
+#include <variant>
 #include <vector>
 
 namespace soadyn {
@@ -36,5 +38,45 @@ struct SimulationSettings {
   double control_dt = 0.0;             // s between controller samples, zero-order hold (0: continuous)
   SensitivitySettings sensitivities;   // none by default (CVODE methods only)
 };
+
+// Each scalar setting above, declared once (settings.cpp).  Its name is the key under a scenario's
+// simulation:, soadyn run's option (--t-end for t_end), the Python SimulationSettings attribute and
+// simulate() keyword, a sweep's vary: path simulation.<name> and the run file's /solver attribute;
+// the YAML reader, the CLI, Python and the log loop over this table instead of listing the fields.
+// (sensitivities, a structured setting, has its own reader: scenario_sensitivity.cpp.)
+enum class SettingKind { Real, Count, Word, Flag };
+enum class SettingRange { Any, Positive, NonNegative, UnitInterval };  // of a Real or Count
+
+struct SettingInfo {
+  using Field = std::variant<double SimulationSettings::*, long SimulationSettings::*, std::string SimulationSettings::*,
+                             bool SimulationSettings::*>;
+  std::string_view name;
+  SettingKind kind;
+  Field field;
+  std::string_view unit;  // of a Real or Count ("s", "1"); empty for words and flags
+  std::string_view help;
+  SettingRange range = SettingRange::Any;  // a Count is also whole
+  // Word: the words it takes (integrators, forward-dynamics routes, …) and what one is called in an
+  // error ("method": "unknown method 'rk5'"); empty noun: "expected analytic or dq, got 'x'"
+  std::vector<std::string> (*words)() = nullptr;
+  std::string_view noun;
+};
+
+const std::vector<SettingInfo>& setting_table();
+const SettingInfo* find_setting(std::string_view name);
+
+// What is wrong with a value for the setting ("" when nothing): "expected a positive number",
+// "unknown method 'rk5'; did you mean 'rk4'?".  A number's text is added by the caller (", got -1").
+std::string setting_problem(const SettingInfo& info, double x);
+std::string setting_problem(const SettingInfo& info, const std::string& word);
+
+// Set one setting; a Word is stored as its canonical word (the O(N) route's old word on → aba).
+// Throws Error("<name>: <problem>") on a value setting_problem refuses.
+void set_setting(SimulationSettings& s, const SettingInfo& info, double x);
+void set_setting(SimulationSettings& s, const SettingInfo& info, const std::string& word);
+void set_setting(SimulationSettings& s, const SettingInfo& info, bool flag);
+
+// The setting's value as text (numbers with %.17g, flags true/false): the CLI's defaults, the log
+std::string setting_text(const SimulationSettings& s, const SettingInfo& info);
 
 }  // namespace soadyn

@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -85,12 +86,9 @@ int run_inspect(const InspectOptions& o);
 struct RunOptions {
   std::string scenario;
   std::string output;
-  std::optional<std::string> method;
-  std::optional<double> rtol, atol, dt, t_end, output_dt;
+  std::map<std::string, std::string> settings;  // --t-end 2 …: one option per setting of setting_table(), by name
   StateOptions state;
   std::string log = "all";             // the groups logged: state, energy, momentum, bodies
-  std::optional<std::string> jacobian, newton;  // --jacobian analytic|dq, --newton full|simplified
-  std::optional<std::string> limits;            // --limits on|off: the joint limits enforced or not
   std::string max_output_size = "1G";  // refuse a run whose projected file is larger
   double flush_interval = 0.5;         // s of wall time between flushes
   bool force = false;                  // replace an output that is not a soadyn run file

@@ -1,5 +1,6 @@
 #include "cli.hpp"
 
+#include "soadyn/algorithms.hpp"
 #include "soadyn/h5log.hpp"
 #include "soadyn/integrators.hpp"
 #include "soadyn/simulate.hpp"
@@ -7,6 +8,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -68,18 +70,39 @@ void add_run(CLI::App& app, RunOptions& o) {
       "flushed rows), 128+N interrupted by signal N (130 SIGINT, 143 SIGTERM, 129 SIGHUP).");
   c->add_option("MODEL", o.scenario, "scenario (.yaml) or robot (.urdf)")->required();
   c->add_option("-o,--output", o.output, "HDF5 output file (default out/<scenario name>.h5)");
-  c->add_option("--method", o.method, join(integrator_names(), " | "))->transform(one_of(integrator_names()));
-  c->add_option("--rtol", o.rtol, "CVODE relative tolerance, in (0, 1)")->check(kPositive);
-  c->add_option("--atol", o.atol, "CVODE absolute tolerance")->check(kPositive);
-  c->add_option("--dt", o.dt, "fixed-step methods' step, s")->check(kPositive);
-  c->add_option("--jacobian", o.jacobian, "cvode-bdf and implicit-midpoint: analytic (default) | dq (difference quotients)")
-      ->transform(one_of({"analytic", "dq"}));
-  c->add_option("--newton", o.newton, "implicit-midpoint: full (default) | simplified Newton iterations")
-      ->transform(one_of({"full", "simplified"}));
-  c->add_option("--limits", o.limits, "on | off: stop joints at their limits (the scenario's simulation: limits:, default off)")
-      ->transform(one_of({"on", "off"}));
-  c->add_option("--t-end", o.t_end, "end time, s")->check(kPositive);
-  c->add_option("--output-dt", o.output_dt, "time between logged samples, s")->check(kPositive);
+  // one option per simulation setting, from the table (settings.hpp): --t-end for t_end
+  for (const SettingInfo& info : setting_table()) {
+    std::string flag = "--" + std::string(info.name);
+    std::replace(flag.begin(), flag.end(), '_', '-');
+    std::string help(info.help);
+    if (!info.unit.empty() && info.unit != "1") help += ", " + std::string(info.unit);
+    CLI::Option* opt = c->add_option(flag, o.settings[std::string(info.name)], help);
+    switch (info.kind) {
+      case SettingKind::Word: {
+        std::vector<std::string> words = info.words();
+        opt->description(help + ": " + join(words, " | "));
+        if (info.name == "dynamics") words.emplace_back(kFdMethodAliasOn);
+        opt->transform(one_of(words));
+        break;
+      }
+      case SettingKind::Flag:
+        opt->description(help + ": on | off");
+        opt->transform(one_of({"on", "off"}));
+        break;
+      case SettingKind::Real:
+      case SettingKind::Count:
+        opt->check(CLI::Validator(
+            [&info](std::string& text) {
+              char* end = nullptr;
+              const double x = std::strtod(text.c_str(), &end);
+              if (text.empty() || *end != '\0') return "expected a number, got '" + text + "'";
+              const std::string p = setting_problem(info, x);
+              return p.empty() ? p : p + ", got '" + text + "'";
+            },
+            "NUMBER"));
+        break;
+    }
+  }
   c->add_option("--max-output-size", o.max_output_size, "refuse a run whose file would be larger (default 1G)")
       ->check(kSize);
   c->add_option("--flush-interval", o.flush_interval, "wall-clock seconds between writes to the file (default 0.5)")
@@ -169,21 +192,25 @@ int run_simulation(const RunOptions& o) {
   Scenario sc = load_with_options(o.scenario, o.state);
   state_from_options(sc.model, o.state, sc.q0, sc.v0);
   SimulationSettings s = sc.simulation;
-  if (o.method) s.method = *o.method;
-  if (o.rtol) s.rtol = *o.rtol;
-  if (o.atol) s.atol = *o.atol;
-  if (o.dt) s.dt = *o.dt;
-  if (o.jacobian) s.jacobian = *o.jacobian;
-  if (o.newton) s.newton = *o.newton;
-  if (o.limits) s.limits = *o.limits == "on";
-  if (o.t_end) s.t_end = *o.t_end;
-  if (o.output_dt) s.output_dt = *o.output_dt;
+  const auto given = [&](const char* name) {
+    const auto it = o.settings.find(name);
+    return it != o.settings.end() && !it->second.empty();
+  };
+  for (const auto& [name, text] : o.settings) {  // checked by the options' validators
+    if (text.empty()) continue;
+    const SettingInfo& info = *find_setting(name);
+    switch (info.kind) {
+      case SettingKind::Word: set_setting(s, info, text); break;
+      case SettingKind::Flag: set_setting(s, info, text == "on"); break;
+      default: set_setting(s, info, std::strtod(text.c_str(), nullptr)); break;
+    }
+  }
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
 
   for (const auto& w : check_run(sc, s)) warn(w);
-  if (is_fixed_step(s.method) && (o.rtol || o.atol))
-    warn(std::string(o.rtol ? "--rtol" : "--atol") + " has no effect with " + s.method + " (a fixed-step method; see --dt)");
-  if (!is_fixed_step(s.method) && o.dt) warn("--dt has no effect with " + s.method + " (it chooses its own steps; see --rtol)");
+  if (is_fixed_step(s.method) && (given("rtol") || given("atol")))
+    warn(std::string(given("rtol") ? "--rtol" : "--atol") + " has no effect with " + s.method + " (a fixed-step method; see --dt)");
+  if (!is_fixed_step(s.method) && given("dt")) warn("--dt has no effect with " + s.method + " (it chooses its own steps; see --rtol)");
   const double rows = output_rows(s), bytes = rows * double(row_bytes(sc.model, groups)), limit = parse_size(o.max_output_size);
   if (bytes > limit) {
     char buf[160];

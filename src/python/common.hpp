@@ -6,6 +6,7 @@
 #include "soadyn/data.hpp"
 #include "soadyn/kinematics.hpp"
 #include "soadyn/model.hpp"
+#include "soadyn/settings.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -66,6 +67,11 @@ extern PyObject* error_type;  // soadyn.Error
 // (Ctrl-C: KeyboardInterrupt) has its exception kept in `pending` and sets `stop`.  Elsewhere none
 // (handlers run on the main thread only).  simulate.cpp
 std::function<void()> signal_poll(std::atomic<int>& stop, py::object& pending);
+
+// one simulation setting of setting_table() (settings.hpp) as a Python value, and back (a value of
+// the wrong type raises TypeError; ranges and words are checked where the run starts, as in C++)
+py::object setting_value(const SimulationSettings& s, const SettingInfo& info);
+void set_setting_value(SimulationSettings& s, const SettingInfo& info, const py::handle& value);
 
 void bind_model(py::module_& m);
 void bind_algorithms(py::module_& m);

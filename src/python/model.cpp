@@ -5,9 +5,24 @@
 #include "soadyn/scenario.hpp"
 #include "soadyn/text.hpp"
 
+#include <deque>
 #include <optional>
 
 namespace soadyn::python {
+
+py::object setting_value(const SimulationSettings& s, const SettingInfo& info) {
+  return std::visit([&](auto field) { return py::cast(s.*field); }, info.field);
+}
+
+void set_setting_value(SimulationSettings& s, const SettingInfo& info, const py::handle& value) {
+  std::visit(
+      [&](auto field) {
+        using T = std::decay_t<decltype(s.*field)>;
+        s.*field = value.cast<T>();
+      },
+      info.field);
+}
+
 
 namespace {
 
@@ -173,24 +188,31 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
                ", nv = " + std::to_string(self.nv) + ">";
       });
 
-  py::class_<SimulationSettings>(m, "SimulationSettings", "A scenario's 'simulation' section (scenarios/README.md).")
-      .def(py::init<>())
-      .def_readwrite("t_end", &SimulationSettings::t_end, "end time, s")
-      .def_readwrite("output_dt", &SimulationSettings::output_dt, "time between logged samples, s")
-      .def_readwrite("method", &SimulationSettings::method,
-                     "cvode-adams | cvode-bdf | rk4 | euler | semi-implicit-euler | symplectic-euler | implicit-midpoint")
-      .def_readwrite("rtol", &SimulationSettings::rtol, "CVODE relative tolerance")
-      .def_readwrite("atol", &SimulationSettings::atol, "CVODE absolute tolerance")
-      .def_readwrite("dt", &SimulationSettings::dt, "fixed-step methods' step, s")
-      .def_readwrite("max_step", &SimulationSettings::max_step, "CVODE's largest step, s (0: none)")
-      .def_readwrite("max_steps", &SimulationSettings::max_steps, "CVODE steps allowed in the whole run")
-      .def_readwrite("dynamics", &SimulationSettings::dynamics, "forward-dynamics route: dense | sparse | aba (\"on\", the old word, is taken)")
-      .def_readwrite("jacobian", &SimulationSettings::jacobian, "cvode-bdf and implicit-midpoint: analytic | dq")
-      .def_readwrite("newton", &SimulationSettings::newton, "implicit-midpoint: full | simplified")
-      .def_readwrite("limits", &SimulationSettings::limits, "joint limits as events (CVODE): impact, hold, release")
-      .def_readwrite("restitution", &SimulationSettings::restitution, "coefficient of restitution at a limit, 0..1")
-      .def_readwrite("control_dt", &SimulationSettings::control_dt,
-                     "s between controller samples, zero-order hold (0: continuous)")
+  py::class_<SimulationSettings> settings(m, "SimulationSettings", "A scenario's 'simulation' section (scenarios/README.md).");
+  settings.def(py::init<>());
+  // one attribute per setting of the table (settings.hpp): its name, its help and unit
+  static std::deque<std::string> docs;  // the texts the properties point to, for the module's life
+  for (const SettingInfo& info : setting_table()) {
+    std::string& doc = docs.emplace_back(info.help);
+    if (info.kind == SettingKind::Word) {
+      const std::vector<std::string> words = info.words();
+      for (size_t k = 0; k < words.size(); ++k) doc += (k == 0 ? ": " : " | ") + words[k];
+    } else if (!info.unit.empty() && info.unit != "1") {
+      doc += ", " + std::string(info.unit);
+    }
+    settings.def_property(
+        info.name.data(), [&info](const SimulationSettings& s) { return setting_value(s, info); },
+        [&info](SimulationSettings& s, const py::object& value) { set_setting_value(s, info, value); }, doc.c_str());
+  }
+  settings.def_property_readonly_static(
+      "names",
+      [](const py::object&) {
+        py::list out;
+        for (const SettingInfo& info : setting_table()) out.append(std::string(info.name));
+        return py::tuple(out);
+      },
+      "the settings' names, in the table's order (sensitivities apart)");
+  settings
       .def_property(
           "sensitivities",
           [](const SimulationSettings& s) {

@@ -264,12 +264,10 @@ py::tuple scenario_state(const py::object& self) {
   f["q0"] = doubles(sc.q0.data(), int(sc.q0.size()));
   f["v0"] = doubles(sc.v0.data(), int(sc.v0.size()));
   const SimulationSettings& s = sc.simulation;
-  f["settings"] = py::dict("t_end"_a = s.t_end, "output_dt"_a = s.output_dt, "method"_a = s.method, "rtol"_a = s.rtol,
-                           "atol"_a = s.atol, "dt"_a = s.dt, "max_step"_a = s.max_step, "max_steps"_a = s.max_steps,
-                           "dynamics"_a = s.dynamics, "jacobian"_a = s.jacobian, "newton"_a = s.newton,
-                           "limits"_a = s.limits, "restitution"_a = s.restitution, "control_dt"_a = s.control_dt,
-                           "sensitivities_initial_state"_a = s.sensitivities.initial_state,
-                           "sensitivities_parameters"_a = s.sensitivities.parameters);
+  py::dict settings("sensitivities_initial_state"_a = s.sensitivities.initial_state,
+                    "sensitivities_parameters"_a = s.sensitivities.parameters);
+  for (const SettingInfo& info : setting_table()) settings[py::str(std::string(info.name))] = setting_value(s, info);
+  f["settings"] = settings;
   py::list torques, springs, dampers;
   for (const auto& u : sc.inputs.torques) torques.append(py::make_tuple(u.joint, u.dof, u.constant, u.amplitude, u.frequency, u.phase));
   for (const auto& u : sc.inputs.springs) springs.append(py::make_tuple(u.joint, u.dof, u.coord, u.stiffness, u.rest));
@@ -299,11 +297,13 @@ Scenario scenario_from_state(const py::object& state) {
   sc.v0 = Eigen::Map<const VecX>(v0.data(), m.nv);
   const Reader s{where, r.as<py::dict>("settings")};
   SimulationSettings& o = sc.simulation;
-  o.t_end = s.as<double>("t_end"), o.output_dt = s.as<double>("output_dt"), o.method = s.as<std::string>("method");
-  o.rtol = s.as<double>("rtol"), o.atol = s.as<double>("atol"), o.dt = s.as<double>("dt");
-  o.max_step = s.as<double>("max_step"), o.max_steps = s.as<long>("max_steps"), o.dynamics = s.as<std::string>("dynamics");
-  o.jacobian = s.as<std::string>("jacobian"), o.newton = s.as<std::string>("newton"), o.limits = s.as<bool>("limits");
-  o.restitution = s.as<double>("restitution"), o.control_dt = s.as<double>("control_dt");
+  for (const SettingInfo& info : setting_table()) {
+    try {
+      set_setting_value(o, info, s.get(std::string(info.name)));
+    } catch (const py::cast_error&) {
+      s.refuse(std::string(info.name), "wrong type");
+    }
+  }
   o.sensitivities.initial_state = s.as<bool>("sensitivities_initial_state");
   o.sensitivities.parameters = s.as<std::vector<std::string>>("sensitivities_parameters");
   // the inputs, their indices checked against the model (evaluate() indexes q and v with them)

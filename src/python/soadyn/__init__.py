@@ -108,8 +108,7 @@ for _cls in (Cost, Data, Error, FramePoses, Inputs, Model, Scenario, Sensitiviti
 def _settings(scene: Scenario, overrides: dict) -> SimulationSettings:
     """The scene's own simulation settings, each override that is not None put over them."""
     s = SimulationSettings()
-    for k in ("t_end", "output_dt", "method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics", "jacobian",
-              "newton", "limits", "restitution", "control_dt", "sensitivities"):
+    for k in SimulationSettings.names + ("sensitivities",):
         setattr(s, k, getattr(scene.settings, k))
     for k, value in overrides.items():
         if value is not None:
@@ -120,15 +119,19 @@ def _settings(scene: Scenario, overrides: dict) -> SimulationSettings:
 def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol: Optional[float] = None,
              atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
              output_dt: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
-             newton: Optional[str] = None, output: Optional[str] = None,
-             controller: Optional[Callable] = None, sensitivities: Optional[dict] = None) -> Trajectory:
+             newton: Optional[str] = None, max_step: Optional[float] = None, max_steps: Optional[int] = None,
+             limits: Optional[bool] = None, restitution: Optional[float] = None, control_dt: Optional[float] = None,
+             output: Optional[str] = None, controller: Optional[Callable] = None,
+             sensitivities: Optional[dict] = None) -> Trajectory:
     """Simulate a scenario and return its Trajectory: 𝓜(q) q̈ = τ(t, q, q̇) − bias(q, q̇) from (q0, v0).
 
     scene: a Scenario or the path of a scenario file.  Each keyword left None keeps the scene's
     own setting (scene.settings): method (cvode-adams | cvode-bdf | rk4 | euler | semi-implicit-euler |
     symplectic-euler | implicit-midpoint), rtol, atol (CVODE), dt (fixed-step methods' step, s), t_end (s),
     output_dt (s between samples), dynamics (forward-dynamics route: aba | dense | sparse),
-    jacobian (CVODE BDF's Jacobian: analytic | dq), newton (implicit midpoint: full | simplified).
+    jacobian (CVODE BDF's Jacobian: analytic | dq), newton (implicit midpoint: full | simplified),
+    max_step, max_steps (CVODE), limits (joint limits as events), restitution, control_dt: one keyword
+    per setting of SimulationSettings.names (scenarios/README.md says what each does).
     output: an HDF5 file to log to as well (the layout of `soadyn run`; read_log reads it back).
     controller: f(t, q, v) -> tau, nv torques added to the inputs' (with the scene's built-in
     controllers): called at every right-hand-side evaluation and sample when continuous, once per
@@ -151,7 +154,9 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     if isinstance(scene, str):
         scene = load_scenario(scene)
     s = _settings(scene, dict(method=method, rtol=rtol, atol=atol, dt=dt, t_end=t_end, output_dt=output_dt,
-                              dynamics=dynamics, jacobian=jacobian, newton=newton, sensitivities=sensitivities))
+                              dynamics=dynamics, jacobian=jacobian, newton=newton, max_step=max_step,
+                              max_steps=max_steps, limits=limits, restitution=restitution, control_dt=control_dt,
+                              sensitivities=sensitivities))
     arrays, summary, interrupt, warns = _soadyn._simulate(scene, s, None if output is None else str(output),
                                                           controller)
     for w in warns:  # e.g. an rtol below what double precision can deliver

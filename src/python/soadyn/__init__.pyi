@@ -74,6 +74,7 @@ class Data:
     Vbar: Vector
 
 class SimulationSettings:
+    names: Tuple[str, ...]  # the settings below, from the library's one table (settings.hpp)
     def __init__(self) -> None: ...
     t_end: float
     output_dt: float
@@ -237,7 +238,9 @@ def forward_dynamics_parameter_derivative(model: Model, data: Data, q: ArrayLike
 def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol: Optional[float] = None,
              atol: Optional[float] = None, dt: Optional[float] = None, t_end: Optional[float] = None,
              output_dt: Optional[float] = None, dynamics: Optional[str] = None, jacobian: Optional[str] = None,
-             newton: Optional[str] = None, output: Optional[str] = None,
+             newton: Optional[str] = None, max_step: Optional[float] = None, max_steps: Optional[int] = None,
+             limits: Optional[bool] = None, restitution: Optional[float] = None, control_dt: Optional[float] = None,
+             output: Optional[str] = None,
              controller: Optional[Callable[[float, np.ndarray, np.ndarray], ArrayLike]] = None,
              sensitivities: Optional[Dict[str, object]] = None) -> Trajectory: ...
 def read_log(path: str) -> Trajectory: ...

@@ -1,0 +1,133 @@
+// The table of simulation settings (settings.hpp): each one's name, kind, unit, range, words and
+// help, said once; the readers and writers at the edges loop over it.
+#include "soadyn/settings.hpp"
+
+#include "soadyn/algorithms.hpp"
+#include "soadyn/integrators.hpp"
+#include "soadyn/text.hpp"
+#include "soadyn/types.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace soadyn {
+
+namespace {
+
+using S = SimulationSettings;
+using K = SettingKind;
+using R = SettingRange;
+
+std::vector<std::string> jacobian_words() { return {"analytic", "dq"}; }
+std::vector<std::string> newton_words() { return {"full", "simplified"}; }
+
+SettingInfo real(std::string_view name, double S::*field, std::string_view unit, R range, std::string_view help) {
+  return {name, K::Real, field, unit, help, range, nullptr, ""};
+}
+SettingInfo word(std::string_view name, std::string S::*field, std::vector<std::string> (*words)(), std::string_view noun,
+                 std::string_view help) {
+  return {name, K::Word, field, "", help, R::Any, words, noun};
+}
+
+}  // namespace
+
+const std::vector<SettingInfo>& setting_table() {
+  static const std::vector<SettingInfo> table = {
+      real("t_end", &S::t_end, "s", R::Positive, "end time"),
+      real("output_dt", &S::output_dt, "s", R::Positive, "time between logged samples"),
+      word("method", &S::method, integrator_names, "method", "the integrator"),
+      real("rtol", &S::rtol, "1", R::Positive, "CVODE relative tolerance, in (0, 1)"),
+      real("atol", &S::atol, "1", R::Positive, "CVODE absolute tolerance (in the state's own units)"),
+      real("dt", &S::dt, "s", R::Positive, "fixed-step methods' step"),
+      real("max_step", &S::max_step, "s", R::NonNegative, "CVODE's largest step (0: none)"),
+      {"max_steps", K::Count, &S::max_steps, "1", "CVODE steps allowed in the whole run", R::Positive, nullptr, ""},
+      word("dynamics", &S::dynamics, fd_method_names, "route", "forward-dynamics route (on, the old word for aba, is taken)"),
+      word("jacobian", &S::jacobian, jacobian_words, "",
+           "cvode-bdf and implicit-midpoint: analytic derivatives or difference quotients (dq)"),
+      word("newton", &S::newton, newton_words, "", "implicit-midpoint: the Jacobian at every iterate, or once per step"),
+      {"limits", K::Flag, &S::limits, "", "joint limits as events (CVODE): impact, hold, release", R::Any, nullptr, ""},
+      real("restitution", &S::restitution, "1", R::UnitInterval, "coefficient of restitution at a limit"),
+      real("control_dt", &S::control_dt, "s", R::NonNegative, "time between controller samples, zero-order hold (0: continuous)"),
+  };
+  return table;
+}
+
+const SettingInfo* find_setting(std::string_view name) {
+  for (const SettingInfo& info : setting_table())
+    if (info.name == name) return &info;
+  return nullptr;
+}
+
+std::string setting_problem(const SettingInfo& info, double x) {
+  if (info.kind != K::Real && info.kind != K::Count) return "expected " + std::string(info.kind == K::Flag ? "true or false" : "a name");
+  if (!std::isfinite(x)) return "expected a finite number";
+  switch (info.range) {
+    case R::Any: break;
+    case R::Positive:
+      if (!(x > 0)) return "expected a positive number";
+      break;
+    case R::NonNegative:
+      if (!(x >= 0)) return "expected 0 or a positive number";
+      break;
+    case R::UnitInterval:
+      if (!(x >= 0 && x <= 1)) return "expected a coefficient in [0, 1]";
+      break;
+  }
+  if (info.kind == K::Count && (x != std::floor(x) || x > 1e15)) return "expected a whole number";
+  return "";
+}
+
+std::string setting_problem(const SettingInfo& info, const std::string& word) {
+  if (info.kind != K::Word) return "expected a number";
+  if (info.name == "dynamics" && word == kFdMethodAliasOn) return "";
+  const std::vector<std::string> words = info.words();
+  if (std::find(words.begin(), words.end(), word) != words.end()) return "";
+  if (!info.noun.empty()) return "unknown " + std::string(info.noun) + " '" + word + "'" + did_you_mean(word, words);
+  std::string alternatives;
+  for (size_t k = 0; k < words.size(); ++k) alternatives += (k == 0 ? "" : k + 1 == words.size() ? " or " : ", ") + words[k];
+  return "expected " + alternatives + ", got '" + word + "'" + did_you_mean(word, words);
+}
+
+namespace {
+
+[[noreturn]] void refuse(const SettingInfo& info, const std::string& problem) {
+  throw Error(std::string(info.name) + ": " + problem);
+}
+
+}  // namespace
+
+void set_setting(SimulationSettings& s, const SettingInfo& info, double x) {
+  if (const std::string p = setting_problem(info, x); !p.empty()) refuse(info, p + ", got " + short_number(x));
+  if (const auto* f = std::get_if<double S::*>(&info.field)) s.**f = x;
+  else s.*std::get<long S::*>(info.field) = long(x);
+}
+
+void set_setting(SimulationSettings& s, const SettingInfo& info, const std::string& word) {
+  if (const std::string p = setting_problem(info, word); !p.empty()) refuse(info, p);
+  s.*std::get<std::string S::*>(info.field) =
+      info.name == "dynamics" && word == kFdMethodAliasOn ? std::string(to_string(FdMethod::ArticulatedBody)) : word;
+}
+
+void set_setting(SimulationSettings& s, const SettingInfo& info, bool flag) {
+  if (info.kind != K::Flag) refuse(info, setting_problem(info, 0.0));
+  s.*std::get<bool S::*>(info.field) = flag;
+}
+
+std::string setting_text(const SimulationSettings& s, const SettingInfo& info) {
+  return std::visit(
+      [&](auto field) -> std::string {
+        const auto& value = s.*field;
+        using T = std::decay_t<decltype(value)>;
+        if constexpr (std::is_same_v<T, std::string>) return value;
+        else if constexpr (std::is_same_v<T, bool>) return value ? "true" : "false";
+        else {
+          char buf[32];
+          std::snprintf(buf, sizeof buf, "%.17g", double(value));
+          return buf;
+        }
+      },
+      info.field);
+}
+
+}  // namespace soadyn

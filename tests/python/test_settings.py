@@ -1,0 +1,83 @@
+"""One table of simulation settings (include/soadyn/settings.hpp): every setting it declares is a
+scenario key, a soadyn run option, a SimulationSettings attribute, a simulate() keyword and a /solver
+attribute of the run file, each carrying the value given to it."""
+import inspect
+import os
+
+import h5py
+import pytest
+
+import soadyn
+from conftest import SCENARIOS, cli
+
+# a valid value other than the default for each setting; a setting added to the table without a
+# value here fails test_every_setting_has_a_test_value
+VALUES = {"t_end": 0.04, "output_dt": 0.02, "method": "cvode-bdf", "rtol": 1e-6, "atol": 1e-9, "dt": 0.002,
+          "max_step": 0.01, "max_steps": 12345, "dynamics": "dense", "jacobian": "dq", "newton": "simplified",
+          "limits": True, "restitution": 0.5, "control_dt": 0.01}
+
+
+def test_every_setting_has_a_test_value():
+    assert set(soadyn.SimulationSettings.names) == set(VALUES)
+    defaults = soadyn.SimulationSettings()
+    for name, value in VALUES.items():
+        assert getattr(defaults, name) != value, f"{name}: the test value is the default"
+
+
+def test_simulate_keyword_reaches_the_run_file(tmp_path):
+    keywords = inspect.signature(soadyn.simulate).parameters
+    scene = soadyn.load_scenario(os.path.join(SCENARIOS, "double_pendulum.yaml"))
+    for name in soadyn.SimulationSettings.names:
+        assert name in keywords, f"simulate() has no keyword for the setting {name}"
+    out = tmp_path / "run.h5"
+    soadyn.simulate(scene, output=str(out), **VALUES)
+    with h5py.File(out, "r") as f:
+        solver = f["/solver"].attrs
+        for name, value in VALUES.items():
+            got = solver[name]
+            got = got.decode() if isinstance(got, bytes) else got
+            expected = ("true" if value else "false") if isinstance(value, bool) else value
+            if isinstance(value, str) or isinstance(value, bool):
+                assert got == expected, name
+            else:
+                assert float(got) == pytest.approx(float(expected), rel=1e-15), name
+
+
+def test_scenario_key_and_attribute():
+    base = open(os.path.join(SCENARIOS, "double_pendulum.yaml")).read()
+    assert "simulation:" in base
+    lines = "".join(f"\n  {k}: {str(v).lower() if isinstance(v, bool) else v}" for k, v in VALUES.items())
+    text = base.replace("simulation:", "simulation:" + lines, 1)
+    # the scene's own keys under simulation: come after ours; drop duplicates of ours
+    kept, seen, in_sim = [], set(), False
+    for line in text.splitlines():
+        if line.startswith("simulation:"):
+            in_sim = True
+        elif line and not line.startswith(" "):
+            in_sim = False
+        key = line.strip().split(":")[0] if in_sim and line.startswith("  ") and not line.startswith("    ") else None
+        if key in seen:
+            continue
+        if key:
+            seen.add(key)
+        kept.append(line)
+    scene = soadyn.parse_scenario("\n".join(kept) + "\n", "settings.yaml")
+    for name, value in VALUES.items():
+        assert getattr(scene.settings, name) == value, name
+    # the O(N) route's old word is taken and stored as its new one
+    scene = soadyn.parse_scenario(base.replace("simulation:", "simulation:\n  dynamics: on", 1), "on.yaml")
+    assert scene.settings.dynamics == "aba"
+
+
+def test_every_setting_is_a_run_option():
+    help_text = cli("run", "--help").stdout
+    for name in soadyn.SimulationSettings.names:
+        assert "--" + name.replace("_", "-") + " " in help_text, name
+
+
+def test_run_option_refusals_name_the_option(tmp_path):
+    p = cli("run", os.path.join(SCENARIOS, "double_pendulum.yaml"), "-o", str(tmp_path / "x.h5"), "--restitution", "2")
+    assert p.returncode != 0 and "--restitution: expected a coefficient in [0, 1], got '2'" in p.stderr
+    assert not (tmp_path / "x.h5").exists()
+    p = cli("run", os.path.join(SCENARIOS, "double_pendulum.yaml"), "-o", str(tmp_path / "x.h5"), "--max-steps", "1.5")
+    assert p.returncode != 0 and "--max-steps: expected a whole number, got '1.5'" in p.stderr
