@@ -28,6 +28,7 @@ if ((!demo)); then
     pybind11-dev python3-pybind11 python3-pytest    # the Python module and its tests
     python3-yaml python3-distributed                # soadyn sweep: sweep files, Dask
     clang libclang-rt-14-dev                        # the libFuzzer targets (tools/fuzz.sh)
+    ccache                                          # tools/mutation_check.py's scratch build reuses these objects
   )
 fi
 missing=()
@@ -47,18 +48,24 @@ if ((${#missing[@]})); then
 fi
 
 echo "== configuring and building (Release) in build/"
+# through ccache when it is there, with paths relative to this tree (CCACHE_BASEDIR), so that a copy
+# of the tree elsewhere (tools/mutation_check.py's scratch build) compiles only the files it changed
+launcher=()
+if command -v ccache >/dev/null; then
+  launcher=("-DCMAKE_CXX_COMPILER_LAUNCHER=env;CCACHE_BASEDIR=$PWD;ccache")
+fi
 if ((demo)); then
   # an existing build/ keeps its options (a later tools/test.sh sets them all again); the options
   # left off here (tests, benchmarks, Python) add targets but change no flag of soadyn's
   if [[ -f build/CMakeCache.txt ]]; then
-    cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_WERROR=ON "$@"
+    cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_WERROR=ON "${launcher[@]}" "$@"
   else
     cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_WERROR=ON \
-      -DSOADYN_BUILD_TESTS=OFF -DSOADYN_BUILD_BENCH=OFF -DSOADYN_PYTHON=OFF "$@"
+      -DSOADYN_BUILD_TESTS=OFF -DSOADYN_BUILD_BENCH=OFF -DSOADYN_PYTHON=OFF "${launcher[@]}" "$@"
   fi
   cmake --build build -j "$(nproc)" --target soadyn_cli
 else
   cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DSOADYN_WERROR=ON \
-    -DSOADYN_BUILD_TESTS=ON -DSOADYN_BUILD_BENCH=ON -DSOADYN_PYTHON=ON "$@"
+    -DSOADYN_BUILD_TESTS=ON -DSOADYN_BUILD_BENCH=ON -DSOADYN_PYTHON=ON "${launcher[@]}" "$@"
   cmake --build build -j "$(nproc)"
 fi
