@@ -3,7 +3,10 @@
 
 Which READMEs: README.md, then the folder READMEs (READMES below), each written to be run from the
 top of a clone.  Which commands: every line of every ```sh block (a line ending in a backslash joins
-the next; blank and comment-only lines are not commands), except
+the next; blank and comment-only lines are not commands), and every ```python block as one command
+(/usr/bin/python3 reading it), in their order in the file — but for README.md's and
+src/python/README.md's Python examples, which tests/python/test_readme.py runs with its own checks —
+except
   - the two set-up commands, tools/demo.sh and tools/test.sh (the test runs after them), and
   - blocks preceded by the line `<!-- README test: not run (reason) -->` (network, installing).
 Where: one scratch directory holding links to the source tree's scenarios/, tests/ and tools/ and a
@@ -26,6 +29,7 @@ SOADYN = os.environ.get("SOADYN", os.path.join(ROOT, "build", "soadyn"))
 SETUP = ("tools/demo.sh", "tools/test.sh")
 READMES = ("README.md", "src/cli/README.md", "scenarios/README.md", "include/soadyn/README.md",
            "src/python/README.md", "tools/results/README.md", "tests/README.md")
+PYTHON_ELSEWHERE = ("README.md", "src/python/README.md")  # their ```python blocks: tests/python/test_readme.py
 SKIP = re.compile(r"<!--\s*README test: not run \((.+?)\)\s*-->")
 
 
@@ -36,6 +40,12 @@ def commands(readme):
     run, skipped = [], []
     k = 0
     while k < len(lines):
+        if lines[k].strip() == "```python" and readme not in PYTHON_ELSEWHERE:
+            end = lines.index("```", k + 1)
+            block = "\n".join(lines[k + 1:end])
+            run.append((f"{name}:{k + 2}", f"/usr/bin/python3 - <<'PYTHON'\n{block}\nPYTHON"))
+            k = end + 1
+            continue
         if lines[k].strip() != "```sh":
             k += 1
             continue
@@ -112,8 +122,10 @@ def main():
         for n, cmd in run:
             before = snapshot(d)
             t0 = time.time()
-            p = subprocess.run(["bash", "-c", cmd], cwd=d, capture_output=True, text=True, timeout=900,
-                               env=dict(os.environ, MPLBACKEND="Agg"))
+            env = dict(os.environ, MPLBACKEND="Agg")
+            if os.environ.get("SOADYN_PYTHONPATH"):
+                env["PYTHONPATH"] = os.environ["SOADYN_PYTHONPATH"]
+            p = subprocess.run(["bash", "-c", cmd], cwd=d, capture_output=True, text=True, timeout=900, env=env)
             after = snapshot(d)
             status = "ok" if p.returncode == 0 else f"exit status {p.returncode}"
             print(f"{n}: {status} in {time.time() - t0:.1f} s: {cmd}")
