@@ -87,7 +87,7 @@ RunModel rebuild_model(const RunFile& run) {
       std::optional<std::string> robot;
       if (!run.robot_text.empty()) robot = run.robot_text;
       else if (const YAML::Node root = YAML::Load(run.scenario_text); root["model"] || root["urdf"])
-        std::fprintf(stderr, "soadyn view: note: %s holds no robot file (written before soadyn stored it); reading %s\n",
+        std::fprintf(stderr, "soadyn: note: %s holds no robot file (written before soadyn stored it); reading %s\n",
                      run.path.c_str(), (root["model"] ? root["model"] : root["urdf"]).as<std::string>("?").c_str());
       const Scenario sc = parse_scenario(run.scenario_text, label, false, InertiaCheck::Balance, robot);
       out.model = sc.model;
