@@ -1,6 +1,5 @@
 #include "h5_util.hpp"
 
-#include "soadyn/h5log.hpp"
 #include "soadyn/text.hpp"
 
 #include <algorithm>

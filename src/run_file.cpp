@@ -233,7 +233,7 @@ const RunSeries* RunContents::find(const std::string& p) const {
 
 const MatX& RunContents::values(const std::string& p) const {
   if (const RunSeries* s = find(p)) return s->values;
-  throw Error(path + ": " + p + " is missing (a run logged without it: soadyn run --log)");
+  throw Error(path + ": dataset " + p + " is missing (a run logged without it: soadyn run --log)");
 }
 
 }  // namespace soadyn

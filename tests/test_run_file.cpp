@@ -104,7 +104,7 @@ TEST(RunFile, ReadsBackEveryLoggedDoubleToTheBit) {
   EXPECT_EQ(claimed, r.column_names);
   EXPECT_EQ(r.find("/q")->units[0], "rad");
   EXPECT_EQ(r.find("/control"), nullptr);
-  EXPECT_EQ(message_of([&] { r.values("/control"); }), w.path + ": /control is missing (a run logged without it: soadyn run --log)");
+  EXPECT_EQ(message_of([&] { r.values("/control"); }), w.path + ": dataset /control is missing (a run logged without it: soadyn run --log)");
 
   // what the run was made from: the scenario's text and the URDF's, as read
   EXPECT_EQ(r.scenario_text, w.sc.text);
