@@ -42,8 +42,8 @@
 // library orders its writes so that the file on disk is valid at every instant.  The file is built
 // under a temporary name and renamed onto the output path at the first flush, so a run killed or
 // refused before then leaves an existing file untouched.  Readers of a running or killed run's
-// file open it in SWMR-read mode (h5py: File(path, "r", swmr=True)); a finished run's file opens
-// plainly.  New series are added as new columns of /samples and new views.
+// file open it in SWMR-read mode (h5py: File(path, "r", swmr=True); read_run_file does so by
+// itself); a finished run's file opens plainly.  New series are added as new columns of /samples and new views.
 #pragma once
 
 #include "soadyn/output_file.hpp"
