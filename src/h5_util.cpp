@@ -1,6 +1,5 @@
 #include "h5_util.hpp"
 
-#include "soadyn/h5log.hpp"
 #include "soadyn/text.hpp"
 
 #include <algorithm>
@@ -99,6 +98,15 @@ void attribute(hid_t obj, const char* name, const std::vector<double>& values) {
   if (n > 0) check(H5Awrite(attr, H5T_NATIVE_DOUBLE, values.data()), std::string("writing attribute ") + name);
 }
 
+Id text_dataset(hid_t parent, const char* name, const std::string& text) {
+  Id type = string_type(text.size(), is_valid_utf8(text));
+  Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
+  Id d(H5Dcreate2(parent, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, std::string("creating /") + name);
+  const std::string padded = text.empty() ? std::string(1, '\0') : text;
+  check(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, padded.data()), std::string("writing /") + name);
+  return d;
+}
+
 void int_dataset(hid_t parent, const char* name, const std::vector<int>& values, const std::string& units) {
   const hsize_t n = values.size();
   Id space(H5Screate_simple(1, &n, nullptr), H5Sclose, "H5Screate_simple");
@@ -143,22 +151,124 @@ void Scalar::write(std::string s) {
 
 Scalar string_scalar(hid_t parent, const char* name, size_t size) { return Scalar(parent, name, -1, string_type(size, true)); }
 
-}  // namespace soadyn::h5
-
-namespace soadyn {
-
-std::int64_t open_run_file(const std::string& path) {
-  static_assert(sizeof(hid_t) == sizeof(std::int64_t));
+Id open_run_file(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not an HDF5 file (expected a run file from soadyn run)");
-  const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  if (fapl < 0) throw Error(path + ": HDF5 could not make file-access properties");
+  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not a run file: not an HDF5 file (expected one from soadyn run)");
+  Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, path + ": file-access properties");
   H5Pset_metadata_read_attempts(fapl, kMetadataReadAttempts);
   hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
   if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
-  H5Pclose(fapl);
   if (f < 0) throw Error(path + ": cannot open the HDF5 file (corrupt or truncated?)");
-  return f;
+  return Id(f, H5Fclose, path);
 }
 
-}  // namespace soadyn
+bool exists(hid_t file, const std::string& path) {
+  // each link of the path must exist before the next is asked about
+  for (size_t from = 1;;) {
+    const size_t slash = path.find('/', from);
+    if (H5Lexists(file, path.substr(0, slash).c_str(), H5P_DEFAULT) <= 0) return false;
+    if (slash == std::string::npos) return true;
+    from = slash + 1;
+  }
+}
+
+bool has_attribute(hid_t obj, const char* name) { return H5Aexists(obj, name) > 0; }
+
+namespace {
+
+// an attribute or a dataset opened for reading, with its type and space
+struct Readable {
+  Id obj, type, space;
+  bool attribute;
+  std::string where;
+  Readable(hid_t parent, const char* name, bool attr, const std::string& at) : attribute(attr), where(at + ": " + name) {
+    const bool there = attr ? H5Aexists(parent, name) > 0 : H5Lexists(parent, name, H5P_DEFAULT) > 0;
+    if (!there) throw Error(where + " is missing");
+    const hid_t id = attr ? H5Aopen(parent, name, H5P_DEFAULT) : H5Dopen2(parent, name, H5P_DEFAULT);
+    if (id < 0) throw Error(where + ": cannot be opened (corrupt or truncated file?)");
+    obj = Id(id, attr ? H5Aclose : H5Dclose, where);
+    const hid_t t = attr ? H5Aget_type(obj) : H5Dget_type(obj), s = attr ? H5Aget_space(obj) : H5Dget_space(obj);
+    if (t < 0 || s < 0) throw Error(where + ": cannot be read (corrupt or truncated file?)");
+    type = Id(t, H5Tclose, where), space = Id(s, H5Sclose, where);
+  }
+  void read(hid_t mem, void* buf) const {
+    const herr_t r = attribute ? H5Aread(obj, mem, buf) : H5Dread(obj, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf);
+    if (r < 0) throw Error(where + ": cannot be read (corrupt or truncated file?)");
+  }
+};
+
+}  // namespace
+
+std::vector<std::string> strings(hid_t obj, const char* name, bool attribute, const std::string& where) {
+  const Readable r(obj, name, attribute, where);
+  if (H5Tget_class(r.type) != H5T_STRING) throw Error(r.where + ": expected strings");
+  const hssize_t n = H5Sget_simple_extent_npoints(r.space);
+  std::vector<std::string> out;
+  if (n <= 0) return out;
+  if (H5Tis_variable_str(r.type) > 0) {
+    Id mem(H5Tcopy(H5T_C_S1), H5Tclose, "H5Tcopy");
+    check(H5Tset_size(mem, H5T_VARIABLE), "H5Tset_size");
+    check(H5Tset_cset(mem, H5Tget_cset(r.type)), "H5Tset_cset");  // HDF5 converts no string between character sets
+    std::vector<char*> p(size_t(n), nullptr);
+    r.read(mem, p.data());
+    for (char* s : p) {
+      out.emplace_back(s ? s : "");
+      H5free_memory(s);
+    }
+    return out;
+  }
+  // fixed-length: n × width bytes, each null-padded or null-terminated
+  const size_t width = H5Tget_size(r.type);
+  std::vector<char> buf(width * size_t(n));
+  r.read(r.type, buf.data());
+  for (hssize_t i = 0; i < n; ++i) {
+    const char* s = buf.data() + size_t(i) * width;
+    out.emplace_back(s, std::find(s, s + width, '\0'));
+  }
+  return out;
+}
+
+std::string one_string(hid_t obj, const char* name, bool attribute, const std::string& where) {
+  std::vector<std::string> s = strings(obj, name, attribute, where);
+  if (s.size() != 1) throw Error(where + ": " + name + ": expected one string, got " + std::to_string(s.size()));
+  return std::move(s[0]);
+}
+
+RowMatrix numbers(hid_t obj, const char* name, bool attribute, const std::string& where, std::vector<hsize_t>* shape) {
+  const Readable r(obj, name, attribute, where);
+  const H5T_class_t c = H5Tget_class(r.type);
+  if (c != H5T_FLOAT && c != H5T_INTEGER) throw Error(r.where + ": expected numbers");
+  const int rank = H5Sget_simple_extent_ndims(r.space);
+  std::vector<hsize_t> dims(size_t(std::max(rank, 0)));
+  if (rank < 0 || H5Sget_simple_extent_dims(r.space, dims.data(), nullptr) < 0) throw Error(r.where + ": cannot be read");
+  hsize_t rows = rank == 0 ? 1 : dims[0], cols = 1;
+  for (size_t k = 1; k < dims.size(); ++k) cols *= dims[k];
+  RowMatrix m(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
+  if (m.size() > 0) r.read(H5T_NATIVE_DOUBLE, m.data());
+  if (shape) *shape = std::move(dims);
+  return m;
+}
+
+std::vector<hsize_t> dims(hid_t obj, const char* name, const std::string& where) {
+  const Readable r(obj, name, false, where);
+  const int rank = H5Sget_simple_extent_ndims(r.space);
+  std::vector<hsize_t> d(size_t(std::max(rank, 0)));
+  if (rank < 0 || H5Sget_simple_extent_dims(r.space, d.data(), nullptr) < 0) throw Error(r.where + ": cannot be read");
+  return d;
+}
+
+void read_rows(hid_t dset, hsize_t first, hsize_t count, hsize_t width, double* out, const std::string& where) {
+  const hid_t fs = H5Dget_space(dset);
+  if (fs < 0) throw Error(where + ": cannot be read (corrupt or truncated file?)");
+  Id file_space(fs, H5Sclose, where);
+  hsize_t start[2] = {first, 0}, n[2] = {count, width};
+  const hid_t ms = H5Screate_simple(2, n, nullptr);
+  if (ms < 0) throw Error(where + ": cannot make a memory space");
+  Id mem_space(ms, H5Sclose, where);
+  if (H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, nullptr, n, nullptr) < 0 ||
+      H5Dread(dset, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, out) < 0)
+    throw Error(where + ": rows " + std::to_string(first) + " to " + std::to_string(first + count - 1) +
+                " cannot be read (corrupt or truncated file?)");
+}
+
+}  // namespace soadyn::h5

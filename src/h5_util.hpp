@@ -1,11 +1,14 @@
-// HDF5 helpers for the run file (h5log.cpp): move-only owners of HDF5 ids, every return code
-// checked, the cause of a failure (the errno the file driver recorded) kept for the message, and
-// the attribute and dataset writers the layout uses.  Internal to the library.
+// HDF5 helpers for the run file, its writer (h5log.cpp) and its reader (run_file.cpp): the one
+// move-only owner of HDF5 ids, every return code checked, the cause of a failure (the errno the
+// file driver recorded) kept for the message, the attribute and dataset writers the layout uses and
+// the readers that take them back.  Internal to the library.
 #pragma once
 
 #include "soadyn/types.hpp"
 
 #include <hdf5.h>
+
+#include <Eigen/Core>
 
 #include <string>
 #include <vector>
@@ -57,6 +60,7 @@ class Id {
   }
   void release() { id_ = -1; }
   operator hid_t() const { return id_; }
+  bool ok() const { return id_ >= 0; }
 
  private:
   hid_t id_ = -1;
@@ -76,6 +80,8 @@ void attribute(hid_t obj, const char* name, const std::string& value);
 void attribute(hid_t obj, const char* name, const std::vector<std::string>& values);  // 1-D, one per entry
 void attribute(hid_t obj, const char* name, const std::vector<double>& values);
 
+// a scalar dataset of one fixed-length string of any size (a file's text), UTF-8 when it is valid UTF-8
+Id text_dataset(hid_t parent, const char* name, const std::string& text);
 // a 1-D dataset of ints, and of variable-length UTF-8 strings (h5py: .asstr()[...] gives str)
 void int_dataset(hid_t parent, const char* name, const std::vector<int>& values, const std::string& units);
 void string_dataset(hid_t parent, const char* name, const std::vector<std::string>& values);
@@ -95,5 +101,30 @@ struct Scalar {
 };
 
 Scalar string_scalar(hid_t parent, const char* name, size_t size);
+
+// Opens a run file read-only: plainly when it was closed, in single-writer/multiple-reader mode
+// when a run is writing it or was killed.  HDF5 retries a metadata read that fails its checksum,
+// sleeping twice as long each time (100 attempts by default: a corrupt file would hang the reader
+// for ever); kMetadataReadAttempts bounds that, so a corrupt or truncated file fails within
+// milliseconds.  Throws soadyn::Error naming the path.
+inline constexpr unsigned kMetadataReadAttempts = 20;
+Id open_run_file(const std::string& path);
+
+// Reading back.  `where` names the object in messages ("run.h5: /model"); each throws
+// soadyn::Error "<where>: <name>: <what is wrong>" for a missing or malformed object.
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+bool exists(hid_t file, const std::string& path);  // every link of an absolute path
+bool has_attribute(hid_t obj, const char* name);
+// the strings of an attribute or a dataset (variable- or fixed-length, scalar or 1-D)
+std::vector<std::string> strings(hid_t obj, const char* name, bool attribute, const std::string& where);
+std::string one_string(hid_t obj, const char* name, bool attribute, const std::string& where);  // exactly one
+// the numbers of an attribute or a dataset, as a row-major matrix: its first dimension the rows,
+// the others the columns (a scalar or 1-D object: one column); `shape` gets its dimensions
+RowMatrix numbers(hid_t obj, const char* name, bool attribute, const std::string& where,
+                  std::vector<hsize_t>* shape = nullptr);
+// the dimensions of a dataset (its data not read)
+std::vector<hsize_t> dims(hid_t obj, const char* name, const std::string& where);
+// rows [first, first + count) of a 2-D dataset of doubles, row-major into `out`
+void read_rows(hid_t dset, hsize_t first, hsize_t count, hsize_t width, double* out, const std::string& where);
 
 }  // namespace soadyn::h5

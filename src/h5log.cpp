@@ -208,14 +208,13 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
     im.file = Id(f, H5Fclose, "H5Fcreate");
     attribute(im.file, "soadyn_version", version);
     attribute(im.file, "scenario_path", sc.path);
-    attribute(im.file, "layout_version", 3L);
+    attribute(im.file, "layout_version", long(kLayoutVersion));
     attribute(im.file, "log_groups", groups.str());
-    {
-      Id type = h5::string_type(sc.text.size(), is_valid_utf8(sc.text));
-      Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
-      Id d(H5Dcreate2(im.file, "scenario", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose, "creating /scenario");
-      const std::string padded = sc.text.empty() ? std::string(1, '\0') : sc.text;
-      check(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, padded.data()), "writing /scenario");
+    h5::text_dataset(im.file, "scenario", sc.text);
+    if (!sc.robot_text.empty()) {
+      // the robot file the scenario named, so the run can be shown without it (soadyn view)
+      Id d = h5::text_dataset(im.file, "robot", sc.robot_text);
+      attribute(d, "path", sc.robot_path);
     }
 
     {

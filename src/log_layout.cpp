@@ -3,6 +3,9 @@
 #include "soadyn/frames.hpp"
 #include "soadyn/kinematics.hpp"
 
+#include <algorithm>
+#include <cassert>
+
 namespace soadyn::log {
 
 namespace {
@@ -23,6 +26,9 @@ std::string per_second(const std::string& rate) { return rate + "^2"; }
 struct Builder {
   Layout out;
   void view(const std::string& path, const std::vector<Column>& cols, int view_cols, int bodies = 0) {
+    // the reader finds views and their columns by kViewPaths and column_stem
+    assert(std::any_of(std::begin(kViewPaths), std::end(kViewPaths), [&](const char* p) { return path == p; }));
+    assert(std::all_of(cols.begin(), cols.end(), [&](const Column& c) { return column_of(c.name, column_stem(path)); }));
     View v;
     v.path = path;
     v.first = int(out.columns.size());

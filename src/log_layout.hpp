@@ -34,6 +34,27 @@ Layout layout(const Model& model, const LogGroups& groups);
 // frames' poses (groups.frames) are computed from s.q with `data` (kinematics frames only)
 void append_row(const Model& model, Data& data, const LogGroups& groups, const Sample& s, std::vector<double>& row);
 
+// Every view a run file can hold, by path: layout() makes only these, and the reader (run_file.cpp)
+// looks for these.  A view's columns of /samples are named by its path: "/energy/kinetic" is the one
+// column "energy.kinetic", "/q" the columns "q.<coordinate>" (column_stem: the path's dots).
+inline constexpr const char* kViewPaths[] = {
+    "/time", "/q", "/qd", "/qdd", "/energy/kinetic", "/energy/potential", "/energy/total", "/energy/work_inputs",
+    "/energy/dissipated", "/energy/impact_loss", "/momentum/linear", "/momentum/angular", "/bodies/position",
+    "/bodies/orientation", "/bodies/com", "/control", "/frames/position", "/frames/orientation",
+    "/sensitivities/initial_state", "/sensitivities/parameters"};
+
+// "/energy/kinetic" → "energy.kinetic"
+inline std::string column_stem(const std::string& view_path) {
+  std::string s = view_path.substr(1);
+  for (char& c : s)
+    if (c == '/') c = '.';
+  return s;
+}
+// the column is the view's: its stem itself (a one-column view) or the stem followed by "."
+inline bool column_of(const std::string& column, const std::string& stem) {
+  return column.compare(0, stem.size(), stem) == 0 && (column.size() == stem.size() || column[stem.size()] == '.');
+}
+
 // SI units of q and v, one per column (joint_traits)
 std::vector<std::string> q_units(const Model& model);
 std::vector<std::string> v_units(const Model& model);

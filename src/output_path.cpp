@@ -4,8 +4,9 @@
 
 #include "soadyn/h5log.hpp"
 
+#include "h5_util.hpp"
+
 #include <fcntl.h>
-#include <hdf5.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -85,15 +86,15 @@ bool is_hdf5(int fd, std::uint64_t size) {
 // read attempt, so a corrupt file answers at once.
 bool is_soadyn_run(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  const hid_t p = H5Pcreate(H5P_FILE_ACCESS);
+  if (p < 0) return false;
+  const h5::Id fapl(p, H5Pclose, "H5Pcreate");
   H5Pset_metadata_read_attempts(fapl, 1);
   hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
   if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);  // a killed run's file
-  H5Pclose(fapl);
   if (f < 0) return false;
-  const bool yes = H5Aexists(f, "soadyn_version") > 0 && H5Aexists(f, "layout_version") > 0;
-  H5Fclose(f);
-  return yes;
+  const h5::Id file(f, H5Fclose, path);
+  return h5::has_attribute(file, "soadyn_version") && h5::has_attribute(file, "layout_version");
 }
 
 // Is the file's content what this writer makes?

@@ -368,6 +368,16 @@ std::string read_text_file(const std::string& path) {
   return text;
 }
 
+bool mjcf_file_unchanged(const std::string& path, const std::string& stored_text) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
+  try {
+    return read_text_file(path) == stored_text;
+  } catch (const Error&) {
+    return false;
+  }
+}
+
 bool is_mjcf_text(const std::string& text) {
   // the first element after the prolog, comments and DOCTYPE
   size_t at = 0;
@@ -407,7 +417,7 @@ InertiaCheck read_inertia_check(const Reader& rd, const YAML::Node& n) {
 }  // namespace
 
 Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root,
-                        std::optional<InertiaCheck> inertia_check) {
+                        std::optional<InertiaCheck> inertia_check, const std::optional<std::string>& robot_text) {
   const Reader rd{path};
   YAML::Node root;
   try {
@@ -461,10 +471,13 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     const bool free = free_root || (root["free_root"] && rd.boolean(root["free_root"], "free_root"));
     try {
       // a URDF, or an MJCF file (MuJoCo's <mujoco>: its own gravity unless the scenario says one)
-      const std::string robot = read_text_file(p.string());
+      const std::string robot = robot_text ? *robot_text : read_text_file(p.string());
+      sc.robot_text = robot;
+      sc.robot_path = p.string();
       if (is_mjcf_text(robot)) {
         const std::optional<Vec3> g = root["gravity"] ? std::optional<Vec3>(gravity) : std::nullopt;
-        mjcf = parse_mjcf(robot, p.string(), true, {free, g, check});
+        const bool from_disk = !robot_text || mjcf_file_unchanged(p.string(), robot);
+        mjcf = parse_mjcf(robot, p.string(), from_disk, {free, g, check});
         sc.model = mjcf->model;
       } else {
         sc.model = parse_urdf(robot, p.string(), free, gravity, check);

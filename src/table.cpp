@@ -1,9 +1,7 @@
 #include "soadyn/table.hpp"
 
-#include "soadyn/h5log.hpp"
+#include "soadyn/run_file.hpp"
 #include "soadyn/text.hpp"
-
-#include "h5_util.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -127,44 +125,15 @@ Table read_csv(const std::string& path) {
   return ordered(std::move(t), lines);
 }
 
-// a T or T×cols dataset of doubles, row-major
-MatX dataset(hid_t file, const char* name, const std::string& path) {
-  if (H5Lexists(file, name, H5P_DEFAULT) <= 0)
-    throw Error(path + ": dataset " + name + " is missing (a run logged without the state group?)");
-  h5::Id d(H5Dopen2(file, name, H5P_DEFAULT), H5Dclose, path + ": opening " + name);
-  h5::Id space(H5Dget_space(d), H5Sclose, path + ": " + name);
-  hsize_t dims[2] = {0, 1};
-  const int rank = H5Sget_simple_extent_ndims(space);
-  if (rank < 1 || rank > 2) throw Error(path + ": dataset " + name + ": expected 1 or 2 dimensions");
-  H5Sget_simple_extent_dims(space, dims, nullptr);
-  const Eigen::Index rows = static_cast<Eigen::Index>(dims[0]), cols = rank == 2 ? static_cast<Eigen::Index>(dims[1]) : 1;
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> m(rows, cols);
-  if (m.size() > 0 && H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, m.data()) < 0)
-    throw Error(path + ": dataset " + name + " cannot be read (corrupt or truncated file?)");
-  return m;
-}
-
-// /model's q_names: an attribute of variable-length strings
-std::vector<std::string> q_names(hid_t file, const std::string& path) {
-  if (H5Aexists_by_name(file, "/model", "q_names", H5P_DEFAULT) <= 0)
-    throw Error(path + ": /model has no q_names (not a run file from soadyn run?)");
-  h5::Id a(H5Aopen_by_name(file, "/model", "q_names", H5P_DEFAULT, H5P_DEFAULT), H5Aclose, path + ": /model q_names");
-  h5::Id type(H5Aget_type(a), H5Tclose, path + ": /model q_names");
-  h5::Id space(H5Aget_space(a), H5Sclose, path + ": /model q_names");
-  const hssize_t n = H5Sget_simple_extent_npoints(space);
-  if (H5Tget_class(type) != H5T_STRING || H5Tis_variable_str(type) <= 0 || n < 1)
-    throw Error(path + ": /model q_names: expected a list of strings");
-  h5::Id mem(H5Tcopy(H5T_C_S1), H5Tclose, "a string type");
-  H5Tset_size(mem, H5T_VARIABLE);
-  H5Tset_cset(mem, H5Tget_cset(type));
-  std::vector<char*> raw(size_t(n), nullptr);
-  if (H5Aread(a, mem, raw.data()) < 0) throw Error(path + ": /model q_names cannot be read");
-  std::vector<std::string> out;
-  for (char* p : raw) {
-    out.emplace_back(p ? p : "");
-    H5free_memory(p);
-  }
-  return out;
+// a run file's /time and /q (read_run_file), the columns named by /model's q_names
+Table run_table(const RunContents& run) {
+  Table t;
+  t.path = run.path;
+  t.columns = run.q_names;
+  t.time = run.values("/time").col(0);
+  t.values = run.values("/q");
+  if (t.columns.empty()) throw Error(run.path + ": /model has no q_names (not a run file from soadyn run?)");
+  return t;
 }
 
 // rows of `m` kept where ordered() kept the times: by matching each kept time in order
@@ -176,48 +145,25 @@ MatX rows_at(const MatX& m, const VecX& all, const VecX& kept) {
   return out;
 }
 
-Table read_run_table(const std::string& path) {
-  h5::Id file(hid_t(open_run_file(path)), H5Fclose, path);
-  Table t;
-  t.path = path;
-  t.columns = q_names(file, path);
-  t.time = dataset(file, "/time", path).col(0);
-  t.values = dataset(file, "/q", path);
-  if (t.values.cols() != Eigen::Index(t.columns.size()))
-    throw Error(path + ": /q has " + std::to_string(t.values.cols()) + " columns, /model names " + std::to_string(t.columns.size()));
-  // a run stopped mid-write keeps whole rows only
-  const Eigen::Index rows = std::min(t.time.size(), t.values.rows());
-  t.time.conservativeResize(rows);
-  t.values.conservativeResize(rows, Eigen::NoChange);
-  return ordered(std::move(t), {});
-}
-
 }  // namespace
 
 RunState read_run_state(const std::string& path) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not a run file (HDF5) from soadyn run");
-  const Table t = read_run_table(path);  // /time and /q, ordered
+  const RunContents run = read_run_file(path);
+  Table all = run_table(run);
+  const VecX times = all.time;
+  const Table t = ordered(std::move(all), {});  // /time and /q, ordered
   RunState s;
   s.path = path;
   s.time = t.time;
   s.q = t.values;
   s.q_names = t.columns;
-  h5::Id file(hid_t(open_run_file(path)), H5Fclose, path);
-  const VecX all = dataset(file, "/time", path).col(0);
-  for (auto [name, out] : {std::pair{"/qd", &s.qd}, std::pair{"/qdd", &s.qdd}}) {
-    if (H5Lexists(file, name, H5P_DEFAULT) <= 0) continue;
-    const MatX m = dataset(file, name, path);
-    if (m.rows() < std::min(all.size(), Eigen::Index(t.time.size())))
-      throw Error(path + ": " + name + " has " + std::to_string(m.rows()) + " rows, /q " + std::to_string(t.time.size()));
-    *out = rows_at(m.topRows(std::min(m.rows(), all.size())), all.head(std::min(m.rows(), all.size())), s.time);
-  }
+  for (auto [name, out] : {std::pair{"/qd", &s.qd}, std::pair{"/qdd", &s.qdd}})
+    if (const RunSeries* m = run.find(name)) *out = rows_at(m->values, times, s.time);
   return s;
 }
 
 Table read_table(const std::string& path) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
-  return H5Fis_hdf5(path.c_str()) > 0 ? read_run_table(path) : read_csv(path);
+  return is_hdf5_file(path) ? ordered(run_table(read_run_file(path)), {}) : read_csv(path);
 }
 
 CubicSpline::CubicSpline(VecX t, VecX y) : t_(std::move(t)), y_(std::move(y)), m_(VecX::Zero(t_.size())) {

@@ -7,7 +7,6 @@
 // all but the above: none of it changes rigid-body dynamics.
 #include "soadyn/scenario.hpp"
 
-#include "urdf_pose.hpp"
 #include "urdf_xml.hpp"
 
 #include <console_bridge/console.h>
@@ -90,7 +89,7 @@ std::vector<std::string> parent_first(const urdf::ModelInterface& robot, const u
 void mass_properties(const urdf::Link& link, BodySpec& s) {
   if (!link.inertial) return;
   const urdf::Inertial& in = *link.inertial;
-  const Placement X = to_placement(in.origin);
+  const Placement X = placement_of_pose(in.origin);
   Mat3 I;
   I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
   s.mass = in.mass;
@@ -114,7 +113,7 @@ BodySpec joint_spec(const urdf::Joint& j, const urdf::Link& link, const std::map
   s.name = link.name;
   s.joint_name = j.name;
   s.parent = link_index.at(j.parent_link_name);
-  s.placement = to_placement(j.parent_to_joint_origin_transform);
+  s.placement = placement_of_pose(j.parent_to_joint_origin_transform);
   s.axis = Vec3(j.axis.x, j.axis.y, j.axis.z);
   switch (j.type) {
     case urdf::Joint::REVOLUTE:

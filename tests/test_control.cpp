@@ -2,11 +2,11 @@
 // gravity, computed torque decaying at its designed poles on the 7-DOF arm, sampled control held
 // between ticks, a controller that throws or returns NaN, and the controllers' work in the balance.
 #include "soadyn/h5log.hpp"
+#include "soadyn/run_file.hpp"
 #include "soadyn/simulate.hpp"
 
 #include "test_util.hpp"
 
-#include <hdf5.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -123,17 +123,7 @@ TEST(Control, ThrowingControllerLeavesAReadableFile) {
   EXPECT_FALSE(r.completed);
   EXPECT_NE(r.status.find("the controller failed at t = 0.5"), std::string::npos) << r.status;
   EXPECT_NE(r.status.find("sensor lost"), std::string::npos) << r.status;
-  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  ASSERT_GE(f, 0);
-  const hid_t d = H5Dopen2(f, "/samples", H5P_DEFAULT);
-  ASSERT_GE(d, 0);
-  hsize_t dims[2] = {0, 0};
-  const hid_t sp = H5Dget_space(d);
-  H5Sget_simple_extent_dims(sp, dims, nullptr);
-  EXPECT_GE(dims[0], 45u);  // the rows up to about t = 0.5 (CVODE steps past the last output)
-  H5Sclose(sp);
-  H5Dclose(d);
-  H5Fclose(f);
+  EXPECT_GE(read_run_file(path).rows(), 45);  // the rows up to about t = 0.5 (CVODE steps past the last output)
   std::filesystem::remove(path);
   // sampled, a NaN torque: one error naming the time and the joint
   SimulationSettings st = sc.simulation;
@@ -161,40 +151,21 @@ TEST(Control, LimitEventsAndControlInTheRunFile) {
   }
   ASSERT_TRUE(r.completed) << r.status;
   ASSERT_GE(r.events.size(), 1u);
-  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  ASSERT_GE(f, 0);
-  auto read = [&](const char* name, hsize_t& rows, hsize_t& cols) {
-    const hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
-    EXPECT_GE(d, 0) << name;
-    const hid_t sp = H5Dget_space(d);
-    hsize_t dims[2] = {0, 1};
-    const int rank = H5Sget_simple_extent_dims(sp, dims, nullptr);
-    rows = dims[0];
-    cols = rank > 1 ? dims[1] : 1;
-    std::vector<double> x(rows * cols);
-    H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, x.data());
-    H5Sclose(sp);
-    H5Dclose(d);
-    return x;
-  };
-  hsize_t rows = 0, cols = 0;
-  const std::vector<double> ev = read("/events", rows, cols);
-  ASSERT_EQ(rows, r.events.size());
-  ASSERT_EQ(cols, 7u);
-  for (size_t k = 0; k < rows; ++k) {
-    EXPECT_NEAR(ev[k * 7 + 0], r.events[k].t, 1e-15);
-    EXPECT_NEAR(ev[k * 7 + 2], -1.0, 0.0);  // the lower limit
-    EXPECT_NEAR(ev[k * 7 + 4], r.events[k].v_before, 1e-15);
-    EXPECT_NEAR(ev[k * 7 + 6], r.events[k].energy_lost, 1e-15);
+  const RunContents file = read_run_file(path);
+  ASSERT_EQ(file.events.size(), r.events.size());
+  for (size_t k = 0; k < r.events.size(); ++k) {
+    EXPECT_EQ(file.events[k].t, r.events[k].t);  // stored doubles: the same bits
+    EXPECT_EQ(file.events[k].side, -1);           // the lower limit
+    EXPECT_EQ(file.events[k].v_before, r.events[k].v_before);
+    EXPECT_EQ(file.events[k].energy_lost, r.events[k].energy_lost);
   }
-  const std::vector<double> lost = read("/energy/impact_loss", rows, cols);
-  ASSERT_EQ(rows, s.size());
-  EXPECT_NEAR(lost.back(), s.back().impact_loss, 1e-15);
-  EXPECT_GT(lost.back(), 0.1);
-  const std::vector<double> tau = read("/control", rows, cols);
-  EXPECT_EQ(cols, 1u);
-  for (size_t k = 0; k < rows; ++k) EXPECT_NEAR(tau[k], s[k].control(0), 1e-15);
-  H5Fclose(f);
+  const MatX& lost = file.values("/energy/impact_loss");
+  ASSERT_EQ(lost.rows(), Eigen::Index(s.size()));
+  EXPECT_EQ(lost(lost.rows() - 1, 0), s.back().impact_loss);
+  EXPECT_GT(lost(lost.rows() - 1, 0), 0.1);
+  const MatX& tau = file.values("/control");
+  EXPECT_EQ(tau.cols(), 1);
+  for (Eigen::Index k = 0; k < tau.rows(); ++k) EXPECT_EQ(tau(k, 0), s[size_t(k)].control(0));
   std::filesystem::remove(path);
 }
 

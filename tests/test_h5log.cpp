@@ -156,7 +156,7 @@ void joint_units(const Model& m, std::vector<std::string>& qu, std::vector<std::
   }
 }
 
-// the whole layout of a run file (h5log.hpp, layout_version 3) against the run's samples, summary
+// the whole layout of a run file (h5log.hpp, layout_version 4) against the run's samples, summary
 // and settings
 void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& s, const std::vector<Sample>& x,
                     const RunSummary& r, const std::string& version, bool same_process, const LogGroups& g = {}) {
@@ -166,9 +166,13 @@ void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& 
   c.object("/");
   c.text("/", "scenario_path", sc.path);
   c.text("/", "soadyn_version", version);
-  c.number("/", "layout_version", 3, H5T_INTEGER);
+  c.number("/", "layout_version", kLayoutVersion, H5T_INTEGER);
   c.text("/", "log_groups", g.str());
   c.scalar("/scenario", sc.text);
+  if (!sc.robot_text.empty()) {  // the URDF the scenario named, as read
+    c.scalar("/robot", sc.robot_text);
+    c.text("/robot", "path", sc.robot_path);
+  }
 
   std::vector<std::string> qu, vu, types;
   joint_units(m, qu, vu);

@@ -7,11 +7,11 @@
 #include "soadyn/sensitivity.hpp"
 
 #include "soadyn/h5log.hpp"
+#include "soadyn/run_file.hpp"
 #include "soadyn/simulate.hpp"
 #include "test_util.hpp"
 #include "whole_run_util.hpp"
 
-#include <hdf5.h>
 
 #include <cmath>
 #include <cstdio>
@@ -254,30 +254,19 @@ TEST(Sensitivity, LoggedToTheRunFile) {
     H5Log log(path, sc, s, "test");
     simulate(sc, s, &log, &samples);
   }
-  const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  ASSERT_GE(f, 0);
+  const RunContents file = read_run_file(path);
   for (const auto& [name, cols] : {std::pair{"/sensitivities/initial_state", 4}, std::pair{"/sensitivities/parameters", 10}}) {
-    const hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
-    ASSERT_GE(d, 0) << name;
-    const hid_t space = H5Dget_space(d);
-    hsize_t dims[3] = {0, 0, 0};
-    ASSERT_EQ(H5Sget_simple_extent_ndims(space), 3);
-    H5Sget_simple_extent_dims(space, dims, nullptr);
-    EXPECT_EQ(dims[0], samples.size());
-    EXPECT_EQ(dims[1], 4u);
-    EXPECT_EQ(dims[2], hsize_t(cols));
-    std::vector<double> all(dims[0] * dims[1] * dims[2]);
-    H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, all.data());
+    const RunSeries* d = file.find(name);
+    ASSERT_NE(d, nullptr) << name;
+    EXPECT_EQ(d->values.rows(), Eigen::Index(samples.size()));
+    EXPECT_EQ(d->shape, (std::vector<Eigen::Index>{4, cols}));
+    // row-major (i, j) in the last row; stored doubles come back bit for bit
     const MatX& want = cols == 4 ? samples.back().sensitivity_initial_state : samples.back().sensitivity_parameters;
-    const size_t last = (dims[0] - 1) * 4 * size_t(cols);
     for (int i = 0; i < 4; ++i)
-      for (int j = 0; j < cols; ++j) EXPECT_DOUBLE_EQ(all[last + size_t(i * cols + j)], want(i, j)) << name << " " << i << "," << j;
-    H5Sclose(space);
-    H5Dclose(d);
+      for (int j = 0; j < cols; ++j) EXPECT_EQ(d->values(d->values.rows() - 1, i * cols + j), want(i, j)) << name << " " << i << "," << j;
   }
-  EXPECT_GT(H5Aexists_by_name(f, "/sensitivities", "parameter_names", H5P_DEFAULT), 0);
-  EXPECT_GT(H5Aexists_by_name(f, "/sensitivities", "state_units", H5P_DEFAULT), 0);
-  H5Fclose(f);
+  EXPECT_EQ(file.parameter_names.size(), 10u);
+  EXPECT_EQ(file.state_units.size(), 4u);
   std::filesystem::remove(path);
 }
 

@@ -1,11 +1,11 @@
 // Simulation: conservation on the four scenarios, convergence orders, HDF5 files (read back with
 // the HDF5 API), instability, inputs.  Killed runs: tests/test_data_safety.py.
 #include "soadyn/h5log.hpp"
+#include "soadyn/run_file.hpp"
 #include "soadyn/simulate.hpp"
 
 #include "test_util.hpp"
 
-#include <hdf5.h>
 #include <unistd.h>
 
 #include <fstream>
@@ -115,35 +115,6 @@ TEST(Satellite, QuaternionStaysUnitInTheIntegratorState) {
 
 // ---- HDF5 ----------------------------------------------------------------------------------
 
-std::vector<double> read_doubles(hid_t file, const char* path, hsize_t* rows = nullptr, hsize_t* cols = nullptr) {
-  const hid_t d = H5Dopen2(file, path, H5P_DEFAULT);
-  EXPECT_GE(d, 0) << path;
-  if (d < 0) return {};
-  const hid_t space = H5Dget_space(d);
-  hsize_t dims[2] = {0, 1};
-  const int rank = H5Sget_simple_extent_dims(space, dims, nullptr);
-  if (rank == 1) dims[1] = 1;
-  std::vector<double> out(dims[0] * dims[1]);
-  if (!out.empty()) H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data());
-  if (rows) *rows = dims[0];
-  if (cols) *cols = dims[1];
-  H5Sclose(space);
-  H5Dclose(d);
-  return out;
-}
-
-// /solver's run-time values and /scenario are scalar datasets (SWMR allows rewriting them in place)
-std::string read_string_dataset(hid_t obj, const char* name) {
-  const hid_t d = H5Dopen2(obj, name, H5P_DEFAULT);
-  if (d < 0) return "(missing)";
-  const hid_t type = H5Dget_type(d);
-  std::string s(H5Tget_size(type), '\0');
-  H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, s.data());
-  H5Tclose(type);
-  H5Dclose(d);
-  return s.substr(0, s.find('\0'));
-}
-
 int run_cli(const std::string& args) { return std::system((std::string(SOADYN_CLI) + " " + args + " > /dev/null 2>&1").c_str()); }
 
 // (the round trip of every dataset and attribute is in test_h5log.cpp)
@@ -158,16 +129,9 @@ TEST(Instability, Rk4BeyondItsLimitStopsCleanly) {
   const std::string msg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_NE(msg.find("unstable at t ="), std::string::npos) << msg;
   EXPECT_NE(msg.find("joint 'theta"), std::string::npos) << msg;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  const hid_t f = H5Fopen(out.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  ASSERT_GE(f, 0);
-  hsize_t rows = 0;
-  read_doubles(f, "/time", &rows);
-  EXPECT_GE(rows, 1u);
-  const hid_t solver = H5Gopen2(f, "/solver", H5P_DEFAULT);
-  EXPECT_NE(read_string_dataset(solver, "status").find("unstable"), std::string::npos);
-  H5Gclose(solver);
-  H5Fclose(f);
+  const RunContents file = read_run_file(out);
+  EXPECT_GE(file.rows(), 1);
+  EXPECT_NE(file.solver.status.find("unstable"), std::string::npos) << file.solver.status;
   std::filesystem::remove(out);
   std::filesystem::remove(err);
 }

@@ -321,19 +321,33 @@ def check_cli_errors(tmp):
     check("missing.h5: no such run file" in p.stderr and p.stderr.count("\n") == 1, f"missing run file: {p.stderr.strip()}")
     p = run("view", os.path.join(SOURCE, "scenarios", "double_pendulum.yaml"), "-o", os.path.join(tmp, "x.html"), expect=2)
     check("not an HDF5 file" in p.stderr, f"not a run file: {p.stderr.strip()}")
-    # a run whose URDF has gone: one line naming the URDF
+    # a run whose scenario and URDF have gone: the page from the text stored in the run, visuals included
+    import h5py
     d = os.path.join(tmp, "moved")
     os.makedirs(d)
     for f in ("view_visuals.yaml", "view_visuals.urdf"):
         shutil.copy(os.path.join(SOURCE, "tests", "data", f), d)
     run("run", os.path.join(d, "view_visuals.yaml"), "-q", "--t-end", "0.1", "-o", os.path.join(d, "run.h5"))
-    os.remove(os.path.join(d, "view_visuals.urdf"))
-    p = run("view", os.path.join(d, "run.h5"), expect=2)
-    check("view_visuals.urdf" in p.stderr and "cannot rebuild the run's model" in p.stderr and p.stderr.count("\n") == 1,
-          f"missing URDF: {p.stderr.strip()}")
-    check(not os.path.exists(os.path.join(d, "run.html")), "missing URDF: no page written")
+    shutil.copy(os.path.join(d, "run.h5"), os.path.join(d, "old.h5"))
+    for f in ("view_visuals.yaml", "view_visuals.urdf"):
+        os.rename(os.path.join(d, f), os.path.join(d, f + ".gone"))
+    p = run("view", os.path.join(d, "run.h5"))
+    with open(os.path.join(d, "run.html"), encoding="utf-8") as f:
+        page = f.read()
+    check(p.stderr == "" and '"kind":"cylinder"' in page, f"URDF gone: the page from the stored URDF ({p.stderr.strip()})")
+    # a file from before /robot (layout 3): the URDF read from disk with a note, refused in one line once gone
+    with h5py.File(os.path.join(d, "old.h5"), "r+") as f:
+        del f["robot"]
+    p = run("view", os.path.join(d, "old.h5"), expect=2)
+    check("view_visuals.urdf" in p.stderr and "cannot rebuild the run's model" in p.stderr and p.stderr.count("soadyn: error") == 1,
+          f"old file, missing URDF: {p.stderr.strip()}")
+    check(not os.path.exists(os.path.join(d, "old.html")), "old file, missing URDF: no page written")
+    for f in ("view_visuals.yaml", "view_visuals.urdf"):
+        os.rename(os.path.join(d, f + ".gone"), os.path.join(d, f))
+    p = run("view", os.path.join(d, "old.h5"))
+    check("holds no robot file" in p.stderr and os.path.exists(os.path.join(d, "old.html")),
+          f"old file: the URDF read from disk, with a note ({p.stderr.strip()})")
     # a run that went unstable: shown up to its last finite row, with a note
-    import h5py
     src = os.path.join(tmp, "double_pendulum.h5")
     bad = os.path.join(tmp, "unstable.h5")
     shutil.copy(src, bad)

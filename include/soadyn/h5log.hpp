@@ -1,4 +1,4 @@
-// HDF5 run files.  Layout (one file per run, layout_version 3):
+// HDF5 run files.  Layout (one file per run, layout_version 4; run_file.hpp reads it back):
 //   /samples (T×W)   every logged number, one row per output time; attributes column_names and
 //                    column_units (W strings each: "time", "q.bus.x", "qd.left", "energy.total",
 //                    "momentum.linear.x", "bodies.position.bus.x", …; "s", "m", "rad", "1", …)
@@ -21,6 +21,9 @@
 //                  v_before, v_after, energy_lost; attribute column_names; with joint limits on
 //   /bodies/names    the N bodies (after fixed joints are merged), a string dataset
 //   /scenario        the scenario's full text (a string dataset: any size)
+//   /robot           the URDF or MJCF text the scenario's urdf: or model: key named, as the run read
+//                    it (attribute path: where it was); absent when it names none, and in files
+//                    before layout 4 (a run of a .urdf or .xml file itself: /scenario holds it)
 //   /model: attributes nq, nv, q_names, v_names, q_units, v_units, joint_names, joint_types,
 //           body_names, gravity, units, free_joint, ball_joint, planar_joint (conventions);
 //           datasets parents, joint_q_index, joint_v_index (ints, −1 = world)
@@ -39,8 +42,8 @@
 // library orders its writes so that the file on disk is valid at every instant.  The file is built
 // under a temporary name and renamed onto the output path at the first flush, so a run killed or
 // refused before then leaves an existing file untouched.  Readers of a running or killed run's
-// file open it in SWMR-read mode (h5py: File(path, "r", swmr=True)); a finished run's file opens
-// plainly.  New series are added as new columns of /samples and new views.
+// file open it in SWMR-read mode (h5py: File(path, "r", swmr=True); read_run_file does so by
+// itself); a finished run's file opens plainly.  New series are added as new columns of /samples and new views.
 #pragma once
 
 #include "soadyn/output_file.hpp"
@@ -70,15 +73,6 @@ class IoError : public Error {
   }
 };
 
-// Opens a run file for reading and returns its HDF5 file id (an hid_t; the caller closes it with
-// H5Fclose): plainly when it was closed, in single-writer/multiple-reader mode when a run is
-// writing it or was killed.  HDF5 retries a metadata read that fails its checksum, sleeping twice
-// as long each time (100 attempts by default: a corrupt file would hang the reader for ever); here
-// kMetadataReadAttempts bound that, so a corrupt or truncated file fails within milliseconds.
-// Throws soadyn::Error naming the path.
-inline constexpr unsigned kMetadataReadAttempts = 20;
-std::int64_t open_run_file(const std::string& path);
-
 // The groups of series a run logs (`soadyn run --log state,energy`); /time is always logged.
 struct LogGroups {
   bool state = true, energy = true, momentum = true, bodies = true;
@@ -96,6 +90,9 @@ struct LogGroups {
   static LogGroups parse(const std::string& text);
   std::string str() const;  // "state,energy,momentum,bodies"
 };
+
+// The layout's version, the root attribute layout_version: 4 added /robot.
+inline constexpr int kLayoutVersion = 4;
 
 // Bytes one logged row takes (W doubles), for the projected size of a run.
 std::uint64_t row_bytes(const Model& model, const LogGroups& groups = {});

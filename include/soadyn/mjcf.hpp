@@ -49,5 +49,8 @@ bool is_mjcf_text(const std::string& text);
 // else the text alone) and builds the model.  Throws soadyn::Error as "path:line: element: what"
 // where MuJoCo's compiler gives a line.
 MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_disk, const MjcfOptions& options = {});
+// A run stores an MJCF file's own text, not the files it <include>s: compiled again from `path`
+// when that file still holds the stored text (so its <include>s resolve), else from the text.
+bool mjcf_file_unchanged(const std::string& path, const std::string& stored_text);
 
 }  // namespace soadyn

@@ -20,6 +20,16 @@ struct Placement {
   Vec3 p = Vec3::Zero();
 };
 
+// A pose with position.{x, y, z} and rotation.{w, x, y, z} (urdfdom's urdf::Pose, which this
+// header does not name) as a Placement, the quaternion normalized: the URDF import's and soadyn
+// view's one conversion.
+template <class Pose>
+Placement placement_of_pose(const Pose& pose) {
+  const auto& a = pose.position;
+  const auto& r = pose.rotation;
+  return {Eigen::Quaterniond(r.w, r.x, r.y, r.z).normalized().toRotationMatrix(), Vec3(a.x, a.y, a.z)};
+}
+
 // a then b: the frame b places in a's frame, placed in a's parent frame
 inline Placement compose(const Placement& a, const Placement& b) { return {a.R * b.R, a.p + a.R * b.p}; }
 

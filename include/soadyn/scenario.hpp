@@ -20,6 +20,9 @@ namespace soadyn {
 struct Scenario {
   std::string path;   // file it came from
   std::string text;   // its full text, stored with every run
+  // the robot file its urdf: or model: key names, as read, and that file's path (empty without
+  // one; a .urdf or .xml loaded itself is `text`), stored with every run too (h5log.hpp /robot)
+  std::string robot_text, robot_path;
   std::string name;
   std::string description;
   Model model;
@@ -36,9 +39,11 @@ Scenario load_scenario(const std::string& path, bool free_root = false,
                        const std::optional<Vec3>& gravity = std::nullopt,
                        std::optional<InertiaCheck> inertia_check = std::nullopt);
 
-// Parses scenario text; `path` names it in messages and anchors a relative `urdf:`.
+// Parses scenario text; `path` names it in messages and anchors a relative `urdf:`.  `robot_text`:
+// the robot file's text as a run stored it (soadyn view), read instead of the file urdf: names.
 Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root = false,
-                        std::optional<InertiaCheck> inertia_check = std::nullopt);
+                        std::optional<InertiaCheck> inertia_check = std::nullopt,
+                        const std::optional<std::string>& robot_text = std::nullopt);
 
 // "warn", "balance", "strict" (the scenario's and the command line's words); nullopt otherwise.
 std::optional<InertiaCheck> parse_inertia_check(const std::string& s);

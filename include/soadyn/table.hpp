@@ -5,7 +5,8 @@
 // without a unit: "time [s]"), then one line of numbers per sample; blank lines and lines starting
 // with '#' are skipped.  A column may be named as `soadyn export --csv` names it ("q.elbow [rad]"):
 // the "q." and the unit are dropped, so an exported run is a table of its joints.
-// Run file (HDF5): /time and /q, the columns named by /model's q_names.
+// Run file (HDF5, read by read_run_file: run_file.hpp): /time and /q, the columns named by
+// /model's q_names.
 // Times must increase; a repeated time (a run's rows at an event) keeps the last row.
 #pragma once
 

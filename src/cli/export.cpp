@@ -1,14 +1,14 @@
 // soadyn export RUN.h5 --csv out.csv [--json out.json] [--columns a,b] [--every K]: a run's
 // /samples as text, each column headed by its name and unit.
 //
-// Reads only /samples and its attributes column_names and column_units (W strings each), in
-// single-writer/multiple-reader mode so a run that is still going (or was killed) exports the rows
-// it has flushed so far.  Rows are read in blocks, so a file of any length exports in bounded
-// memory.  Outputs are written under a temporary name and renamed into place.
+// Reads only /samples and its attributes column_names and column_units (W strings each), through
+// the library's RunReader (run_file.hpp), in single-writer/multiple-reader mode so a run that is
+// still going (or was killed) exports the rows it has flushed so far.  Rows are read in blocks, so
+// a file of any length exports in bounded memory.  Outputs are written under a temporary name and renamed into place.
 #include "cli.hpp"
-#include "h5id.hpp"
 
 #include "soadyn/h5log.hpp"
+#include "soadyn/run_file.hpp"
 #include "soadyn/text.hpp"
 
 #include <unistd.h>
@@ -27,67 +27,22 @@ namespace soadyn::cli {
 namespace {
 
 namespace fs = std::filesystem;
-using h5::Id;
 
+// the run's /samples (RunReader): its rows when opened, W columns, their names and units
 struct Samples {
-  Id file{-1, H5Fclose}, dset{-1, H5Dclose};
-  hsize_t rows = 0, width = 0;
+  RunReader run;
+  std::uint64_t rows = 0, width = 0;
   std::vector<std::string> names, units;
 };
 
-// an attribute holding an array of strings (variable- or fixed-length)
-std::vector<std::string> string_array(hid_t obj, const char* name, const std::string& where) {
-  if (H5Aexists(obj, name) <= 0) throw Error(where + ": attribute '" + name + "' is missing (written by a soadyn older than this one? run it again)");
-  Id a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
-  Id type(H5Aget_type(a), H5Tclose), space(H5Aget_space(a), H5Sclose);
-  if (!a.ok() || !type.ok() || H5Tget_class(type) != H5T_STRING)
-    throw Error(where + ": attribute '" + name + "': expected an array of strings");
-  const hssize_t n = H5Sget_simple_extent_npoints(space);
-  std::vector<std::string> out;
-  if (n <= 0) return out;
-  if (H5Tis_variable_str(type) > 0) {
-    Id mem(H5Tcopy(H5T_C_S1), H5Tclose);
-    H5Tset_size(mem, H5T_VARIABLE);
-    H5Tset_cset(mem, H5Tget_cset(type));  // HDF5 converts no string between character sets
-    std::vector<char*> ptrs(size_t(n), nullptr);
-    if (H5Aread(a, mem, ptrs.data()) < 0) throw Error(where + ": attribute '" + name + "' cannot be read");
-    for (char* p : ptrs) {
-      out.emplace_back(p ? p : "");
-      H5free_memory(p);
-    }
-  } else {
-    const size_t w = H5Tget_size(type);
-    std::vector<char> buf(w * size_t(n));
-    if (H5Aread(a, type, buf.data()) < 0) throw Error(where + ": attribute '" + name + "' cannot be read");
-    for (hssize_t i = 0; i < n; ++i) {
-      std::string s(buf.data() + size_t(i) * w, w);
-      out.push_back(s.substr(0, s.find('\0')));
-    }
-  }
-  return out;
-}
-
 Samples open_samples(const std::string& path) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error(path + ": no such file");
   if (!fs::is_regular_file(path, ec)) throw Error(path + ": not a file (expected a run file from soadyn run)");
-  Samples s;
-  s.file = Id(hid_t(open_run_file(path)), H5Fclose);
-  if (H5Lexists(s.file, "samples", H5P_DEFAULT) <= 0) throw Error(path + ": no /samples (not a run file from soadyn run?)");
-  s.dset = Id(H5Dopen2(s.file, "samples", H5P_DEFAULT), H5Dclose);
-  if (!s.dset.ok()) throw Error(path + ": /samples cannot be opened (corrupt or truncated file?)");
-  Id space(H5Dget_space(s.dset), H5Sclose);
-  hsize_t dims[2] = {0, 0};
-  if (H5Sget_simple_extent_ndims(space) != 2) throw Error(path + ": /samples: expected a T×W table");
-  H5Sget_simple_extent_dims(space, dims, nullptr);
-  s.rows = dims[0], s.width = dims[1];
-  s.names = string_array(s.dset, "column_names", path + ": /samples");
-  s.units = string_array(s.dset, "column_units", path + ": /samples");
-  for (const auto* v : {&s.names, &s.units})
-    if (v->size() != s.width)
-      throw Error(path + ": /samples has " + std::to_string(s.width) + " columns but " +
-                  std::to_string(v->size()) + (v == &s.names ? " column_names" : " column_units"));
+  Samples s{RunReader(path), 0, 0, {}, {}};
+  if (s.run.column_names().empty()) throw Error(path + ": no /samples (not a run file from soadyn run?)");
+  s.rows = s.run.rows(), s.width = s.run.column_names().size();
+  s.names = s.run.column_names(), s.units = s.run.column_units();
   return s;
 }
 
@@ -245,22 +200,17 @@ int run_export(const ExportOptions& o) {
       writers[i]->write(h);
     }
     // rows, read in blocks of about 4 MB: rows 0, K, 2K, … of the extent seen at opening
-    const hsize_t K = hsize_t(o.every), block = std::max<hsize_t>(1, (hsize_t(1) << 19) / std::max<hsize_t>(1, s.width));
+    const std::uint64_t K = std::uint64_t(o.every), block = std::max<std::uint64_t>(1, (std::uint64_t(1) << 19) / std::max<std::uint64_t>(1, s.width));
     std::vector<double> buf;
     std::string csv_text, json_text;
-    hsize_t written = 0;
+    std::uint64_t written = 0;
     double t_first = 0, t_last = 0;
-    for (hsize_t r0 = 0; r0 < s.rows; r0 += block) {
-      const hsize_t n = std::min(block, s.rows - r0);
+    for (std::uint64_t r0 = 0; r0 < s.rows; r0 += block) {
+      const std::uint64_t n = std::min(block, s.rows - r0);
       buf.resize(size_t(n * s.width));
-      Id file_space(H5Dget_space(s.dset), H5Sclose);
-      hsize_t start[2] = {r0, 0}, count[2] = {n, s.width};
-      Id mem_space(H5Screate_simple(2, count, nullptr), H5Sclose);
-      if (H5Sselect_hyperslab(file_space, H5S_SELECT_SET, start, nullptr, count, nullptr) < 0 ||
-          H5Dread(s.dset, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, buf.data()) < 0)
-        throw Error(o.run + ": /samples: rows " + std::to_string(r0) + " to " + std::to_string(r0 + n - 1) + " cannot be read (corrupt or truncated file?)");
+      s.run.read_rows(r0, n, buf.data());
       csv_text.clear(), json_text.clear();
-      for (hsize_t r = (K - r0 % K) % K; r < n; r += K) {
+      for (std::uint64_t r = (K - r0 % K) % K; r < n; r += K) {
         const double* row = buf.data() + r * s.width;
         for (size_t k = 0; k < cols.size(); ++k) {
           const double x = row[cols[k]];

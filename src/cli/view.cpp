@@ -276,7 +276,7 @@ int run_view(const ViewOptions& o) {
   std::string events = "[";
   const std::vector<std::string> vn = run.v_names.empty() ? m.v_names() : run.v_names;
   for (size_t k = 0; k < run.events.size(); ++k) {
-    const view::RunFile::Event& e = run.events[k];
+    const RunEvent& e = run.events[k];
     const char* kind = e.kind >= 0 && e.kind < int(std::size(kLimitEventKinds)) ? kLimitEventKinds[e.kind] : "event";
     events += std::string(k ? "," : "") + "{\"t\":" + num(e.t) + ",\"joint\":" + quote(size_t(e.dof) < vn.size() ? vn[size_t(e.dof)] : "dof " + std::to_string(e.dof)) +
               ",\"side\":" + quote(e.side < 0 ? "lower" : "upper") + ",\"kind\":" + quote(kind) + ",\"v_before\":" + num(e.v_before) +

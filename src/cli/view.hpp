@@ -1,9 +1,10 @@
 // soadyn view: the pieces behind the page (see view.cpp for the page itself).
-//   view_run.cpp    a run file read back, the model rebuilt from the scenario stored in it
+//   view_run.cpp    a run file read back (run_file.hpp), the model rebuilt from the text stored in it
 //   view_scene.cpp  what each body looks like: skeleton, centre of mass, inertia box, URDF visuals
 #pragma once
 
 #include "soadyn/model.hpp"
+#include "soadyn/run_file.hpp"
 
 #include <Eigen/Geometry>
 
@@ -16,6 +17,7 @@ namespace soadyn::cli::view {
 struct RunFile {
   std::string path;
   std::string scenario_text, scenario_path, version;
+  std::string robot_text, robot_path;    // the robot file the scenario named, as stored (layout 4)
   std::string method, status;
   std::vector<std::string> joint_names;  // as logged (empty if the file has none)
   VecX time;                             // T
@@ -25,13 +27,7 @@ struct RunFile {
   std::vector<std::string> frame_names;  // the frames a scenario's log: frames: logged (/frames/names)
   VecX impact_loss;                      // T: L(t), the energy the limits' impacts took (empty without limits)
   std::vector<std::string> v_names;      // /model v_names (empty if the file has none)
-  // the joint limits' events (/events, h5log.hpp), in time order
-  struct Event {
-    double t = 0.0;
-    int dof = -1, side = 0, kind = 0;  // dof into v; side −1 lower, +1 upper; kind 0 impact, 1 hold, 2 release
-    double v_before = 0.0, v_after = 0.0, energy_lost = 0.0;
-  };
-  std::vector<Event> events;
+  std::vector<RunEvent> events;          // the joint limits' events (/events, run_file.hpp), in time order
 };
 
 // Keeps the first `rows` samples of every series (a run stopped mid-write, or one gone non-finite).
@@ -40,8 +36,10 @@ void keep_rows(RunFile& run, Eigen::Index rows);
 // Reads `path`; throws soadyn::Error naming the file and what is missing or malformed.
 RunFile read_run(const std::string& path);
 
-// The model the run was made with, rebuilt from the scenario text stored in the file; throws
-// soadyn::Error if it cannot be (a URDF that moved) or does not match the logged q.
+// The model the run was made with, rebuilt from the scenario and robot text stored in the file,
+// never the files on disk; a file from before layout 4 (no /robot) reads the robot file its
+// scenario names from disk, with a note on stderr.  Throws soadyn::Error if it cannot be (an old
+// file's URDF that moved) or does not match the logged q.
 struct RunModel {
   Model model;
   std::string name, description;

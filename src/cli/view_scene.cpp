@@ -4,7 +4,6 @@
 // of the body they were welded into; from an MJCF file, its geoms where MuJoCo's compiler put them.
 #include "view.hpp"
 
-#include "../urdf_pose.hpp"
 #include "soadyn/mjcf.hpp"
 #include "soadyn/scenario.hpp"
 
@@ -78,7 +77,7 @@ void add_urdf_visuals(const Model& model, const std::string& urdf_text, const st
         body = -2;
         break;
       }
-      X = compose(to_placement(j->parent_to_joint_origin_transform), X);
+      X = compose(placement_of_pose(j->parent_to_joint_origin_transform), X);
       at = robot->getLink(j->parent_link_name);
       if (!at) break;
       body = model.body_index(at->name);
@@ -86,7 +85,7 @@ void add_urdf_visuals(const Model& model, const std::string& urdf_text, const st
     if (body == -2) continue;
     for (const auto& v : link->visual_array) {
       if (!v || !v->geometry) continue;
-      const Placement Xv = compose(X, to_placement(v->origin));
+      const Placement Xv = compose(X, placement_of_pose(v->origin));
       Shape s;
       s.p = Xv.p;
       s.R = Eigen::Quaterniond(Xv.R).normalized();

@@ -258,6 +258,8 @@ py::tuple scenario_state(const py::object& self) {
   py::dict f;
   f["path"] = sc.path;
   f["text"] = sc.text;
+  f["robot_text"] = sc.robot_text;  // stored in its runs' files (h5log.hpp /robot)
+  f["robot_path"] = sc.robot_path;
   f["name"] = sc.name;
   f["description"] = sc.description;
   f["model"] = py::cast(sc.model);  // a copy, pickled as a Model
@@ -286,6 +288,8 @@ Scenario scenario_from_state(const py::object& state) {
   Scenario sc;
   sc.path = r.as<std::string>("path");
   sc.text = r.as<std::string>("text");
+  sc.robot_text = r.as<std::string>("robot_text");
+  sc.robot_path = r.as<std::string>("robot_path");
   sc.name = r.as<std::string>("name");
   sc.description = r.as<std::string>("description");
   const py::object model = r.get("model");
@@ -327,7 +331,9 @@ Scenario scenario_from_state(const py::object& state) {
   for (const auto& name : sc.log_frames)
     if (m.frame_index(name) < 0) r.refuse("log_frames", "a frame the model does not have");
   if (r.as<size_t>("controllers") > 0)  // from the text, where its tables are
-    sc.inputs.controllers = parse_scenario(sc.text, sc.path).inputs.controllers;
+    sc.inputs.controllers =
+        parse_scenario(sc.text, sc.path, false, std::nullopt,
+                       sc.robot_text.empty() ? std::nullopt : std::optional<std::string>(sc.robot_text)).inputs.controllers;
   return sc;
 }
 

@@ -16,6 +16,5 @@ add_custom_command(OUTPUT ${_assets_cpp}
   DEPENDS ${_view}/embed.cmake ${_view}/viewer.html ${_view}/viewer.css ${_view}/viewer.js ${_view}/plot.js ${_view}/frames.js ${SOADYN_THREE_JS} ${SOADYN_ORBIT_JS}
   COMMENT "Embedding the viewer's page and three.js" VERBATIM)
 target_sources(soadyn_cli PRIVATE src/cli/view.cpp src/cli/view_run.cpp src/cli/view_scene.cpp ${_assets_cpp})
-target_link_libraries(soadyn_cli PRIVATE yaml-cpp ${urdfdom_LIBRARIES} ${HDF5_C_LIBRARIES})
-target_include_directories(soadyn_cli SYSTEM PRIVATE ${urdfdom_INCLUDE_DIRS} ${HDF5_C_INCLUDE_DIRS})
-target_compile_definitions(soadyn_cli PRIVATE ${HDF5_C_DEFINITIONS})
+target_link_libraries(soadyn_cli PRIVATE yaml-cpp ${urdfdom_LIBRARIES})
+target_include_directories(soadyn_cli SYSTEM PRIVATE ${urdfdom_INCLUDE_DIRS})

@@ -176,142 +176,63 @@ def balance_errors(total: np.ndarray, kinetic: np.ndarray, work: np.ndarray):
     return worst, last
 
 
-# HDF5 retries a metadata read that fails its checksum in SWMR-read mode, sleeping twice as long
-# each time, 100 times by default: a corrupt file would hang the reader for ever.  soadyn's C++
-# readers allow 20 attempts (kMetadataReadAttempts, h5log.hpp); h5py has no call for it, so it is
-# set on the file-access properties through the HDF5 library h5py itself loaded.
-METADATA_READ_ATTEMPTS = 20
-
-
-def _hdf5_library():
-    import ctypes
-    with open("/proc/self/maps", encoding="utf-8", errors="replace") as maps:
-        for line in maps:
-            path = line.split()[-1] if len(line.split()) >= 6 else ""
-            if "/libhdf5" in path and ".so" in path and "_hl" not in path and "cpp" not in path:
-                lib = ctypes.CDLL(path)
-                lib.H5Pset_metadata_read_attempts.argtypes = [ctypes.c_int64, ctypes.c_uint]
-                lib.H5Pset_metadata_read_attempts.restype = ctypes.c_int
-                return lib
-    return None
-
-
-def open_run_file(path: str):
-    """An h5py.File (read-only) of a soadyn run file: plainly when it was closed, in SWMR-read mode
-    when a run is writing it or was killed, with HDF5's metadata read attempts bounded so that a
-    corrupt or truncated file raises OSError at once instead of hanging."""
-    import h5py
-
-    lib = _hdf5_library()
-    if lib is None:  # no way to bound the retries: only a plain open, which never retries
-        return h5py.File(path, "r")
-    name = os.fsencode(path)
-    for flags in (h5py.h5f.ACC_RDONLY, h5py.h5f.ACC_RDONLY | h5py.h5f.ACC_SWMR_READ):
-        fapl = h5py.h5p.create(h5py.h5p.FILE_ACCESS)
-        fapl.set_fclose_degree(h5py.h5f.CLOSE_STRONG)
-        if lib.H5Pset_metadata_read_attempts(fapl.id, METADATA_READ_ATTEMPTS) < 0:
-            raise OSError(f"{path}: cannot bound HDF5's metadata read attempts")
-        try:
-            return h5py.File(h5py.h5f.open(name, flags, fapl=fapl))
-        except (OSError, RuntimeError, ValueError) as e:
-            error = e
-    raise OSError(str(error))
-
-
 def read_log(path: str) -> Trajectory:
     """The Trajectory of a soadyn HDF5 run file (soadyn.simulate(output=…) or `soadyn run`).
 
     The same arrays as the run returned (float64 round-trips exactly); a run still being written
     or cut short gives what was flushed.  The energy-balance errors are recomputed from the logged
-    energies the way simulate() computes them.  Needs h5py.
+    energies the way simulate() computes them.  Read by the library's reader (run_file.hpp), as
+    `soadyn export` and `soadyn view` read it.
     Raises soadyn.Error when the file is missing or is not a soadyn run.
     """
-    import h5py  # only here: the rest of soadyn does not need it
-
-    from . import Error
+    from . import Error, _soadyn
 
     if not os.path.isfile(path):
         raise Error(f"{path}: cannot read the run file: " + ("no such file" if not os.path.exists(path) else "not a regular file"))
     try:
-        f = open_run_file(path)
-    except (OSError, RuntimeError, ValueError) as e:
-        raise Error(f"{path}: cannot read the run file (corrupt or truncated?): {e}") from None
-    try:
-        with f:
-            missing = [k for k in ("time", "solver") if k not in f]
-            if missing:
-                raise Error(f"{path}: not a soadyn run file (no {', '.join(missing)})")
+        c = _soadyn._read_run_file(path)
+    except Error as e:
+        why = str(e)
+        why = why[len(path) + 2:] if why.startswith(f"{path}: ") else why
+        raise Error(f"{path}: cannot read the run file: {why}") from None
+    logged, solver = c["series"], c["solver"]
+    nq, nv, nb = c["nq"], c["nv"], len(c["body_names"])
+    t = logged["/time"]
+    T = len(t)
 
-            model = f["model"] if "model" in f else None
-            nq = int(model.attrs["nq"]) if model is not None and "nq" in model.attrs else 0
-            nv = int(model.attrs["nv"]) if model is not None and "nv" in model.attrs else 0
-            nb = len(model.attrs["body_names"]) if model is not None and "body_names" in model.attrs else 0
+    def series(name, *shape):
+        """a view's array (T, *shape), or NaN where the run did not log it"""
+        return logged[name] if name in logged else np.full((T,) + shape, np.nan)
 
-            def series(name, *shape):
-                if name in f:
-                    return np.asarray(f[name][...], dtype=np.float64)
-                return np.full((f["time"].shape[0],) + shape, np.nan)
-
-            def text(v):
-                return v.decode() if isinstance(v, bytes) else str(v)
-
-            solver = f["solver"]
-
-            def get(k, default):
-                # run-time values: scalar datasets (SWMR layout) or attributes (earlier files)
-                if k in solver:
-                    return solver[k][()]
-                return solver.attrs[k] if k in solver.attrs else default
-
-            t, q, v = series("time"), series("q", nq), series("qd", nv)
-            T = min(len(t), len(q), len(v))  # a file cut between two datasets' writes (layout 1)
-            # files from before the energy balance (layout 2) hold the energies but no work: W = D = 0
-            old = "energy/total" in f and "energy/work_inputs" not in f
-            work = np.zeros(len(t)) if old else series("energy/work_inputs")
-            arrays = dict(t=t, q=q, v=v, qdd=series("qdd", v.shape[1]),
-                          kinetic_energy=series("energy/kinetic"), potential_energy=series("energy/potential"),
-                          total_energy=series("energy/total"), work_inputs=work,
-                          dissipated=np.zeros(len(t)) if old else series("energy/dissipated"),
-                          linear_momentum=series("momentum/linear", 3), angular_momentum=series("momentum/angular", 3),
-                          body_position=series("bodies/position", nb, 3), body_orientation=series("bodies/orientation", nb, 4),
-                          body_com=series("bodies/com", nb, 3))
-            arrays = {k: x[:T] for k, x in arrays.items()}
-            status = text(get("status", "unknown"))
-            worst, last = balance_errors(arrays["total_energy"], arrays["kinetic_energy"], arrays["work_inputs"])
-            summary = RunSummary(
-                method=text(get("method", "")), status=status, completed=status == "completed",
-                t_reached=float(get("t_reached", t[T - 1] if T else 0.0)), steps=int(get("steps", 0)),
-                rhs_evals=int(get("rhs_evals", 0)), jac_evals=int(get("jac_evals", 0)),
-                error_test_failures=int(get("error_test_failures", 0)),
-                nonlinear_iterations=int(get("nonlinear_iterations", 0)), cpu_seconds=float(get("cpu_seconds", 0.0)),
-                quaternion_handling=text(get("quaternion_handling", "")), output_dt=float(get("output_dt", 0.0)),
-                max_energy_balance_error=worst, final_energy_balance_error=last)
-            if model is not None and "joint_names" in model.attrs:  # layout 3: str attributes
-                names = [text(n) for n in model.attrs["joint_names"]]
-            elif model is not None and "joint_names" in model:  # earlier layouts: a dataset
-                names = [text(n) for n in model["joint_names"][...]]
-            else:
-                names = []
-            parents = [int(p) for p in model["parents"][...]] if model is not None and "parents" in model else []
-            scenario = text(f["scenario"][()]) if "scenario" in f else text(f.attrs.get("scenario", ""))
-            # /frames: names (F), position (T, F, 3), orientation (T, F, 4)
-            frames = {}
-            if "frames" in f and "names" in f["frames"]:
-                fnames = [text(n) for n in f["frames/names"][...]]
-                shape = (len(fnames),)
-                pos, att = series("frames/position", *shape, 3)[:T], series("frames/orientation", *shape, 4)[:T]
-                frames = {n: FramePoses(position=pos[:, k].copy(), orientation=att[:, k].copy()) for k, n in enumerate(fnames)}
-            # /sensitivities: initial_state (T, nx, nx), parameters (T, nx, np), names on the group
-            sensitivities = None
-            if "sensitivities" in f:
-                g = f["sensitivities"]
-                listed = lambda k: [text(n) for n in g.attrs[k]] if k in g.attrs else []  # noqa: E731
-                sensitivities = Sensitivities(
-                    initial_state=np.asarray(g["initial_state"][:T]) if "initial_state" in g else None,
-                    parameters=np.asarray(g["parameters"][:T]) if "parameters" in g else None,
-                    state_names=listed("state_names"), state_units=listed("state_units"),
-                    parameter_names=listed("parameter_names"), parameter_units=listed("parameter_units"))
-            return Trajectory(**arrays, summary=summary, joint_names=names, parents=parents, scenario=scenario,
-                              frames=frames, sensitivities=sensitivities)
-    except (OSError, RuntimeError, KeyError, ValueError, TypeError, IndexError) as e:  # a corrupt file's parts
-        raise Error(f"{path}: cannot read the run file (corrupt or truncated?): {e}") from None
+    q, v = series("/q", nq), series("/qd", nv)
+    # files from before the energy balance (layout 2) hold the energies but no work: W = D = 0
+    old = "/energy/total" in logged and "/energy/work_inputs" not in logged
+    work = np.zeros(T) if old else series("/energy/work_inputs")
+    arrays = dict(t=t, q=q, v=v, qdd=series("/qdd", v.shape[1]),
+                  kinetic_energy=series("/energy/kinetic"), potential_energy=series("/energy/potential"),
+                  total_energy=series("/energy/total"), work_inputs=work,
+                  dissipated=np.zeros(T) if old else series("/energy/dissipated"),
+                  linear_momentum=series("/momentum/linear", 3), angular_momentum=series("/momentum/angular", 3),
+                  body_position=series("/bodies/position", nb, 3), body_orientation=series("/bodies/orientation", nb, 4),
+                  body_com=series("/bodies/com", nb, 3))
+    status = solver["status"] or "unknown"
+    worst, last = balance_errors(arrays["total_energy"], arrays["kinetic_energy"], arrays["work_inputs"])
+    summary = RunSummary(
+        method=solver["method"], status=status, completed=status == "completed", t_reached=solver["t_reached"],
+        steps=solver["steps"], rhs_evals=solver["rhs_evals"], jac_evals=solver["jac_evals"],
+        error_test_failures=solver["error_test_failures"], nonlinear_iterations=solver["nonlinear_iterations"],
+        cpu_seconds=solver["cpu_seconds"], quaternion_handling=solver["quaternion_handling"],
+        output_dt=solver["output_dt"], max_energy_balance_error=worst, final_energy_balance_error=last)
+    # /frames: names (F), position (T, F, 3), orientation (T, F, 4)
+    fnames = c["frame_names"]
+    pos, att = series("/frames/position", len(fnames), 3), series("/frames/orientation", len(fnames), 4)
+    frames = {n: FramePoses(position=pos[:, k].copy(), orientation=att[:, k].copy()) for k, n in enumerate(fnames)}
+    # /sensitivities: initial_state (T, nx, nx), parameters (T, nx, np), names on the group
+    sensitivities = None
+    if c["state_names"] or any(k.startswith("/sensitivities/") for k in logged):
+        sensitivities = Sensitivities(
+            initial_state=logged.get("/sensitivities/initial_state"), parameters=logged.get("/sensitivities/parameters"),
+            state_names=c["state_names"], state_units=c["state_units"],
+            parameter_names=c["parameter_names"], parameter_units=c["parameter_units"])
+    return Trajectory(**arrays, summary=summary, joint_names=c["joint_names"], parents=c["parents"],
+                      scenario=c["scenario"], frames=frames, sensitivities=sensitivities)
