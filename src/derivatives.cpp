@@ -18,7 +18,19 @@
 
 #include "soadyn/algorithms.hpp"
 
+#include <algorithm>
+
 namespace soadyn {
+
+namespace {
+// right-hand sides per pass of articulated_solve: the pass's blocks (6 columns per body) stay in
+// cache, and each of its vectorized lines runs long enough
+constexpr int kSolveBlock = 64;
+}  // namespace
+
+FdMethod derivative_route(const Model& model) {
+  return model.nv >= 16 ? FdMethod::ArticulatedBody : FdMethod::Sparse;
+}
 
 DerivativeData::DerivativeData(const Model& m)
     : S(Mat6X::Zero(6, m.nv)),
@@ -40,6 +52,8 @@ DerivativeData::DerivativeData(const Model& m)
       dqdd_dv(MatX::Zero(m.nv, m.nv)),
       Minv(MatX::Zero(m.nv, m.nv)),
       solve(MatX::Zero(2 * m.nv, m.nv)),
+      route(derivative_route(m)),
+      work(MatX::Zero(std::max(1, std::min(2 * m.nv, kSolveBlock)), 6 * (m.nbodies + 1))),
       w(Mat6X::Zero(6, m.nbodies)),
       T1(Mat6X::Zero(6, m.nbodies)),
       T2(Mat6X::Zero(6, m.nbodies)) {}
@@ -284,8 +298,16 @@ void ltdl_solve_transposed(const Model& model, const Data& data, MatX& Xt) {
 void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
                                   const Inputs* inputs, bool minv) {
   const int nv = model.nv;
-  // q̈, 𝓜 and its tree factor LᵀDL
-  forward_dynamics(model, data, tau, FdMethod::Sparse);
+  if (dd.route != FdMethod::ArticulatedBody && dd.route != FdMethod::Sparse)
+    throw Error("forward_dynamics_derivatives: DerivativeData::route: expected aba or sparse, got " +
+                std::string(to_string(dd.route)));
+  // q̈ and a factor of 𝓜: the articulated-body one, or 𝓜 by composite inertias and its LᵀDL
+  forward_dynamics(model, data, tau, dd.route);
+  // X ← 𝓜⁻¹ X for the rows of X, by that factor
+  auto solve = [&](MatX& Xt) {
+    if (dd.route == FdMethod::ArticulatedBody) articulated_solve(model, data, Xt, dd.work);
+    else ltdl_solve_transposed(model, data, Xt);
+  };
   // ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x) at that q̈: both sets in one solve
   inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
   dd.dqdd_dq = -dd.dtau_dq;
@@ -293,13 +315,13 @@ void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v,
   if (inputs) inputs->add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
   dd.solve.topRows(nv) = dd.dqdd_dq.transpose();
   dd.solve.bottomRows(nv) = dd.dqdd_dv.transpose();
-  ltdl_solve_transposed(model, data, dd.solve);
+  solve(dd.solve);
   dd.dqdd_dq = dd.solve.topRows(nv).transpose();
   dd.dqdd_dv = dd.solve.bottomRows(nv).transpose();
   if (minv) {
     // 𝓜⁻¹ is symmetric: solving with the identity's rows gives it directly
     dd.Minv.setIdentity();
-    ltdl_solve_transposed(model, data, dd.Minv);
+    solve(dd.Minv);
   }
 }
 

@@ -121,12 +121,13 @@ struct Minverse {
 --
 
 𝓜(q)⁻¹ without forming 𝓜: the articulated-body recursion for every unit force at once, O(N²) on a
-chain (C++ minverse, as Pinocchio's computeMinverse).  q: (nq,).  Returns a new array (nv, nv).)";
+chain (C++ minverse, as Pinocchio's computeMinverse).  q: (nq,).  Returns data.Minv, shape (nv, nv),
+a read-only view (fd_derivatives's third result shares it).)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
+    DerivativeData& dd = d.derivative_data(m);
     kin(m, d, name, a[0]);
-    MatX Minv(m.nv, m.nv);
-    minverse(m, *d.data, Minv);
-    return owned(std::move(Minv));
+    minverse(m, *d.data, dd.Minv);
+    return d.Minv;
   }
 };
 
@@ -210,13 +211,14 @@ struct IdDerivatives {
 
 ∂/∂q is along the tangent increment δ (nv,) with q ⊕ δ = joint_integrate(q, δ, 1): a free joint's
 δ = [δθ (inertial axes); δp], a ball's δθ in the child's frame.  q: (nq,), v: (nv,), qdd: (nv,).
-Returns two new arrays of shape (nv, nv).)";
+Returns (data.dtau_dq, data.dtau_dv), shape (nv, nv) each: read-only views, not copies (the next
+derivative call on this Data overwrites them, fd_derivatives too; .copy() to keep them).)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
+    DerivativeData& dd = d.derivative_data(m);
     read_vector(m, *d.data, name, "qdd", a[2], m.nv, d.x);
     kin_vel(m, d, name, a[0], a[1]);
-    DerivativeData dd(m);
     inverse_dynamics_derivatives(m, *d.data, d.v, d.x, dd);
-    return py::make_tuple(owned(std::move(dd.dtau_dq)), owned(std::move(dd.dtau_dv)));
+    return d.id_result;
   }
 };
 
@@ -227,14 +229,17 @@ struct FdDerivatives {
 --
 
 (∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = 𝓜⁻¹) of q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)), τ held fixed; ∂/∂q along the
-tangent as in id_derivatives.  q: (nq,), v: (nv,), tau: (nv,).  Returns three new arrays of shape
-(nv, nv); also fills data.qdd and data.M.)";
+tangent as in id_derivatives.  q: (nq,), v: (nv,), tau: (nv,).  Returns (data.dqdd_dq,
+data.dqdd_dv, data.Minv), shape (nv, nv) each: read-only views, not copies (the next derivative
+call on this Data overwrites them; .copy() to keep them).  Also fills data.qdd, and data.dtau_dq,
+data.dtau_dv at that q̈.  𝓜⁻¹ is applied by the articulated-body factor (O(N) per column) or, on
+small models, by 𝓜's LᵀDL (then data.M is filled too), whichever is faster for the model.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
+    DerivativeData& dd = d.derivative_data(m);
     read_vector(m, *d.data, name, "tau", a[2], m.nv, d.x);
     kin_vel(m, d, name, a[0], a[1]);
-    DerivativeData dd(m);
     forward_dynamics_derivatives(m, *d.data, d.v, d.x, dd, nullptr, true);
-    return py::make_tuple(owned(std::move(dd.dqdd_dq)), owned(std::move(dd.dqdd_dv)), owned(std::move(dd.Minv)));
+    return d.fd_result;
   }
 };
 
