@@ -5,8 +5,9 @@
 //   tip to base:  u_i = b_i − G_iᵀ Z_i,   Z_p += D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i)
 //   base to tip:  A'_i = D_i A_p,  x_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i),  A_i = A'_i + G_i x_i
 // O(N) per right-hand side whatever the tree, where LᵀDL costs the sum of the DOFs' depths.  The
-// right-hand sides are the rows of Xt, k at a time: body i's Z_i (then A_i) is a k×6 block and
-// each line of the sweeps one vectorized pass over the k rows.
+// right-hand sides go K at a time, turned into rows: body i's Z_i (then A_i) is a K×6 block of fixed
+// size, each of its columns one SIMD register or two, so every line below is a few vector
+// instructions and the blocks of all bodies stay in the first cache levels.
 #include "soadyn/algorithms.hpp"
 #include "soadyn/operators.hpp"
 
@@ -14,60 +15,90 @@
 
 namespace soadyn {
 
-void articulated_solve(const Model& model, const Data& data, Eigen::Ref<MatX> Xt, MatX& work) {
+namespace {
+
+using Stride = Eigen::OuterStride<>;
+
+// right-hand sides per pass: a column of a body's block is one AVX-512 register
+constexpr int kRows = 8;
+
+// the K right-hand sides held as the rows of x (column stride ld) solved in place; w: the K×6
+// blocks of N bodies
+template <int K>
+void solve_rows(const Model& model, const Data& data, double* x, Eigen::Index ld, double* w) {
+  using Col = Eigen::Matrix<double, K, 1>;
+  using Block = Eigen::Matrix<double, K, 6>;
+  using Cols = Eigen::Matrix<double, K, Eigen::Dynamic, 0, K, 6>;
   const int N = model.nbodies;
-  if (Xt.cols() != model.nv || work.cols() != 6 * (N + 1) || work.rows() < 1)
-    throw Error("articulated_solve: expected Xt with " + std::to_string(model.nv) + " columns and a workspace of " +
-                std::to_string(6 * (N + 1)) + " columns; got " + std::to_string(Xt.cols()) + " and " +
-                std::to_string(work.cols()));
   const DOperator D{data.d};
-  for (Eigen::Index r0 = 0; r0 < Xt.rows(); r0 += work.rows()) {
-    const Eigen::Index k = std::min(work.rows(), Xt.rows() - r0);
-    auto W = work.topRows(k);             // Z_i, then A_i, at columns 6i..6i+5
-    auto T = W.middleCols<6>(6 * N);      // a multi-DOF joint's scratch
-    auto X = Xt.middleRows(r0, k);
-    W.leftCols(6 * N).setZero();
-    // tip to base: u_i = b_i − G_iᵀ Z_i (kept in X), Z_p += D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i)
-    for (int i = N - 1; i >= 0; --i) {
-      const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
-      auto Z = W.middleCols<6>(6 * i);
-      if (ni == 1) {
-        auto u = X.col(vi);
-        const Vec6 g = data.G.col(vi);
-        u -= g(0) * Z.col(0) + g(1) * Z.col(1) + g(2) * Z.col(2) + g(3) * Z.col(3) + g(4) * Z.col(4) + g(5) * Z.col(5);
-        if (p < 0) continue;
-        const Vec6 UD = data.Dinv1(i) * data.U1.col(i);
-        for (int c = 0; c < 6; ++c) Z.col(c) += UD(c) * u;
-      } else {
-        auto u = X.middleCols(vi, ni);
-        u.noalias() -= Z.lazyProduct(data.G.middleCols(vi, ni));
-        if (p < 0) continue;
-        const Mat6G UD = data.U[i] * data.Dinv[i];
-        Z.noalias() += u.lazyProduct(UD.transpose());
-      }
-      D.add_apply_transpose_rows(i, Z, W.middleCols<6>(6 * p));
+  std::fill(w, w + 6 * K * N, 0.0);
+  // tip to base: u_i = b_i − G_iᵀ Z_i (kept in X), Z_p += D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i).  Each block is
+  // read into a local once and written once: a block written and read back at once would wait on
+  // the stores
+  for (int i = N - 1; i >= 0; --i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    Block Z = Eigen::Map<const Block>(w + 6 * K * i);
+    if (ni == 1) {
+      Eigen::Map<Col> u(x + vi * ld);
+      u -= Z.lazyProduct(data.G.col(vi));
+      if (p < 0) continue;
+      const Vec6 UD = data.Dinv1(i) * data.U1.col(i);
+      Z += u.lazyProduct(UD.transpose());
+    } else {
+      Eigen::Map<Cols, 0, Stride> u(x + vi * ld, K, ni, Stride(ld));
+      u -= Z.lazyProduct(data.G.middleCols(vi, ni));
+      if (p < 0) continue;
+      const Mat6G UD = data.U[i] * data.Dinv[i];
+      Z += u.lazyProduct(UD.transpose());
     }
-    // base to tip: A'_i = D_i A_p, x_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i) (into X), A_i = A'_i + G_i x_i
-    for (int i = 0; i < N; ++i) {
-      const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
-      auto A = W.middleCols<6>(6 * i);
-      A.setZero();
-      if (p >= 0) D.add_apply_rows(i, W.middleCols<6>(6 * p), A);
-      if (ni == 1) {
-        auto x = X.col(vi);
-        const Vec6 U = data.U1.col(i), g = data.G.col(vi);
-        if (p >= 0) x -= U(0) * A.col(0) + U(1) * A.col(1) + U(2) * A.col(2) + U(3) * A.col(3) + U(4) * A.col(4) + U(5) * A.col(5);
-        x *= data.Dinv1(i);
-        for (int c = 0; c < 6; ++c) A.col(c) += g(c) * x;
-      } else {
-        auto x = X.middleCols(vi, ni);
-        if (p >= 0) x.noalias() -= A.lazyProduct(data.U[i]);
-        T.leftCols(ni).noalias() = x.lazyProduct(data.Dinv[i].transpose());
-        x = T.leftCols(ni);
-        A.noalias() += x.lazyProduct(data.G.middleCols(vi, ni).transpose());
-      }
-    }
+    D.add_apply_transpose_rows(i, Z, Eigen::Map<Block>(w + 6 * K * p));
   }
+  // base to tip: A'_i = D_i A_p, x_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i) (into X), A_i = A'_i + G_i x_i (in Z_i's place)
+  for (int i = 0; i < N; ++i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    Block A = Block::Zero();
+    if (p >= 0) D.add_apply_rows(i, Eigen::Map<const Block>(w + 6 * K * p), A);
+    if (ni == 1) {
+      Eigen::Map<Col> xi(x + vi * ld);
+      Col xv = xi;
+      if (p >= 0) xv -= A.lazyProduct(data.U1.col(i));
+      xv *= data.Dinv1(i);
+      xi = xv;
+      A += xv.lazyProduct(data.G.col(vi).transpose());
+    } else {
+      Eigen::Map<Cols, 0, Stride> xi(x + vi * ld, K, ni, Stride(ld));
+      if (p >= 0) xi -= A.lazyProduct(data.U[i]);
+      const Cols t = xi.lazyProduct(data.Dinv[i].transpose());
+      xi = t;
+      A += t.lazyProduct(data.G.middleCols(vi, ni).transpose());
+    }
+    Eigen::Map<Block>(w + 6 * K * i) = A;
+  }
+}
+
+}  // namespace
+
+void articulated_solve(const Model& model, const Data& data, Eigen::Ref<MatX> X, MatX& work) {
+  const int N = model.nbodies, nv = model.nv;
+  constexpr int K = kRows;
+  if (X.rows() != nv || work.rows() != 6 * K || work.cols() != N + (nv + 5) / 6)
+    throw Error("articulated_solve: expected X with " + std::to_string(nv) + " rows and a workspace of " +
+                std::to_string(6 * K) + " × " + std::to_string(N + (nv + 5) / 6) + " (articulated_solve_work); got " +
+                std::to_string(X.rows()) + " rows and " + std::to_string(work.rows()) + " × " + std::to_string(work.cols()));
+  // K columns of X at a time, turned into the K rows of `rows` (after the bodies' blocks): each
+  // DOF's K entries contiguous; a last, narrower group zero-padded
+  Eigen::Map<Eigen::Matrix<double, K, Eigen::Dynamic>> rows(work.data() + 6 * K * N, K, nv);
+  for (Eigen::Index c0 = 0; c0 < X.cols(); c0 += K) {
+    const Eigen::Index n = std::min<Eigen::Index>(K, X.cols() - c0);
+    if (n < K) rows.setZero();
+    rows.topRows(n) = X.middleCols(c0, n).transpose();
+    solve_rows<K>(model, data, rows.data(), K, work.data());
+    X.middleCols(c0, n) = rows.topRows(n).transpose();
+  }
+}
+
+MatX articulated_solve_work(const Model& model) {
+  return MatX::Zero(6 * kRows, model.nbodies + (model.nv + 5) / 6);
 }
 
 }  // namespace soadyn

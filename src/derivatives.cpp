@@ -22,12 +22,6 @@
 
 namespace soadyn {
 
-namespace {
-// right-hand sides per pass of articulated_solve: the pass's blocks (6 columns per body) stay in
-// cache, and each of its vectorized lines runs long enough
-constexpr int kSolveBlock = 64;
-}  // namespace
-
 FdMethod derivative_route(const Model& model) {
   return model.nv >= 16 ? FdMethod::ArticulatedBody : FdMethod::Sparse;
 }
@@ -53,7 +47,7 @@ DerivativeData::DerivativeData(const Model& m)
       Minv(MatX::Zero(m.nv, m.nv)),
       solve(MatX::Zero(2 * m.nv, m.nv)),
       route(derivative_route(m)),
-      work(MatX::Zero(std::max(1, std::min(2 * m.nv, kSolveBlock)), 6 * (m.nbodies + 1))),
+      work(articulated_solve_work(m)),
       w(Mat6X::Zero(6, m.nbodies)),
       T1(Mat6X::Zero(6, m.nbodies)),
       T2(Mat6X::Zero(6, m.nbodies)) {}
@@ -303,26 +297,27 @@ void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v,
                 std::string(to_string(dd.route)));
   // q̈ and a factor of 𝓜: the articulated-body one, or 𝓜 by composite inertias and its LᵀDL
   forward_dynamics(model, data, tau, dd.route);
-  // X ← 𝓜⁻¹ X for the rows of X, by that factor
-  auto solve = [&](MatX& Xt) {
-    if (dd.route == FdMethod::ArticulatedBody) articulated_solve(model, data, Xt, dd.work);
-    else ltdl_solve_transposed(model, data, Xt);
-  };
-  // ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x) at that q̈: both sets in one solve
+  // ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x) at that q̈
   inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
   dd.dqdd_dq = -dd.dtau_dq;
   dd.dqdd_dv = -dd.dtau_dv;
   if (inputs) inputs->add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
+  if (minv) dd.Minv.setIdentity();
+  if (dd.route == FdMethod::ArticulatedBody) {
+    // the articulated-body factor, column by column (K columns at a time)
+    articulated_solve(model, data, dd.dqdd_dq, dd.work);
+    articulated_solve(model, data, dd.dqdd_dv, dd.work);
+    if (minv) articulated_solve(model, data, dd.Minv, dd.work);
+    return;
+  }
+  // LᵀDL, both sets in one solve, held transposed; 𝓜⁻¹ is symmetric: solving with the identity's
+  // rows gives it directly
   dd.solve.topRows(nv) = dd.dqdd_dq.transpose();
   dd.solve.bottomRows(nv) = dd.dqdd_dv.transpose();
-  solve(dd.solve);
+  ltdl_solve_transposed(model, data, dd.solve);
   dd.dqdd_dq = dd.solve.topRows(nv).transpose();
   dd.dqdd_dv = dd.solve.bottomRows(nv).transpose();
-  if (minv) {
-    // 𝓜⁻¹ is symmetric: solving with the identity's rows gives it directly
-    dd.Minv.setIdentity();
-    solve(dd.Minv);
-  }
+  if (minv) ltdl_solve_transposed(model, data, dd.Minv);
 }
 
 }  // namespace soadyn

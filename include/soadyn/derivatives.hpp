@@ -63,7 +63,7 @@ struct DerivativeData {
   // how forward_dynamics_derivatives applies 𝓜⁻¹: FdMethod::ArticulatedBody or FdMethod::Sparse
   // (LᵀDL); derivative_route(model) picks the faster for the model, a caller may set either
   FdMethod route;
-  MatX work;                        // articulated_solve's k×6(N + 1) blocks
+  MatX work;                        // articulated_solve's blocks (articulated_solve_work)
   Mat6X w, T1, T2;                  // 6×N: the vector products' sums (…_transpose_times)
 };
 
