@@ -22,8 +22,17 @@
 
 namespace soadyn {
 
+// Per column, LᵀDL costs the entries of its factor, nnz(L) = Σ_k (1 + the ancestors of DOF k), and
+// the articulated-body factor a fixed amount per body.  The articulated-body factor when
+// nnz(L) ≥ 16 N, by measurement (tools/bench/bench_derivatives.cpp, fd_deriv_ltdl against
+// fd_deriv_aba): chains cross between 24 bodies (nnz(L) = 12.5 N, LᵀDL 8 % faster) and 32 (16.5 N,
+// the articulated-body factor 12 % faster); a free trunk with four legs of 20 links is even at
+// 16.6 N; binary trees up to 255 bodies (about 7 N) and robots of up to 50 DOFs (12 N) keep LᵀDL.
 FdMethod derivative_route(const Model& model) {
-  return model.nv >= 16 ? FdMethod::ArticulatedBody : FdMethod::Sparse;
+  long nnz = 0;
+  for (int k = 0; k < model.nv; ++k)
+    for (int j = k; j >= 0; j = model.dof_parent[size_t(j)]) ++nnz;
+  return nnz >= 16L * model.nbodies ? FdMethod::ArticulatedBody : FdMethod::Sparse;
 }
 
 DerivativeData::DerivativeData(const Model& m)
@@ -200,23 +209,44 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
 
 }  // namespace
 
+namespace {
+
+// the fill's block of joint i with itself: (r, c) = row_r·col_c, plus S_r·φ_c where c does not carry r
+void own_block(const Model& model, DerivativeData& dd, int i) {
+  const int vi = model.idx_v[i], ni = model.nv_i[i];
+  const JointType t = model.joint_type[i];
+  for (int r = vi; r < vi + ni; ++r)
+    for (int c = vi; c < vi + ni; ++c) {
+      double dq = dd.row.col(r).dot(dd.colq.col(c));
+      if (!joint_carries(t, c - vi, r - vi)) dq += dd.S.col(r).dot(dd.phi.col(c));
+      dd.dtau_dq(r, c) = dq;
+      dd.dtau_dv(r, c) = dd.row.col(r).dot(dd.colv.col(c));
+    }
+}
+
+}  // namespace
+
 void inverse_dynamics_derivatives(const Model& model, const Data& data, const VecX& qd, const VecX& qdd,
                                   DerivativeData& dd) {
   derivative_sweeps(model, data, qd, qdd, dd, "inverse_dynamics_derivatives");
   const int N = model.nbodies;
+  if (model.chain) {
+    // a chain: every DOF before r is an ancestor of r, so the (body, ancestor) pairs below are four
+    // triangular matrix products, (r, c ≤ r) = row_r·col_c and (c ≤ r, r) = S_c·ψ_r, S_c·ρ_r; the
+    // joints' own blocks (the diagonal) are then written over
+    dd.dtau_dq.triangularView<Eigen::Lower>() = dd.row.transpose() * dd.colq;
+    dd.dtau_dv.triangularView<Eigen::Lower>() = dd.row.transpose() * dd.colv;
+    dd.dtau_dq.triangularView<Eigen::Upper>() = dd.S.transpose() * dd.psi;
+    dd.dtau_dv.triangularView<Eigen::Upper>() = dd.S.transpose() * dd.rho;
+    for (int i = 0; i < N; ++i) own_block(model, dd, i);
+    return;
+  }
   // fill: the joint's own block, then every (body, ancestor) pair both ways; the rest is zero
   dd.dtau_dq.setZero();
   dd.dtau_dv.setZero();
   for (int i = 0; i < N; ++i) {
     const int vi = model.idx_v[i], ni = model.nv_i[i];
-    const JointType t = model.joint_type[i];
-    for (int r = vi; r < vi + ni; ++r)
-      for (int c = vi; c < vi + ni; ++c) {
-        double dq = dd.row.col(r).dot(dd.colq.col(c));
-        if (!joint_carries(t, c - vi, r - vi)) dq += dd.S.col(r).dot(dd.phi.col(c));
-        dd.dtau_dq(r, c) = dq;
-        dd.dtau_dv(r, c) = dd.row.col(r).dot(dd.colv.col(c));
-      }
+    own_block(model, dd, i);
     for (int j = model.parent[i]; j >= 0; j = model.parent[j]) {
       const int vj = model.idx_v[j], nj = model.nv_i[j];
       for (int r = vi; r < vi + ni; ++r)

@@ -88,11 +88,14 @@ TEST_P(DerivativeRoutes, ArticulatedBodyRouteEqualsLtdlAndCentralDifferences) {
 INSTANTIATE_TEST_SUITE_P(RandomTrees, DerivativeRoutes, ::testing::ValuesIn(kCases),
                          [](const auto& info) { return std::string(info.param.name); });
 
-// derivative_route picks the articulated-body factor for big models; a Dense route is refused
-TEST(DerivativeRoutesChoice, BigModelsTakeTheArticulatedBodyFactor) {
+// derivative_route picks the articulated-body factor for long chains, LᵀDL for short chains and
+// shallow trees; a Dense route is refused
+TEST(DerivativeRoutesChoice, LongChainsTakeTheArticulatedBodyFactor) {
   Rng rng(3);
   const Model big = random_model(rng, {.n = 64, .branching = 0.0});
   EXPECT_EQ(derivative_route(big), FdMethod::ArticulatedBody);
+  EXPECT_EQ(derivative_route(random_model(rng, {.n = 8, .branching = 0.0})), FdMethod::Sparse);
+  EXPECT_EQ(derivative_route(random_model(rng, {.n = 64, .branching = 1.0})), FdMethod::Sparse);
   Data data(big);
   DerivativeData dd(big);
   dd.route = FdMethod::Dense;

@@ -411,7 +411,8 @@ q: (nq,) or (T, nq), e.g. a Trajectory's q.  Returns new arrays of shape (N, 3) 
 (T, N, 3) and (T, N, 3, 3): the body frame's origin (its joint point) and its rotation body →
 inertial.  Runs without the GIL.)");
   // for tools/bench/python_overhead.py: the same library calls in a C++ loop in this process, so
-  // the two sides are timed in adjacent windows on the same machine state
+  // the two sides are timed in adjacent windows on the same machine state (the derivative calls on
+  // the Data's own derivative arrays, as the Python functions use them)
   m.def("_time_cpp", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v, const ArrayIn& tau,
                         const std::string& which, long calls) {
         VecX qv(model.nq), vv(model.nv), tv(model.nv);
@@ -428,8 +429,21 @@ inertial.  Runs without the GIL.)");
             update_velocities(model, data, vv);
             forward_dynamics(model, data, tv, FdMethod::ArticulatedBody);
           }
+        } else if (which == "fd_derivatives" || which == "id_derivatives" || which == "minverse") {
+          DerivativeData& dd = d.derivative_data(model);
+          for (long k = 0; k < calls; ++k) {
+            update_kinematics(model, data, qv);
+            if (which == "minverse") {
+              minverse(model, data, dd.Minv);
+              continue;
+            }
+            update_velocities(model, data, vv);
+            if (which == "fd_derivatives") forward_dynamics_derivatives(model, data, vv, tv, dd, nullptr, true);
+            else inverse_dynamics_derivatives(model, data, vv, tv, dd);  // τ's values as q̈
+          }
         } else {
-          throw Error("_time_cpp: which: expected mass_matrix or forward_dynamics, got '" + which + "'");
+          throw Error("_time_cpp: which: expected mass_matrix, forward_dynamics, fd_derivatives, id_derivatives or "
+                      "minverse, got '" + which + "'");
         }
         return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / double(calls);
       }, "model"_a, "data"_a, "q"_a, "v"_a, "tau"_a, "which"_a, "calls"_a);

@@ -116,6 +116,7 @@ template <Shape B, bool Analytic> void Jacobian(benchmark::State& st) {
 
 void sizes(benchmark::internal::Benchmark* b) {
   for (int n = 1; n <= 256; n *= 2) b->Arg(n);
+  b->Arg(24);
 }
 void tree_sizes(benchmark::internal::Benchmark* b) {
   for (int n : {1, 3, 7, 15, 31, 63, 127, 255}) b->Arg(n);
@@ -124,7 +125,7 @@ void tree_sizes(benchmark::internal::Benchmark* b) {
 }  // namespace
 
 void leg_lengths(benchmark::internal::Benchmark* b) {
-  for (int n : {1, 3, 6, 11}) b->Arg(n);  // 10, 18, 30, 50 DOFs
+  for (int n : {1, 3, 6, 11, 20}) b->Arg(n);  // 10, 18, 30, 50, 86 DOFs
 }
 
 #define SETS(group, shape, range)                                                                      \
