@@ -211,6 +211,10 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
 
 namespace {
 
+// from this many DOFs on, a chain's fill is matrix products (below that, the products' packing costs
+// more than the pairs' dot products: 8 DOFs 20 % slower, 16 even, 32 20 % faster)
+constexpr int kChainProducts = 16;
+
 // the fill's block of joint i with itself: (r, c) = row_r·col_c, plus S_r·φ_c where c does not carry r
 void own_block(const Model& model, DerivativeData& dd, int i) {
   const int vi = model.idx_v[i], ni = model.nv_i[i];
@@ -230,7 +234,7 @@ void inverse_dynamics_derivatives(const Model& model, const Data& data, const Ve
                                   DerivativeData& dd) {
   derivative_sweeps(model, data, qd, qdd, dd, "inverse_dynamics_derivatives");
   const int N = model.nbodies;
-  if (model.chain) {
+  if (model.chain && model.nv >= kChainProducts) {
     // a chain: every DOF before r is an ancestor of r, so the (body, ancestor) pairs below are four
     // triangular matrix products, (r, c ≤ r) = row_r·col_c and (c ≤ r, r) = S_c·ψ_r, S_c·ρ_r; the
     // joints' own blocks (the diagonal) are then written over

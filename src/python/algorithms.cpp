@@ -343,6 +343,13 @@ bool parse(PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames, PyObject*
 
 template <class T>
 T& instance(PyObject* obj, const char* fn, const char* what, const char* type) {
+  // an object of exactly this class: its value straight from the instance (pybind11's caster
+  // looks the class up by name on every call, a third of the call's overhead)
+  static py::detail::type_info* const info = py::detail::get_type_info(typeid(T));
+  if (info && Py_TYPE(obj) == info->type) {
+    auto* inst = reinterpret_cast<py::detail::instance*>(obj);
+    if (void* value = inst->get_value_and_holder(info, false).value_ptr()) return *static_cast<T*>(value);
+  }
   py::detail::make_caster<T> caster;
   if (!caster.load(obj, false))
     throw py::type_error(std::string(fn) + ": " + what + ": expected a " + type + ", got " +
