@@ -18,7 +18,22 @@
 
 #include "soadyn/algorithms.hpp"
 
+#include <algorithm>
+
 namespace soadyn {
+
+// Per column, LᵀDL costs the entries of its factor, nnz(L) = Σ_k (1 + the ancestors of DOF k), and
+// the articulated-body factor a fixed amount per body.  The articulated-body factor when
+// nnz(L) ≥ 16 N, by measurement (tools/bench/bench_derivatives.cpp, fd_deriv_ltdl against
+// fd_deriv_aba): chains cross between 24 bodies (nnz(L) = 12.5 N, LᵀDL 8 % faster) and 32 (16.5 N,
+// the articulated-body factor 12 % faster); a free trunk with four legs of 20 links is even at
+// 16.6 N; binary trees up to 255 bodies (about 7 N) and robots of up to 50 DOFs (12 N) keep LᵀDL.
+FdMethod derivative_route(const Model& model) {
+  long nnz = 0;
+  for (int k = 0; k < model.nv; ++k)
+    for (int j = k; j >= 0; j = model.dof_parent[size_t(j)]) ++nnz;
+  return nnz >= 16L * model.nbodies ? FdMethod::ArticulatedBody : FdMethod::Sparse;
+}
 
 DerivativeData::DerivativeData(const Model& m)
     : S(Mat6X::Zero(6, m.nv)),
@@ -40,6 +55,8 @@ DerivativeData::DerivativeData(const Model& m)
       dqdd_dv(MatX::Zero(m.nv, m.nv)),
       Minv(MatX::Zero(m.nv, m.nv)),
       solve(MatX::Zero(2 * m.nv, m.nv)),
+      route(derivative_route(m)),
+      work(articulated_solve_work(m)),
       w(Mat6X::Zero(6, m.nbodies)),
       T1(Mat6X::Zero(6, m.nbodies)),
       T2(Mat6X::Zero(6, m.nbodies)) {}
@@ -192,23 +209,48 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
 
 }  // namespace
 
+namespace {
+
+// from this many DOFs on, a chain's fill is matrix products (below that, the products' packing costs
+// more than the pairs' dot products: 8 DOFs 20 % slower, 16 even, 32 20 % faster)
+constexpr int kChainProducts = 16;
+
+// the fill's block of joint i with itself: (r, c) = row_r·col_c, plus S_r·φ_c where c does not carry r
+void own_block(const Model& model, DerivativeData& dd, int i) {
+  const int vi = model.idx_v[i], ni = model.nv_i[i];
+  const JointType t = model.joint_type[i];
+  for (int r = vi; r < vi + ni; ++r)
+    for (int c = vi; c < vi + ni; ++c) {
+      double dq = dd.row.col(r).dot(dd.colq.col(c));
+      if (!joint_carries(t, c - vi, r - vi)) dq += dd.S.col(r).dot(dd.phi.col(c));
+      dd.dtau_dq(r, c) = dq;
+      dd.dtau_dv(r, c) = dd.row.col(r).dot(dd.colv.col(c));
+    }
+}
+
+}  // namespace
+
 void inverse_dynamics_derivatives(const Model& model, const Data& data, const VecX& qd, const VecX& qdd,
                                   DerivativeData& dd) {
   derivative_sweeps(model, data, qd, qdd, dd, "inverse_dynamics_derivatives");
   const int N = model.nbodies;
+  if (model.chain && model.nv >= kChainProducts) {
+    // a chain: every DOF before r is an ancestor of r, so the (body, ancestor) pairs below are four
+    // triangular matrix products, (r, c ≤ r) = row_r·col_c and (c ≤ r, r) = S_c·ψ_r, S_c·ρ_r; the
+    // joints' own blocks (the diagonal) are then written over
+    dd.dtau_dq.triangularView<Eigen::Lower>() = dd.row.transpose() * dd.colq;
+    dd.dtau_dv.triangularView<Eigen::Lower>() = dd.row.transpose() * dd.colv;
+    dd.dtau_dq.triangularView<Eigen::Upper>() = dd.S.transpose() * dd.psi;
+    dd.dtau_dv.triangularView<Eigen::Upper>() = dd.S.transpose() * dd.rho;
+    for (int i = 0; i < N; ++i) own_block(model, dd, i);
+    return;
+  }
   // fill: the joint's own block, then every (body, ancestor) pair both ways; the rest is zero
   dd.dtau_dq.setZero();
   dd.dtau_dv.setZero();
   for (int i = 0; i < N; ++i) {
     const int vi = model.idx_v[i], ni = model.nv_i[i];
-    const JointType t = model.joint_type[i];
-    for (int r = vi; r < vi + ni; ++r)
-      for (int c = vi; c < vi + ni; ++c) {
-        double dq = dd.row.col(r).dot(dd.colq.col(c));
-        if (!joint_carries(t, c - vi, r - vi)) dq += dd.S.col(r).dot(dd.phi.col(c));
-        dd.dtau_dq(r, c) = dq;
-        dd.dtau_dv(r, c) = dd.row.col(r).dot(dd.colv.col(c));
-      }
+    own_block(model, dd, i);
     for (int j = model.parent[i]; j >= 0; j = model.parent[j]) {
       const int vj = model.idx_v[j], nj = model.nv_i[j];
       for (int r = vi; r < vi + ni; ++r)
@@ -284,23 +326,32 @@ void ltdl_solve_transposed(const Model& model, const Data& data, MatX& Xt) {
 void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
                                   const Inputs* inputs, bool minv) {
   const int nv = model.nv;
-  // q̈, 𝓜 and its tree factor LᵀDL
-  forward_dynamics(model, data, tau, FdMethod::Sparse);
-  // ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x) at that q̈: both sets in one solve
+  if (dd.route != FdMethod::ArticulatedBody && dd.route != FdMethod::Sparse)
+    throw Error("forward_dynamics_derivatives: DerivativeData::route: expected aba or sparse, got " +
+                std::string(to_string(dd.route)));
+  // q̈ and a factor of 𝓜: the articulated-body one, or 𝓜 by composite inertias and its LᵀDL
+  forward_dynamics(model, data, tau, dd.route);
+  // ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x) at that q̈
   inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
   dd.dqdd_dq = -dd.dtau_dq;
   dd.dqdd_dv = -dd.dtau_dv;
   if (inputs) inputs->add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
+  if (minv) dd.Minv.setIdentity();
+  if (dd.route == FdMethod::ArticulatedBody) {
+    // the articulated-body factor, column by column (K columns at a time)
+    articulated_solve(model, data, dd.dqdd_dq, dd.work);
+    articulated_solve(model, data, dd.dqdd_dv, dd.work);
+    if (minv) articulated_solve(model, data, dd.Minv, dd.work);
+    return;
+  }
+  // LᵀDL, both sets in one solve, held transposed; 𝓜⁻¹ is symmetric: solving with the identity's
+  // rows gives it directly
   dd.solve.topRows(nv) = dd.dqdd_dq.transpose();
   dd.solve.bottomRows(nv) = dd.dqdd_dv.transpose();
   ltdl_solve_transposed(model, data, dd.solve);
   dd.dqdd_dq = dd.solve.topRows(nv).transpose();
   dd.dqdd_dv = dd.solve.bottomRows(nv).transpose();
-  if (minv) {
-    // 𝓜⁻¹ is symmetric: solving with the identity's rows gives it directly
-    dd.Minv.setIdentity();
-    ltdl_solve_transposed(model, data, dd.Minv);
-  }
+  if (minv) ltdl_solve_transposed(model, data, dd.Minv);
 }
 
 }  // namespace soadyn

@@ -59,6 +59,38 @@ void add_congruence_D(Mat6& out, const Mat6& P, const Vec3& d) {
   out.bottomRightCorner<3, 3>() += C;
 }
 
+// The factor both articulated-body sweeps share, at body i once its children are in P_i:
+// U_i = P_i G_i, 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ and, below a parent, P⁺_i = P_i − U_i 𝒟_i⁻¹ U_iᵀ in place
+// (P_i is not needed after this step).  The caller adds D_iᵀ P⁺_i D_i to P_p.
+inline void articulated_factor_step(const Model& model, Data& data, int i) {
+  const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+  Mat6& P = data.P[i];
+  if (ni == 1) {
+    // U = P g,  𝒟 = gᵀ U;  P⁺ = P − U Uᵀ / 𝒟
+    const Vec6 g = data.G.col(vi);
+    // a revolute joint's g is [g_ω; 0] and a prismatic one's [0; g_v]: half of P is read
+    Vec6 U;
+    if (model.joint_type[i] == JointType::Revolute) U.noalias() = P.leftCols<3>() * g.head<3>();
+    else if (model.joint_type[i] == JointType::Prismatic) U.noalias() = P.rightCols<3>() * g.tail<3>();
+    else U.noalias() = P * g;
+    const double Dinv = 1.0 / g.dot(U);
+    data.U1.col(i) = U;
+    data.Dinv1(i) = Dinv;
+    if (p < 0) return;
+    const Vec6 UD = Dinv * U;
+    for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
+    return;
+  }
+  // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
+  const auto Gi = data.G.middleCols(vi, ni);
+  data.U[i].noalias() = P * Gi;
+  const MatGG joint_inertia = Gi.transpose() * data.U[i];  // 𝒟_i, the articulated inertia across the joint
+  data.Dinv[i] = joint_inertia.inverse();
+  if (p < 0) return;
+  const Mat6G UD = data.U[i] * data.Dinv[i];
+  P.noalias() -= UD * data.U[i].transpose();
+}
+
 void aba(const Model& model, Data& data, const VecX& tau) {
   const DOperator D{data.d};
   // tip to base: articulated inertias P_i and bias forces z_i
@@ -78,37 +110,23 @@ void aba(const Model& model, Data& data, const VecX& tau) {
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
     const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
-    Mat6& P = data.P[i];  // becomes P⁺ in place: P_i is not needed after this step
+    articulated_factor_step(model, data, i);
+    const Mat6& P = data.P[i];  // P⁺_i below a parent
     Vec6 za;
     if (ni == 1) {
-      // U = P g,  𝒟 = gᵀ U,  u = τ − gᵀ z;  P⁺ = P − U Uᵀ / 𝒟;  z⁺ = z + P⁺ a + U u / 𝒟
-      const Vec6 g = data.G.col(vi);
-      // a revolute joint's g is [g_ω; 0] and a prismatic one's [0; g_v]: half of P is read
-      Vec6 U;
-      if (model.joint_type[i] == JointType::Revolute) U.noalias() = P.leftCols<3>() * g.head<3>();
-      else if (model.joint_type[i] == JointType::Prismatic) U.noalias() = P.rightCols<3>() * g.tail<3>();
-      else U.noalias() = P * g;
-      const double Dinv = 1.0 / g.dot(U);
-      const double u = tau(vi) - g.dot(data.z.col(i));
-      data.U1.col(i) = U;
-      data.Dinv1(i) = Dinv;
+      // u = τ − gᵀ z;  z⁺ = z + P⁺ a + U u / 𝒟
+      const double u = tau(vi) - data.G.col(vi).dot(data.z.col(i));
       data.u(vi) = u;
       if (p < 0) continue;
-      const Vec6 UD = Dinv * U;
-      for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
+      const Vec6 UD = data.Dinv1(i) * data.U1.col(i);
       za = data.z.col(i) + P * data.coriolis.col(i) + u * UD;
     } else {
-      // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
       const auto Gi = data.G.middleCols(vi, ni);
-      data.U[i].noalias() = P * Gi;
-      const MatGG joint_inertia = Gi.transpose() * data.U[i];  // 𝒟_i, the articulated inertia across the joint
-      data.Dinv[i] = joint_inertia.inverse();
       data.u.segment(vi, ni).noalias() = tau.segment(vi, ni) - Gi.transpose() * data.z.col(i);
       if (p < 0) continue;
-      const Mat6G UD = data.U[i] * data.Dinv[i];
-      P.noalias() -= UD * data.U[i].transpose();
       za = data.z.col(i);
       za.noalias() += P * data.coriolis.col(i);
+      const Mat6G UD = data.U[i] * data.Dinv[i];
       za.noalias() += UD * data.u.segment(vi, ni);
     }
     // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f], added in 3-vector halves (a
@@ -288,13 +306,10 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
   for (int i = N - 1; i >= 0; --i) {
     const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
     const int b = model.dfs_begin[i], n = model.dfs_end[i] - b;
-    Mat6& P = data.P[i];
-    if (ni == 1) {  // U = P g, 𝒟⁻¹ a number
-      const Vec6 g = data.G.col(vi);
-      const Vec6 U = P * g;
-      const double Dinv = 1.0 / g.dot(U);
-      data.U1.col(i) = U;
-      data.Dinv1(i) = Dinv;
+    articulated_factor_step(model, data, i);
+    if (ni == 1) {  // 𝒟⁻¹ a number
+      const Vec6 g = data.G.col(vi), U = data.U1.col(i);
+      const double Dinv = data.Dinv1(i);
       for (int x = 0; x < n; ++x) {
         auto z = Z.col(b + x);
         const double u = (x == 0 ? 1.0 : 0.0) - g.dot(z);
@@ -304,14 +319,8 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
         z.setZero();
         D.add_apply_transpose(i, zp, z);
       }
-      if (p < 0) continue;
-      const Vec6 UD = Dinv * U;
-      for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;
     } else {
       const auto Gi = data.G.middleCols(vi, ni);
-      data.U[i].noalias() = P * Gi;
-      const MatGG joint_inertia = Gi.transpose() * data.U[i];
-      data.Dinv[i] = joint_inertia.inverse();
       const Mat6G UD = data.U[i] * data.Dinv[i];
       for (int x = 0; x < n; ++x) {
         auto z = Z.col(b + x);
@@ -324,10 +333,8 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
         z.setZero();
         D.add_apply_transpose(i, zp, z);
       }
-      if (p < 0) continue;
-      P.noalias() -= UD * data.U[i].transpose();
     }
-    add_congruence_D(data.P[p], P, data.d.col(i));
+    if (p >= 0) add_congruence_D(data.P[p], data.P[i], data.d.col(i));
   }
   // Base to tip, one column at a time: A'_i = D_i A_p, q̈_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i), A_i = A'_i + G_i q̈_i,
   // u_i nonzero only where column k's joint lies in i's subtree.  O(N) per column.

@@ -77,6 +77,13 @@ void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod 
 // and data.Zminv.
 void minverse(const Model& model, Data& data, MatX& Minv);
 
+// X ← 𝓜⁻¹ X for the columns of X (nv×k), with the articulated-body factor that
+// forward_dynamics(…, ArticulatedBody) or minverse leaves in data (P, U1, Dinv1, U, Dinv): one
+// tip-to-base and one base-to-tip sweep per column, O(N) each whatever the tree, several columns at
+// a time (articulated_solve.cpp).  `work` is articulated_solve_work(model); nothing allocates.
+void articulated_solve(const Model& model, const Data& data, Eigen::Ref<MatX> X, MatX& work);
+MatX articulated_solve_work(const Model& model);
+
 // The tree-sparse route in two parts, for reuse: factor data.Mass into data.L, then solve in place.
 void ltdl_factor(const Model& model, Data& data);
 void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x);

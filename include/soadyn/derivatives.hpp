@@ -19,11 +19,16 @@
 //   planar, revolute, prismatic: δ is the coordinate's own increment.
 // So ∂q̈/∂q is nv×nv; joint_tangent_map (joint.hpp) gives the chain rule to the coordinates.
 //
-// Forward dynamics: ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x |_q̈) at the q̈ of the state, with 𝓜 by the
-// composite sweep, factored along the tree (LᵀDL, no fill-in off ancestor chains), and the 2·nv
-// columns solved with that factor all at once.  ∂q̈/∂τ = 𝓜⁻¹ on request, by the same factor.
+// Forward dynamics: ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x |_q̈) at the q̈ of the state, the 2·nv columns
+// solved all at once with one of two factors of 𝓜 (DerivativeData::route):
+//   ArticulatedBody  the articulated-body recursion's (aba gives q̈ and the factor), then two O(N)
+//                    sweeps per column (articulated_solve): O(N²) in all, on chains too;
+//   Sparse           𝓜 by the composite sweep factored along the tree (LᵀDL, no fill-in off
+//                    ancestor chains): O(Σ depth) per column, dense O(N²) per column on a chain.
+// ∂q̈/∂τ = 𝓜⁻¹ on request, by the same factor.
 #pragma once
 
+#include "soadyn/algorithms.hpp"
 #include "soadyn/data.hpp"
 #include "soadyn/inputs.hpp"
 #include "soadyn/model.hpp"
@@ -55,8 +60,16 @@ struct DerivativeData {
   MatX dqdd_dq, dqdd_dv;            // ∂q̈/∂q (tangent), ∂q̈/∂v of forward dynamics, nv×nv
   MatX Minv;                        // ∂q̈/∂τ = 𝓜⁻¹ (when asked for)
   MatX solve;                       // 2nv×nv: [∂q̈/∂q, ∂q̈/∂v]ᵀ while 𝓜⁻¹ is applied
+  // how forward_dynamics_derivatives applies 𝓜⁻¹: FdMethod::ArticulatedBody or FdMethod::Sparse
+  // (LᵀDL); derivative_route(model) picks the faster for the model, a caller may set either
+  FdMethod route;
+  MatX work;                        // articulated_solve's blocks (articulated_solve_work)
   Mat6X w, T1, T2;                  // 6×N: the vector products' sums (…_transpose_times)
 };
+
+// The faster way to apply 𝓜⁻¹ in forward_dynamics_derivatives for this model (the rule and its
+// measurement: derivatives.cpp).
+FdMethod derivative_route(const Model& model);
 
 // ∂τ/∂q and ∂τ/∂v of τ = 𝓜(q) q̈ + bias(q, v) at (q, v, q̈), q̈ held fixed.  Needs [kin] at q; v and
 // q̈ have size nv.  Fills dd.dtau_dq, dd.dtau_dv and dd.tau.  O(N·depth).
@@ -74,7 +87,8 @@ void inverse_dynamics_derivatives_transpose_times(const Model& model, Derivative
 
 // ∂q̈/∂q and ∂q̈/∂v of q̈ = 𝓜⁻¹ (τ − bias) at (q, v), where τ is the generalized force at this state
 // and `inputs` (may be null) says how it changes with q and v (springs, dampers).  Needs [kin] and
-// [vel] at (q, v).  Fills data.qdd, data.Mass and its factor data.L, dd.dqdd_dq, dd.dqdd_dv (and the
+// [vel] at (q, v).  Fills data.qdd, the factor of dd.route (ArticulatedBody: the articulated-body
+// route's workspace; Sparse: data.Mass, data.bias and data.L), dd.dqdd_dq, dd.dqdd_dv (and the
 // inverse-dynamics derivatives at that q̈); with `minv`, also dd.Minv = 𝓜⁻¹ = ∂q̈/∂τ.
 void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
                                   const Inputs* inputs = nullptr, bool minv = false);

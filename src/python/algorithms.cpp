@@ -121,12 +121,13 @@ struct Minverse {
 --
 
 𝓜(q)⁻¹ without forming 𝓜: the articulated-body recursion for every unit force at once, O(N²) on a
-chain (C++ minverse, as Pinocchio's computeMinverse).  q: (nq,).  Returns a new array (nv, nv).)";
+chain (C++ minverse, as Pinocchio's computeMinverse).  q: (nq,).  Returns data.Minv, shape (nv, nv),
+a read-only view (fd_derivatives's third result shares it).)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
+    DerivativeData& dd = d.derivative_data(m);
     kin(m, d, name, a[0]);
-    MatX Minv(m.nv, m.nv);
-    minverse(m, *d.data, Minv);
-    return owned(std::move(Minv));
+    minverse(m, *d.data, dd.Minv);
+    return d.Minv;
   }
 };
 
@@ -210,13 +211,14 @@ struct IdDerivatives {
 
 ∂/∂q is along the tangent increment δ (nv,) with q ⊕ δ = joint_integrate(q, δ, 1): a free joint's
 δ = [δθ (inertial axes); δp], a ball's δθ in the child's frame.  q: (nq,), v: (nv,), qdd: (nv,).
-Returns two new arrays of shape (nv, nv).)";
+Returns (data.dtau_dq, data.dtau_dv), shape (nv, nv) each: read-only views, not copies (the next
+derivative call on this Data overwrites them, fd_derivatives too; .copy() to keep them).)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
+    DerivativeData& dd = d.derivative_data(m);
     read_vector(m, *d.data, name, "qdd", a[2], m.nv, d.x);
     kin_vel(m, d, name, a[0], a[1]);
-    DerivativeData dd(m);
     inverse_dynamics_derivatives(m, *d.data, d.v, d.x, dd);
-    return py::make_tuple(owned(std::move(dd.dtau_dq)), owned(std::move(dd.dtau_dv)));
+    return d.id_result;
   }
 };
 
@@ -227,14 +229,17 @@ struct FdDerivatives {
 --
 
 (∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = 𝓜⁻¹) of q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)), τ held fixed; ∂/∂q along the
-tangent as in id_derivatives.  q: (nq,), v: (nv,), tau: (nv,).  Returns three new arrays of shape
-(nv, nv); also fills data.qdd and data.M.)";
+tangent as in id_derivatives.  q: (nq,), v: (nv,), tau: (nv,).  Returns (data.dqdd_dq,
+data.dqdd_dv, data.Minv), shape (nv, nv) each: read-only views, not copies (the next derivative
+call on this Data overwrites them; .copy() to keep them).  Also fills data.qdd, and data.dtau_dq,
+data.dtau_dv at that q̈.  𝓜⁻¹ is applied by the articulated-body factor (O(N) per column) or, on
+small models, by 𝓜's LᵀDL (then data.M is filled too), whichever is faster for the model.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
+    DerivativeData& dd = d.derivative_data(m);
     read_vector(m, *d.data, name, "tau", a[2], m.nv, d.x);
     kin_vel(m, d, name, a[0], a[1]);
-    DerivativeData dd(m);
     forward_dynamics_derivatives(m, *d.data, d.v, d.x, dd, nullptr, true);
-    return py::make_tuple(owned(std::move(dd.dqdd_dq)), owned(std::move(dd.dqdd_dv)), owned(std::move(dd.Minv)));
+    return d.fd_result;
   }
 };
 
@@ -338,6 +343,13 @@ bool parse(PyObject* const* args, Py_ssize_t nargs, PyObject* kwnames, PyObject*
 
 template <class T>
 T& instance(PyObject* obj, const char* fn, const char* what, const char* type) {
+  // an object of exactly this class: its value straight from the instance (pybind11's caster
+  // looks the class up by name on every call, a third of the call's overhead)
+  static py::detail::type_info* const info = py::detail::get_type_info(typeid(T));
+  if (info && Py_TYPE(obj) == info->type) {
+    auto* inst = reinterpret_cast<py::detail::instance*>(obj);
+    if (void* value = inst->get_value_and_holder(info, false).value_ptr()) return *static_cast<T*>(value);
+  }
   py::detail::make_caster<T> caster;
   if (!caster.load(obj, false))
     throw py::type_error(std::string(fn) + ": " + what + ": expected a " + type + ", got " +
@@ -406,7 +418,8 @@ q: (nq,) or (T, nq), e.g. a Trajectory's q.  Returns new arrays of shape (N, 3) 
 (T, N, 3) and (T, N, 3, 3): the body frame's origin (its joint point) and its rotation body →
 inertial.  Runs without the GIL.)");
   // for tools/bench/python_overhead.py: the same library calls in a C++ loop in this process, so
-  // the two sides are timed in adjacent windows on the same machine state
+  // the two sides are timed in adjacent windows on the same machine state (the derivative calls on
+  // the Data's own derivative arrays, as the Python functions use them)
   m.def("_time_cpp", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v, const ArrayIn& tau,
                         const std::string& which, long calls) {
         VecX qv(model.nq), vv(model.nv), tv(model.nv);
@@ -423,8 +436,21 @@ inertial.  Runs without the GIL.)");
             update_velocities(model, data, vv);
             forward_dynamics(model, data, tv, FdMethod::ArticulatedBody);
           }
+        } else if (which == "fd_derivatives" || which == "id_derivatives" || which == "minverse") {
+          DerivativeData& dd = d.derivative_data(model);
+          for (long k = 0; k < calls; ++k) {
+            update_kinematics(model, data, qv);
+            if (which == "minverse") {
+              minverse(model, data, dd.Minv);
+              continue;
+            }
+            update_velocities(model, data, vv);
+            if (which == "fd_derivatives") forward_dynamics_derivatives(model, data, vv, tv, dd, nullptr, true);
+            else inverse_dynamics_derivatives(model, data, vv, tv, dd);  // τ's values as q̈
+          }
         } else {
-          throw Error("_time_cpp: which: expected mass_matrix or forward_dynamics, got '" + which + "'");
+          throw Error("_time_cpp: which: expected mass_matrix, forward_dynamics, fd_derivatives, id_derivatives or "
+                      "minverse, got '" + which + "'");
         }
         return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / double(calls);
       }, "model"_a, "data"_a, "q"_a, "v"_a, "tau"_a, "which"_a, "calls"_a);

@@ -4,6 +4,7 @@
 
 #include "soadyn/algorithms.hpp"
 #include "soadyn/data.hpp"
+#include "soadyn/derivatives.hpp"
 #include "soadyn/kinematics.hpp"
 #include "soadyn/model.hpp"
 #include "soadyn/settings.hpp"
@@ -53,6 +54,12 @@ struct PyData {
   VecX q, v, x;  // arguments copied here: the library takes VecX, this copy does not allocate
   py::array M, bias, tau, qdd;          // the results the algorithms fill
   py::array R, eta, d, s, r, G, V, Vbar;  // kinematics
+  // the derivative algorithms' arrays (nv×nv each: made by the first call that needs them) and
+  // their views; id_result and fd_result are the tuples id_derivatives and fd_derivatives return
+  std::shared_ptr<DerivativeData> derivatives;
+  py::array dtau_dq, dtau_dv, dqdd_dq, dqdd_dv, Minv;
+  py::tuple id_result, fd_result;
+  DerivativeData& derivative_data(const Model& model);
 
   // throws soadyn::Error when this Data was built for another model
   void check(const Model& model, const char* where) const { data->check(model, where, "data", 0, 0); }

@@ -61,6 +61,12 @@ const Model& warned(const Model& model) {
   return model;
 }
 
+// a derivative view of a Data (its derivative arrays made on first use, zero until filled)
+py::array derivative_view(PyData& self, py::array PyData::*view) {
+  self.derivative_data(self.model.cast<const Model&>());
+  return self.*view;
+}
+
 }  // namespace
 
 void bind_model(py::module_& m) {
@@ -159,7 +165,9 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
   py::class_<PyData>(m, "Data", R"(The per-state arrays of one Model, allocated once (model.create_data()).
 
 The algorithms fill it and return read-only views of it (no copy): mass_matrix → data.M,
-bias → data.bias, inverse_dynamics → data.tau, forward_dynamics → data.qdd.  A view is
+bias → data.bias, inverse_dynamics → data.tau, forward_dynamics → data.qdd, id_derivatives →
+(data.dtau_dq, data.dtau_dv), fd_derivatives → (data.dqdd_dq, data.dqdd_dv, data.Minv),
+minverse → data.Minv (the derivative arrays, nv×nv each, made by the first call that needs them).  A view is
 overwritten by the next call on the same Data (copy it to keep it) and keeps the memory alive
 after the Data object is gone.  Kinematics (filled by every algorithm that takes q), one row per
 body, inertial coordinates: R (N, 3, 3) body → inertial, eta (N, 3) joint points η_i,
@@ -182,6 +190,16 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
       .def_readonly("r", &PyData::r, "r_i, centre of mass, shape (N, 3)")
       .def_readonly("G", &PyData::G, "column k: the motion vector of DOF k, [g; 0] or [0; g], shape (6, nv)")
       .def_readonly("V", &PyData::V, "v_i = [ω_i; η̇_i] (eq. 4), shape (N, 6)")
+      .def_property_readonly("dtau_dq", [](PyData& self) { return derivative_view(self, &PyData::dtau_dq); },
+                             "∂τ/∂q (tangent) of inverse dynamics, shape (nv, nv): filled by id_derivatives and fd_derivatives")
+      .def_property_readonly("dtau_dv", [](PyData& self) { return derivative_view(self, &PyData::dtau_dv); },
+                             "∂τ/∂v of inverse dynamics, shape (nv, nv): filled by id_derivatives and fd_derivatives")
+      .def_property_readonly("dqdd_dq", [](PyData& self) { return derivative_view(self, &PyData::dqdd_dq); },
+                             "∂q̈/∂q (tangent) of forward dynamics, shape (nv, nv): filled by fd_derivatives")
+      .def_property_readonly("dqdd_dv", [](PyData& self) { return derivative_view(self, &PyData::dqdd_dv); },
+                             "∂q̈/∂v of forward dynamics, shape (nv, nv): filled by fd_derivatives")
+      .def_property_readonly("Minv", [](PyData& self) { return derivative_view(self, &PyData::Minv); },
+                             "𝓜⁻¹ = ∂q̈/∂τ, shape (nv, nv): filled by fd_derivatives and minverse")
       .def_readonly("Vbar", &PyData::Vbar, "v̄_i = [ω_i; ṙ_i] (eq. 5), shape (N, 6)")
       .def("__repr__", [](const PyData& self) {
         return "<soadyn.Data: " + std::to_string(self.nbodies) + " bodies, nq = " + std::to_string(self.nq) +

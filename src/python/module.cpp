@@ -144,6 +144,24 @@ PyData::PyData(const Model& model)
   G = view(base, D.G.data(), {6, nv}, {1, 6});
 }
 
+DerivativeData& PyData::derivative_data(const Model& model) {
+  check(model, "derivatives");
+  if (derivatives) return *derivatives;
+  auto dd = std::make_shared<DerivativeData>(model);
+  auto* keep = new std::shared_ptr<DerivativeData>(dd);
+  py::capsule base(keep, [](void* p) { delete static_cast<std::shared_ptr<DerivativeData>*>(p); });
+  // column-major nv×nv
+  dtau_dq = view(base, dd->dtau_dq.data(), {nv, nv}, {1, nv});
+  dtau_dv = view(base, dd->dtau_dv.data(), {nv, nv}, {1, nv});
+  dqdd_dq = view(base, dd->dqdd_dq.data(), {nv, nv}, {1, nv});
+  dqdd_dv = view(base, dd->dqdd_dv.data(), {nv, nv}, {1, nv});
+  Minv = view(base, dd->Minv.data(), {nv, nv}, {1, nv});
+  id_result = py::make_tuple(dtau_dq, dtau_dv);
+  fd_result = py::make_tuple(dqdd_dq, dqdd_dv, Minv);
+  derivatives = std::move(dd);
+  return *derivatives;
+}
+
 }  // namespace soadyn::python
 
 PYBIND11_MODULE(_soadyn, m) {

@@ -302,6 +302,36 @@ def test_results_are_read_only_views_of_data(rng):
     assert np.shares_memory(data.R, data.R) and data.R.shape == (3, 3, 3) and data.G.shape == (6, 3)
 
 
+def test_derivatives_are_read_only_views_of_data(rng):
+    model = soadyn.load(f"{SCENARIOS}/three_link_arm.yaml")
+    data = model.create_data()
+    q, v, tau = random_state(rng, model)
+    fd = soadyn.fd_derivatives(model, data, q, v, tau)
+    kept = [x.copy() for x in fd]
+    idd = soadyn.id_derivatives(model, data, q, v, tau)
+    views = dict(zip(("dqdd_dq", "dqdd_dv", "Minv", "dtau_dq", "dtau_dv"), (*fd, *idd)))
+    for name, x in views.items():
+        assert np.shares_memory(x, getattr(data, name)) and x.shape == (model.nv, model.nv), name
+        assert not x.flags.writeable, name
+        with pytest.raises(ValueError):
+            x[0, 0] = 1.0
+    # id_derivatives leaves fd_derivatives' results alone; minverse writes data.Minv, the same 𝓜⁻¹
+    for x, k in zip(fd, kept):
+        assert np.array_equal(x, k)
+    assert soadyn.minverse(model, data, q) is fd[2]
+    assert_close(fd[2], kept[2], 1e-12)
+    # the next call overwrites them; a view outlives its Data
+    q2 = q + 0.5
+    again = soadyn.fd_derivatives(model, data, q2, v, tau)
+    assert all(a is b for a, b in zip(again, fd)) and not np.allclose(fd[0], kept[0])
+    expected = [x.copy() for x in again]
+    del data, again
+    gc.collect()
+    for d in [model.create_data() for _ in range(20)]:
+        soadyn.fd_derivatives(model, d, q, v, tau)
+    assert all(np.array_equal(x, e) for x, e in zip(fd, expected))
+
+
 def test_a_view_keeps_the_memory_alive(rng):
     model = soadyn.load(f"{SCENARIOS}/three_link_arm.yaml")
     data = model.create_data()

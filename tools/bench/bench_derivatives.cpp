@@ -1,9 +1,13 @@
-// Time of each derivative set against N, chains and binary trees (tools/bench/models.hpp), next to
-// one O(N) forward dynamics; tools/bench/derivatives.py turns the JSON into
-// tools/results/derivatives.md (ratios to forward dynamics, fitted exponents, BDF analytic vs DQ).
+// Time of each derivative set against N, chains, binary trees (tools/bench/models.hpp) and legged
+// free-floating robots (a free trunk and four legs of N links: 6 + 4N DOFs), next to one O(N)
+// forward dynamics; tools/bench/derivatives.py turns the JSON into tools/results/derivatives.md
+// (ratios to forward dynamics, fitted exponents, BDF analytic vs DQ).
 //   fd          kinematics + velocities + O(N) articulated-body q̈ (the unit)
 //   id_deriv    kinematics + ∂τ/∂q, ∂τ/∂v (inverse_dynamics_derivatives)
-//   fd_deriv    kinematics + velocities + ∂q̈/∂q, ∂q̈/∂v (forward_dynamics_derivatives)
+//   fd_deriv    kinematics + velocities + ∂q̈/∂q, ∂q̈/∂v (forward_dynamics_derivatives, the route
+//               derivative_route picks)
+//   fd_deriv_ltdl, fd_deriv_aba  the same with 𝓜⁻¹ applied by the LᵀDL factor / the articulated-body
+//               factor, whatever the size (DerivativeData::route)
 //   fd_deriv_minv  the same and 𝓜⁻¹ = ∂q̈/∂τ
 //   minverse       kinematics + 𝓜⁻¹ by the articulated-body recursion (minverse, O(N²) on a chain)
 //   minverse_ltdl  kinematics + 𝓜 + its LᵀDL factor solved against the identity (O(N³) on a chain)
@@ -21,13 +25,19 @@ using namespace soadyn;
 
 namespace {
 
+enum class Shape { Chain, Tree, Legged };
+
+Model make_model(Shape shape, int n) {
+  return shape == Shape::Legged ? bench::make_legged(4, n) : bench::make_tree(n, shape == Shape::Tree);
+}
+
 struct Fixture {
   Model model;
   Data data;
   DerivativeData dd;
   VecX q, v, tau, qdd;
-  Fixture(int n, bool binary)
-      : model(bench::make_tree(n, binary)),
+  Fixture(Shape shape, int n)
+      : model(make_model(shape, n)),
         data(model),
         dd(model),
         q(bench::random_vector(model.nq, 1, 3.0)),
@@ -36,9 +46,9 @@ struct Fixture {
         qdd(bench::random_vector(model.nv, 4)) {}
 };
 
-template <bool Binary, class F>
+template <Shape B, class F>
 void run(benchmark::State& st, F&& body) {
-  Fixture f(int(st.range(0)), Binary);
+  Fixture f(B, int(st.range(0)));
   for (auto _ : st) {
     body(f);
     benchmark::ClobberMemory();
@@ -46,7 +56,7 @@ void run(benchmark::State& st, F&& body) {
   st.counters["N"] = double(st.range(0));
 }
 
-template <bool B> void Fd(benchmark::State& st) {
+template <Shape B> void Fd(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
     update_kinematics(f.model, f.data, f.q);
     update_velocities(f.model, f.data, f.v);
@@ -54,29 +64,31 @@ template <bool B> void Fd(benchmark::State& st) {
     benchmark::DoNotOptimize(f.data.qdd.data());
   });
 }
-template <bool B> void IdDeriv(benchmark::State& st) {
+template <Shape B> void IdDeriv(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
     update_kinematics(f.model, f.data, f.q);
     inverse_dynamics_derivatives(f.model, f.data, f.v, f.qdd, f.dd);
     benchmark::DoNotOptimize(f.dd.dtau_dq.data());
   });
 }
-template <bool B, bool Minv> void FdDeriv(benchmark::State& st) {
+// Route: 0 derivative_route's, 1 LᵀDL, 2 articulated-body
+template <Shape B, bool Minv, int Route = 0> void FdDeriv(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
+    if (Route) f.dd.route = Route == 1 ? FdMethod::Sparse : FdMethod::ArticulatedBody;
     update_kinematics(f.model, f.data, f.q);
     update_velocities(f.model, f.data, f.v);
     forward_dynamics_derivatives(f.model, f.data, f.v, f.tau, f.dd, nullptr, Minv);
     benchmark::DoNotOptimize(f.dd.dqdd_dq.data());
   });
 }
-template <bool B> void Minverse(benchmark::State& st) {
+template <Shape B> void Minverse(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
     update_kinematics(f.model, f.data, f.q);
     minverse(f.model, f.data, f.dd.Minv);
     benchmark::DoNotOptimize(f.dd.Minv.data());
   });
 }
-template <bool B> void MinverseLtdl(benchmark::State& st) {
+template <Shape B> void MinverseLtdl(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
     update_kinematics(f.model, f.data, f.q);
     mass_matrix(f.model, f.data);
@@ -86,8 +98,8 @@ template <bool B> void MinverseLtdl(benchmark::State& st) {
     benchmark::DoNotOptimize(f.dd.Minv.data());
   });
 }
-template <bool B, bool Analytic> void Jacobian(benchmark::State& st) {
-  const Model model = bench::make_tree(int(st.range(0)), B);
+template <Shape B, bool Analytic> void Jacobian(benchmark::State& st) {
+  const Model model = make_model(B, int(st.range(0)));
   const Inputs none;
   System sys(model, none, FdMethod::ArticulatedBody);
   const VecX y = sys.state(bench::random_vector(model.nq, 1, 3.0), bench::random_vector(model.nv, 2));
@@ -104,6 +116,7 @@ template <bool B, bool Analytic> void Jacobian(benchmark::State& st) {
 
 void sizes(benchmark::internal::Benchmark* b) {
   for (int n = 1; n <= 256; n *= 2) b->Arg(n);
+  b->Arg(24);
 }
 void tree_sizes(benchmark::internal::Benchmark* b) {
   for (int n : {1, 3, 7, 15, 31, 63, 127, 255}) b->Arg(n);
@@ -111,21 +124,24 @@ void tree_sizes(benchmark::internal::Benchmark* b) {
 
 }  // namespace
 
-BENCHMARK(Fd<false>)->Name("chain/fd")->Apply(sizes);
-BENCHMARK(IdDeriv<false>)->Name("chain/id_deriv")->Apply(sizes);
-BENCHMARK(FdDeriv<false, false>)->Name("chain/fd_deriv")->Apply(sizes);
-BENCHMARK(FdDeriv<false, true>)->Name("chain/fd_deriv_minv")->Apply(sizes);
-BENCHMARK(Minverse<false>)->Name("chain/minverse")->Apply(sizes);
-BENCHMARK(MinverseLtdl<false>)->Name("chain/minverse_ltdl")->Apply(sizes);
-BENCHMARK(Jacobian<false, true>)->Name("chain/jac_analytic")->Apply(sizes);
-BENCHMARK(Jacobian<false, false>)->Name("chain/jac_dq")->Apply(sizes);
-BENCHMARK(Fd<true>)->Name("tree/fd")->Apply(tree_sizes);
-BENCHMARK(IdDeriv<true>)->Name("tree/id_deriv")->Apply(tree_sizes);
-BENCHMARK(FdDeriv<true, false>)->Name("tree/fd_deriv")->Apply(tree_sizes);
-BENCHMARK(FdDeriv<true, true>)->Name("tree/fd_deriv_minv")->Apply(tree_sizes);
-BENCHMARK(Minverse<true>)->Name("tree/minverse")->Apply(tree_sizes);
-BENCHMARK(MinverseLtdl<true>)->Name("tree/minverse_ltdl")->Apply(tree_sizes);
-BENCHMARK(Jacobian<true, true>)->Name("tree/jac_analytic")->Apply(tree_sizes);
-BENCHMARK(Jacobian<true, false>)->Name("tree/jac_dq")->Apply(tree_sizes);
+void leg_lengths(benchmark::internal::Benchmark* b) {
+  for (int n : {1, 3, 6, 11, 20}) b->Arg(n);  // 10, 18, 30, 50, 86 DOFs
+}
+
+#define SETS(group, shape, range)                                                                      \
+  BENCHMARK(Fd<shape>)->Name(group "/fd")->Apply(range);                                              \
+  BENCHMARK(IdDeriv<shape>)->Name(group "/id_deriv")->Apply(range);                                   \
+  BENCHMARK(FdDeriv<shape, false>)->Name(group "/fd_deriv")->Apply(range);                            \
+  BENCHMARK(FdDeriv<shape, false, 1>)->Name(group "/fd_deriv_ltdl")->Apply(range);                    \
+  BENCHMARK(FdDeriv<shape, false, 2>)->Name(group "/fd_deriv_aba")->Apply(range);                     \
+  BENCHMARK(FdDeriv<shape, true>)->Name(group "/fd_deriv_minv")->Apply(range);                        \
+  BENCHMARK(Minverse<shape>)->Name(group "/minverse")->Apply(range);                                  \
+  BENCHMARK(MinverseLtdl<shape>)->Name(group "/minverse_ltdl")->Apply(range);                         \
+  BENCHMARK(Jacobian<shape, true>)->Name(group "/jac_analytic")->Apply(range);                        \
+  BENCHMARK(Jacobian<shape, false>)->Name(group "/jac_dq")->Apply(range)
+
+SETS("chain", Shape::Chain, sizes);
+SETS("tree", Shape::Tree, tree_sizes);
+SETS("legged", Shape::Legged, leg_lengths);
 
 BENCHMARK_MAIN();

@@ -2,8 +2,10 @@
 """Derivative benchmark report: tools/results/derivatives.md.
 
 1. Runs build/soadyn_bench_derivatives (configure with -DSOADYN_BUILD_BENCH=ON) and reports each
-   derivative set's CPU time per call against N, chains and binary trees, as a multiple of one
-   O(N) forward dynamics at the same N, with exponents fitted over N = 16..256.
+   derivative set's CPU time per call against N, chains, binary trees and legged free-floating
+   robots, as a multiple of one O(N) forward dynamics at the same N, with exponents fitted over
+   N = 16..256; and the forward derivatives on chains in ns, 𝓜⁻¹ applied by LᵀDL (the route
+   before issue 31) and by the articulated-body factor, with their fitted exponents.
 2. Runs CVODE BDF at rtol 1e-8 with the analytic Jacobian and with difference quotients on the
    stiff scenes (scenarios/stiff_arm.yaml and scenarios/flexible_satellite.yaml): steps, RHS and
    Jacobian evaluations, CPU time, each the best of --repeat runs, analytic and DQ interleaved
@@ -24,6 +26,8 @@ import numpy as np
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 SETS = [("id_deriv", "∂τ/∂q, ∂τ/∂v (inverse dynamics)"),
         ("fd_deriv", "∂q̈/∂q, ∂q̈/∂v (forward dynamics)"),
+        ("fd_deriv_ltdl", "the same, 𝓜⁻¹ by LᵀDL"),
+        ("fd_deriv_aba", "the same, 𝓜⁻¹ by the articulated-body factor"),
         ("fd_deriv_minv", "∂q̈/∂q, ∂q̈/∂v and ∂q̈/∂τ = 𝓜⁻¹"),
         ("jac_analytic", "∂f/∂y of ẏ = f(y), analytic (BDF, midpoint)"),
         ("jac_dq", "∂f/∂y by nq + nv difference quotients of f")]
@@ -129,16 +133,31 @@ def derivative_tables(args):
              "CPU time per call as a multiple of one O(N) forward dynamics (kinematics, velocities, articulated-body",
              "q̈) at the same N; the last columns give that forward dynamics in ns and each set's growth exponent",
              "fitted over N = 16..256. tools/bench/derivatives.py wrote this file.", ""]
-    for group in ("chain", "tree"):
+    for group in ("chain", "tree", "legged"):
         fd = series[f"{group}/fd"]
         ns = sorted(fd)
-        lines.append(f"| {group}: set | " + " | ".join(f"N={n}" for n in ns) + " | exponent |")
+        legged = group == "legged"  # its argument is the legs' length: 6 + 4n DOFs, no exponent
+        head = [f"nv={6 + 4 * n}" if legged else f"N={n}" for n in ns]
+        fit = (lambda _: "") if legged else (lambda pts: f"{exponent(pts):.2f}")
+        lines.append(f"| {'legged, free trunk and 4 legs' if legged else group}: set | " + " | ".join(head) + " | exponent |")
         lines.append("|---" * (len(ns) + 2) + "|")
-        lines.append("| forward dynamics [ns] | " + " | ".join(f"{fd[n]:.0f}" for n in ns) + f" | {exponent(fd):.2f} |")
+        lines.append("| forward dynamics [ns] | " + " | ".join(f"{fd[n]:.0f}" for n in ns) + f" | {fit(fd)} |")
         for key, label in SETS:
             s = series[f"{group}/{key}"]
-            lines.append(f"| {label} | " + " | ".join(f"{s[n] / fd[n]:.1f}×" for n in ns) + f" | {exponent(s):.2f} |")
+            lines.append(f"| {label} | " + " | ".join(f"{s[n] / fd[n]:.1f}×" for n in ns) + f" | {fit(s)} |")
         lines.append("")
+    # the forward derivatives on chains in ns: LᵀDL (before issue 31), the articulated-body factor,
+    # and the route derivative_route picks
+    rows = [("fd_deriv_ltdl", "𝓜⁻¹ by LᵀDL (before)"), ("fd_deriv_aba", "𝓜⁻¹ by the articulated-body factor"),
+            ("fd_deriv", "derivative_route's pick (after)")]
+    ns = [n for n in sorted(series["chain/fd_deriv"]) if 16 <= n <= 256]
+    lines += ["∂q̈/∂q and ∂q̈/∂v on chains, CPU ns per call (kinematics and velocities included), and the exponent",
+              "fitted by least squares on log-log over N = 16..256 (issue 31: ≤ 2.1):", "",
+              "| chain | " + " | ".join(f"N={n}" for n in ns) + " | exponent |", "|---" * (len(ns) + 2) + "|"]
+    for key, label in rows:
+        pts = series[f"chain/{key}"]
+        lines.append(f"| {label} | " + " | ".join(f"{pts[n]:,.0f}" for n in ns) + f" | {exponent(pts):.2f} |")
+    lines.append("")
     fd32, fdd32 = series["chain/fd"].get(32), series["chain/fd_deriv"].get(32)
     tree31 = series["tree/fd_deriv"][31] / series["tree/fd"][31]
     lines += [f"Forward-dynamics derivatives at N = 32 (chain): {fdd32 / fd32:.1f}× one forward dynamics "

@@ -6,7 +6,8 @@ on one model and state (a 7-DOF arm by default), side by side.  Not a test: a be
 
 The C++ side is soadyn._soadyn._time_cpp: the library calls the Python functions make
 (update_kinematics + mass_matrix; update_kinematics + update_velocities + forward_dynamics, O(N)
-route) in a C++ loop inside this process.  Python and C++ are timed in adjacent windows of
+route; the same + forward_dynamics_derivatives with 𝓜⁻¹ or inverse_dynamics_derivatives with q̈ = tau;
+update_kinematics + minverse) in a C++ loop inside this process.  Python and C++ are timed in adjacent windows of
 `--calls` calls, round after round, so both see the same machine state; the table gives the best
 window of each side and the median over rounds of (Python − C++) in adjacent windows, which
 stays meaningful on a loaded machine.
@@ -43,6 +44,11 @@ def main():
               "soadyn.forward_dynamics(model, data, q, v, tau)"),
              ("forward_dynamics(…, method='aba')", "forward_dynamics",
               "soadyn.forward_dynamics(model, data, q, v, tau, method='aba')"),
+             ("fd_derivatives(model, data, q, v, tau)", "fd_derivatives",
+              "soadyn.fd_derivatives(model, data, q, v, tau)"),
+             ("id_derivatives(model, data, q, v, qdd)", "id_derivatives",
+              "soadyn.id_derivatives(model, data, q, v, tau)"),
+             ("minverse(model, data, q)", "minverse", "soadyn.minverse(model, data, q)"),
              ("mass_matrix, q strided (q[::2] of a copy)", "mass_matrix", "soadyn.mass_matrix(model, data, qs)"),
              ("mass_matrix, q a Python list", "mass_matrix", "soadyn.mass_matrix(model, data, ql)")]
     n = args.calls

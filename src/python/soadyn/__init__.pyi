@@ -72,6 +72,16 @@ class Data:
     G: Vector
     V: Vector
     Vbar: Vector
+    @property
+    def dtau_dq(self) -> Vector: ...
+    @property
+    def dtau_dv(self) -> Vector: ...
+    @property
+    def dqdd_dq(self) -> Vector: ...
+    @property
+    def dqdd_dv(self) -> Vector: ...
+    @property
+    def Minv(self) -> Vector: ...
 
 class SimulationSettings:
     names: Tuple[str, ...]  # the settings below, from the library's one table (settings.hpp)
