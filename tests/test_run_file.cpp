@@ -8,6 +8,7 @@
 #include "soadyn/simulate.hpp"
 
 #include "../src/h5_util.hpp"
+#include "test_util.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -18,6 +19,7 @@
 #include <functional>
 
 using namespace soadyn;
+using soadyn::test::message_of;
 
 namespace {
 
@@ -25,15 +27,6 @@ namespace fs = std::filesystem;
 
 std::string tmp(const std::string& name) {
   return (fs::temp_directory_path() / ("soadyn_rf_" + std::to_string(getpid()) + "_" + name)).string();
-}
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
 }
 
 // row k of a series holds the n doubles at `want`, bit for bit (a stored double is not rounded)

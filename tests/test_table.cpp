@@ -16,6 +16,7 @@
 #include <numbers>
 
 using namespace soadyn;
+using soadyn::test::message_of;
 
 namespace {
 
@@ -36,15 +37,6 @@ std::string scratch(const std::string& name) {
 }
 
 void write(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 // largest errors of the spline through sin on [0, 2π] with n intervals (sin'' = 0 at both ends:
 // the natural end conditions hold, so the error is the interior's O(h⁴), O(h³), O(h²))

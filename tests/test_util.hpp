@@ -9,12 +9,24 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <functional>
+#include <string>
 #include <numeric>
 #include <random>
 
 namespace soadyn::test {
 
 // |a − b| ≤ tol · max(1, |b|) elementwise-max sense: ‖a − b‖_max ≤ tol · max(1, ‖b‖_max)
+// what f throws as soadyn::Error, or "(no error)"
+inline std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
 inline ::testing::AssertionResult near_rel(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, double tol) {
   if (a.rows() != b.rows() || a.cols() != b.cols())
     return ::testing::AssertionFailure() << "shape " << a.rows() << "x" << a.cols() << " vs " << b.rows() << "x"
