@@ -1,6 +1,6 @@
 // X ← 𝓜⁻¹ X for many right-hand sides with the articulated-body factor (the innovations
 // factorization behind the note's factored inverse mass matrix): the articulated inertias P⁺_i,
-// U_i = P_i G_i and 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ that aba's tip-to-base sweep (dynamics.cpp) leaves in Data.
+// U_i = P_i G_i and 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ that aba's tip-to-base sweep (articulated.cpp) leaves in Data.
 // For one right-hand side b (zero velocity, no gravity: a force alone) the recursion is
 //   tip to base:  u_i = b_i − G_iᵀ Z_i,   Z_p += D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i)
 //   base to tip:  A'_i = D_i A_p,  x_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i),  A_i = A'_i + G_i x_i

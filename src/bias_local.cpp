@@ -1,5 +1,5 @@
 // bias(q, q̇) from (q, q̇) alone, in body frames: the fast path beside bias_forces' inertial sweep
-// (dynamics.cpp), which stays the reference it is tested against.
+// (rnea.cpp), which stays the reference it is tested against.
 //
 // The same two sweeps as the note's bias = Gᵀ Ψ_Dᵀ (M Ψ_D 𝔞 + 𝔟), with each body's velocity,
 // acceleration and force in its own axes about its joint point η_i (Featherstone's recursive

@@ -194,7 +194,7 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
   data.check(model, "update_velocities", "v", v.size(), model.nv);
   // one base-to-tip sweep: (3)-(4) v_i = D_i v_p + G_i q̇_i, i.e. v = Ψ_D G q̇, with what the
   // dynamics needs of body i formed as soon as v_i is known.  6-vectors are read and written in
-  // their 3-vector halves only (see rnea in dynamics.cpp: whole reads of half-written columns
+  // their 3-vector halves only (see rnea in rnea.cpp: whole reads of half-written columns
   // stall the CPU's store forwarding)
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];

@@ -1,6 +1,6 @@
 // The joint-torque regressor and the inertial parameters (regressor.hpp).
 //
-// Inverse dynamics (dynamics.cpp's sweeps) gives each body's joint-point acceleration pair
+// Inverse dynamics (rnea.cpp's sweeps) gives each body's joint-point acceleration pair
 // A_i = [α_i; a_i] (a_i the classical acceleration of η_i, gravity folded in at the roots) and
 // velocity ω_i.  Newton–Euler about the moving point η_i, in body i's axes (R_i: body → inertial),
 // with h = m c:

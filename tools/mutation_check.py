@@ -68,7 +68,7 @@ MUTATIONS = [
      "wp.cross(gu) + wp.cross(Vec3(u - up));", "wp.cross(gu) - wp.cross(Vec3(u - up));",
      "a sign slip in a_i's ω_p × ḋ_i: bias and every route's q̈ wrong, yet M q̈ + bias = τ still holds",
      CLI_ROUTES),
-    (4, "sparse-route-solve", "src/dynamics.cpp",
+    (4, "sparse-route-solve", "src/ltdl.cpp",
      "for (int k = 0; k < model.nv; ++k) x(k) /= H(k, k);", "for (int k = 1; k < model.nv; ++k) x(k) /= H(k, k);",
      "the tree-sparse route forgets the first pivot",
      CLI_ROUTES),

@@ -89,7 +89,7 @@ struct DOperator {
 // G_i x_i and G_iᵀ f for the joint whose columns of G are iv..iv+n−1; a 1-DOF joint as its one
 // column, kept off Eigen's dynamic-size matrix-vector product.  Both read and write 6-vectors in
 // their 3-vector halves, as the sweeps keep them: a column written in halves and read back whole
-// straddles two stores the CPU cannot forward (rnea in dynamics.cpp).
+// straddles two stores the CPU cannot forward (rnea in rnea.cpp).
 // G_i x_i = [w; u]
 inline void subspace_apply(const Mat6X& G, int iv, int n, const VecX& x, Vec3& w, Vec3& u) {
   if (n == 1) {

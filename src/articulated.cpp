@@ -1,0 +1,221 @@
+// The articulated-body recursion: O(N) forward dynamics (the factored inverse mass matrix) and
+// 𝓜⁻¹ in O(N²) by the same factor (algorithms.hpp).
+#include "soadyn/algorithms.hpp"
+#include "soadyn/kinematics.hpp"
+#include "soadyn/operators.hpp"
+#include "dynamics_routes.hpp"
+
+namespace soadyn {
+
+namespace {
+
+// Dᵀ P D for a symmetric 6×6 P = [A B; Bᵀ C] and D = [e 0; −d̃ e]:
+//   [A + X + Xᵀ + d̃ C d̃ᵀ,  B + d̃ C;  (B + d̃ C)ᵀ,  C]   with X = d̃ Bᵀ,
+// each d̃ product taken as three cross products.
+void add_congruence_D(Mat6& out, const Mat6& P, const Vec3& d) {
+  const Mat3 B = P.topRightCorner<3, 3>(), C = P.bottomRightCorner<3, 3>();
+  Mat3 W, X, Y;  // W = d̃ C, X = d̃ Bᵀ, Y = d̃ Wᵀ = (W d̃ᵀ)ᵀ = d̃ C d̃ᵀ (symmetric)
+  for (int c = 0; c < 3; ++c) {
+    W.col(c) = d.cross(Vec3(C.col(c)));
+    X.col(c) = d.cross(Vec3(B.row(c).transpose()));
+  }
+  for (int c = 0; c < 3; ++c) Y.col(c) = d.cross(Vec3(W.row(c).transpose()));
+  out.topLeftCorner<3, 3>() += P.topLeftCorner<3, 3>() + X + X.transpose() + Y;
+  out.topRightCorner<3, 3>() += B + W;
+  out.bottomLeftCorner<3, 3>() += (B + W).transpose();
+  out.bottomRightCorner<3, 3>() += C;
+}
+
+// The factor both articulated-body sweeps share, at body i once its children are in P_i:
+// U_i = P_i G_i, 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ and, below a parent, P⁺_i = P_i − U_i 𝒟_i⁻¹ U_iᵀ in place
+// (P_i is not needed after this step).  The caller adds D_iᵀ P⁺_i D_i to P_p.
+inline void articulated_factor_step(const Model& model, Data& data, int i) {
+  const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+  Mat6& P = data.P[i];
+  if (ni == 1) {
+    // U = P g,  𝒟 = gᵀ U;  P⁺ = P − U Uᵀ / 𝒟
+    const Vec6 g = data.G.col(vi);
+    // a revolute joint's g is [g_ω; 0] and a prismatic one's [0; g_v]: half of P is read
+    Vec6 U;
+    if (model.joint_type[i] == JointType::Revolute) U.noalias() = P.leftCols<3>() * g.head<3>();
+    else if (model.joint_type[i] == JointType::Prismatic) U.noalias() = P.rightCols<3>() * g.tail<3>();
+    else U.noalias() = P * g;
+    const double Dinv = 1.0 / g.dot(U);
+    data.U1.col(i) = U;
+    data.Dinv1(i) = Dinv;
+    if (p < 0) return;
+    const Vec6 UD = Dinv * U;
+    for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
+    return;
+  }
+  // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
+  const auto Gi = data.G.middleCols(vi, ni);
+  data.U[i].noalias() = P * Gi;
+  const MatGG joint_inertia = Gi.transpose() * data.U[i];  // 𝒟_i, the articulated inertia across the joint
+  data.Dinv[i] = joint_inertia.inverse();
+  if (p < 0) return;
+  const Mat6G UD = data.U[i] * data.Dinv[i];
+  P.noalias() -= UD * data.U[i].transpose();
+}
+
+}  // namespace
+
+namespace detail {
+
+void aba(const Model& model, Data& data, const VecX& tau) {
+  const DOperator D{data.d};
+  // tip to base: articulated inertias P_i and bias forces z_i
+  for (int i = 0; i < model.nbodies; ++i) {
+    // P_i = M_i = [I, h̃; h̃ᵀ, m e], written in place entry by entry: a 6×6 assembled from 3×3
+    // temporaries goes through the stack in 8-byte pieces read back at once in 16-byte ones,
+    // which the CPU cannot forward (a tenth of this sweep's time)
+    const SpatialInertia& M = data.M[i];
+    Mat6& P = data.P[i];
+    const double h0 = M.h(0), h1 = M.h(1), h2 = M.h(2), m = M.m;
+    P.topLeftCorner<3, 3>() = M.I;
+    P.col(3) << 0.0, h2, -h1, m, 0.0, 0.0;
+    P.col(4) << -h2, 0.0, h0, 0.0, m, 0.0;
+    P.col(5) << h1, -h0, 0.0, 0.0, 0.0, m;
+    P.block<3, 3>(3, 0) << 0.0, h2, -h1, -h2, 0.0, h0, h1, -h0, 0.0;  // h̃ᵀ, row by row
+    data.z.col(i) = data.gyroscopic.col(i);
+  }
+  for (int i = model.nbodies - 1; i >= 0; --i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    articulated_factor_step(model, data, i);
+    const Mat6& P = data.P[i];  // P⁺_i below a parent
+    Vec6 za;
+    if (ni == 1) {
+      // u = τ − gᵀ z;  z⁺ = z + P⁺ a + U u / 𝒟
+      const double u = tau(vi) - data.G.col(vi).dot(data.z.col(i));
+      data.u(vi) = u;
+      if (p < 0) continue;
+      const Vec6 UD = data.Dinv1(i) * data.U1.col(i);
+      za = data.z.col(i) + P * data.coriolis.col(i) + u * UD;
+    } else {
+      const auto Gi = data.G.middleCols(vi, ni);
+      data.u.segment(vi, ni).noalias() = tau.segment(vi, ni) - Gi.transpose() * data.z.col(i);
+      if (p < 0) continue;
+      za = data.z.col(i);
+      za.noalias() += P * data.coriolis.col(i);
+      const Mat6G UD = data.U[i] * data.Dinv[i];
+      za.noalias() += UD * data.u.segment(vi, ni);
+    }
+    // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f], added in 3-vector halves (a
+    // 6-vector built whole went through the stack and was read back across two stores)
+    add_congruence_D(data.P[p], P, data.d.col(i));
+    const Vec3 zf = za.tail<3>();
+    data.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
+    data.z.col(p).tail<3>() += zf;
+  }
+  // base to tip: A' = D_i A_p + a_i,  q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A'),  A_i = A' + G_i q̈_i
+  for (int i = 0; i < model.nbodies; ++i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    if (ni == 1) {
+      // in 3-vector halves, which stay in registers: A' = [ω; u], q̈ = 𝒟⁻¹ (u_i − U_ωᵀ ω − U_vᵀ u)
+      Vec3 w = data.coriolis.col(i).head<3>(), v = data.coriolis.col(i).tail<3>();
+      if (p >= 0) {
+        const Vec3 wp = data.A.col(p).head<3>();
+        w += wp;
+        v += data.A.col(p).tail<3>() + wp.cross(Vec3(data.d.col(i)));
+      }
+      const double qdd = data.Dinv1(i) * (data.u(vi) - data.U1.col(i).head<3>().dot(w) - data.U1.col(i).tail<3>().dot(v));
+      data.qdd(vi) = qdd;
+      data.A.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
+      data.A.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
+      continue;
+    }
+    Vec6 Ai = data.coriolis.col(i);
+    if (p >= 0) D.add_apply(i, data.A.col(p), Ai);
+    const VecG rhs = data.u.segment(vi, ni) - data.U[i].transpose() * Ai;
+    data.qdd.segment(vi, ni).noalias() = data.Dinv[i] * rhs;
+    Ai.noalias() += data.G.middleCols(vi, ni) * data.qdd.segment(vi, ni);
+    // in halves: D_i A_p reads A_p in halves
+    data.A.col(i).head<3>() = Ai.head<3>();
+    data.A.col(i).tail<3>() = Ai.tail<3>();
+  }
+}
+
+}  // namespace detail
+
+void minverse(const Model& model, Data& data, MatX& Minv) {
+  const int N = model.nbodies;
+  if (Minv.rows() != model.nv || Minv.cols() != model.nv) Minv.resize(model.nv, model.nv);
+  const DOperator D{data.d};
+  // The articulated-body recursion for every unit force at once (τ = e_k, no velocity, no gravity):
+  // column k of 𝓜⁻¹ is that q̈.  Tip to base, the bias forces of all unit forces are the columns Z of
+  // a 6×nv block in depth-first positions (body i's subtree at dfs_begin[i] … dfs_end[i] − 1, its own
+  // DOFs first): u_i = E_i − G_iᵀ Z_i over the subtree's columns (E_i: 1 at i's own DOFs), kept in
+  // 𝓜⁻¹'s rows of i; then Z_p = D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i) in place (p's children's subtrees are
+  // disjoint; p's own columns stay 0) and P_p += D_iᵀ (P_i − U_i 𝒟_i⁻¹ U_iᵀ) D_i.  O(N·depth).
+  Mat6X& Z = data.Zminv;
+  Z.setZero();
+  for (int i = 0; i < N; ++i) data.P[i] = data.M[i].matrix();
+  for (int i = N - 1; i >= 0; --i) {
+    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    const int b = model.dfs_begin[i], n = model.dfs_end[i] - b;
+    articulated_factor_step(model, data, i);
+    if (ni == 1) {  // 𝒟⁻¹ a number
+      const Vec6 g = data.G.col(vi), U = data.U1.col(i);
+      const double Dinv = data.Dinv1(i);
+      for (int x = 0; x < n; ++x) {
+        auto z = Z.col(b + x);
+        const double u = (x == 0 ? 1.0 : 0.0) - g.dot(z);
+        Minv(vi, model.dfs_dof[size_t(b + x)]) = u;
+        if (p < 0) continue;
+        const Vec6 zp = z + (Dinv * u) * U;
+        z.setZero();
+        D.add_apply_transpose(i, zp, z);
+      }
+    } else {
+      const auto Gi = data.G.middleCols(vi, ni);
+      const Mat6G UD = data.U[i] * data.Dinv[i];
+      for (int x = 0; x < n; ++x) {
+        auto z = Z.col(b + x);
+        VecG u = -(Gi.transpose() * z);
+        if (x < ni) u(x) += 1.0;
+        Minv.block(vi, model.dfs_dof[size_t(b + x)], ni, 1) = u;
+        if (p < 0) continue;
+        Vec6 zp = z;
+        zp.noalias() += UD * u;
+        z.setZero();
+        D.add_apply_transpose(i, zp, z);
+      }
+    }
+    if (p >= 0) add_congruence_D(data.P[p], data.P[i], data.d.col(i));
+  }
+  // Base to tip, one column at a time: A'_i = D_i A_p, q̈_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i), A_i = A'_i + G_i q̈_i,
+  // u_i nonzero only where column k's joint lies in i's subtree.  O(N) per column.
+  for (int k = 0; k < model.nv; ++k) {
+    const int at = model.dfs_begin[model.dof_body[size_t(k)]];
+    double* col = Minv.col(k).data();
+    for (int i = 0; i < N; ++i) {
+      const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+      const bool carries = model.dfs_begin[i] <= at && at < model.dfs_end[i];
+      if (ni == 1) {
+        // in 3-vector halves, which stay in registers (as aba's forward sweep): A' = [ω; u]
+        Vec3 w = Vec3::Zero(), v = Vec3::Zero();
+        if (p >= 0) {
+          w = data.A.col(p).head<3>();
+          v = data.A.col(p).tail<3>() + w.cross(Vec3(data.d.col(i)));
+        }
+        const double qdd =
+            data.Dinv1(i) * ((carries ? col[vi] : 0.0) - data.U1.col(i).head<3>().dot(w) - data.U1.col(i).tail<3>().dot(v));
+        col[vi] = qdd;
+        data.A.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
+        data.A.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
+        continue;
+      }
+      Vec6 A = Vec6::Zero();
+      if (p >= 0) D.add_apply(i, data.A.col(p), A);
+      VecG u = -(data.U[i].transpose() * A);
+      if (carries) u += Minv.block(vi, k, ni, 1);
+      const VecG qdd = data.Dinv[i] * u;
+      Minv.block(vi, k, ni, 1) = qdd;
+      A.noalias() += data.G.middleCols(vi, ni) * qdd;
+      data.A.col(i).head<3>() = A.head<3>();
+      data.A.col(i).tail<3>() = A.tail<3>();
+    }
+  }
+}
+
+}  // namespace soadyn
