@@ -249,7 +249,7 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
       const std::string name(info.name);
       if (name == "output_dt") attribute(g_solver, "output_dt", output_interval(settings));
       else if (info.kind == SettingKind::Real || info.kind == SettingKind::Count)
-        attribute(g_solver, name.c_str(), std::strtod(setting_text(settings, info).c_str(), nullptr));
+        attribute(g_solver, name.c_str(), setting_number(settings, info));
       else attribute(g_solver, name.c_str(), setting_text(settings, info));
     }
     im.status = h5::string_scalar(g_solver, "status", 1024);

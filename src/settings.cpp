@@ -23,11 +23,11 @@ std::vector<std::string> jacobian_words() { return {"analytic", "dq"}; }
 std::vector<std::string> newton_words() { return {"full", "simplified"}; }
 
 SettingInfo real(std::string_view name, double S::*field, std::string_view unit, R range, std::string_view help) {
-  return {name, K::Real, field, unit, help, range, nullptr, ""};
+  return {name, K::Real, field, unit, help, range, nullptr, "", "", ""};
 }
 SettingInfo word(std::string_view name, std::string S::*field, std::vector<std::string> (*words)(), std::string_view noun,
-                 std::string_view help) {
-  return {name, K::Word, field, "", help, R::Any, words, noun};
+                 std::string_view help, std::string_view old_word = "", std::string_view new_word = "") {
+  return {name, K::Word, field, "", help, R::Any, words, noun, old_word, new_word};
 }
 
 }  // namespace
@@ -41,12 +41,13 @@ const std::vector<SettingInfo>& setting_table() {
       real("atol", &S::atol, "1", R::Positive, "CVODE absolute tolerance (in the state's own units)"),
       real("dt", &S::dt, "s", R::Positive, "fixed-step methods' step"),
       real("max_step", &S::max_step, "s", R::NonNegative, "CVODE's largest step (0: none)"),
-      {"max_steps", K::Count, &S::max_steps, "1", "CVODE steps allowed in the whole run", R::Positive, nullptr, ""},
-      word("dynamics", &S::dynamics, fd_method_names, "route", "forward-dynamics route (on, the old word for aba, is taken)"),
+      {"max_steps", K::Count, &S::max_steps, "1", "CVODE steps allowed in the whole run", R::Positive, nullptr, "", "", ""},
+      word("dynamics", &S::dynamics, fd_method_names, "route", "forward-dynamics route (on, the old word for aba, is taken)",
+           kFdMethodAliasOn, to_string(FdMethod::ArticulatedBody)),
       word("jacobian", &S::jacobian, jacobian_words, "",
            "cvode-bdf and implicit-midpoint: analytic derivatives or difference quotients (dq)"),
       word("newton", &S::newton, newton_words, "", "implicit-midpoint: the Jacobian at every iterate, or once per step"),
-      {"limits", K::Flag, &S::limits, "", "joint limits as events (CVODE): impact, hold, release", R::Any, nullptr, ""},
+      {"limits", K::Flag, &S::limits, "", "joint limits as events (CVODE): impact, hold, release", R::Any, nullptr, "", "", ""},
       real("restitution", &S::restitution, "1", R::UnitInterval, "coefficient of restitution at a limit"),
       real("control_dt", &S::control_dt, "s", R::NonNegative, "time between controller samples, zero-order hold (0: continuous)"),
   };
@@ -80,7 +81,7 @@ std::string setting_problem(const SettingInfo& info, double x) {
 
 std::string setting_problem(const SettingInfo& info, const std::string& word) {
   if (info.kind != K::Word) return "expected a number";
-  if (info.name == "dynamics" && word == kFdMethodAliasOn) return "";
+  if (!info.old_word.empty() && word == info.old_word) return "";
   const std::vector<std::string> words = info.words();
   if (std::find(words.begin(), words.end(), word) != words.end()) return "";
   if (!info.noun.empty()) return "unknown " + std::string(info.noun) + " '" + word + "'" + did_you_mean(word, words);
@@ -106,7 +107,7 @@ void set_setting(SimulationSettings& s, const SettingInfo& info, double x) {
 void set_setting(SimulationSettings& s, const SettingInfo& info, const std::string& word) {
   if (const std::string p = setting_problem(info, word); !p.empty()) refuse(info, p);
   s.*std::get<std::string S::*>(info.field) =
-      info.name == "dynamics" && word == kFdMethodAliasOn ? std::string(to_string(FdMethod::ArticulatedBody)) : word;
+      !info.old_word.empty() && word == info.old_word ? std::string(info.new_word) : word;
 }
 
 void set_setting(SimulationSettings& s, const SettingInfo& info, bool flag) {
@@ -128,6 +129,12 @@ std::string setting_text(const SimulationSettings& s, const SettingInfo& info) {
         }
       },
       info.field);
+}
+
+double setting_number(const SimulationSettings& s, const SettingInfo& info) {
+  if (const auto* f = std::get_if<double S::*>(&info.field)) return s.**f;
+  if (const auto* f = std::get_if<long S::*>(&info.field)) return double(s.**f);
+  throw Error(std::string(info.name) + ": not a number setting");
 }
 
 }  // namespace soadyn

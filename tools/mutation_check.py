@@ -60,7 +60,7 @@ MUTATIONS = [
      "/energy/potential logs the kinetic energy",
      gtest("test_h5log", "Hdf5.*")),
     (3, "h5-t-end-attribute", "src/h5log.cpp",
-     "attribute(g_solver, name.c_str(), std::strtod(setting_text(settings, info).c_str(), nullptr));",
+     "attribute(g_solver, name.c_str(), setting_number(settings, info));",
      "attribute(g_solver, name.c_str(), settings.output_dt);",
      "/solver's numbers (t_end among them) all hold the output interval",
      gtest("test_h5log", "Hdf5.*")),

@@ -60,6 +60,8 @@ struct SettingInfo {
   // error ("method": "unknown method 'rk5'"); empty noun: "expected analytic or dq, got 'x'"
   std::vector<std::string> (*words)() = nullptr;
   std::string_view noun;
+  // Word: an older word still taken (not among words()), stored as its successor: dynamics' on → aba
+  std::string_view old_word, new_word;
 };
 
 const std::vector<SettingInfo>& setting_table();
@@ -76,7 +78,9 @@ void set_setting(SimulationSettings& s, const SettingInfo& info, double x);
 void set_setting(SimulationSettings& s, const SettingInfo& info, const std::string& word);
 void set_setting(SimulationSettings& s, const SettingInfo& info, bool flag);
 
-// The setting's value as text (numbers with %.17g, flags true/false): the CLI's defaults, the log
+// The setting's value as text (numbers with %.17g, flags true/false), and a Real's or Count's as a
+// number (the run file's /solver)
 std::string setting_text(const SimulationSettings& s, const SettingInfo& info);
+double setting_number(const SimulationSettings& s, const SettingInfo& info);
 
 }  // namespace soadyn

@@ -1,6 +1,5 @@
 #include "cli.hpp"
 
-#include "soadyn/algorithms.hpp"
 #include "soadyn/h5log.hpp"
 #include "soadyn/integrators.hpp"
 #include "soadyn/simulate.hpp"
@@ -81,7 +80,7 @@ void add_run(CLI::App& app, RunOptions& o) {
       case SettingKind::Word: {
         std::vector<std::string> words = info.words();
         opt->description(help + ": " + join(words, " | "));
-        if (info.name == "dynamics") words.emplace_back(kFdMethodAliasOn);
+        if (!info.old_word.empty()) words.emplace_back(info.old_word);
         opt->transform(one_of(words));
         break;
       }
