@@ -4,6 +4,7 @@
 #include "soadyn/kinematics.hpp"
 #include "soadyn/operators.hpp"
 #include "dynamics_routes.hpp"
+#include "joint_inertial.hpp"
 
 namespace soadyn {
 
@@ -30,32 +31,82 @@ void add_congruence_D(Mat6& out, const Mat6& P, const Vec3& d) {
 // U_i = P_i G_i, 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ and, below a parent, P⁺_i = P_i − U_i 𝒟_i⁻¹ U_iᵀ in place
 // (P_i is not needed after this step).  The caller adds D_iᵀ P⁺_i D_i to P_p.
 inline void articulated_factor_step(const Model& model, Data& data, int i) {
-  const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
-  Mat6& P = data.P[i];
-  if (ni == 1) {
-    // U = P g,  𝒟 = gᵀ U;  P⁺ = P − U Uᵀ / 𝒟
-    const Vec6 g = data.G.col(vi);
-    // a revolute joint's g is [g_ω; 0] and a prismatic one's [0; g_v]: half of P is read
-    Vec6 U;
-    if (model.joint_type[i] == JointType::Revolute) U.noalias() = P.leftCols<3>() * g.head<3>();
-    else if (model.joint_type[i] == JointType::Prismatic) U.noalias() = P.rightCols<3>() * g.tail<3>();
-    else U.noalias() = P * g;
-    const double Dinv = 1.0 / g.dot(U);
-    data.U1.col(i) = U;
-    data.Dinv1(i) = Dinv;
-    if (p < 0) return;
-    const Vec6 UD = Dinv * U;
-    for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
-    return;
-  }
-  // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
-  const auto Gi = data.G.middleCols(vi, ni);
-  data.U[i].noalias() = P * Gi;
-  const MatGG joint_inertia = Gi.transpose() * data.U[i];  // 𝒟_i, the articulated inertia across the joint
-  data.Dinv[i] = joint_inertia.inverse();
+  visit_joint(model, i, [&](const auto& j) {
+    using J = std::decay_t<decltype(j)>;
+    const int vi = model.idx_v[i], p = model.parent[i];
+    Mat6& P = data.P[i];
+    if constexpr (J::nv == 1) {
+      // U = P g,  𝒟 = gᵀ U;  P⁺ = P − U Uᵀ / 𝒟
+      Vec6 U;
+      inertial::times<J>(P, data.G, vi, U);
+      const double Dinv = 1.0 / data.G.col(vi).dot(U);
+      data.U1.col(i) = U;
+      data.Dinv1(i) = Dinv;
+      if (p < 0) return;
+      const Vec6 UD = Dinv * U;
+      for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
+    } else {
+      // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
+      Eigen::Matrix<double, 6, J::nv> U;
+      inertial::times<J>(P, data.G, vi, U);
+      const Eigen::Matrix<double, J::nv, J::nv> joint_inertia = data.G.middleCols<J::nv>(vi).transpose() * U;  // 𝒟_i
+      data.U[i] = U;
+      data.Dinv[i] = joint_inertia.inverse();
+      if (p < 0) return;
+      const Eigen::Matrix<double, 6, J::nv> UD = U * data.Dinv[i];
+      P.noalias() -= UD * U.transpose();
+    }
+  });
+}
+
+// aba's tip-to-base step after the factor step: u_i = τ_i − G_iᵀ z_i, then at a parent
+// z⁺ = z + P⁺ a + U 𝒟⁻¹ u, P_p += D_iᵀ P⁺ D_i, z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f] (added in
+// 3-vector halves: a 6-vector built whole went through the stack and was read back across two stores)
+template <class J>
+inline void aba_backward_step(const Model& model, Data& data, const VecX& tau, int i) {
+  const int vi = model.idx_v[i], p = model.parent[i];
+  const Mat6& P = data.P[i];  // P⁺_i below a parent
+  double gz[J::nv];
+  inertial::project<J>(data.G, vi, data.z.col(i).head<3>(), data.z.col(i).tail<3>(), gz);
+  for (int c = 0; c < J::nv; ++c) data.u(vi + c) = tau(vi + c) - gz[c];
   if (p < 0) return;
-  const Mat6G UD = data.U[i] * data.Dinv[i];
-  P.noalias() -= UD * data.U[i].transpose();
+  Vec6 za = data.z.col(i);
+  za.noalias() += P * data.coriolis.col(i);
+  if constexpr (J::nv == 1) {
+    za += (data.u(vi) * data.Dinv1(i)) * data.U1.col(i);
+  } else {
+    const Eigen::Matrix<double, J::nv, 1> Du = data.Dinv[i] * data.u.segment<J::nv>(vi);
+    za.noalias() += data.U[i] * Du;
+  }
+  add_congruence_D(data.P[p], P, data.d.col(i));
+  const Vec3 zf = za.tail<3>();
+  data.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
+  data.z.col(p).tail<3>() += zf;
+}
+
+// aba's base-to-tip step, in 3-vector halves, which stay in registers: A' = [ω; u],
+// q̈_i = 𝒟⁻¹ (u_i − U_ωᵀ ω − U_vᵀ u), A_i = A' + G_i q̈_i
+template <class J>
+inline void aba_forward_step(const Model& model, Data& data, int i) {
+  const int vi = model.idx_v[i], p = model.parent[i];
+  Vec3 w = data.coriolis.col(i).head<3>(), v = data.coriolis.col(i).tail<3>();
+  if (p >= 0) {
+    const Vec3 wp = data.A.col(p).head<3>();
+    w += wp;
+    v += data.A.col(p).tail<3>() + wp.cross(Vec3(data.d.col(i)));
+  }
+  if constexpr (J::nv == 1) {
+    data.qdd(vi) = data.Dinv1(i) * (data.u(vi) - data.U1.col(i).head<3>().dot(w) - data.U1.col(i).tail<3>().dot(v));
+  } else {
+    const auto U = data.U[i];
+    const Eigen::Matrix<double, J::nv, 1> rhs =
+        data.u.segment<J::nv>(vi) - U.topRows<3>().transpose() * w - U.bottomRows<3>().transpose() * v;
+    data.qdd.segment<J::nv>(vi).noalias() = data.Dinv[i] * rhs;
+  }
+  Vec3 gw, gu;
+  inertial::motion<J>(data.G, vi, data.qdd.data() + vi, gw, gu);
+  data.A.col(i).head<3>() = w + gw;
+  data.A.col(i).tail<3>() = v + gu;
 }
 
 }  // namespace
@@ -63,7 +114,6 @@ inline void articulated_factor_step(const Model& model, Data& data, int i) {
 namespace detail {
 
 void aba(const Model& model, Data& data, const VecX& tau) {
-  const DOperator D{data.d};
   // tip to base: articulated inertias P_i and bias forces z_i
   for (int i = 0; i < model.nbodies; ++i) {
     // P_i = M_i = [I, h̃; h̃ᵀ, m e], written in place entry by entry: a 6×6 assembled from 3×3
@@ -80,59 +130,12 @@ void aba(const Model& model, Data& data, const VecX& tau) {
     data.z.col(i) = data.gyroscopic.col(i);
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
-    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
     articulated_factor_step(model, data, i);
-    const Mat6& P = data.P[i];  // P⁺_i below a parent
-    Vec6 za;
-    if (ni == 1) {
-      // u = τ − gᵀ z;  z⁺ = z + P⁺ a + U u / 𝒟
-      const double u = tau(vi) - data.G.col(vi).dot(data.z.col(i));
-      data.u(vi) = u;
-      if (p < 0) continue;
-      const Vec6 UD = data.Dinv1(i) * data.U1.col(i);
-      za = data.z.col(i) + P * data.coriolis.col(i) + u * UD;
-    } else {
-      const auto Gi = data.G.middleCols(vi, ni);
-      data.u.segment(vi, ni).noalias() = tau.segment(vi, ni) - Gi.transpose() * data.z.col(i);
-      if (p < 0) continue;
-      za = data.z.col(i);
-      za.noalias() += P * data.coriolis.col(i);
-      const Mat6G UD = data.U[i] * data.Dinv[i];
-      za.noalias() += UD * data.u.segment(vi, ni);
-    }
-    // P_p += D_iᵀ P⁺ D_i;  z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f], added in 3-vector halves (a
-    // 6-vector built whole went through the stack and was read back across two stores)
-    add_congruence_D(data.P[p], P, data.d.col(i));
-    const Vec3 zf = za.tail<3>();
-    data.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
-    data.z.col(p).tail<3>() += zf;
+    visit_joint(model, i, [&](const auto& j) { aba_backward_step<std::decay_t<decltype(j)>>(model, data, tau, i); });
   }
   // base to tip: A' = D_i A_p + a_i,  q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A'),  A_i = A' + G_i q̈_i
-  for (int i = 0; i < model.nbodies; ++i) {
-    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
-    if (ni == 1) {
-      // in 3-vector halves, which stay in registers: A' = [ω; u], q̈ = 𝒟⁻¹ (u_i − U_ωᵀ ω − U_vᵀ u)
-      Vec3 w = data.coriolis.col(i).head<3>(), v = data.coriolis.col(i).tail<3>();
-      if (p >= 0) {
-        const Vec3 wp = data.A.col(p).head<3>();
-        w += wp;
-        v += data.A.col(p).tail<3>() + wp.cross(Vec3(data.d.col(i)));
-      }
-      const double qdd = data.Dinv1(i) * (data.u(vi) - data.U1.col(i).head<3>().dot(w) - data.U1.col(i).tail<3>().dot(v));
-      data.qdd(vi) = qdd;
-      data.A.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
-      data.A.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
-      continue;
-    }
-    Vec6 Ai = data.coriolis.col(i);
-    if (p >= 0) D.add_apply(i, data.A.col(p), Ai);
-    const VecG rhs = data.u.segment(vi, ni) - data.U[i].transpose() * Ai;
-    data.qdd.segment(vi, ni).noalias() = data.Dinv[i] * rhs;
-    Ai.noalias() += data.G.middleCols(vi, ni) * data.qdd.segment(vi, ni);
-    // in halves: D_i A_p reads A_p in halves
-    data.A.col(i).head<3>() = Ai.head<3>();
-    data.A.col(i).tail<3>() = Ai.tail<3>();
-  }
+  for (int i = 0; i < model.nbodies; ++i)
+    visit_joint(model, i, [&](const auto& j) { aba_forward_step<std::decay_t<decltype(j)>>(model, data, i); });
 }
 
 }  // namespace detail
@@ -150,11 +153,12 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
   Mat6X& Z = data.Zminv;
   Z.setZero();
   for (int i = 0; i < N; ++i) data.P[i] = data.M[i].matrix();
-  for (int i = N - 1; i >= 0; --i) {
-    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+  for (int i = N - 1; i >= 0; --i) visit_joint(model, i, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
+    const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
     const int b = model.dfs_begin[i], n = model.dfs_end[i] - b;
     articulated_factor_step(model, data, i);
-    if (ni == 1) {  // 𝒟⁻¹ a number
+    if constexpr (J::nv == 1) {  // 𝒟⁻¹ a number
       const Vec6 g = data.G.col(vi), U = data.U1.col(i);
       const double Dinv = data.Dinv1(i);
       for (int x = 0; x < n; ++x) {
@@ -182,16 +186,17 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
       }
     }
     if (p >= 0) add_congruence_D(data.P[p], data.P[i], data.d.col(i));
-  }
+  });
   // Base to tip, one column at a time: A'_i = D_i A_p, q̈_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i), A_i = A'_i + G_i q̈_i,
   // u_i nonzero only where column k's joint lies in i's subtree.  O(N) per column.
   for (int k = 0; k < model.nv; ++k) {
     const int at = model.dfs_begin[model.dof_body[size_t(k)]];
     double* col = Minv.col(k).data();
-    for (int i = 0; i < N; ++i) {
-      const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+    for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
+      const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
       const bool carries = model.dfs_begin[i] <= at && at < model.dfs_end[i];
-      if (ni == 1) {
+      if constexpr (J::nv == 1) {
         // in 3-vector halves, which stay in registers (as aba's forward sweep): A' = [ω; u]
         Vec3 w = Vec3::Zero(), v = Vec3::Zero();
         if (p >= 0) {
@@ -203,7 +208,7 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
         col[vi] = qdd;
         data.A.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
         data.A.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
-        continue;
+        return;
       }
       Vec6 A = Vec6::Zero();
       if (p >= 0) D.add_apply(i, data.A.col(p), A);
@@ -214,7 +219,7 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
       A.noalias() += data.G.middleCols(vi, ni) * qdd;
       data.A.col(i).head<3>() = A.head<3>();
       data.A.col(i).tail<3>() = A.tail<3>();
-    }
+    });
   }
 }
 

@@ -36,30 +36,32 @@ void solve_rows(const Model& model, const Data& data, double* x, Eigen::Index ld
   // tip to base: u_i = b_i − G_iᵀ Z_i (kept in X), Z_p += D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i).  Each block is
   // read into a local once and written once: a block written and read back at once would wait on
   // the stores
-  for (int i = N - 1; i >= 0; --i) {
-    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+  for (int i = N - 1; i >= 0; --i) visit_joint(model, i, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
+    const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
     Block Z = Eigen::Map<const Block>(w + 6 * K * i);
-    if (ni == 1) {
+    if constexpr (J::nv == 1) {
       Eigen::Map<Col> u(x + vi * ld);
       u -= Z.lazyProduct(data.G.col(vi));
-      if (p < 0) continue;
+      if (p < 0) return;
       const Vec6 UD = data.Dinv1(i) * data.U1.col(i);
       Z += u.lazyProduct(UD.transpose());
     } else {
       Eigen::Map<Cols, 0, Stride> u(x + vi * ld, K, ni, Stride(ld));
       u -= Z.lazyProduct(data.G.middleCols(vi, ni));
-      if (p < 0) continue;
+      if (p < 0) return;
       const Mat6G UD = data.U[i] * data.Dinv[i];
       Z += u.lazyProduct(UD.transpose());
     }
     D.add_apply_transpose_rows(i, Z, Eigen::Map<Block>(w + 6 * K * p));
-  }
+  });
   // base to tip: A'_i = D_i A_p, x_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i) (into X), A_i = A'_i + G_i x_i (in Z_i's place)
-  for (int i = 0; i < N; ++i) {
-    const int vi = model.idx_v[i], ni = model.nv_i[i], p = model.parent[i];
+  for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
+    const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
     Block A = Block::Zero();
     if (p >= 0) D.add_apply_rows(i, Eigen::Map<const Block>(w + 6 * K * p), A);
-    if (ni == 1) {
+    if constexpr (J::nv == 1) {
       Eigen::Map<Col> xi(x + vi * ld);
       Col xv = xi;
       if (p >= 0) xv -= A.lazyProduct(data.U1.col(i));
@@ -74,7 +76,7 @@ void solve_rows(const Model& model, const Data& data, double* x, Eigen::Index ld
       A += t.lazyProduct(data.G.middleCols(vi, ni).transpose());
     }
     Eigen::Map<Block>(w + 6 * K * i) = A;
-  }
+  });
 }
 
 }  // namespace

@@ -120,9 +120,9 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
   gravity_acc << Vec3::Zero(), -model.gravity;
 
   // base to tip: S_i, v_i = v_p + S_i q̇_i, a_i = a_p + S_i q̈_i + Σ_c q̇_c μ_c × S_c, f_i, B_i
-  for (int i = 0; i < N; ++i) {
+  for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
     const int p = model.parent[i], vi = model.idx_v[i], ni = model.nv_i[i];
-    const JointType t = model.joint_type[i];
     const Vec3 eta = data.eta.col(i);
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
     Vec6 vel = vp, acc = p < 0 ? gravity_acc : Vec6(dd.a.col(p));
@@ -135,7 +135,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     for (int m = 0; m < ni; ++m) {
       Vec6 mu = vp;  // μ_m = v_p + Σ_k [k carries m] S_k q̇_k
       for (int k = 0; k < ni; ++k)
-        if (joint_carries(t, k, m)) mu += dd.S.col(vi + k) * qd(vi + k);
+        if (J::carries(k, m)) mu += dd.S.col(vi + k) * qd(vi + k);
       acc += qd(vi + m) * mcross(mu, dd.S.col(vi + m));
     }
     dd.v.col(i) = vel;
@@ -146,7 +146,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     dd.F.col(i) = Yi * acc + fcross(vel, h);  // f_i = Y_i a_i + v_i ×* Y_i v_i
     dd.Y[i] = Yi;
     dd.B[i] = b_matrix(Yi, vel, h);
-  }
+  });
   // tip to base: F_p += F_i, Y_p += Y_i, B_p += B_i (all about one point: plain sums); τ_i = S_iᵀ F_i
   for (int i = N - 1; i >= 0; --i) {
     const int p = model.parent[i], vi = model.idx_v[i], ni = model.nv_i[i];
@@ -163,9 +163,9 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
   }
 
   // per column c of joint j: κ_c, β_c, λ_c, φ_c, ψ_c, ρ_c
-  for (int j = 0; j < N; ++j) {
+  for (int j = 0; j < N; ++j) visit_joint(model, j, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
     const int p = model.parent[j], vj = model.idx_v[j], nj = model.nv_i[j];
-    const JointType t = model.joint_type[j];
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
     const Vec6 vel = dd.v.col(j), acc = dd.a.col(j), Fj = dd.F.col(j);
     for (int k = 0; k < nj; ++k) {
@@ -173,8 +173,8 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
       const Vec6 xi = dd.S.col(c);
       Vec6 nu = vp, mu = vp;  // ν_c: not carried by c;  μ_c: carries c
       for (int m = 0; m < nj; ++m) {
-        if (!joint_carries(t, k, m)) nu += dd.S.col(vj + m) * qd(vj + m);
-        if (joint_carries(t, m, k)) mu += dd.S.col(vj + m) * qd(vj + m);
+        if (!J::carries(k, m)) nu += dd.S.col(vj + m) * qd(vj + m);
+        if (J::carries(m, k)) mu += dd.S.col(vj + m) * qd(vj + m);
       }
       // the joint's own term ∂a_j: ∂(S_m q̈_m) = [c carries m] ξ × S_m q̈_m, and
       // ∂(μ_m × S_m) = ∂μ_m × S_m + [c carries m] μ_m × (ξ × S_m), ∂μ_m = ξ × Σ_l [l carries m][c carries l] S_l q̇_l
@@ -183,10 +183,10 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
         const Vec6 Sm = dd.S.col(vj + m);
         Vec6 dmu = Vec6::Zero(), mu_m = vp;
         for (int l = 0; l < nj; ++l) {
-          if (joint_carries(t, l, m)) mu_m += dd.S.col(vj + l) * qd(vj + l);
-          if (joint_carries(t, l, m) && joint_carries(t, k, l)) dmu += dd.S.col(vj + l) * qd(vj + l);
+          if (J::carries(l, m)) mu_m += dd.S.col(vj + l) * qd(vj + l);
+          if (J::carries(l, m) && J::carries(k, l)) dmu += dd.S.col(vj + l) * qd(vj + l);
         }
-        if (joint_carries(t, k, m)) {
+        if (J::carries(k, m)) {
           const Vec6 xS = mcross(xi, Sm);
           da += qdd(vj + m) * xS + qd(vj + m) * mcross(mu_m, xS);
         }
@@ -203,7 +203,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
       dd.colv.col(c).head<6>() = -lambda;
       dd.colv.col(c).tail<6>() = xi;
     }
-  }
+  });
 
 }
 
@@ -217,15 +217,17 @@ constexpr int kChainProducts = 16;
 
 // the fill's block of joint i with itself: (r, c) = row_r·col_c, plus S_r·φ_c where c does not carry r
 void own_block(const Model& model, DerivativeData& dd, int i) {
-  const int vi = model.idx_v[i], ni = model.nv_i[i];
-  const JointType t = model.joint_type[i];
-  for (int r = vi; r < vi + ni; ++r)
-    for (int c = vi; c < vi + ni; ++c) {
-      double dq = dd.row.col(r).dot(dd.colq.col(c));
-      if (!joint_carries(t, c - vi, r - vi)) dq += dd.S.col(r).dot(dd.phi.col(c));
-      dd.dtau_dq(r, c) = dq;
-      dd.dtau_dv(r, c) = dd.row.col(r).dot(dd.colv.col(c));
-    }
+  visit_joint(model, i, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
+    const int vi = model.idx_v[i];
+    for (int r = vi; r < vi + J::nv; ++r)
+      for (int c = vi; c < vi + J::nv; ++c) {
+        double dq = dd.row.col(r).dot(dd.colq.col(c));
+        if (!J::carries(c - vi, r - vi)) dq += dd.S.col(r).dot(dd.phi.col(c));
+        dd.dtau_dq(r, c) = dq;
+        dd.dtau_dv(r, c) = dd.row.col(r).dot(dd.colv.col(c));
+      }
+  });
 }
 
 }  // namespace
@@ -291,19 +293,19 @@ void inverse_dynamics_derivatives_transpose_times(const Model& model, Derivative
   }
   for (int i = N - 1; i >= 0; --i)
     if (const int p = model.parent[i]; p >= 0) T1.col(p) += T1.col(i), T2.col(p) += T2.col(i);
-  for (int j = 0; j < N; ++j) {
+  for (int j = 0; j < N; ++j) visit_joint(model, j, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
     const int p = model.parent[j], vj = model.idx_v[j], nj = model.nv_i[j];
-    const JointType t = model.joint_type[j];
     const Vec6 wp = p < 0 ? Vec6::Zero() : Vec6(w.col(p));
     for (int k = 0; k < nj; ++k) {
       const int c = vj + k;
       double q = T1.col(j).dot(dd.colq.col(c).head<6>()) + T2.col(j).dot(dd.colq.col(c).tail<6>()) + wp.dot(dd.psi.col(c));
       for (int r = 0; r < nj; ++r)
-        if (!joint_carries(t, k, r)) q += mu(vj + r) * dd.S.col(vj + r).dot(dd.phi.col(c));
+        if (!J::carries(k, r)) q += mu(vj + r) * dd.S.col(vj + r).dot(dd.phi.col(c));
       gq(c) = q;
       gv(c) = T1.col(j).dot(dd.colv.col(c).head<6>()) + T2.col(j).dot(dd.colv.col(c).tail<6>()) + wp.dot(dd.rho.col(c));
     }
-  }
+  });
 }
 
 namespace {

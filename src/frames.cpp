@@ -6,6 +6,8 @@
 #include "soadyn/operators.hpp"
 #include "soadyn/text.hpp"
 
+#include "joint_inertial.hpp"
+
 namespace soadyn {
 
 const std::vector<ReferenceInfo>& references() {
@@ -78,7 +80,9 @@ void point_acceleration(const Model& model, const Data& data, int b, const Vec3&
     if (model.parent[j] >= 0) xw = data.coriolis.col(j).head<3>(), xv = data.coriolis.col(j).tail<3>();
     if (qdd) {
       Vec3 gw, gu;
-      subspace_apply(data.G, model.idx_v[j], model.nv_i[j], *qdd, gw, gu);
+      visit_joint(model, j, [&](const auto& joint) {
+        inertial::motion<std::decay_t<decltype(joint)>>(data.G, model.idx_v[j], qdd->data() + model.idx_v[j], gw, gu);
+      });
       xw += gw, xv += gu;
     }
     // D_{b:j} x = [x_ω; x_v + x_ω × (η_b − η_j)]

@@ -128,7 +128,10 @@ void joint_qdot(JointType t, const double* q, const double* v, double* qdot) {
       qdot[3] = 0.5 * (w * c + x * b - y * a);
       return;
     }
-    default:
+    case JointType::Revolute:
+    case JointType::Prismatic:
+    case JointType::Planar:
+    case JointType::Fixed:
       for (int k = 0; k < joint_nv(t); ++k) qdot[k] = v[k];
       return;
   }
@@ -157,7 +160,10 @@ void joint_velocity(JointType t, const double* q, const double* qdot, double* v)
       v[2] = 2.0 * w.z() / n2;
       return;
     }
-    default:
+    case JointType::Revolute:
+    case JointType::Prismatic:
+    case JointType::Planar:
+    case JointType::Fixed:
       for (int k = 0; k < joint_nv(t); ++k) v[k] = qdot[k];
       return;
   }
@@ -175,7 +181,10 @@ void joint_integrate(JointType t, const double* q, const double* v, double h, do
       // about the child's axes: quat⁺ = quat ⊗ exp(h ω)
       store((quat_at(q) * rotation_by(Vec3(v[0], v[1], v[2]), h)).normalized(), q_out);
       return;
-    default:
+    case JointType::Revolute:
+    case JointType::Prismatic:
+    case JointType::Planar:
+    case JointType::Fixed:
       for (int k = 0; k < joint_nq(t); ++k) q_out[k] = q[k] + h * v[k];
       return;
   }
@@ -196,8 +205,11 @@ bool joint_carries(JointType t, int k, int m) {
     case JointType::Ball: return true;                   // all three turn with the child
     case JointType::Planar: return k < 2 && m == 2;      // x, y carry the axis of θ
     case JointType::Free: return k >= 3 && m < 3;        // η̇ carries the rotations' moment arm
-    default: return false;                               // G × G = 0
+    case JointType::Revolute:
+    case JointType::Prismatic:
+    case JointType::Fixed: return false;                 // G × G = 0
   }
+  throw Error("joint_carries: unknown joint type " + std::to_string(static_cast<int>(t)));
 }
 
 void joint_tangent_map(JointType t, const double* q, Eigen::Ref<MatX> T) {
@@ -224,7 +236,10 @@ void joint_tangent_map(JointType t, const double* q, Eigen::Ref<MatX> T) {
       T.block<3, 3>(3, 0).setIdentity();
       return;
     }
-    default: T.setIdentity(); return;
+    case JointType::Revolute:
+    case JointType::Prismatic:
+    case JointType::Planar:
+    case JointType::Fixed: T.setIdentity(); return;
   }
 }
 
@@ -249,7 +264,10 @@ void joint_qdot_jacobian(JointType t, const double* q, const double* v, Eigen::R
       dv.block<3, 3>(0, 3).setIdentity();
       return;
     }
-    default: dv.setIdentity(); return;
+    case JointType::Revolute:
+    case JointType::Prismatic:
+    case JointType::Planar:
+    case JointType::Fixed: dv.setIdentity(); return;
   }
   dq *= 0.5;
   dv *= 0.5;

@@ -2,6 +2,8 @@
 
 #include "soadyn/operators.hpp"
 
+#include "joint_inertial.hpp"
+
 #include <cmath>
 
 #if defined(SOADYN_MVEC) && defined(__AVX2__)
@@ -27,7 +29,7 @@ const Mat3 kIdentity = Mat3::Identity();
 
 namespace {
 
-// (cos θ, sin θ) of every revolute joint along a unit axis (Model::turn_body), four at a time
+// (cos θ, sin θ) of every revolute joint along a unit axis (Model::angles), four at a time
 // through glibc's vector math library where the library is built for AVX2, else one sincos each.
 // The four angles are gathered into a register, not stored and read back whole: a wide load of
 // narrow stores stalls the CPU (interleaved, chain N = 8: 50 → 16 ns; binary tree N = 15:
@@ -65,50 +67,64 @@ void turns_of(const int* body, const int* iq, int from, int nt, const double* x,
 }  // namespace
 
 void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool roots) {
-  turns_of(model.turn_body.data(), model.turn_q.data(), roots ? 0 : model.turn_roots, int(model.turn_body.size()),
-           q.data(), turn);
+  const Model::AngleBatch& batch = model.angles;
+  turns_of(batch.body.data(), batch.q.data(), roots ? 0 : batch.roots, int(batch.body.size()), q.data(), turn);
 }
 
 namespace {
 
+// Each kind's part of the kinematics step: from the parent's frame Rp and the joint point η (the
+// placement's offset already added), the body's frame R, η moved by the joint, and G_i.
+// A revolute joint along ±e_k: g_i = ±C_j e_k, and a turn by θ about it mixes only the other two
+// columns of C_j (the batched (cos θ, sin θ) of data.turn, no 3×3 product); a prismatic one along
+// ±e_k slides η by x g_i.  C_j = C_p X.R, or C_p itself where the placement does not turn.
+template <int k>
+inline void joint_frame(const joints::RevoluteAxis<k>& j, const Model& model, Data& data, const VecX&, int i,
+                        const Mat3& Rp, Mat3& R, Vec3&) {
+  turn_frame(Rp, k, data.turn(0, i), j.sign * data.turn(1, i), R);
+  data.G.col(model.idx_v[i]) << j.sign * Rp.col(k), Vec3::Zero();
+}
+template <int k>
+inline void joint_frame(const joints::TurnedRevoluteAxis<k>& j, const Model& model, Data& data, const VecX&, int i,
+                        const Mat3& Rp, Mat3& R, Vec3&) {
+  Mat3 Rj;
+  Rj.noalias() = Rp * model.placement[i].R;
+  turn_frame(Rj, k, data.turn(0, i), j.sign * data.turn(1, i), R);
+  data.G.col(model.idx_v[i]) << j.sign * Rj.col(k), Vec3::Zero();
+}
+template <int k>
+inline void joint_frame(const joints::PrismaticAxis<k>& j, const Model& model, Data& data, const VecX& q, int i,
+                        const Mat3& Rp, Mat3& R, Vec3& eta) {
+  if (j.turned) R.noalias() = Rp * model.placement[i].R;
+  else R = Rp;
+  const Vec3 g = j.sign * R.col(k);
+  eta += q(model.idx_q[i]) * g;
+  data.G.col(model.idx_v[i]) << Vec3::Zero(), g;
+}
+// any other kind: C_i = C_j R(q), η += C_j p(q)
+template <class J>
+inline void joint_frame(const J& joint, const Model& model, Data& data, const VecX& q, int i, const Mat3& Rp, Mat3& R,
+                        Vec3& eta) {
+  Mat3 Rj, Rm;
+  Vec3 pm;
+  Rj.noalias() = Rp * model.placement[i].R;
+  joint.motion(q.data() + model.idx_q[i], Rm, pm);
+  R.noalias() = Rj * Rm;
+  eta.noalias() += Rj * pm;
+  joint.subspace(Rj, R, data.G.middleCols<J::nv>(model.idx_v[i]));
+}
+
 // body i of the kinematics sweep, its parent's frame known and its joint's (cos θ, sin θ) in
 // data.turn; kInertias = false stops at the frames (R, η, d, G)
-template <bool kInertias>
-inline void kinematics_step(const Model& model, Data& data, const VecX& q, int i) {
+template <bool kInertias, class J>
+inline void kinematics_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
   const int p = model.parent[i];
   const Mat3& Rp = p < 0 ? kIdentity : data.R[p];
-  const Placement& X = model.placement[i];
-  const int iv = model.idx_v[i];
-  // joint frame: C_j = C_p X.R at η_p + C_p X.p
-  Mat3 Rj;
-  if (model.placement_turns[i]) Rj.noalias() = Rp * X.R;
-  else Rj = Rp;
-  Vec3 eta = Rp * X.p;
+  // η_j = η_p + C_p X.p, then the joint's own motion
+  Vec3 eta = Rp * model.placement[i].p;
   if (p >= 0) eta += data.eta.col(p);
   Mat3& R = data.R[i];
-  const int unit = model.unit_axis[i];
-  if (unit != 0) {
-    // a revolute or prismatic joint along ±e_k of its joint frame: g_i = ±C_j e_k, and a turn
-    // by θ about it mixes only the other two columns of C_j (one sincos, no 3×3 product)
-    const int k = std::abs(unit) - 1;
-    const double sign = unit > 0 ? 1.0 : -1.0, x = q(model.idx_q[i]);
-    const Vec3 g = sign * Rj.col(k);
-    if (model.joint_type[i] == JointType::Revolute) {
-      turn_frame(Rj, k, data.turn(0, i), sign * data.turn(1, i), R);
-      data.G.col(iv) << g, Vec3::Zero();
-    } else {
-      R = Rj;
-      eta += x * g;
-      data.G.col(iv) << Vec3::Zero(), g;
-    }
-  } else {
-    Mat3 Rm;
-    Vec3 pm;
-    joint_motion(model.joint_type[i], model.axis[i], q.data() + model.idx_q[i], Rm, pm);
-    R.noalias() = Rj * Rm;
-    eta.noalias() += Rj * pm;
-    joint_subspace(model.joint_type[i], model.axis[i], Rj, R, data.G.middleCols(iv, model.nv_i[i]));
-  }
+  joint_frame(joint, model, data, q, i, Rp, R, eta);
   // d_i = η_i − η_p;  s_i = C_i com_i;  r_i = η_i + s_i;  M_i = (m_i, m_i s_i, C_i I_η C_iᵀ) (eq. 12)
   data.eta.col(i) = eta;
   data.d.col(i) = p < 0 ? eta : Vec3(eta - data.eta.col(p));
@@ -119,6 +135,11 @@ inline void kinematics_step(const Model& model, Data& data, const VecX& q, int i
   data.M[i].m = model.mass[i];
   data.M[i].h = model.mass[i] * s;
   rotate_symmetric(R, model.inertia_origin[i], data.M[i].I);
+}
+
+template <bool kInertias>
+inline void kinematics_step(const Model& model, Data& data, const VecX& q, int i) {
+  std::visit([&](const auto& joint) { kinematics_step<kInertias>(joint, model, data, q, i); }, model.joint_model[i]);
 }
 
 template <bool kInertias>
@@ -137,8 +158,7 @@ void frames_to(const Model& model, Data& data, const VecX& q, int b) {
   for (int i = b; i >= 0; i = model.parent[i]) {
     if (n == kPath) return kinematics_sweep<false>(model, data, q);
     path[n++] = i;
-    if (model.unit_axis[i] != 0 && model.joint_type[i] == JointType::Revolute)
-      turn_body[nt] = i, turn_q[nt++] = model.idx_q[i];
+    if (turns_by_angle(model.joint_model[i])) turn_body[nt] = i, turn_q[nt++] = model.idx_q[i];
   }
   turns_of(turn_body, turn_q, 0, nt, q.data(), data.turn);
   for (int k = n - 1; k >= 0; --k) kinematics_step<false>(model, data, q, path[k]);
@@ -197,10 +217,12 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
   // their 3-vector halves only (see rnea in rnea.cpp: whole reads of half-written columns
   // stall the CPU's store forwarding)
   for (int i = 0; i < model.nbodies; ++i) {
-    const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
+    const int p = model.parent[i], iv = model.idx_v[i];
     // G_i q̇_i = [gw; gu]
     Vec3 gw, gu;
-    subspace_apply(data.G, iv, n, v, gw, gu);
+    visit_joint(model, i, [&](const auto& j) {
+      inertial::motion<std::decay_t<decltype(j)>>(data.G, iv, v.data() + iv, gw, gu);
+    });
     Vec3 w = gw, u = gu;
     if (p < 0) {
       // gravity enters as a base acceleration −g

@@ -2,6 +2,7 @@
 #include "soadyn/kinematics.hpp"
 #include "soadyn/operators.hpp"
 
+#include "joint_inertial.hpp"
 #include "mass_matrix_entries.hpp"
 
 namespace soadyn {
@@ -33,12 +34,18 @@ void mass_matrix(const Model& model, Data& data) {
   for (int i = model.nbodies - 1; i >= 0; --i) {
     const SpatialInertia& K = data.K[i];
     const Vec3 eta = data.eta.col(i);
-    for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k) {
-      const Vec3 a = data.G.col(k).head<3>(), b = data.G.col(k).tail<3>();
-      const Vec6 F = K * data.G.col(k);  // [n; f]
-      data.F0.col(k) << F.head<3>() + eta.cross(F.tail<3>()), F.tail<3>();
-      data.S0.col(k) << a, b + eta.cross(a);
-    }
+    visit_joint(model, i, [&](const auto& j) {
+      using J = std::decay_t<decltype(j)>;
+      for (int k = model.idx_v[i]; k < model.idx_v[i] + J::nv; ++k) {
+        const Vec3 a = data.G.col(k).head<3>(), b = data.G.col(k).tail<3>();
+        Vec3 n, f;  // K_i G_k = [n; f]: [I a; a × h] for [a; 0], [h × b; m b] for [0; b]
+        if constexpr (inertial::angular<J>) n.noalias() = K.I * a, f = a.cross(K.h);
+        else if constexpr (inertial::linear<J>) n = K.h.cross(b), f = K.m * b;
+        else n.noalias() = K.I * a + K.h.cross(b), f = K.m * b - K.h.cross(a);
+        data.F0.col(k) << n + eta.cross(f), f;
+        data.S0.col(k) << a, b + eta.cross(a);
+      }
+    });
     if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(K, data.d.col(i));
   }
   mass_matrix_entries(model, data);

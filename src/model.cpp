@@ -135,23 +135,14 @@ Model Model::build(const std::vector<BodySpec>& given, const Vec3& gravity, Iner
   }
   for (int k = 0; k < m.nbodies; ++k) {
     m.inertia_origin.push_back(m.inertia[k] + parallel_axis(m.mass[k], m.com[k]));  // I_η = I_cm − m c̃ c̃
-    int unit = 0;
-    const JointType t = m.joint_type[k];
-    if (t == JointType::Revolute || t == JointType::Prismatic)
-      for (int a = 0; a < 3; ++a) {
-        if (m.axis[k] == Vec3::Unit(a)) unit = a + 1;
-        if (m.axis[k] == -Vec3::Unit(a)) unit = -(a + 1);
-      }
-    m.unit_axis.push_back(unit);
-    m.placement_turns.push_back(m.placement[k].R != Mat3::Identity());
-    m.has_planar = m.has_planar || t == JointType::Planar;
+    m.joint_model.push_back(classify_joint(m.joint_type[k], m.axis[k], m.placement[k].R));
   }
   for (const bool roots : {true, false})
     for (int k = 0; k < m.nbodies; ++k)
-      if (m.unit_axis[k] != 0 && m.joint_type[k] == JointType::Revolute && (m.parent[k] < 0) == roots) {
-        m.turn_body.push_back(k);
-        m.turn_q.push_back(m.idx_q[k]);
-        m.turn_roots += roots;
+      if (turns_by_angle(m.joint_model[k]) && (m.parent[k] < 0) == roots) {
+        m.angles.body.push_back(k);
+        m.angles.q.push_back(m.idx_q[k]);
+        m.angles.roots += roots;
       }
   // depth-first positions of the DOFs: children in index order, each subtree one run
   {

@@ -4,6 +4,8 @@
 #include "soadyn/kinematics.hpp"
 #include "soadyn/operators.hpp"
 
+#include "joint_inertial.hpp"
+
 namespace soadyn {
 
 namespace {
@@ -17,11 +19,13 @@ namespace {
 void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
   const DOperator D{data.d};
   for (int i = 0; i < model.nbodies; ++i) {
-    const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
+    const int p = model.parent[i], iv = model.idx_v[i];
     Vec3 w = data.coriolis.col(i).head<3>(), u = data.coriolis.col(i).tail<3>();
     if (qdd) {  // + G_i q̈_i
       Vec3 gw, gu;
-      subspace_apply(data.G, iv, n, *qdd, gw, gu);
+      visit_joint(model, i, [&](const auto& j) {
+        inertial::motion<std::decay_t<decltype(j)>>(data.G, iv, qdd->data() + iv, gw, gu);
+      });
       w += gw;
       u += gu;
     }
@@ -38,8 +42,11 @@ void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
     data.F.col(i).tail<3>() = M.m * u - M.h.cross(w) + data.gyroscopic.col(i).tail<3>();
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
-    const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
-    subspace_apply_transpose(data.G, iv, n, data.F.col(i), out);
+    const int p = model.parent[i], iv = model.idx_v[i];
+    const Vec3 n = data.F.col(i).head<3>(), f = data.F.col(i).tail<3>();
+    visit_joint(model, i, [&](const auto& j) {
+      inertial::project<std::decay_t<decltype(j)>>(data.G, iv, n, f, out.data() + iv);
+    });
     if (p >= 0) D.add_apply_transpose(i, data.F.col(i), data.F.col(p));  // F_p += D_iᵀ F_i, in halves
   }
 }

@@ -275,7 +275,8 @@ TEST(Kinematics, SpecializedPathEqualsReference) {
     Rng rng(7000 + seed);
     const Model model = random_model(rng, {.n = 30, .branching = 0.5, .prismatic = 0.3, .ball = 0.1, .planar = 0.1,
                                            .free_root = seed % 2 == 0, .fixed = 3, .unit_axis = 0.6});
-    for (int i = 0; i < model.nbodies; ++i) specialized += model.unit_axis[i] != 0;
+    for (int i = 0; i < model.nbodies; ++i)
+      specialized += std::string(kind_name(model.joint_model[i])).find("-axis-") != std::string::npos;
     Data fast(model), ref(model);
     VecX q = random_q(rng, model);
     // half the seeds turn the revolute joints far (the batched turns reduce large angles too)
@@ -297,7 +298,7 @@ TEST(Kinematics, SpecializedPathEqualsReference) {
 }
 
 // joint_turns against std::cos and std::sin: every revolute joint along a unit axis and nothing
-// else (Model::turn_body, roots first), for every count of turning joints modulo the batch of
+// else (Model::angles, roots first), for every count of turning joints modulo the batch of
 // four, with roots = false leaving the root joints' columns as they were
 TEST(Kinematics, JointTurnsAreEveryUnitRevoluteJointsCosSin) {
   for (int n = 1; n <= 14; ++n) {
@@ -309,9 +310,10 @@ TEST(Kinematics, JointTurnsAreEveryUnitRevoluteJointsCosSin) {
     std::vector<int> expected;
     for (const bool roots : {true, false})
       for (int i = 0; i < model.nbodies; ++i)
-        if (model.unit_axis[i] != 0 && model.joint_type[i] == JointType::Revolute && (model.parent[i] < 0) == roots)
+        if (model.joint_type[i] == JointType::Revolute && (model.parent[i] < 0) == roots &&
+            model.axis[i].cwiseAbs().maxCoeff() == 1.0 && model.axis[i].cwiseAbs().sum() == 1.0)
           expected.push_back(i);
-    ASSERT_EQ(model.turn_body, expected) << "n " << n;
+    ASSERT_EQ(model.angles.body, expected) << "n " << n;
     VecX q = random_q(rng, model);
     q *= 40.0;  // angles beyond ±π
     for (const bool roots : {true, false}) {

@@ -6,10 +6,13 @@
 #pragma once
 
 #include "soadyn/joint.hpp"
+#include "soadyn/joint_model.hpp"
 #include "soadyn/types.hpp"
 
 #include <limits>
 #include <string>
+#include <utility>
+#include <variant>
 #include <vector>
 
 namespace soadyn {
@@ -107,16 +110,14 @@ class Model {
   std::vector<int> dfs_dof, dfs_begin, dfs_end;
   int depth = 0;                           // longest chain from the ground (nilpotency of Φ_D)
   bool chain = false;                      // every DOF's parent DOF is the one before it
-  // for the specialized kinematics (kinematics.cpp), set by build: a revolute or prismatic axis
-  // along ±e_k of its joint frame is stored as ±(k + 1), any other axis or joint as 0; and
-  // whether the placement turns the frame (a rotation other than the identity)
-  std::vector<int> unit_axis;
-  std::vector<char> placement_turns;
-  // the revolute joints along a unit axis, whose (cos θ, sin θ) joint_turns computes: their bodies
-  // and q indices, the turn_roots joints that hang from the ground first
-  std::vector<int> turn_body, turn_q;
-  int turn_roots = 0;
-  bool has_planar = false;                 // a planar joint (the body-axes bias takes the inertial route)
+  // each body's joint kind (joint_model.hpp): what every sweep dispatches on, once per body
+  std::vector<JointModel> joint_model;
+  // the angles whose (cos θ, sin θ) the sweeps take in one batch (joint_turns, kinematics.hpp):
+  // the bodies whose kind turns_by_angle and their q indices, the `roots` hanging from the ground first
+  struct AngleBatch {
+    std::vector<int> body, q;
+    int roots = 0;
+  } angles;
   std::vector<std::string> warnings;       // what build accepted but a user should hear (one line each)
 
   double world_mass = 0.0;                 // bodies welded to the world: mass and first moment,
@@ -144,5 +145,12 @@ class Model {
   VecX velocity(const VecX& q, const VecX& qd) const;  // the reverse map: v from q̇
   VecX integrate(const VecX& q, const VecX& v, double h) const;
 };
+
+// f(joint) with body i's joint kind (one of JointModel's types): the one dispatch per body each
+// sweep makes, so the step for that kind runs with its constants known at compile time
+template <class F>
+inline decltype(auto) visit_joint(const Model& model, int i, F&& f) {
+  return std::visit(std::forward<F>(f), model.joint_model[i]);
+}
 
 }  // namespace soadyn

@@ -86,29 +86,6 @@ struct DOperator {
   }
 };
 
-// G_i x_i and G_iᵀ f for the joint whose columns of G are iv..iv+n−1; a 1-DOF joint as its one
-// column, kept off Eigen's dynamic-size matrix-vector product.  Both read and write 6-vectors in
-// their 3-vector halves, as the sweeps keep them: a column written in halves and read back whole
-// straddles two stores the CPU cannot forward (rnea in rnea.cpp).
-// G_i x_i = [w; u]
-inline void subspace_apply(const Mat6X& G, int iv, int n, const VecX& x, Vec3& w, Vec3& u) {
-  if (n == 1) {
-    w = x(iv) * G.col(iv).head<3>();
-    u = x(iv) * G.col(iv).tail<3>();
-    return;
-  }
-  Vec6 out;
-  out.noalias() = G.middleCols(iv, n) * x.segment(iv, n);
-  w = out.head<3>();
-  u = out.tail<3>();
-}
-// out_i = G_iᵀ f, f = [n; f] a column of force pairs
-template <class F>
-inline void subspace_apply_transpose(const Mat6X& G, int iv, int n, const Eigen::MatrixBase<F>& f, Eigen::Ref<VecX> out) {
-  if (n == 1) out(iv) = G.col(iv).head<3>().dot(f.template head<3>()) + G.col(iv).tail<3>().dot(f.template tail<3>());
-  else out.segment(iv, n).noalias() = G.middleCols(iv, n).transpose() * f;
-}
-
 // Any block-diagonal A = diag{A_i} of k×k blocks (A_i of a root is never used).
 struct BlockOperator {
   const std::vector<MatX>& A;
