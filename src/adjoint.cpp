@@ -26,7 +26,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
   CvodeAdjoint(System& sys, const SimulationSettings& s, const SensitivityPlan& plan, const Cost& cost, const VecX& y0)
       // no projection: the quaternion is normalized in the dynamics and the adjoint differentiates
       // the coordinates CVODE integrates (as the forward sensitivities do)
-      : Cvode(s.method == "cvode-bdf", sys, s, 0.0, y0, false),
+      : Cvode(s.method == Method::CvodeBdf, sys, s, 0.0, y0, false),
         settings_(s),
         plan_(plan),
         cost_(cost),
@@ -362,7 +362,7 @@ CostGradient gradient(const Scenario& sc, const SimulationSettings& settings, co
   check_sensitivities(sc, s, false);
   if (!cost.running && !cost.terminal) throw Error("gradient: the cost has neither a running nor a terminal part");
   const SensitivityPlan plan = plan_sensitivities(m, wrt);
-  System sys(m, sc.inputs, parse_fd_method(s.dynamics));
+  System sys(m, sc.inputs, s.dynamics);
   VecX y = sys.state(sc.q0, sc.v0);
   m.normalize(y.head(m.nq));
   const double cpu0 = thread_cpu_seconds();

@@ -97,7 +97,7 @@ class Cvode : public Integrator {
       // stiff: Newton iterations with a direct solver.  Analytic: the Jacobian from System::jacobian
       // and M = I − γJ solved by its structure (NewtonSolver: an nv×nv LU).  DQ: CVODE's
       // difference-quotient Jacobian and its dense LU of M
-      const bool analytic = analytic_jacobian(s.jacobian);
+      const bool analytic = s.jacobian == Jacobian::Analytic;
       if (analytic) sys.prepare_jacobian();
       A_.reset(SUNDenseMatrix(sys.size(), sys.size(), ctx_.get()));
       if (A_) ls_.reset(analytic ? linsol::make(sys, ctx_.get()) : SUNLinSol_Dense(y_.get(), A_.get(), ctx_.get()));

@@ -13,18 +13,6 @@
 
 namespace soadyn {
 
-bool analytic_jacobian(const std::string& jacobian) {
-  if (jacobian == "analytic") return true;
-  if (jacobian == "dq") return false;
-  throw Error("jacobian: expected analytic or dq; got '" + jacobian + "'");
-}
-
-bool full_newton(const std::string& newton) {
-  if (newton == "full") return true;
-  if (newton == "simplified") return false;
-  throw Error("newton: expected full or simplified; got '" + newton + "'");
-}
-
 int first_non_finite(const VecX& y) {
   for (int k = 0; k < y.size(); ++k)
     if (!std::isfinite(y(k))) return k;
@@ -281,8 +269,8 @@ class ImplicitMidpoint : public FixedStep {
  public:
   ImplicitMidpoint(System& s, const SimulationSettings& settings, double t0)
       : FixedStep(s, settings.dt, t0),
-        analytic_(analytic_jacobian(settings.jacobian)),
-        full_(full_newton(settings.newton)),
+        analytic_(settings.jacobian == Jacobian::Analytic),
+        full_(settings.newton == Newton::Full),
         J_(s.size(), s.size()),
         newton_(s.model, s.nquad),
         delta_(s.size()) {
@@ -358,20 +346,27 @@ const std::vector<IntegratorInfo>& integrators() {
   using S = const SimulationSettings&;
   using P = std::unique_ptr<Integrator>;
   static const std::vector<IntegratorInfo> table = {
-      {"cvode-adams", "SUNDIALS CVODE, Adams–Moulton with fixed-point iterations (non-stiff)", false, 0, false, 0, nullptr,
+      {Method::CvodeAdams, "cvode-adams",
+       "SUNDIALS CVODE, Adams–Moulton with fixed-point iterations (non-stiff)", false, 0, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(false, sys, s, t0, y0); }},
-      {"cvode-bdf", "SUNDIALS CVODE, BDF with Newton and a direct solver (stiff)", false, 0, false, 24, nullptr,
+      {Method::CvodeBdf, "cvode-bdf",
+       "SUNDIALS CVODE, BDF with Newton and a direct solver (stiff)", false, 0, false, 24, nullptr,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(true, sys, s, t0, y0); }},
-      {"euler", "explicit Euler, order 1", true, 1, false, 0, nullptr,
+      {Method::Euler, "euler",
+       "explicit Euler, order 1", true, 1, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<Euler>(sys, s.dt, t0); }},
-      {"semi-implicit-euler", "v then q, order 1; not symplectic where the mass matrix depends on q", true, 1, false, 0,
+      {Method::SemiImplicitEuler, "semi-implicit-euler",
+       "v then q, order 1; not symplectic where the mass matrix depends on q", true, 1, false, 0,
        nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SemiImplicitEuler>(sys, s.dt, t0); }},
-      {"symplectic-euler", "symplectic Euler in the momenta p = M(q) v by Newton, order 1, symplectic (no free or ball joints)",
+      {Method::SymplecticEuler, "symplectic-euler",
+       "symplectic Euler in the momenta p = M(q) v by Newton, order 1, symplectic (no free or ball joints)",
        true, 1, true, 12, &SymplecticEuler::refuses,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SymplecticEuler>(sys, s.dt, t0); }},
-      {"rk4", "classical Runge–Kutta, order 4", true, 4, false, 0, nullptr,
+      {Method::Rk4, "rk4",
+       "classical Runge–Kutta, order 4", true, 4, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<RK4>(sys, s.dt, t0); }},
-      {"implicit-midpoint", "implicit midpoint rule in (q, v) by Newton, order 2, symmetric and A-stable", true, 2, false, 24,
+      {Method::ImplicitMidpoint, "implicit-midpoint",
+       "implicit midpoint rule in (q, v) by Newton, order 2, symmetric and A-stable", true, 2, false, 24,
        nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<ImplicitMidpoint>(sys, s, t0); }},
   };
   return table;
@@ -389,16 +384,18 @@ std::vector<std::string> integrator_names() {
   return names;
 }
 
-std::unique_ptr<Integrator> make_integrator(const std::string& method, System& system,
-                                            const SimulationSettings& settings, double t0, const VecX& y0) {
-  if (const IntegratorInfo* info = find_integrator(method)) {
-    if (info->refuses)
-      if (const std::string why = info->refuses(system.model); !why.empty()) throw Error(why);
-    return info->make(system, settings, t0, y0);
-  }
-  std::string all;
-  for (const auto& n : integrator_names()) all += (all.empty() ? "" : ", ") + n;
-  throw Error("method: expected one of " + all + "; got '" + method + "'");
+const IntegratorInfo& find_integrator(Method method) {
+  for (const auto& info : integrators())
+    if (info.method == method) return info;
+  throw Error("method: not an integration method (" + std::to_string(int(method)) + ")");
+}
+
+std::unique_ptr<Integrator> make_integrator(Method method, System& system, const SimulationSettings& settings,
+                                            double t0, const VecX& y0) {
+  const IntegratorInfo& info = find_integrator(method);
+  if (info.refuses)
+    if (const std::string why = info.refuses(system.model); !why.empty()) throw Error(why);
+  return info.make(system, settings, t0, y0);
 }
 
 }  // namespace soadyn

@@ -17,15 +17,7 @@ namespace soadyn {
 
 RolloutSettings rollout_settings(const SimulationSettings& s) {
   RolloutSettings r;
-  r.method = s.method;
-  r.dt = s.dt;
-  r.dynamics = s.dynamics;
-  r.rtol = s.rtol;
-  r.atol = s.atol;
-  r.max_step = s.max_step;
-  r.max_steps = s.max_steps;
-  r.jacobian = s.jacobian;
-  r.newton = s.newton;
+  static_cast<IntegrationSettings&>(r) = s;
   return r;
 }
 
@@ -33,17 +25,9 @@ namespace {
 
 SimulationSettings simulation_settings(const RolloutSettings& r) {
   SimulationSettings s;
-  s.method = r.method;
-  s.dt = r.dt;
+  static_cast<IntegrationSettings&>(s) = r;
   s.output_dt = r.dt;
   s.t_end = double(r.steps) * r.dt;
-  s.dynamics = r.dynamics;
-  s.rtol = r.rtol;
-  s.atol = r.atol;
-  s.max_step = r.max_step;
-  s.max_steps = r.max_steps;
-  s.jacobian = r.jacobian;
-  s.newton = r.newton;
   return s;
 }
 
@@ -165,9 +149,9 @@ RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, co
   check_shape("states", states.rows(), states.cols(), ny, T * K, "nq + nv rows, column k·T + s");
   if (rs.energies) check_shape("energies", energies.rows(), energies.cols(), T, K, "T rows, one column per rollout");
   const SimulationSettings ss = simulation_settings(rs);
-  const FdMethod fd = parse_fd_method(rs.dynamics);
+  const FdMethod fd = rs.dynamics;
   {
-    System probe(model, inputs, fd);  // an unknown method or one that refuses the model throws here
+    System probe(model, inputs, fd);  // a method that refuses the model throws here
     make_integrator(rs.method, probe, ss, 0.0, probe.state(model.neutral_configuration(), VecX::Zero(model.nv)));
   }
 

@@ -42,7 +42,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
   CvodeSensitivity(System& sys, const SimulationSettings& s, const SensitivityPlan& plan, double t0, const VecX& y0)
       // no projection: CVODES projects the state, not its sensitivities; the quaternion is normalized in
       // the dynamics and at every output instead, and its change along itself is no tangent increment
-      : Cvode(s.method == "cvode-bdf", sys, s, t0, y0, false), plan_(plan), ns_(plan.nx0() + plan.np()) {
+      : Cvode(s.method == Method::CvodeBdf, sys, s, t0, y0, false), plan_(plan), ns_(plan.nx0() + plan.np()) {
     const Model& m = sys.model;
     const int n = sys.size(), nv = m.nv, nq = m.nq;
     if (ns_ == 0) throw Error("sensitivities: nothing to differentiate (initial_state false, no parameters)");
@@ -237,7 +237,7 @@ void check_sensitivities(const Scenario& sc, const SimulationSettings& s, bool h
   if (!s.sensitivities.any()) return;
   const std::string why = "sensitivities: ";
   if (is_fixed_step(s.method))
-    throw Error(why + "need a CVODE method (cvode-adams or cvode-bdf): " + s.method +
+    throw Error(why + "need a CVODE method (cvode-adams or cvode-bdf): " + std::string(to_string(s.method)) +
                 " takes fixed steps and its variational equation is not stepped");
   if (has_controller || !sc.inputs.controllers.empty())
     throw Error(why + "a run with a controller is not differentiated (its dtau/dx is not): remove the controller");
@@ -248,8 +248,8 @@ void check_sensitivities(const Scenario& sc, const SimulationSettings& s, bool h
 
 SensitivityIntegrator make_sensitivity_integrator(System& system, const SimulationSettings& settings,
                                                   const SensitivityPlan& plan, double t0, const VecX& y0) {
-  if (settings.method != "cvode-adams" && settings.method != "cvode-bdf")
-    throw Error("sensitivities: need cvode-adams or cvode-bdf, got " + settings.method);
+  if (settings.method != Method::CvodeAdams && settings.method != Method::CvodeBdf)
+    throw Error("sensitivities: need cvode-adams or cvode-bdf, got " + std::string(to_string(settings.method)));
   auto p = std::make_unique<CvodeSensitivity>(system, settings, plan, t0, y0);
   SensitivityIntegrator out;
   out.source = p.get();

@@ -56,10 +56,7 @@ Sample observe(System& sys, double t, const VecX& y) {
   return s;
 }
 
-bool is_fixed_step(const std::string& method) {
-  const IntegratorInfo* info = find_integrator(method);
-  return info && info->fixed_step;
-}
+bool is_fixed_step(Method method) { return find_integrator(method).fixed_step; }
 
 double output_stride(const SimulationSettings& s) { return std::max(1.0, std::round(s.output_dt / s.dt)); }
 
@@ -106,24 +103,23 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   if (sc.model.nv == 0)
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
   // the run's nv×nv matrices (Data's 3, the method's), before any is allocated
-  if (const IntegratorInfo* info = find_integrator(s.method)) {
+  const IntegratorInfo& info = find_integrator(s.method);
+  try {
     const double nv = sc.model.nv;
-    try {
-      check_memory(8.0 * (3 + info->dense_workspace) * nv * nv, sc.model.nv,
-                   "the nv×nv matrices of a " + s.method + " run");
-    } catch (const Error& e) {
-      throw Error(sc.path + ": " + e.what());
-    }
+    check_memory(8.0 * (3 + info.dense_workspace) * nv * nv, sc.model.nv,
+                 "the nv×nv matrices of a " + std::string(info.name) + " run");
+  } catch (const Error& e) {
+    throw Error(sc.path + ": " + e.what());
   }
-  if (const IntegratorInfo* info = find_integrator(s.method); info && info->refuses)
-    if (const std::string why = info->refuses(sc.model); !why.empty()) throw Error(sc.path + ": " + why);
+  if (info.refuses)
+    if (const std::string why = info.refuses(sc.model); !why.empty()) throw Error(sc.path + ": " + why);
   // joint limits: root finding (CVODE), e in [0, 1], a start inside the limits
   if (!(s.restitution >= 0 && s.restitution <= 1))
     throw Error("simulation settings: restitution must lie in [0, 1], got " + short_number(s.restitution));
   if (s.limits && sc.model.has_limits()) {
     if (is_fixed_step(s.method))
       throw Error("simulation settings: limits: true needs an integrator that locates events (cvode-adams or "
-                  "cvode-bdf); " + s.method + " takes fixed steps");
+                  "cvode-bdf); " + std::string(to_string(s.method)) + " takes fixed steps");
     JointLimits(sc.model, s.restitution).check_inside(sc.q0);
   }
   if (!(s.control_dt >= 0) || !std::isfinite(s.control_dt))
@@ -181,7 +177,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   if (!sc.inputs.controllers.empty()) builtin.emplace(m, sc.inputs.controllers);
   const ControlFunction law =
       sum_controllers({builtin ? ControlFunction(std::ref(*builtin)) : ControlFunction{}, std::move(controller)}, m.nv);
-  System sys(m, sc.inputs, parse_fd_method(settings.dynamics), bool(law));
+  System sys(m, sc.inputs, settings.dynamics, bool(law));
   // a controller that throws or returns a non-finite τ ends the run, said with the time
   ControlFunction checked;
   if (law)
@@ -228,7 +224,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
   if (sampled) integrator->set_exact_stops(true);
 
   RunSummary summary;
-  summary.method = settings.method;
+  summary.method = to_string(settings.method);
   summary.quaternion_handling = integrator->quaternion_handling();
   const double cpu0 = thread_cpu_seconds();
   // sampling: the balance error |E(t) − E(0) − W(t) + L(t)| / max(|E(0)|, peak T)

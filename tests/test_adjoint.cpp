@@ -73,7 +73,7 @@ void check_against_forward(const Scenario& sc, const SimulationSettings& s, cons
   const double e0 = g0.size() ? relative(adj.d_initial_state, g0) : 0.0;
   const double ep = gp.size() ? relative(adj.d_parameters, gp) : 0.0;
   std::printf("  %s: adjoint against forward sensitivities: x0 %.1e, pi %.1e (forward %ld steps, backward %ld, %ld checkpoints)\n",
-              s.method.c_str(), e0, ep, adj.forward_steps, adj.backward_steps, adj.checkpoints);
+              std::string(to_string(s.method)).c_str(), e0, ep, adj.forward_steps, adj.backward_steps, adj.checkpoints);
   EXPECT_LT(e0, tol);
   EXPECT_LT(ep, tol);
   EXPECT_GT(adj.backward_steps, 0);

@@ -90,8 +90,8 @@ TEST(SystemJacobian, FlexibleSatelliteAgainstCentralDifferences) {
 
 SimulationSettings bdf(const Scenario& sc, const std::string& jacobian, double rtol, double t_end) {
   SimulationSettings s = sc.simulation;
-  s.method = "cvode-bdf";
-  s.jacobian = jacobian;
+  s.method = Method::CvodeBdf;
+  s.jacobian = parse_jacobian(jacobian);
   s.rtol = rtol;
   s.atol = 1e-2 * rtol;
   s.t_end = t_end;
@@ -147,8 +147,8 @@ TEST(BdfJacobian, CvodeUsesTheJacobianAsked) {
 
 SimulationSettings midpoint(const Scenario& sc, const std::string& newton, double dt, double t_end) {
   SimulationSettings s = sc.simulation;
-  s.method = "implicit-midpoint";
-  s.newton = newton;
+  s.method = Method::ImplicitMidpoint;
+  s.newton = parse_newton(newton);
   s.dt = dt;
   s.t_end = t_end;
   s.output_dt = dt;
@@ -203,15 +203,18 @@ TEST(MidpointNewton, FullAndSimplifiedAgreeAndConserveEnergy) {
   }
 }
 
+// the words are checked where they come in (the settings table); inside, the enums
 TEST(Settings, JacobianAndNewtonAreCheckedWords) {
   const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
   SimulationSettings s = midpoint(sc, "full", 1e-3, 0.01);
-  s.jacobian = "numeric";
-  EXPECT_THROW(simulate(sc, s), Error);
-  s.jacobian = "dq";
-  s.newton = "quasi";
-  EXPECT_THROW(simulate(sc, s), Error);
-  s.newton = "simplified";
+  EXPECT_THAT([&] { set_setting(s, *find_setting("jacobian"), std::string("numeric")); },
+              testing::ThrowsMessage<Error>(testing::StartsWith("jacobian: expected analytic or dq, got 'numeric'")));
+  EXPECT_THAT([&] { parse_newton("quasi"); },
+              testing::ThrowsMessage<Error>(testing::StartsWith("newton: expected full or simplified, got 'quasi'")));
+  EXPECT_EQ(s.jacobian, Jacobian::Analytic);
+  set_setting(s, *find_setting("jacobian"), std::string("dq"));
+  s.newton = parse_newton("simplified");
+  EXPECT_EQ(s.jacobian, Jacobian::Dq);
   EXPECT_TRUE(simulate(sc, s).completed);
 }
 

@@ -46,7 +46,7 @@ class GridCheck : public RunObserver {
 
 SimulationSettings fixed(const Scenario& sc, const std::string& method, double dt, double t_end, double output_dt) {
   SimulationSettings s = sc.simulation;
-  s.method = method;
+  s.method = parse_method(method);
   s.dt = dt;
   s.t_end = t_end;
   s.output_dt = output_dt;
@@ -126,7 +126,7 @@ INSTANTIATE_TEST_SUITE_P(FixedStepMethods, ExactSteps, ::testing::ValuesIn(fixed
 TEST(ExactStepsAdvance, AccumulatedOutputTimesTakeOneStepEach) {
   const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
   const SimulationSettings s = fixed(sc, "rk4", 1e-3, 10.0, 1e-3);
-  System sys(sc.model, sc.inputs, parse_fd_method(s.dynamics));
+  System sys(sc.model, sc.inputs, s.dynamics);
   VecX y = sys.state(sc.q0, sc.v0);
   double t = 0.0, t_out = 0.0;
   auto integrator = make_integrator(s.method, sys, s, t, y);
@@ -160,7 +160,7 @@ TEST(ExactStepsCli, RunReports200000Steps) {
 // error at t = 1 against CVODE at rtol 1e-13 for dt, dt/2, dt/4: the mean log2 slope
 double observed_order(const Scenario& sc, const std::string& method, double dt, double T) {
   SimulationSettings ref = sc.simulation;
-  ref.method = "cvode-adams";
+  ref.method = Method::CvodeAdams;
   ref.rtol = 1e-13;
   ref.atol = 1e-15;
   ref.t_end = T;
@@ -261,10 +261,10 @@ VecX canonical_step(const Scenario& sc, const std::string& method, double h, con
   System sys(m, sc.inputs, FdMethod::Sparse);
   VecX y = sys.state(x.head(n), d.Mass.ldlt().solve(x.tail(n)));
   SimulationSettings s;
-  s.method = method;
+  s.method = parse_method(method);
   s.dt = h;
   double t = 0.0;
-  make_integrator(method, sys, s, t, y)->advance(h, t, y);
+  make_integrator(s.method, sys, s, t, y)->advance(h, t, y);
   update_kinematics(m, d, y.head(n));
   mass_matrix(m, d);
   VecX out(2 * n);

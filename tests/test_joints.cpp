@@ -251,7 +251,7 @@ TEST(BallJointScenarios, ConserveEnergyAndVerticalMomentumWithEveryMethod) {
     for (const auto& info : integrators()) {
       if (info.refuses && !info.refuses(sc.model).empty()) continue;  // symplectic-euler: no quaternions
       SimulationSettings s = sc.simulation;
-      s.method = std::string(info.name);
+      s.method = info.method;
       s.t_end = 2.0;
       s.dt = 1e-4;
       s.rtol = 1e-10;
@@ -284,7 +284,7 @@ TEST(BallJointScenarios, FreeBodyWithBallJointConservesMomentum) {
   sc.q0 = sc.model.neutral_configuration();
   sc.v0 = random_v(rng, sc.model, 1.0);
   SimulationSettings s;
-  s.method = "cvode-adams";
+  s.method = Method::CvodeAdams;
   s.t_end = 5.0;
   s.output_dt = 0.05;
   s.rtol = 1e-11;

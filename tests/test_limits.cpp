@@ -173,7 +173,7 @@ TEST(Limits, OffByDefaultAndRefusals) {
   EXPECT_TRUE(simulate(off, on).warnings.empty());
   SimulationSettings fixed = off.simulation;
   fixed.limits = true;
-  fixed.method = "rk4";
+  fixed.method = Method::Rk4;
   EXPECT_THROW(check_run(off, fixed), Error);
   const Scenario beyond = parse_scenario(pendulum("initial: {q: {arm: -0.5}}\nlimits: {arm: [0.0, 3.0]}\nsimulation: {limits: true}\n"), "b.yaml");
   try {

@@ -136,7 +136,7 @@ TEST(LogContent, BodyPosesAgreeWithTheJacobianIntegratedVelocities) {
     const Scenario sc = load_scenario(kDir + name + ".yaml");
     const Model& m = sc.model;
     SimulationSettings s = sc.simulation;
-    s.method = "cvode-adams";
+    s.method = Method::CvodeAdams;
     s.rtol = 1e-11;
     s.atol = 1e-13;
     s.t_end = 1.0;
@@ -205,9 +205,9 @@ struct Balance {
 Balance run(const std::string& name, const std::string& method, double tol_or_dt, double t_end = 10.0) {
   const Scenario sc = load_scenario(kDir + name + ".yaml");
   SimulationSettings s = sc.simulation;
-  s.method = method;
+  s.method = parse_method(method);
   s.t_end = t_end;
-  if (is_fixed_step(method)) s.dt = tol_or_dt;
+  if (is_fixed_step(s.method)) s.dt = tol_or_dt;
   else s.rtol = tol_or_dt, s.atol = tol_or_dt * 1e-2;
   Balance b;
   b.r = simulate(sc, s, nullptr, &b.x);

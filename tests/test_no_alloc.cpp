@@ -190,7 +190,7 @@ TEST(NoAllocation, SymplecticEulerStepsAllocateNothing) {
     }
   System sys(model, in, FdMethod::ArticulatedBody);
   SimulationSettings s;
-  s.method = "symplectic-euler";
+  s.method = Method::SymplecticEuler;
   s.dt = 1e-3;
   VecX y = sys.state(random_q(rng, model), random_v(rng, model));
   double t = 0.0;

@@ -53,13 +53,13 @@ void expect_matches_simulate(const char* scenario, const char* method, double dt
   const long K = 3;
   const MatX Y0 = initial_states(sc, K);
   RolloutSettings rs = rollout_settings(sc.simulation);
-  rs.method = method;
+  rs.method = parse_method(method);
   rs.dt = dt;
   rs.steps = T;
   const Result r = run(sc, Y0, nullptr, rs);
   EXPECT_EQ(r.report.completed, K) << scenario << " " << method;
   SimulationSettings ss = sc.simulation;
-  ss.method = method;
+  ss.method = parse_method(method);
   ss.dt = dt;
   ss.output_dt = dt;
   ss.t_end = double(T) * dt;
@@ -103,7 +103,7 @@ TEST(Rollout, SameStatesWhateverTheThreadCount) {
   for (long c = 0; c < U.cols(); ++c) U.col(c).setConstant(0.1 * std::sin(0.3 * double(c)));
   for (const char* method : {"rk4", "cvode-adams"}) {
     RolloutSettings rs;
-    rs.method = method;
+    rs.method = parse_method(method);
     rs.dt = 5e-3;
     rs.steps = T;
     const Result one = run(sc, Y0, &U, rs);
@@ -125,7 +125,7 @@ TEST(Rollout, ControlsActAsTorques) {
   MatX U = MatX::Zero(sc.model.nv, T * K);
   U.row(0).setConstant(0.7);
   RolloutSettings rs;
-  rs.method = "rk4";
+  rs.method = Method::Rk4;
   rs.dt = 1e-3;
   rs.steps = T;
   const Result r = run(sc, Y0, &U, rs);
@@ -151,11 +151,11 @@ TEST(Rollout, CvodeFollowsAControlJump) {
   MatX U = MatX::Zero(sc.model.nv, T);
   U.rightCols(T / 2).row(1).setConstant(2.0);
   RolloutSettings rs;
-  rs.method = "rk4";
+  rs.method = Method::Rk4;
   rs.dt = 1e-2;
   rs.steps = T;
   const Result rk = run(sc, Y0, &U, rs);
-  rs.method = "cvode-adams";
+  rs.method = Method::CvodeAdams;
   rs.rtol = 1e-11;
   rs.atol = 1e-12;
   const Result cv = run(sc, Y0, &U, rs);
@@ -191,9 +191,6 @@ TEST(Rollout, BadArgumentsRefused) {
   bad(1, 1) = std::nan("");
   EXPECT_THAT(message(bad, nullptr, rs, states), HasSubstr("initial_states: entry 1 of rollout 1 is nan"));
   RolloutSettings wrong = rs;
-  wrong.method = "rk5";
-  EXPECT_THAT(message(Y0, nullptr, wrong, states), HasSubstr("method: expected one of"));
-  wrong = rs;
   wrong.dt = 0;
   EXPECT_THAT(message(Y0, nullptr, wrong, states), HasSubstr("rollout: dt"));
 }
@@ -204,7 +201,7 @@ TEST(Rollout, FailedRolloutReportedOthersComplete) {
   MatX Y0 = initial_states(sc, 3);
   Y0.col(1).tail(2).setConstant(1e5);  // explicit Euler at dt = 0.05 blows up
   RolloutSettings rs;
-  rs.method = "euler";
+  rs.method = Method::Euler;
   rs.dt = 0.05;
   rs.steps = 400;
   const Result r = run(sc, Y0, nullptr, rs);
@@ -249,7 +246,7 @@ TEST(SimulateStates, EachRunIsSimulateWhateverTheThreadCount) {
   for (const char* name : {"double_pendulum.yaml", "arm_control_limits.yaml"}) {
     Scenario sc = load_scenario(scenario_path(name));
     sc.simulation.t_end = 0.3;
-    if (sc.simulation.method != "cvode-adams") sc.simulation.method = "rk4";
+    if (sc.simulation.method != Method::CvodeAdams) sc.simulation.method = Method::Rk4;
     const Model& m = sc.model;
     const long K = 5;
     MatX Y0 = initial_states(sc, K);

@@ -51,7 +51,7 @@ struct Written {
 Written write_run(const std::string& name) {
   Written w{load_scenario(SOADYN_SOURCE_DIR "/tests/data/view_visuals.yaml"), {}, {}, tmp(name)};
   SimulationSettings s = w.sc.simulation;
-  s.method = "rk4";
+  s.method = Method::Rk4;
   s.t_end = 0.5;
   s.output_dt = 0.01;
   {

@@ -1,5 +1,7 @@
 // Scenario files and URDF import: the four example files, URDF = equivalent YAML, and every
 // bad-input case with its message.
+#include "soadyn/integrators.hpp"
+#include "soadyn/rollout.hpp"
 #include "soadyn/scenario.hpp"
 
 #include "test_util.hpp"
@@ -445,11 +447,63 @@ TEST(BadUrdf, UnsupportedJointType) {
 TEST(ScenarioFiles, DynamicsRouteWordAndItsOldAlias) {
   const std::string head =
       "bodies:\n  - {name: a, joint: {type: revolute, axis: [0, 0, 1]}, mass: 1, inertia: [1, 1, 1]}\nsimulation:\n  dynamics: ";
-  EXPECT_EQ(parse_scenario(head + "aba\n", "scene.yaml").simulation.dynamics, "aba");
-  EXPECT_EQ(parse_scenario(head + "on\n", "scene.yaml").simulation.dynamics, "aba");
-  EXPECT_EQ(parse_scenario(head + "sparse\n", "scene.yaml").simulation.dynamics, "sparse");
-  EXPECT_EQ(SimulationSettings().dynamics, "aba");
+  EXPECT_EQ(parse_scenario(head + "aba\n", "scene.yaml").simulation.dynamics, FdMethod::ArticulatedBody);
+  EXPECT_EQ(parse_scenario(head + "on\n", "scene.yaml").simulation.dynamics, FdMethod::ArticulatedBody);
+  EXPECT_EQ(parse_scenario(head + "sparse\n", "scene.yaml").simulation.dynamics, FdMethod::Sparse);
+  EXPECT_EQ(SimulationSettings().dynamics, FdMethod::ArticulatedBody);
   EXPECT_EQ(parse_fd_method("on"), FdMethod::ArticulatedBody);
   EXPECT_THAT([&] { parse_scenario(head + "abb\n", "scene.yaml"); },
               testing::ThrowsMessage<Error>(testing::HasSubstr("did you mean 'aba'")));
+}
+
+// the word-valued settings are enums inside: every word of each Word row of the table goes word →
+// enum → word unchanged, each to a different value; the integrators' registry gives every Method
+// its one row and word
+TEST(Settings, EveryWordRoundTripsThroughItsEnum) {
+  int word_rows = 0;
+  for (const SettingInfo& info : setting_table()) {
+    if (info.kind != SettingKind::Word) continue;
+    ++word_rows;
+    std::vector<SimulationSettings> set;
+    for (const std::string& word : info.words()) {
+      SimulationSettings s;
+      set_setting(s, info, word);
+      EXPECT_EQ(setting_text(s, info), word) << info.name;
+      EXPECT_EQ(std::get<WordField>(info.field).get(s), word) << info.name;
+      for (const SimulationSettings& other : set) EXPECT_NE(setting_text(other, info), word) << info.name;
+      set.push_back(s);
+    }
+    SimulationSettings s;
+    EXPECT_THROW(set_setting(s, info, std::string("x")), Error) << info.name;
+  }
+  EXPECT_EQ(word_rows, 4);
+  std::vector<Method> methods;
+  for (const IntegratorInfo& info : integrators()) {
+    EXPECT_EQ(to_string(info.method), info.name);
+    EXPECT_EQ(parse_method(info.name), info.method);
+    EXPECT_EQ(&find_integrator(info.method), &info);
+    for (Method m : methods) EXPECT_NE(m, info.method) << info.name;
+    methods.push_back(info.method);
+  }
+  EXPECT_EQ(methods.size(), 7u);
+  EXPECT_EQ(parse_jacobian("dq"), Jacobian::Dq);
+  EXPECT_EQ(to_string(Newton::Simplified), "simplified");
+  EXPECT_THAT([] { parse_method("rk5"); },
+              testing::ThrowsMessage<Error>(testing::StrEq("method: unknown method 'rk5'; did you mean 'rk4'?")));
+  // one IntegrationSettings: a scenario's integration settings reach a batch of rollouts whole
+  SimulationSettings s;
+  s.method = Method::ImplicitMidpoint, s.dt = 2e-3, s.rtol = 1e-6, s.atol = 1e-9, s.max_step = 0.1, s.max_steps = 7;
+  s.dynamics = FdMethod::Dense, s.jacobian = Jacobian::Dq, s.newton = Newton::Simplified;
+  const RolloutSettings r = rollout_settings(s);
+  EXPECT_EQ(r.method, Method::ImplicitMidpoint);
+  EXPECT_EQ(r.dt, 2e-3);
+  EXPECT_EQ(r.rtol, 1e-6);
+  EXPECT_EQ(r.atol, 1e-9);
+  EXPECT_EQ(r.max_step, 0.1);
+  EXPECT_EQ(r.max_steps, 7);
+  EXPECT_EQ(r.dynamics, FdMethod::Dense);
+  EXPECT_EQ(r.jacobian, Jacobian::Dq);
+  EXPECT_EQ(r.newton, Newton::Simplified);
+  EXPECT_EQ(RolloutSettings().method, Method::Rk4);
+  EXPECT_EQ(SimulationSettings().method, Method::CvodeAdams);
 }

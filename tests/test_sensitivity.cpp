@@ -116,7 +116,7 @@ void check_against_differences(const Scenario& sc, SimulationSettings s, double 
   const double h = 1e-3;  // with the fourth-order stencil: truncation ~h⁴, the reruns' error ~1e-11 / h
   const double e0 = worst(got, differences_initial(sc, s, h), true);
   const double ep = worst(got, differences_parameters(sc, s, plan, h), false);
-  std::printf("  %s: largest relative difference from central differences: x0 %.1e, pi %.1e\n", s.method.c_str(), e0, ep);
+  std::printf("  %s: largest relative difference from central differences: x0 %.1e, pi %.1e\n", std::string(to_string(s.method)).c_str(), e0, ep);
   EXPECT_LT(e0, tol);
   EXPECT_LT(ep, tol);
 }
@@ -205,7 +205,7 @@ TEST(Sensitivity, RefusesWhatItDoesNotDifferentiate) {
   SimulationSettings s = tight("rk4", 0.1);
   s.sensitivities = {true, {}};
   EXPECT_THAT([&] { simulate(sc, s); }, testing::ThrowsMessage<Error>(HasSubstr("need a CVODE method")));
-  s.method = "cvode-adams";
+  s.method = Method::CvodeAdams;
   EXPECT_THAT([&] { simulate(sc, s, nullptr, nullptr, nullptr, {}, [](double, const VecX&, const VecX&, Eigen::Ref<VecX>) {}); },
               testing::ThrowsMessage<Error>(HasSubstr("controller")));
   s.sensitivities = {false, {"lowr"}};

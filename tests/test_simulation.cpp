@@ -27,7 +27,7 @@ std::string tmp(const std::string& name) {
 RunSummary run(const Scenario& sc, const std::string& method, double rtol, std::vector<Sample>* samples = nullptr,
                double t_end = 0) {
   SimulationSettings s = sc.simulation;
-  s.method = method;
+  s.method = parse_method(method);
   s.rtol = rtol;
   s.atol = rtol * 1e-2;
   if (t_end > 0) s.t_end = t_end;
@@ -87,13 +87,13 @@ TEST(Satellite, QuaternionStaysUnitInTheIntegratorState) {
   std::vector<Eigen::Vector4d> final_quaternion;
   for (const char* method : {"cvode-adams", "cvode-bdf"}) {
     SimulationSettings s = sc.simulation;
-    s.method = method;
+    s.method = parse_method(method);
     s.rtol = 1e-12;
     s.atol = 1e-14;
-    System sys(sc.model, sc.inputs, parse_fd_method(s.dynamics));
+    System sys(sc.model, sc.inputs, s.dynamics);
     VecX y = sys.state(sc.q0, sc.v0);
     double t = 0;
-    auto integrator = make_integrator(method, sys, s, t, y);
+    auto integrator = make_integrator(s.method, sys, s, t, y);
     const bool projected = integrator->quaternion_handling().find("CVodeSetProjFn") != std::string::npos;
     EXPECT_EQ(projected, std::string(method) == "cvode-bdf") << integrator->quaternion_handling();
     double worst = 0;
@@ -141,7 +141,7 @@ TEST(Instability, CvodeFailureNamesTimeAndWorstDof) {
   Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
   for (const char* method : {"cvode-adams", "cvode-bdf"}) {
     SimulationSettings s = sc.simulation;
-    s.method = method;
+    s.method = parse_method(method);
     s.max_steps = 200;  // far too few for 10 s at rtol 1e-10
     std::vector<Sample> samples;
     const RunSummary r = simulate(sc, s, nullptr, &samples);

@@ -23,7 +23,7 @@ initial:
 
 std::vector<Sample> run(const Scenario& sc, const std::string& method, double dt, double t_end, RunSummary* out = nullptr) {
   SimulationSettings s = sc.simulation;
-  s.method = method;
+  s.method = parse_method(method);
   s.dt = dt;
   s.t_end = t_end;
   s.output_dt = 0.1;
@@ -59,16 +59,16 @@ TEST(Stability, BdfSolvesTheStiffArmWithTenTimesFewerRhsEvaluations) {
   const Scenario sc = load_scenario(SOADYN_SOURCE_DIR "/scenarios/stiff_arm.yaml");
   SimulationSettings s = sc.simulation;
   s.t_end = 5.0;
-  s.method = "cvode-bdf";
+  s.method = Method::CvodeBdf;
   const RunSummary bdf = simulate(sc, s);
-  s.method = "cvode-adams";
+  s.method = Method::CvodeAdams;
   const RunSummary adams = simulate(sc, s);
   ASSERT_TRUE(bdf.completed) << bdf.status;
   ASSERT_TRUE(adams.completed) << adams.status;
   EXPECT_GE(double(adams.stats.rhs_evals), 10.0 * double(bdf.stats.rhs_evals))
       << "Adams " << adams.stats.rhs_evals << ", BDF " << bdf.stats.rhs_evals;
   // and the explicit methods need a step ~1000x below the motion's: RK4 at 1 ms blows up
-  s.method = "rk4";
+  s.method = Method::Rk4;
   s.dt = 1e-3;
   EXPECT_FALSE(simulate(sc, s).completed);
 }
@@ -88,7 +88,7 @@ TEST(Stability, BdfOnTheStiffArmIsAccurate) {
   t.atol = 1e-13;
   ASSERT_TRUE(simulate(sc, t, nullptr, &tight).completed);
   SimulationSettings m = s;
-  m.method = "implicit-midpoint";
+  m.method = Method::ImplicitMidpoint;
   m.dt = 1e-4;
   ASSERT_TRUE(simulate(sc, m, nullptr, &ref).completed);
   ASSERT_EQ(bdf.size(), ref.size());

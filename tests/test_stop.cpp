@@ -34,7 +34,7 @@ TEST(StopHook, EndsAtTheNextOutputStepWithTheSignalNamed) {
   const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
   for (const char* method : {"rk4", "cvode-adams"}) {
     SimulationSettings s = sc.simulation;
-    s.method = method;
+    s.method = parse_method(method);
     std::atomic<int> stop{0};
     StopAfter obs(stop, SIGTERM, 7);
     std::vector<Sample> samples;
@@ -70,7 +70,7 @@ TEST(StopHook, EndsBetweenTwoStepsNotAtTheNextOutput) {
   const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
   for (const char* method : {"rk4", "cvode-adams"}) {
     SimulationSettings s = sc.simulation;
-    s.method = method;
+    s.method = parse_method(method);
     s.dt = 1e-3;
     s.t_end = s.output_dt = 1000.0;
     s.rtol = 1e-12, s.atol = 1e-12;
@@ -111,7 +111,7 @@ TEST(StopHook, PollRunsBeforeEveryStepAndMaySetTheFlag) {
   const Scenario sc = load_scenario(kDir + "double_pendulum.yaml");
   for (const char* method : {"rk4", "cvode-bdf"}) {
     SimulationSettings s = sc.simulation;
-    s.method = method;
+    s.method = parse_method(method);
     s.t_end = s.output_dt = 10.0;
     std::atomic<int> stop{0};
     long calls = 0;

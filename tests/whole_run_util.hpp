@@ -13,7 +13,7 @@ namespace soadyn::test {
 // CVODE at rtol 1e-11, atol 1e-13, t_end, four outputs
 inline SimulationSettings tight(const std::string& method, double t_end) {
   SimulationSettings s;
-  s.method = method;
+  s.method = parse_method(method);
   s.t_end = t_end;
   s.output_dt = t_end / 4;
   s.rtol = 1e-11;

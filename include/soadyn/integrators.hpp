@@ -172,6 +172,7 @@ class Integrator {
 // steps of exactly `dt` (else CVODE's adaptive steps under rtol/atol), the properties claimed for a
 // fixed-step method (each one a test: test_integrators), the models it refuses, and how to make one.
 struct IntegratorInfo {
+  Method method;    // its enum (settings.hpp): SimulationSettings::method holds this, the name its word
   std::string_view name;
   std::string_view description;
   bool fixed_step;
@@ -187,21 +188,16 @@ struct IntegratorInfo {
 };
 const std::vector<IntegratorInfo>& integrators();
 const IntegratorInfo* find_integrator(std::string_view name);  // nullptr for an unknown name
+const IntegratorInfo& find_integrator(Method method);           // every Method has its row
 std::vector<std::string> integrator_names();
 
-// Makes the named integrator; throws soadyn::Error naming the known methods for an unknown name, and
-// for a model the method refuses (IntegratorInfo::refuses).
-std::unique_ptr<Integrator> make_integrator(const std::string& method, System& system,
-                                            const SimulationSettings& settings, double t0, const VecX& y0);
+// Makes the integrator; throws soadyn::Error for a model the method refuses (IntegratorInfo::refuses).
+std::unique_ptr<Integrator> make_integrator(Method method, System& system, const SimulationSettings& settings,
+                                            double t0, const VecX& y0);
 
 // The CVODE integrators (cvode.cpp)
 std::unique_ptr<Integrator> make_cvode(bool bdf, System& system, const SimulationSettings& settings, double t0,
                                        const VecX& y0);
-
-// Whether `jacobian` names analytic derivatives ("analytic") or difference quotients ("dq"); throws
-// soadyn::Error for another word.  Likewise `newton`: full or simplified.
-bool analytic_jacobian(const std::string& jacobian);
-bool full_newton(const std::string& newton);
 
 // Fixed steps in a span T (see the header comment): `whole` steps of dt (an integer, held as a double
 // so that spans beyond a long are still counted) and, when T/dt is not a whole number, one shorter

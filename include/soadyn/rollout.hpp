@@ -32,16 +32,12 @@
 
 namespace soadyn {
 
-struct RolloutSettings {
-  std::string method = "rk4";         // a name of integrators()
-  double dt = 1e-3;                   // s: the step of fixed-step methods, the control and output interval
+// The integration settings (settings.hpp: method, rtol, atol, dt, max_step, max_steps, dynamics,
+// jacobian, newton) with rk4 as the method, and what a batch adds.  dt is also the control and
+// output interval; max_steps counts each rollout's steps.
+struct RolloutSettings : IntegrationSettings {
+  RolloutSettings() { method = Method::Rk4; }
   long steps = 0;                     // T (with a control matrix: its T)
-  std::string dynamics = "aba";       // forward-dynamics route: dense | sparse | aba ("on" taken too)
-  double rtol = 1e-8, atol = 1e-10;   // CVODE
-  double max_step = 0.0;              // CVODE (0: none)
-  long max_steps = 100000000;         // CVODE, per rollout
-  std::string jacobian = "analytic";  // cvode-bdf, implicit-midpoint
-  std::string newton = "full";        // implicit-midpoint
   int threads = 1;                    // ≤ 0: one per hardware thread
   bool energies = true;               // fill `energies` (an extra kinematics pass per state)
 };
@@ -60,7 +56,7 @@ struct RolloutReport {
 
 // Throws soadyn::Error (naming the argument, what was expected and what was got) for a wrong shape,
 // a non-finite initial state or control, dt not positive and finite, a negative T, a model without
-// degrees of freedom or an unknown or refusing method, before any rollout starts.  A rollout that
+// degrees of freedom or a method that refuses the model, before any rollout starts.  A rollout that
 // fails midway does not throw: its status says why.  `controls` may be null (no control) and so may
 // `control` (no callback); not both given.  `stop` and `poll` as in simulate(): `stop` is read
 // before every step; `poll` runs on the calling thread (with threads = 1 before every step; with
@@ -69,7 +65,7 @@ RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, co
                       const ControlFn* control, const RolloutSettings& settings, batch::Out states,
                       batch::Out energies, const std::atomic<int>* stop = nullptr, std::function<void()> poll = {});
 
-// The model's settings of a scenario: method, dt, rtol, atol, dynamics, jacobian, newton, max_step
+// A scenario's integration settings (IntegrationSettings: method, dt, rtol, atol, dynamics, …)
 RolloutSettings rollout_settings(const SimulationSettings& s);
 
 // One run of simulate_states: what simulate() gave from that initial state.

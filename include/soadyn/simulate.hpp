@@ -92,7 +92,7 @@ double output_rows(const SimulationSettings& settings);
 
 
 // Fixed-step methods (rk4, euler, …) as opposed to CVODE's.
-bool is_fixed_step(const std::string& method);
+bool is_fixed_step(Method method);
 
 // Simulates sc with settings (its own `simulation` section, possibly overridden).  Never throws
 // for a run that fails midway: the summary says how it ended (completed = false) and the

@@ -207,9 +207,10 @@ int run_simulation(const RunOptions& o) {
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
 
   for (const auto& w : check_run(sc, s)) warn(w);
+  const std::string method(to_string(s.method));
   if (is_fixed_step(s.method) && (given("rtol") || given("atol")))
-    warn(std::string(given("rtol") ? "--rtol" : "--atol") + " has no effect with " + s.method + " (a fixed-step method; see --dt)");
-  if (!is_fixed_step(s.method) && given("dt")) warn("--dt has no effect with " + s.method + " (it chooses its own steps; see --rtol)");
+    warn(std::string(given("rtol") ? "--rtol" : "--atol") + " has no effect with " + method + " (a fixed-step method; see --dt)");
+  if (!is_fixed_step(s.method) && given("dt")) warn("--dt has no effect with " + method + " (it chooses its own steps; see --rtol)");
   const double rows = output_rows(s), bytes = rows * double(row_bytes(sc.model, groups)), limit = parse_size(o.max_output_size);
   if (bytes > limit) {
     char buf[160];
@@ -237,16 +238,17 @@ int run_simulation(const RunOptions& o) {
 
   if (!o.quiet) {
     std::printf("scenario               %s\n", sc.path.c_str());
-    if (s.method == "implicit-midpoint")
-      std::printf("method                 %s (dt %g s, %s Newton, %s Jacobian)\n", s.method.c_str(), s.dt,
-                  s.newton.c_str(), s.jacobian.c_str());
+    const std::string newton(to_string(s.newton)), jacobian(to_string(s.jacobian));
+    if (s.method == Method::ImplicitMidpoint)
+      std::printf("method                 %s (dt %g s, %s Newton, %s Jacobian)\n", method.c_str(), s.dt, newton.c_str(),
+                  jacobian.c_str());
     else if (is_fixed_step(s.method))
-      std::printf("method                 %s (dt %g s)\n", s.method.c_str(), s.dt);
-    else if (s.method == "cvode-bdf")
-      std::printf("method                 %s (rtol %g, atol %g, %s Jacobian)\n", s.method.c_str(), s.rtol, s.atol,
-                  s.jacobian.c_str());
+      std::printf("method                 %s (dt %g s)\n", method.c_str(), s.dt);
+    else if (s.method == Method::CvodeBdf)
+      std::printf("method                 %s (rtol %g, atol %g, %s Jacobian)\n", method.c_str(), s.rtol, s.atol,
+                  jacobian.c_str());
     else
-      std::printf("method                 %s (rtol %g, atol %g)\n", s.method.c_str(), s.rtol, s.atol);
+      std::printf("method                 %s (rtol %g, atol %g)\n", method.c_str(), s.rtol, s.atol);
     std::printf("quaternion             %s\n", r.quaternion_handling.c_str());
     std::printf("status                 %s\n", r.status.c_str());
     std::printf("t reached              %.9g s\n", r.t_reached);

@@ -339,9 +339,17 @@ py::tuple run_rollout(py::object scene, py::handle initial_states, py::object co
                          std::string(py::str(py::type::handle_of(scene).attr("__name__"))));
   }
   const Model& m = *model;
-  if (method) rs.method = *method;
+  // the words as a scenario takes them (the table's, settings.hpp): the same refusals, on for aba
+  SimulationSettings words;
+  if (method) {
+    set_setting(words, *find_setting("method"), *method);
+    rs.method = words.method;
+  }
+  if (dynamics) {
+    set_setting(words, *find_setting("dynamics"), *dynamics);
+    rs.dynamics = words.dynamics;
+  }
   if (dt) rs.dt = *dt;
-  if (dynamics) rs.dynamics = *dynamics;
   if (rtol) rs.rtol = *rtol;
   if (atol) rs.atol = *atol;
   rs.threads = threads_arg(where, threads);

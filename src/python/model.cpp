@@ -10,15 +10,26 @@
 
 namespace soadyn::python {
 
+// a Word setting's enum as its word (a str), the others as they are
 py::object setting_value(const SimulationSettings& s, const SettingInfo& info) {
-  return std::visit([&](auto field) { return py::cast(s.*field); }, info.field);
+  return std::visit(
+      [&](auto field) -> py::object {
+        if constexpr (std::is_same_v<decltype(field), WordField>) return py::str(std::string(field.get(s)));
+        else return py::cast(s.*field);
+      },
+      info.field);
 }
 
+// a Word setting from its word (refused, as a scenario refuses it, when it names none of its values)
 void set_setting_value(SimulationSettings& s, const SettingInfo& info, const py::handle& value) {
   std::visit(
       [&](auto field) {
-        using T = std::decay_t<decltype(s.*field)>;
-        s.*field = value.cast<T>();
+        if constexpr (std::is_same_v<decltype(field), WordField>) {
+          set_setting(s, info, value.cast<std::string>());
+        } else {
+          using T = std::decay_t<decltype(s.*field)>;
+          s.*field = value.cast<T>();
+        }
       },
       info.field);
 }
@@ -230,6 +241,15 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
         return py::tuple(out);
       },
       "the settings' names, in the table's order (sensitivities apart)");
+  settings.def_property_readonly_static(
+      "words",
+      [](const py::object&) {
+        py::dict out;
+        for (const SettingInfo& info : setting_table())
+          if (info.kind == SettingKind::Word) out[py::str(std::string(info.name))] = py::tuple(py::cast(info.words()));
+        return out;
+      },
+      "each word-valued setting's words, {name: (word, ...)} (an older word, dynamics' on, is taken too)");
   settings
       .def_property(
           "sensitivities",
@@ -257,11 +277,11 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
           },
           "forward sensitivities (CVODES): {'initial_state': bool, 'parameters': [body, ...] or 'all'}")
       .def("__repr__", [](const SimulationSettings& s) {
-        return "SimulationSettings(method='" + s.method + "', t_end=" + py::repr(py::float_(s.t_end)).cast<std::string>() +
+        return "SimulationSettings(method='" + std::string(to_string(s.method)) + "', t_end=" + py::repr(py::float_(s.t_end)).cast<std::string>() +
                ", output_dt=" + py::repr(py::float_(s.output_dt)).cast<std::string>() +
                ", rtol=" + py::repr(py::float_(s.rtol)).cast<std::string>() + ", atol=" +
                py::repr(py::float_(s.atol)).cast<std::string>() + ", dt=" + py::repr(py::float_(s.dt)).cast<std::string>() +
-               ", dynamics='" + s.dynamics + "')";
+               ", dynamics='" + std::string(to_string(s.dynamics)) + "')";
       });
 
   py::class_<Inputs>(m, "Inputs", "A scenario's joint inputs: torques, springs and dampers.")

@@ -109,7 +109,7 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   const std::vector<std::string> warnings = check_run(sc, settings);
   check_sensitivities(sc, settings, !controller.is_none());
   {
-    System probe(sc.model, sc.inputs, parse_fd_method(settings.dynamics));
+    System probe(sc.model, sc.inputs, settings.dynamics);
     const VecX y0 = probe.state(sc.q0, sc.v0);
     make_integrator(settings.method, probe, settings, 0.0, y0);
   }

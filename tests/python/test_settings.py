@@ -81,3 +81,43 @@ def test_run_option_refusals_name_the_option(tmp_path):
     assert not (tmp_path / "x.h5").exists()
     p = cli("run", os.path.join(SCENARIOS, "double_pendulum.yaml"), "-o", str(tmp_path / "x.h5"), "--max-steps", "1.5")
     assert p.returncode != 0 and "--max-steps: expected a whole number, got '1.5'" in p.stderr
+
+
+def test_every_word_round_trips(tmp_path):
+    """The word-valued settings are enums inside the library: each word they take comes back as
+    itself from the attribute, a pickle, a scenario key and the run file's /solver."""
+    import pickle
+    words = soadyn.SimulationSettings.words
+    assert set(words) == {"method", "dynamics", "jacobian", "newton"}
+    assert words["method"] == soadyn.METHODS and set(words["dynamics"]) == set(soadyn.DYNAMICS)
+    assert words["jacobian"] == ("analytic", "dq") and words["newton"] == ("full", "simplified")
+    path = os.path.join(SCENARIOS, "double_pendulum.yaml")
+    base = "".join(line for line in open(path) if not line.startswith("  method:"))  # its simulation: sets one
+    scene = soadyn.load_scenario(path)
+    for name, taken in words.items():
+        for word in taken:
+            s = soadyn.SimulationSettings()
+            setattr(s, name, word)
+            assert getattr(s, name) == word, (name, word)
+            scene.settings.method = "cvode-adams"
+            setattr(scene.settings, name, word)
+            assert getattr(pickle.loads(pickle.dumps(scene)).settings, name) == word, (name, word)
+            sc = soadyn.parse_scenario(base.replace("simulation:", f"simulation:\n  {name}: {word}", 1), "words.yaml")
+            assert getattr(sc.settings, name) == word, (name, word)
+            kw = {name: word, "t_end": 0.01, "output_dt": 0.01}
+            if name != "method":  # a method that reads the setting
+                kw["method"] = "implicit-midpoint" if name == "newton" else "cvode-bdf"
+            out = tmp_path / f"{name}-{word}.h5"
+            assert soadyn.simulate(sc, output=str(out), **kw).summary.method == kw.get("method", word)
+            with h5py.File(out, "r") as f:
+                got = f["/solver"].attrs[name]
+                assert (got.decode() if isinstance(got, bytes) else got) == word, (name, word)
+    # an unknown word is refused where it comes in, in the scenario reader's words; the old one is taken
+    s = soadyn.SimulationSettings()
+    with pytest.raises(soadyn.Error, match=r"^method: unknown method 'rk5'; did you mean 'rk4'\?$"):
+        s.method = "rk5"
+    with pytest.raises(soadyn.Error, match=r"^jacobian: expected analytic or dq, got 'numeric'"):
+        s.jacobian = "numeric"
+    assert s.method == "cvode-adams" and s.jacobian == "analytic"
+    s.dynamics = "on"
+    assert s.dynamics == "aba"

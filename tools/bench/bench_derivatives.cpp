@@ -98,7 +98,7 @@ template <Shape B> void MinverseLtdl(benchmark::State& st) {
     benchmark::DoNotOptimize(f.dd.Minv.data());
   });
 }
-template <Shape B, bool Analytic> void Jacobian(benchmark::State& st) {
+template <Shape B, bool Analytic> void SystemJacobian(benchmark::State& st) {
   const Model model = make_model(B, int(st.range(0)));
   const Inputs none;
   System sys(model, none, FdMethod::ArticulatedBody);
@@ -137,8 +137,8 @@ void leg_lengths(benchmark::internal::Benchmark* b) {
   BENCHMARK(FdDeriv<shape, true>)->Name(group "/fd_deriv_minv")->Apply(range);                        \
   BENCHMARK(Minverse<shape>)->Name(group "/minverse")->Apply(range);                                  \
   BENCHMARK(MinverseLtdl<shape>)->Name(group "/minverse_ltdl")->Apply(range);                         \
-  BENCHMARK(Jacobian<shape, true>)->Name(group "/jac_analytic")->Apply(range);                        \
-  BENCHMARK(Jacobian<shape, false>)->Name(group "/jac_dq")->Apply(range)
+  BENCHMARK(SystemJacobian<shape, true>)->Name(group "/jac_analytic")->Apply(range);                        \
+  BENCHMARK(SystemJacobian<shape, false>)->Name(group "/jac_dq")->Apply(range)
 
 SETS("chain", Shape::Chain, sizes);
 SETS("tree", Shape::Tree, tree_sizes);

@@ -115,7 +115,7 @@ void Step(benchmark::State& st, const char* method) {
   y << bench::random_vector(model.nq, 1, 0.3), bench::random_vector(model.nv, 2, 0.1);
   const VecX y0 = y;
   double t = 0.0;
-  auto integrator = make_integrator(method, sys, s, t, y);
+  auto integrator = make_integrator(parse_method(method), sys, s, t, y);
   for (auto _ : st) {
     y = y0;  // every iteration times the same step from the same state
     t = 0.0;

@@ -80,7 +80,7 @@ int rollouts(const Scenario& sc, mjModel* mm, mjData* md, long steps, long K) {
   }
   const double mujoco = double(K) / seconds_since(t0);
   RolloutSettings rs;
-  rs.method = "rk4";
+  rs.method = Method::Rk4;
   rs.dt = mm->opt.timestep;
   rs.steps = steps;
   rs.energies = false;
