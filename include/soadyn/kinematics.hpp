@@ -20,7 +20,7 @@ void update_frames_to(const Model& model, Data& data, const VecX& q, int body);
 // reference the specialized path is tested against.
 void update_kinematics_reference(const Model& model, Data& data, const VecX& q);
 
-// (cos θ, sin θ) into column i of turn for every revolute joint along a unit axis (unit_axis ≠ 0),
+// (cos θ, sin θ) into column i of turn for every revolute joint along a unit axis (Model::angles),
 // the one trigonometry update_kinematics and the local-frame 𝓜 route need; roots = false leaves
 // out the joints that hang from the ground (the local route never turns a root's inertia)
 void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool roots = true);
