@@ -13,11 +13,11 @@
 // The subspaces: AngularAxis<k> ±[e_k; 0], LinearAxis<k> ±[0; e_k], Angular [a; 0], Linear [0; a],
 // Spherical [e; 0], PlanarBody [0 0 n; t1 t2 0] (t = Rmᵀ e, turning with θ), FreeBody
 // [Rᵀ 0; 0 Rᵀ] (the free joint's velocity is inertial).  Each answers:
-//   motion(x)           Ĝ x = [gw; gu]
-//   bias_term(gw, gu)   Ġ̂ q̇ at q̈ = 0 in body axes, c_J: zero where Ĝ is constant, [0; −gw × gu]
-//                       for the planar and free joints (d/dt Rᵀ e = −ω × Rᵀ e)
-//   project(n, f, out)  Ĝᵀ [n; f] into out[0 .. nv)
-//   times(K, F, c)      K Ĝ into columns c .. c + nv of F
+//   add_motion(x, v̂, â)  v̂ += Ĝ x and â += v̂ × Ĝ x + c_J, c_J = Ġ̂ x at q̈ = 0: zero where Ĝ is
+//                        constant, [0; −gw × gu] for the planar and free joints (d/dt Rᵀ e = −ω × Rᵀ e)
+//   project(n, f, out)   Ĝᵀ [n; f] into out[0 .. nv)
+//   entry(m, F col)      column m of Ĝ dotted with a force pair
+//   times(K, F, c)       K Ĝ into columns c .. c + nv of F
 #pragma once
 
 #include "soadyn/data.hpp"
@@ -119,10 +119,6 @@ template <int k>
 struct AngularAxis {
   static constexpr int nv = 1, a = (k + 1) % 3, b = (k + 2) % 3;
   double sign;
-  void motion(const double* x, Vec3& gw, Vec3& gu) const {
-    gw.setZero(), gu.setZero();
-    gw(k) = sign * x[0];
-  }
   // v̂ × Ĝ q̇ with Ĝ q̇ = r e_k: [ω × e_k; u × e_k] r, two components each; Ĝ constant
   void add_motion(const double* x, Vec3& w, Vec3& u, Vec3& aw, Vec3& au) const {
     const double r = sign * x[0];
@@ -144,10 +140,6 @@ template <int k>
 struct LinearAxis {
   static constexpr int nv = 1, a = (k + 1) % 3, b = (k + 2) % 3;
   double sign;
-  void motion(const double* x, Vec3& gw, Vec3& gu) const {
-    gw.setZero(), gu.setZero();
-    gu(k) = sign * x[0];
-  }
   // v̂ × Ĝ q̇ = [0; ω × e_k r]
   void add_motion(const double* x, Vec3& w, Vec3& u, Vec3&, Vec3& au) const {
     const double r = sign * x[0];
@@ -173,7 +165,6 @@ inline constexpr int angular_axis<AngularAxis<k>> = k;
 struct Angular {
   static constexpr int nv = 1;
   const Vec3& g;
-  void motion(const double* x, Vec3& gw, Vec3& gu) const { gw = x[0] * g, gu.setZero(); }
   void add_motion(const double* x, Vec3& w, Vec3& u, Vec3& aw, Vec3& au) const {
     const Vec3 gw = x[0] * g;
     aw += w.cross(gw);
@@ -188,7 +179,6 @@ struct Angular {
 struct Linear {
   static constexpr int nv = 1;
   const Vec3& g;
-  void motion(const double* x, Vec3& gw, Vec3& gu) const { gw.setZero(), gu = x[0] * g; }
   void add_motion(const double* x, Vec3& w, Vec3& u, Vec3&, Vec3& au) const {
     const Vec3 gu = x[0] * g;
     au += w.cross(gu);
@@ -201,7 +191,6 @@ struct Linear {
 
 struct Spherical {
   static constexpr int nv = 3;
-  void motion(const double* x, Vec3& gw, Vec3& gu) const { gw = Vec3(x[0], x[1], x[2]), gu.setZero(); }
   void add_motion(const double* x, Vec3& w, Vec3& u, Vec3& aw, Vec3& au) const {
     const Vec3 gw(x[0], x[1], x[2]);
     aw += w.cross(gw);
@@ -215,6 +204,15 @@ struct Spherical {
   }
 };
 
+// v̂ += [gw; gu], â += v̂ × [gw; gu] + c_J with c_J = [0; −gw × gu]: a Ĝ that turns with the body's
+// rotation about its own joint (planar, free)
+inline void add_turning_motion(const Vec3& gw, const Vec3& gu, Vec3& w, Vec3& u, Vec3& aw, Vec3& au) {
+  aw += w.cross(gw);
+  au += w.cross(gu) + u.cross(gw) - gw.cross(gu);
+  w += gw;
+  u += gu;
+}
+
 // columns [0; t1], [0; t2], [n; 0]
 struct PlanarBody {
   static constexpr int nv = 3;
@@ -224,10 +222,7 @@ struct PlanarBody {
   void add_motion(const double* x, Vec3& w, Vec3& u, Vec3& aw, Vec3& au) const {
     Vec3 gw, gu;
     motion(x, gw, gu);
-    aw += w.cross(gw);
-    au += w.cross(gu) + u.cross(gw) - gw.cross(gu);  // v̂ × Ĝ q̇ + c_J
-    w += gw;
-    u += gu;
+    add_turning_motion(gw, gu, w, u, aw, au);
   }
   void project(const Vec3& nn, const Vec3& f, double* out) const { out[0] = t1.dot(f), out[1] = t2.dot(f), out[2] = n.dot(nn); }
   double entry(int m, const double* col) const {
@@ -252,10 +247,7 @@ struct FreeBody {
   void add_motion(const double* x, Vec3& w, Vec3& u, Vec3& aw, Vec3& au) const {
     Vec3 gw, gu;
     motion(x, gw, gu);
-    aw += w.cross(gw);
-    au += w.cross(gu) + u.cross(gw) - gw.cross(gu);  // v̂ × Ĝ q̇ + c_J
-    w += gw;
-    u += gu;
+    add_turning_motion(gw, gu, w, u, aw, au);
   }
   void project(const Vec3& n, const Vec3& f, double* out) const {
     const Vec3 a = R * n, b = R * f;
