@@ -34,14 +34,14 @@ inline void articulated_factor_step(const Model& model, Data& data, int i) {
   visit_joint(model, i, [&](const auto& j) {
     using J = std::decay_t<decltype(j)>;
     const int vi = model.idx_v[i], p = model.parent[i];
-    Mat6& P = data.P[i];
+    Mat6& P = data.work.articulated.P[i];
     if constexpr (J::nv == 1) {
       // U = P g,  𝒟 = gᵀ U;  P⁺ = P − U Uᵀ / 𝒟
       Vec6 U;
       inertial::times<J>(P, data.G, vi, U);
       const double Dinv = 1.0 / data.G.col(vi).dot(U);
-      data.U1.col(i) = U;
-      data.Dinv1(i) = Dinv;
+      data.work.articulated.U1.col(i) = U;
+      data.work.articulated.Dinv1(i) = Dinv;
       if (p < 0) return;
       const Vec6 UD = Dinv * U;
       for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
@@ -50,10 +50,10 @@ inline void articulated_factor_step(const Model& model, Data& data, int i) {
       Eigen::Matrix<double, 6, J::nv> U;
       inertial::times<J>(P, data.G, vi, U);
       const Eigen::Matrix<double, J::nv, J::nv> joint_inertia = data.G.middleCols<J::nv>(vi).transpose() * U;  // 𝒟_i
-      data.U[i] = U;
-      data.Dinv[i] = joint_inertia.inverse();
+      data.work.articulated.U[i] = U;
+      data.work.articulated.Dinv[i] = joint_inertia.inverse();
       if (p < 0) return;
-      const Eigen::Matrix<double, 6, J::nv> UD = U * data.Dinv[i];
+      const Eigen::Matrix<double, 6, J::nv> UD = U * data.work.articulated.Dinv[i];
       P.noalias() -= UD * U.transpose();
     }
   });
@@ -65,23 +65,23 @@ inline void articulated_factor_step(const Model& model, Data& data, int i) {
 template <class J>
 inline void aba_backward_step(const Model& model, Data& data, const VecX& tau, int i) {
   const int vi = model.idx_v[i], p = model.parent[i];
-  const Mat6& P = data.P[i];  // P⁺_i below a parent
+  const Mat6& P = data.work.articulated.P[i];  // P⁺_i below a parent
   double gz[J::nv];
-  inertial::project<J>(data.G, vi, data.z.col(i).head<3>(), data.z.col(i).tail<3>(), gz);
-  for (int c = 0; c < J::nv; ++c) data.u(vi + c) = tau(vi + c) - gz[c];
+  inertial::project<J>(data.G, vi, data.work.articulated.z.col(i).head<3>(), data.work.articulated.z.col(i).tail<3>(), gz);
+  for (int c = 0; c < J::nv; ++c) data.work.articulated.u(vi + c) = tau(vi + c) - gz[c];
   if (p < 0) return;
-  Vec6 za = data.z.col(i);
+  Vec6 za = data.work.articulated.z.col(i);
   za.noalias() += P * data.coriolis.col(i);
   if constexpr (J::nv == 1) {
-    za += (data.u(vi) * data.Dinv1(i)) * data.U1.col(i);
+    za += (data.work.articulated.u(vi) * data.work.articulated.Dinv1(i)) * data.work.articulated.U1.col(i);
   } else {
-    const Eigen::Matrix<double, J::nv, 1> Du = data.Dinv[i] * data.u.segment<J::nv>(vi);
-    za.noalias() += data.U[i] * Du;
+    const Eigen::Matrix<double, J::nv, 1> Du = data.work.articulated.Dinv[i] * data.work.articulated.u.segment<J::nv>(vi);
+    za.noalias() += data.work.articulated.U[i] * Du;
   }
-  add_congruence_D(data.P[p], P, data.d.col(i));
+  add_congruence_D(data.work.articulated.P[p], P, data.d.col(i));
   const Vec3 zf = za.tail<3>();
-  data.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
-  data.z.col(p).tail<3>() += zf;
+  data.work.articulated.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
+  data.work.articulated.z.col(p).tail<3>() += zf;
 }
 
 // aba's base-to-tip step, in 3-vector halves, which stay in registers: A' = [ω; u],
@@ -96,12 +96,12 @@ inline void aba_forward_step(const Model& model, Data& data, int i) {
     v += data.A.col(p).tail<3>() + wp.cross(Vec3(data.d.col(i)));
   }
   if constexpr (J::nv == 1) {
-    data.qdd(vi) = data.Dinv1(i) * (data.u(vi) - data.U1.col(i).head<3>().dot(w) - data.U1.col(i).tail<3>().dot(v));
+    data.qdd(vi) = data.work.articulated.Dinv1(i) * (data.work.articulated.u(vi) - data.work.articulated.U1.col(i).head<3>().dot(w) - data.work.articulated.U1.col(i).tail<3>().dot(v));
   } else {
-    const auto U = data.U[i];
+    const auto U = data.work.articulated.U[i];
     const Eigen::Matrix<double, J::nv, 1> rhs =
-        data.u.segment<J::nv>(vi) - U.topRows<3>().transpose() * w - U.bottomRows<3>().transpose() * v;
-    data.qdd.segment<J::nv>(vi).noalias() = data.Dinv[i] * rhs;
+        data.work.articulated.u.segment<J::nv>(vi) - U.topRows<3>().transpose() * w - U.bottomRows<3>().transpose() * v;
+    data.qdd.segment<J::nv>(vi).noalias() = data.work.articulated.Dinv[i] * rhs;
   }
   Vec3 gw, gu;
   inertial::motion<J>(data.G, vi, data.qdd.data() + vi, gw, gu);
@@ -119,15 +119,15 @@ void aba(const Model& model, Data& data, const VecX& tau) {
     // P_i = M_i = [I, h̃; h̃ᵀ, m e], written in place entry by entry: a 6×6 assembled from 3×3
     // temporaries goes through the stack in 8-byte pieces read back at once in 16-byte ones,
     // which the CPU cannot forward (a tenth of this sweep's time)
-    const SpatialInertia& M = data.M[i];
-    Mat6& P = data.P[i];
+    const SpatialInertia& M = data.inertia[i];
+    Mat6& P = data.work.articulated.P[i];
     const double h0 = M.h(0), h1 = M.h(1), h2 = M.h(2), m = M.m;
     P.topLeftCorner<3, 3>() = M.I;
     P.col(3) << 0.0, h2, -h1, m, 0.0, 0.0;
     P.col(4) << -h2, 0.0, h0, 0.0, m, 0.0;
     P.col(5) << h1, -h0, 0.0, 0.0, 0.0, m;
     P.block<3, 3>(3, 0) << 0.0, h2, -h1, -h2, 0.0, h0, h1, -h0, 0.0;  // h̃ᵀ, row by row
-    data.z.col(i) = data.gyroscopic.col(i);
+    data.work.articulated.z.col(i) = data.gyroscopic.col(i);
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
     articulated_factor_step(model, data, i);
@@ -150,17 +150,18 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
   // DOFs first): u_i = E_i − G_iᵀ Z_i over the subtree's columns (E_i: 1 at i's own DOFs), kept in
   // 𝓜⁻¹'s rows of i; then Z_p = D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i) in place (p's children's subtrees are
   // disjoint; p's own columns stay 0) and P_p += D_iᵀ (P_i − U_i 𝒟_i⁻¹ U_iᵀ) D_i.  O(N·depth).
-  Mat6X& Z = data.Zminv;
+  Mat6X& Z = data.work.articulated.Z;
+  Mat6X& Acc = data.work.articulated.A;  // per-column body accelerations, not [fd]'s data.A
   Z.setZero();
-  for (int i = 0; i < N; ++i) data.P[i] = data.M[i].matrix();
+  for (int i = 0; i < N; ++i) data.work.articulated.P[i] = data.inertia[i].matrix();
   for (int i = N - 1; i >= 0; --i) visit_joint(model, i, [&](const auto& joint) {
     using J = std::decay_t<decltype(joint)>;
     const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
     const int b = model.dfs_begin[i], n = model.dfs_end[i] - b;
     articulated_factor_step(model, data, i);
     if constexpr (J::nv == 1) {  // 𝒟⁻¹ a number
-      const Vec6 g = data.G.col(vi), U = data.U1.col(i);
-      const double Dinv = data.Dinv1(i);
+      const Vec6 g = data.G.col(vi), U = data.work.articulated.U1.col(i);
+      const double Dinv = data.work.articulated.Dinv1(i);
       for (int x = 0; x < n; ++x) {
         auto z = Z.col(b + x);
         const double u = (x == 0 ? 1.0 : 0.0) - g.dot(z);
@@ -172,7 +173,7 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
       }
     } else {
       const auto Gi = data.G.middleCols(vi, ni);
-      const Mat6G UD = data.U[i] * data.Dinv[i];
+      const Mat6G UD = data.work.articulated.U[i] * data.work.articulated.Dinv[i];
       for (int x = 0; x < n; ++x) {
         auto z = Z.col(b + x);
         VecG u = -(Gi.transpose() * z);
@@ -185,7 +186,7 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
         D.add_apply_transpose(i, zp, z);
       }
     }
-    if (p >= 0) add_congruence_D(data.P[p], data.P[i], data.d.col(i));
+    if (p >= 0) add_congruence_D(data.work.articulated.P[p], data.work.articulated.P[i], data.d.col(i));
   });
   // Base to tip, one column at a time: A'_i = D_i A_p, q̈_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i), A_i = A'_i + G_i q̈_i,
   // u_i nonzero only where column k's joint lies in i's subtree.  O(N) per column.
@@ -200,25 +201,25 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
         // in 3-vector halves, which stay in registers (as aba's forward sweep): A' = [ω; u]
         Vec3 w = Vec3::Zero(), v = Vec3::Zero();
         if (p >= 0) {
-          w = data.A.col(p).head<3>();
-          v = data.A.col(p).tail<3>() + w.cross(Vec3(data.d.col(i)));
+          w = Acc.col(p).head<3>();
+          v = Acc.col(p).tail<3>() + w.cross(Vec3(data.d.col(i)));
         }
         const double qdd =
-            data.Dinv1(i) * ((carries ? col[vi] : 0.0) - data.U1.col(i).head<3>().dot(w) - data.U1.col(i).tail<3>().dot(v));
+            data.work.articulated.Dinv1(i) * ((carries ? col[vi] : 0.0) - data.work.articulated.U1.col(i).head<3>().dot(w) - data.work.articulated.U1.col(i).tail<3>().dot(v));
         col[vi] = qdd;
-        data.A.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
-        data.A.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
+        Acc.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
+        Acc.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
         return;
       }
       Vec6 A = Vec6::Zero();
-      if (p >= 0) D.add_apply(i, data.A.col(p), A);
-      VecG u = -(data.U[i].transpose() * A);
+      if (p >= 0) D.add_apply(i, Acc.col(p), A);
+      VecG u = -(data.work.articulated.U[i].transpose() * A);
       if (carries) u += Minv.block(vi, k, ni, 1);
-      const VecG qdd = data.Dinv[i] * u;
+      const VecG qdd = data.work.articulated.Dinv[i] * u;
       Minv.block(vi, k, ni, 1) = qdd;
       A.noalias() += data.G.middleCols(vi, ni) * qdd;
-      data.A.col(i).head<3>() = A.head<3>();
-      data.A.col(i).tail<3>() = A.tail<3>();
+      Acc.col(i).head<3>() = A.head<3>();
+      Acc.col(i).tail<3>() = A.tail<3>();
     });
   }
 }

@@ -44,13 +44,13 @@ void solve_rows(const Model& model, const Data& data, double* x, Eigen::Index ld
       Eigen::Map<Col> u(x + vi * ld);
       u -= Z.lazyProduct(data.G.col(vi));
       if (p < 0) return;
-      const Vec6 UD = data.Dinv1(i) * data.U1.col(i);
+      const Vec6 UD = data.work.articulated.Dinv1(i) * data.work.articulated.U1.col(i);
       Z += u.lazyProduct(UD.transpose());
     } else {
       Eigen::Map<Cols, 0, Stride> u(x + vi * ld, K, ni, Stride(ld));
       u -= Z.lazyProduct(data.G.middleCols(vi, ni));
       if (p < 0) return;
-      const Mat6G UD = data.U[i] * data.Dinv[i];
+      const Mat6G UD = data.work.articulated.U[i] * data.work.articulated.Dinv[i];
       Z += u.lazyProduct(UD.transpose());
     }
     D.add_apply_transpose_rows(i, Z, Eigen::Map<Block>(w + 6 * K * p));
@@ -64,14 +64,14 @@ void solve_rows(const Model& model, const Data& data, double* x, Eigen::Index ld
     if constexpr (J::nv == 1) {
       Eigen::Map<Col> xi(x + vi * ld);
       Col xv = xi;
-      if (p >= 0) xv -= A.lazyProduct(data.U1.col(i));
-      xv *= data.Dinv1(i);
+      if (p >= 0) xv -= A.lazyProduct(data.work.articulated.U1.col(i));
+      xv *= data.work.articulated.Dinv1(i);
       xi = xv;
       A += xv.lazyProduct(data.G.col(vi).transpose());
     } else {
       Eigen::Map<Cols, 0, Stride> xi(x + vi * ld, K, ni, Stride(ld));
-      if (p >= 0) xi -= A.lazyProduct(data.U[i]);
-      const Cols t = xi.lazyProduct(data.Dinv[i].transpose());
+      if (p >= 0) xi -= A.lazyProduct(data.work.articulated.U[i]);
+      const Cols t = xi.lazyProduct(data.work.articulated.Dinv[i].transpose());
       xi = t;
       A += t.lazyProduct(data.G.middleCols(vi, ni).transpose());
     }

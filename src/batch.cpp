@@ -138,7 +138,7 @@ void mass_matrix(Pool& pool, In Q, Out M) {
     for (long k = begin; k < end; ++k) {
       load(w, Q, k);
       soadyn::mass_matrix(m, w.data, w.q);
-      M.middleCols(k * m.nv, m.nv) = w.data.Mass;
+      M.middleCols(k * m.nv, m.nv) = w.data.M;
     }
   });
 }

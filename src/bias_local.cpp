@@ -36,8 +36,8 @@ template <class J>
 inline void forward_step(const J& joint, const Model& model, Data& data, const VecX& q, const VecX& v, int i) {
   const auto X = local::transform(joint, model, data, q, i);
   if constexpr (std::is_same_v<decltype(X), const local::Rigid>) {
-    data.Xr[i] = X.R;  // kept for the tip-to-base sweep
-    data.Xp.col(i) = X.p;
+    data.work.local.Xr[i] = X.R;  // kept for the tip-to-base sweep
+    data.work.local.Xp.col(i) = X.p;
   }
   const int p = model.parent[i];
   Vec3 w, u, aw, au;
@@ -45,18 +45,18 @@ inline void forward_step(const J& joint, const Model& model, Data& data, const V
     w.setZero(), u.setZero(), aw.setZero();
     au = X.to_child(-model.gravity);
   } else {
-    const Vec3 wp = data.Vb.col(p).head<3>(), awp = data.Ab.col(p).head<3>();
+    const Vec3 wp = data.work.local.V.col(p).head<3>(), awp = data.work.local.A.col(p).head<3>();
     w = X.to_child(wp);
-    u = X.to_child(Vec3(data.Vb.col(p).tail<3>() + wp.cross(X.p)));
+    u = X.to_child(Vec3(data.work.local.V.col(p).tail<3>() + wp.cross(X.p)));
     aw = X.to_child(awp);
-    au = X.to_child(Vec3(data.Ab.col(p).tail<3>() + awp.cross(X.p)));
+    au = X.to_child(Vec3(data.work.local.A.col(p).tail<3>() + awp.cross(X.p)));
   }
   local::subspace(joint, X, model, i).add_motion(v.data() + model.idx_v[i], w, u, aw, au);
-  data.Vb.col(i).head<3>() = w, data.Vb.col(i).tail<3>() = u;
-  data.Ab.col(i).head<3>() = aw, data.Ab.col(i).tail<3>() = au;
+  data.work.local.V.col(i).head<3>() = w, data.work.local.V.col(i).tail<3>() = u;
+  data.work.local.A.col(i).head<3>() = aw, data.work.local.A.col(i).tail<3>() = au;
   // M̂_i, constant in body axes
   const SpatialInertia K = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
-  body_force(K, w, u, aw, au, data.Fb, i);
+  body_force(K, w, u, aw, au, data.work.local.F, i);
 }
 
 // tip to base, body i: bias_i = Ĝ_iᵀ f̂_i,  f̂_p += X_iᵀ f̂_i (X_i as the forward step found it)
@@ -65,17 +65,17 @@ inline void backward_step(const J& joint, const Model& model, Data& data, const 
   using X_t = decltype(local::transform(joint, model, data, q, i));
   const auto X = [&] {
     if constexpr (std::is_same_v<X_t, local::Rigid>)
-      return local::Rigid{data.Xr[i], data.Xp.col(i)};
+      return local::Rigid{data.work.local.Xr[i], data.work.local.Xp.col(i)};
     else
       return local::transform(joint, model, data, q, i);
   }();
-  const Vec3 n = data.Fb.col(i).head<3>(), f = data.Fb.col(i).tail<3>();
+  const Vec3 n = data.work.local.F.col(i).head<3>(), f = data.work.local.F.col(i).tail<3>();
   local::subspace(joint, X, model, i).project(n, f, data.bias.data() + model.idx_v[i]);
   const int p = model.parent[i];
   if (p < 0) return;
   const Vec3 fp = X.to_parent(f);
-  data.Fb.col(p).head<3>() += X.to_parent(n) + X.p.cross(fp);
-  data.Fb.col(p).tail<3>() += fp;
+  data.work.local.F.col(p).head<3>() += X.to_parent(n) + X.p.cross(fp);
+  data.work.local.F.col(p).tail<3>() += fp;
 }
 
 }  // namespace
@@ -83,11 +83,11 @@ inline void backward_step(const J& joint, const Model& model, Data& data, const 
 void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v) {
   data.check(model, "bias_forces", "q", q.size(), model.nq);
   data.check(model, "bias_forces", "v", v.size(), model.nv);
-  joint_turns(model, q, data.turn);
+  joint_turns(model, q, data.work.turn);
   for (int i = 0; i < model.nbodies; ++i)
-    std::visit([&](const auto& joint) { forward_step(joint, model, data, q, v, i); }, model.joint_model[i]);
+    visit_joint(model, i, [&](const auto& joint) { forward_step(joint, model, data, q, v, i); });
   for (int i = model.nbodies - 1; i >= 0; --i)
-    std::visit([&](const auto& joint) { backward_step(joint, model, data, q, i); }, model.joint_model[i]);
+    visit_joint(model, i, [&](const auto& joint) { backward_step(joint, model, data, q, i); });
 }
 
 }  // namespace soadyn

@@ -15,9 +15,9 @@ double moving_mass(const Model& model) {
 
 // K_i = M_i + Σ_children D_cᵀ K_c D_c, about η_i (tip to base), as mass_matrix forms them
 void composite_inertias(const Model& model, Data& data) {
-  for (int i = 0; i < model.nbodies; ++i) data.K[i] = data.M[i];
+  for (int i = 0; i < model.nbodies; ++i) data.work.composite.K[i] = data.inertia[i];
   for (int i = model.nbodies - 1; i >= 0; --i)
-    if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(data.K[i], data.d.col(i));
+    if (model.parent[i] >= 0) data.work.composite.K[model.parent[i]].add_transformed(data.work.composite.K[i], data.d.col(i));
 }
 
 // J_c from each body's K_j = (m_j, h_j, ·), only its mass and first moment read:
@@ -27,7 +27,7 @@ void com_columns(const Model& model, const Data& data, MatX& J) {
   const double m = moving_mass(model);
   for (int i = 0; i < model.nbodies; ++i)
     for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k)
-      J.col(k) = (data.K[i].m * data.G.col(k).tail<3>() - data.K[i].h.cross(Vec3(data.G.col(k).head<3>()))) / m;
+      J.col(k) = (data.work.composite.K[i].m * data.G.col(k).tail<3>() - data.work.composite.K[i].h.cross(Vec3(data.G.col(k).head<3>()))) / m;
 }
 
 }  // namespace
@@ -54,14 +54,14 @@ void com_jacobian(const Model& model, Data& data, const VecX& q, MatX& J) {
   // tip to base, the subtree's mass m_j and first moment h_j about η_j alone (K_j without its
   // rotational inertia, which J_c does not need): h_i = m_i C_i com_i, then h_p += h_i + m_i d_i
   for (int i = 0; i < model.nbodies; ++i) {
-    data.K[i].m = model.mass[i];
-    data.K[i].h.noalias() = model.mass[i] * (data.R[i] * model.com[i]);
+    data.work.composite.K[i].m = model.mass[i];
+    data.work.composite.K[i].h.noalias() = model.mass[i] * (data.R[i] * model.com[i]);
   }
   for (int i = model.nbodies - 1; i >= 0; --i) {
     const int p = model.parent[i];
     if (p < 0) continue;
-    data.K[p].m += data.K[i].m;
-    data.K[p].h += data.K[i].h + data.K[i].m * data.d.col(i);
+    data.work.composite.K[p].m += data.work.composite.K[i].m;
+    data.work.composite.K[p].h += data.work.composite.K[i].h + data.work.composite.K[i].m * data.d.col(i);
   }
   com_columns(model, data, J);
 }
@@ -74,7 +74,7 @@ void centroidal_momentum_matrix(const Model& model, Data& data, MatX& AG) {
     const Vec3 arm = data.eta.col(i) - c;
     for (int k = model.idx_v[i]; k < model.idx_v[i] + model.nv_i[i]; ++k) {
       // K_i G_k = [n; f] about η_i, moved to c: [n + (η_i − c) × f; f]
-      const Vec6 F = data.K[i] * data.G.col(k);
+      const Vec6 F = data.work.composite.K[i] * data.G.col(k);
       AG.col(k) << F.head<3>() + arm.cross(F.tail<3>()), F.tail<3>();
     }
   }
@@ -106,7 +106,7 @@ Vec6 centroidal_momentum_matrix_dot_times_v(const Model& model, Data& data) {
       data.A.col(i).tail<3>() = data.A.col(p).tail<3>() + wp.cross(Vec3(data.d.col(i))) + data.coriolis.col(i).tail<3>();
     }
     // the body's rate of momentum, the force pair M_i a_i + 𝔟_i about η_i, moved to c
-    const Vec6 F = data.M[i] * data.A.col(i) + data.gyroscopic.col(i);
+    const Vec6 F = data.inertia[i] * data.A.col(i) + data.gyroscopic.col(i);
     hd.head<3>() += F.head<3>() + (data.eta.col(i) - c).cross(F.tail<3>());
     hd.tail<3>() += F.tail<3>();
   }
@@ -119,7 +119,7 @@ SpatialInertia centroidal_inertia(const Model& model, Data& data) {
   SpatialInertia KG;
   // each root's composite, moved from η_root to c (D with d = η_root − c)
   for (int i = 0; i < model.nbodies; ++i)
-    if (model.parent[i] < 0) KG.add_transformed(data.K[i], data.eta.col(i) - c);
+    if (model.parent[i] < 0) KG.add_transformed(data.work.composite.K[i], data.eta.col(i) - c);
   return KG;
 }
 

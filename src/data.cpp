@@ -41,42 +41,45 @@ Data::Data(const Model& m)
       s(Mat3X::Zero(3, m.nbodies)),
       r(Mat3X::Zero(3, m.nbodies)),
       G(Mat6X::Zero(6, m.nv)),
-      turn(Eigen::Matrix2Xd::Zero(2, m.nbodies)),
-      M(m.nbodies),
+      inertia(m.nbodies),
       V(Mat6X::Zero(6, m.nbodies)),
       Vbar(Mat6X::Zero(6, m.nbodies)),
       coriolis(Mat6X::Zero(6, m.nbodies)),
       gyroscopic(Mat6X::Zero(6, m.nbodies)),
-      K(m.nbodies),
-      S0(Mat6X::Zero(6, m.nv)),
-      F0(Mat6X::Zero(6, m.nv)),
-      F0t(Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(m.nv, 6)),
-      Kl(m.nbodies),
-      Fl(Mat6X::Zero(6, m.nv)),
-      Mass(MatX::Zero(m.nv, m.nv)),
+      M(MatX::Zero(m.nv, m.nv)),
       A(Mat6X::Zero(6, m.nbodies)),
       F(Mat6X::Zero(6, m.nbodies)),
       bias(VecX::Zero(m.nv)),
-      Vb(Mat6X::Zero(6, m.nbodies)),
-      Ab(Mat6X::Zero(6, m.nbodies)),
-      Fb(Mat6X::Zero(6, m.nbodies)),
-      Xr(m.nbodies, Mat3::Identity()),
-      Xp(Mat3X::Zero(3, m.nbodies)),
       tau(VecX::Zero(m.nv)),
-      qdd(VecX::Zero(m.nv)),
-      L(MatX::Zero(m.nv, m.nv)),
-      llt(m.nv),
-      P(m.nbodies, Mat6::Zero()),
-      z(Mat6X::Zero(6, m.nbodies)),
-      U1(Mat6X::Zero(6, m.nbodies)),
-      Dinv1(VecX::Zero(m.nbodies)),
-      Dinv(m.nbodies),
-      u(VecX::Zero(m.nv)),
-      Zminv(Mat6X::Zero(6, m.nv)) {
-  U.reserve(m.nbodies);
-  for (int i = 0; i < m.nbodies; ++i) {
-    U.emplace_back(Mat6G::Zero(6, m.nv_i[i]));
-    Dinv[i] = MatGG::Zero(m.nv_i[i], m.nv_i[i]);
+      qdd(VecX::Zero(m.nv)) {
+  const int N = m.nbodies, nv = m.nv;
+  work.turn = Eigen::Matrix2Xd::Zero(2, N);
+  auto& c = work.composite;
+  c.K.resize(N);
+  c.S0 = c.F0 = Mat6X::Zero(6, nv);
+  c.F0t = Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(nv, 6);
+  auto& l = work.local;
+  l.K.resize(N);
+  l.Fcol = Mat6X::Zero(6, nv);
+  l.V = l.A = l.F = Mat6X::Zero(6, N);
+  l.Xr.assign(N, Mat3::Identity());
+  l.Xp = Mat3X::Zero(3, N);
+  l.R.assign(N, Mat3::Identity());
+  l.eta = l.d = Mat3X::Zero(3, N);
+  l.G = Mat6X::Zero(6, nv);
+  work.factor.L = MatX::Zero(nv, nv);
+  work.factor.llt = Eigen::LLT<MatX>(nv);
+  auto& a = work.articulated;
+  a.P.assign(N, Mat6::Zero());
+  a.z = a.U1 = a.A = Mat6X::Zero(6, N);
+  a.Dinv1 = VecX::Zero(N);
+  a.u = VecX::Zero(nv);
+  a.Z = Mat6X::Zero(6, nv);
+  a.U.reserve(N);
+  a.Dinv.reserve(N);
+  for (int i = 0; i < N; ++i) {
+    a.U.emplace_back(Mat6G::Zero(6, m.nv_i[i]));
+    a.Dinv.emplace_back(MatGG::Zero(m.nv_i[i], m.nv_i[i]));
   }
 }
 

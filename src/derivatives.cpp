@@ -141,7 +141,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     dd.v.col(i) = vel;
     dd.a.col(i) = acc;
     SpatialInertia Yi;  // M_i moved from η_i to the origin
-    Yi.add_transformed(data.M[i], eta);
+    Yi.add_transformed(data.inertia[i], eta);
     const Vec6 h = Yi * vel;
     dd.F.col(i) = Yi * acc + fcross(vel, h);  // f_i = Y_i a_i + v_i ×* Y_i v_i
     dd.Y[i] = Yi;
@@ -310,10 +310,10 @@ void inverse_dynamics_derivatives_transpose_times(const Model& model, Derivative
 
 namespace {
 
-// X ← 𝓜⁻¹ X with the tree factor 𝓜 = Lᵀ D L (data.L, ltdl_factor) for many right-hand sides at once,
+// X ← 𝓜⁻¹ X with the tree factor 𝓜 = Lᵀ D L (data.work.factor.L, ltdl_factor) for many right-hand sides at once,
 // held transposed (Xt = Xᵀ, so each of ltdl_solve's row operations is one contiguous axpy)
 void ltdl_solve_transposed(const Model& model, const Data& data, MatX& Xt) {
-  const auto& H = data.L;
+  const auto& H = data.work.factor.L;
   const auto& lambda = model.dof_parent;
   // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip)
   for (int k = model.nv - 1; k >= 0; --k)

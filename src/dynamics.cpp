@@ -42,10 +42,10 @@ void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod 
     case FdMethod::Dense:
       mass_matrix(model, data);
       bias_forces(model, data);
-      data.llt.compute(data.Mass);
-      if (data.llt.info() != Eigen::Success) throw Error("forward dynamics: the mass matrix is not positive definite");
+      data.work.factor.llt.compute(data.M);
+      if (data.work.factor.llt.info() != Eigen::Success) throw Error("forward dynamics: the mass matrix is not positive definite");
       data.qdd = tau - data.bias;
-      data.llt.solveInPlace(data.qdd);
+      data.work.factor.llt.solveInPlace(data.qdd);
       return;
     case FdMethod::Sparse:
       mass_matrix(model, data);

@@ -188,7 +188,7 @@ class SymplecticEuler : public FixedStep {
     // at q: kinematics, 𝓜, p = 𝓜 v, g = bias(q, 0)
     update_kinematics(m, data_, q_);
     mass_matrix(m, data_);
-    p_.noalias() = data_.Mass * v;
+    p_.noalias() = data_.M * v;
     update_velocities(m, data_, zero_);
     bias_forces(m, data_);
     g_ = data_.bias;
@@ -208,7 +208,7 @@ class SymplecticEuler : public FixedStep {
       dv_.setZero();
       sys_.inputs.add_derivatives(dq_, dv_);
       // R'(w) = 𝓜 − h P(w)ᵀ − h ∂τ_in/∂v
-      J_ = data_.Mass - h * dd_.dtau_dq.transpose() - h * dv_;
+      J_ = data_.M - h * dd_.dtau_dq.transpose() - h * dv_;
       lu_.compute(J_);
       delta_.noalias() = lu_.solve(r_);
       w_ -= delta_;
@@ -232,7 +232,7 @@ class SymplecticEuler : public FixedStep {
       y(nq + nv + 1) += h * pw.dissipated;
     }
     // p⁺ = 𝓜(q) v⁺, q⁺ = q + h v⁺, v⁺⁺ = 𝓜(q⁺)⁻¹ p⁺
-    p_.noalias() = data_.Mass * w_;
+    p_.noalias() = data_.M * w_;
     y.head(nq) += h * w_;
     q_ = y.head(nq);
     update_kinematics(m, data_, q_);

@@ -266,17 +266,17 @@ struct FreeBody {
   }
 };
 
-// ---- each kind's X_i, from q and the batched (cos θ, sin θ) of data.turn, and its Ĝ_i given X_i
+// ---- each kind's X_i, from q and the batched (cos θ, sin θ) of data.work.turn, and its Ĝ_i given X_i
 
 template <int k>
 inline AxisTurn<k> transform(const joints::RevoluteAxis<k>& j, const Model& model, const Data& data, const VecX&, int i) {
-  return {data.turn(0, i), j.sign * data.turn(1, i), model.placement[i].p};
+  return {data.work.turn(0, i), j.sign * data.work.turn(1, i), model.placement[i].p};
 }
 template <int k>
 inline Rigid transform(const joints::TurnedRevoluteAxis<k>& j, const Model& model, const Data& data, const VecX&, int i) {
   const Placement& X = model.placement[i];
   Rigid out{Mat3(), X.p};
-  turn_frame(X.R, k, data.turn(0, i), j.sign * data.turn(1, i), out.R);
+  turn_frame(X.R, k, data.work.turn(0, i), j.sign * data.work.turn(1, i), out.R);
   return out;
 }
 template <int k>

@@ -2,6 +2,7 @@
 
 #include "soadyn/operators.hpp"
 
+#include "dynamics_routes.hpp"
 #include "joint_inertial.hpp"
 
 #include <cmath>
@@ -73,37 +74,46 @@ void joint_turns(const Model& model, const VecX& q, Eigen::Matrix2Xd& turn, bool
 
 namespace {
 
+// where a sweep writes the frames: [kin]'s own, or a route's workspace (Workspace::BodyAxes)
+struct Frames {
+  std::vector<Mat3>& R;
+  Mat3X &eta, &d;
+  Mat6X& G;
+  Eigen::Matrix2Xd& turn;
+};
+Frames frames_of(Data& data) { return {data.R, data.eta, data.d, data.G, data.work.turn}; }
+
 // Each kind's part of the kinematics step: from the parent's frame Rp and the joint point η (the
 // placement's offset already added), the body's frame R, η moved by the joint, and G_i.
 // A revolute joint along ±e_k: g_i = ±C_j e_k, and a turn by θ about it mixes only the other two
-// columns of C_j (the batched (cos θ, sin θ) of data.turn, no 3×3 product); a prismatic one along
+// columns of C_j (the batched (cos θ, sin θ) of f.turn, no 3×3 product); a prismatic one along
 // ±e_k slides η by x g_i.  C_j = C_p X.R, or C_p itself where the placement does not turn.
 template <int k>
-inline void joint_frame(const joints::RevoluteAxis<k>& j, const Model& model, Data& data, const VecX&, int i,
+inline void joint_frame(const joints::RevoluteAxis<k>& j, const Model& model, Frames& f, const VecX&, int i,
                         const Mat3& Rp, Mat3& R, Vec3&) {
-  turn_frame(Rp, k, data.turn(0, i), j.sign * data.turn(1, i), R);
-  data.G.col(model.idx_v[i]) << j.sign * Rp.col(k), Vec3::Zero();
+  turn_frame(Rp, k, f.turn(0, i), j.sign * f.turn(1, i), R);
+  f.G.col(model.idx_v[i]) << j.sign * Rp.col(k), Vec3::Zero();
 }
 template <int k>
-inline void joint_frame(const joints::TurnedRevoluteAxis<k>& j, const Model& model, Data& data, const VecX&, int i,
+inline void joint_frame(const joints::TurnedRevoluteAxis<k>& j, const Model& model, Frames& f, const VecX&, int i,
                         const Mat3& Rp, Mat3& R, Vec3&) {
   Mat3 Rj;
   Rj.noalias() = Rp * model.placement[i].R;
-  turn_frame(Rj, k, data.turn(0, i), j.sign * data.turn(1, i), R);
-  data.G.col(model.idx_v[i]) << j.sign * Rj.col(k), Vec3::Zero();
+  turn_frame(Rj, k, f.turn(0, i), j.sign * f.turn(1, i), R);
+  f.G.col(model.idx_v[i]) << j.sign * Rj.col(k), Vec3::Zero();
 }
 template <int k>
-inline void joint_frame(const joints::PrismaticAxis<k>& j, const Model& model, Data& data, const VecX& q, int i,
+inline void joint_frame(const joints::PrismaticAxis<k>& j, const Model& model, Frames& f, const VecX& q, int i,
                         const Mat3& Rp, Mat3& R, Vec3& eta) {
   if (j.turned) R.noalias() = Rp * model.placement[i].R;
   else R = Rp;
   const Vec3 g = j.sign * R.col(k);
   eta += q(model.idx_q[i]) * g;
-  data.G.col(model.idx_v[i]) << Vec3::Zero(), g;
+  f.G.col(model.idx_v[i]) << Vec3::Zero(), g;
 }
 // any other kind: C_i = C_j R(q), η += C_j p(q)
 template <class J>
-inline void joint_frame(const J& joint, const Model& model, Data& data, const VecX& q, int i, const Mat3& Rp, Mat3& R,
+inline void joint_frame(const J& joint, const Model& model, Frames& f, const VecX& q, int i, const Mat3& Rp, Mat3& R,
                         Vec3& eta) {
   Mat3 Rj, Rm;
   Vec3 pm;
@@ -111,41 +121,41 @@ inline void joint_frame(const J& joint, const Model& model, Data& data, const Ve
   joint.motion(q.data() + model.idx_q[i], Rm, pm);
   R.noalias() = Rj * Rm;
   eta.noalias() += Rj * pm;
-  joint.subspace(Rj, R, data.G.middleCols<J::nv>(model.idx_v[i]));
+  joint.subspace(Rj, R, f.G.middleCols<J::nv>(model.idx_v[i]));
 }
 
 // body i of the kinematics sweep, its parent's frame known and its joint's (cos θ, sin θ) in
-// data.turn; kInertias = false stops at the frames (R, η, d, G)
+// f.turn; kInertias = false stops at the frames (R, η, d, G)
 template <bool kInertias, class J>
-inline void kinematics_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
+inline void kinematics_step(const J& joint, const Model& model, Data& data, Frames& f, const VecX& q, int i) {
   const int p = model.parent[i];
-  const Mat3& Rp = p < 0 ? kIdentity : data.R[p];
+  const Mat3& Rp = p < 0 ? kIdentity : f.R[p];
   // η_j = η_p + C_p X.p, then the joint's own motion
   Vec3 eta = Rp * model.placement[i].p;
-  if (p >= 0) eta += data.eta.col(p);
-  Mat3& R = data.R[i];
-  joint_frame(joint, model, data, q, i, Rp, R, eta);
+  if (p >= 0) eta += f.eta.col(p);
+  Mat3& R = f.R[i];
+  joint_frame(joint, model, f, q, i, Rp, R, eta);
   // d_i = η_i − η_p;  s_i = C_i com_i;  r_i = η_i + s_i;  M_i = (m_i, m_i s_i, C_i I_η C_iᵀ) (eq. 12)
-  data.eta.col(i) = eta;
-  data.d.col(i) = p < 0 ? eta : Vec3(eta - data.eta.col(p));
+  f.eta.col(i) = eta;
+  f.d.col(i) = p < 0 ? eta : Vec3(eta - f.eta.col(p));
   if constexpr (!kInertias) return;
   const Vec3 s = R * model.com[i];
   data.s.col(i) = s;
   data.r.col(i) = eta + s;
-  data.M[i].m = model.mass[i];
-  data.M[i].h = model.mass[i] * s;
-  rotate_symmetric(R, model.inertia_origin[i], data.M[i].I);
+  data.inertia[i].m = model.mass[i];
+  data.inertia[i].h = model.mass[i] * s;
+  rotate_symmetric(R, model.inertia_origin[i], data.inertia[i].I);
 }
 
 template <bool kInertias>
-inline void kinematics_step(const Model& model, Data& data, const VecX& q, int i) {
-  std::visit([&](const auto& joint) { kinematics_step<kInertias>(joint, model, data, q, i); }, model.joint_model[i]);
+inline void kinematics_step(const Model& model, Data& data, Frames& f, const VecX& q, int i) {
+  visit_joint(model, i, [&](const auto& joint) { kinematics_step<kInertias>(joint, model, data, f, q, i); });
 }
 
 template <bool kInertias>
-void kinematics_sweep(const Model& model, Data& data, const VecX& q) {
-  joint_turns(model, q, data.turn);
-  for (int i = 0; i < model.nbodies; ++i) kinematics_step<kInertias>(model, data, q, i);
+void kinematics_sweep(const Model& model, Data& data, Frames f, const VecX& q) {
+  joint_turns(model, q, f.turn);
+  for (int i = 0; i < model.nbodies; ++i) kinematics_step<kInertias>(model, data, f, q, i);
 }
 
 // the frames of body b's ancestors and then b's, parent first: the path up from b, its turned
@@ -156,24 +166,31 @@ void frames_to(const Model& model, Data& data, const VecX& q, int b) {
   int path[kPath], turn_body[kPath], turn_q[kPath];
   int n = 0, nt = 0;
   for (int i = b; i >= 0; i = model.parent[i]) {
-    if (n == kPath) return kinematics_sweep<false>(model, data, q);
+    if (n == kPath) return kinematics_sweep<false>(model, data, frames_of(data), q);
     path[n++] = i;
     if (turns_by_angle(model.joint_model[i])) turn_body[nt] = i, turn_q[nt++] = model.idx_q[i];
   }
-  turns_of(turn_body, turn_q, 0, nt, q.data(), data.turn);
-  for (int k = n - 1; k >= 0; --k) kinematics_step<false>(model, data, q, path[k]);
+  Frames f = frames_of(data);
+  turns_of(turn_body, turn_q, 0, nt, q.data(), f.turn);
+  for (int k = n - 1; k >= 0; --k) kinematics_step<false>(model, data, f, q, path[k]);
 }
 
 }  // namespace
 
 void update_kinematics(const Model& model, Data& data, const VecX& q) {
   data.check(model, "update_kinematics", "q", q.size(), model.nq);
-  kinematics_sweep<true>(model, data, q);
+  kinematics_sweep<true>(model, data, frames_of(data), q);
 }
+
+namespace detail {
+void update_frames(const Model& model, Data& data, const VecX& q, Workspace::BodyAxes& out) {
+  kinematics_sweep<false>(model, data, {out.R, out.eta, out.d, out.G, data.work.turn}, q);
+}
+}  // namespace detail
 
 void update_frames(const Model& model, Data& data, const VecX& q) {
   data.check(model, "update_frames", "q", q.size(), model.nq);
-  kinematics_sweep<false>(model, data, q);
+  kinematics_sweep<false>(model, data, frames_of(data), q);
 }
 
 void update_frames_to(const Model& model, Data& data, const VecX& q, int body) {
@@ -204,9 +221,9 @@ void update_kinematics_reference(const Model& model, Data& data, const VecX& q) 
     joint_subspace(model.joint_type[i], model.axis[i], Rj, data.R[i], data.G.middleCols(model.idx_v[i], model.nv_i[i]));
     // M_i = [I_i − m s̃ s̃, m s̃; −m s̃, m e] (eq. 12); its upper-left block, the inertia about η_i,
     // is the body-frame one turned: C_i I_η C_iᵀ
-    data.M[i].m = model.mass[i];
-    data.M[i].h = model.mass[i] * data.s.col(i);
-    data.M[i].I.noalias() = data.R[i] * model.inertia_origin[i] * data.R[i].transpose();
+    data.inertia[i].m = model.mass[i];
+    data.inertia[i].h = model.mass[i] * data.s.col(i);
+    data.inertia[i].I.noalias() = data.R[i] * model.inertia_origin[i] * data.R[i].transpose();
   }
 }
 
@@ -244,8 +261,8 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
     data.Vbar.col(i).head<3>() = w;
     data.Vbar.col(i).tail<3>() = u + w.cross(Vec3(data.s.col(i)));
     // gyroscopic force about η_i: f = m ω × (ω × s), n = ω × I ω + s × f = ω × (I − m s̃ s̃) ω
-    const Vec3& h = data.M[i].h;
-    data.gyroscopic.col(i).head<3>() = w.cross(data.M[i].I * w);
+    const Vec3& h = data.inertia[i].h;
+    data.gyroscopic.col(i).head<3>() = w.cross(data.inertia[i].I * w);
     data.gyroscopic.col(i).tail<3>() = w.cross(w.cross(h));
   }
 }
@@ -262,11 +279,11 @@ Mat6 S_matrix(const Data& data, int i) {
   return S;
 }
 
-Mat6 M_matrix(const Data& data, int i) { return data.M[i].matrix(); }
+Mat6 M_matrix(const Data& data, int i) { return data.inertia[i].matrix(); }
 
 Mat3 inertia_cm(const Data& data, int i) {
   const Vec3 s = data.s.col(i);
-  return data.M[i].I - parallel_axis(data.M[i].m, s);
+  return data.inertia[i].I - parallel_axis(data.inertia[i].m, s);
 }
 
 Mat6G G_matrix(const Model& model, const Data& data, int i) {

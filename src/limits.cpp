@@ -94,7 +94,7 @@ void JointLimits::contact(System& sys, double t, VecX& y, int s, std::vector<Lim
   // 𝓜 at q, and 𝓜⁻¹ E on the DOFs that take an impulse: this one and the held ones
   update_kinematics(m, d, y.head(m.nq));
   mass_matrix(m, d);
-  const Eigen::LDLT<MatX> M(d.Mass);
+  const Eigen::LDLT<MatX> M(d.M);
   std::vector<int> S{sd.dof};
   for (const int h : held_) S.push_back(sides_[size_t(h)].dof);
   const int n = int(S.size());
@@ -103,7 +103,7 @@ void JointLimits::contact(System& sys, double t, VecX& y, int s, std::vector<Lim
   const MatX C = M.solve(E);  // 𝓜⁻¹ E
   MatX Wss(n, n);
   for (int a = 0; a < n; ++a) Wss.row(a) = C.row(S[size_t(a)]);
-  const double T0 = 0.5 * v.dot(d.Mass * v);
+  const double T0 = 0.5 * v.dot(d.M * v);
   // impulses p on S: v⁺_S = (−e v_k⁻, 0, …) and Δv = 𝓜⁻¹ E p
   auto hit = [&](double after) {
     VecX target = VecX::Zero(n), now(n);
@@ -118,7 +118,7 @@ void JointLimits::contact(System& sys, double t, VecX& y, int s, std::vector<Lim
   const bool rests = std::abs(after) <= kRestSpeed;
   if (rests) after = 0.0;
   hit(after);
-  const double lost = T0 - 0.5 * v.dot(d.Mass * v);
+  const double lost = T0 - 0.5 * v.dot(d.M * v);
   lost_ += lost;
   if (!rests) {
     out.push_back(event(t, s, "impact", before, after, lost));

@@ -23,16 +23,16 @@ void ltdl_factor(const Model& model, Data& data) {
   // Row i of the update H(i, j) −= a H(k, j), j over i and its ancestors, runs over the few
   // stretches of consecutive DOFs the chain is made of (one stretch on a chain): each is one
   // vectorized row-segment operation.
-  auto& H = data.L;
+  auto& H = data.work.factor.L;
   const int n = model.nv;
   if (model.chain && n >= kChainBlocked) {
     // A chain has no sparsity to use: 𝓜 = Lᵀ D L is then the dense factorization of the reversed
     // matrix, done by Eigen's blocked Cholesky.  With J the reversal, J 𝓜 J = C Cᵀ (C lower), so
     // 𝓜 = U Uᵀ with U = J C J upper, and Lᵀ = U diag(U)⁻¹, D = diag(U)²:
     //   L(k, i) = C(n−1−i, n−1−k) / C(n−1−k, n−1−k),  D(k) = C(n−1−k, n−1−k)²
-    data.llt.compute(data.Mass.reverse());
-    if (data.llt.info() != Eigen::Success) throw Error("forward dynamics: the mass matrix is not positive definite");
-    const MatX& C = data.llt.matrixLLT();
+    data.work.factor.llt.compute(data.M.reverse());
+    if (data.work.factor.llt.info() != Eigen::Success) throw Error("forward dynamics: the mass matrix is not positive definite");
+    const MatX& C = data.work.factor.llt.matrixLLT();
     for (int k = 0; k < n; ++k) {
       const double ckk = C(n - 1 - k, n - 1 - k), inv = 1.0 / ckk;
       for (int i = 0; i < k; ++i) H(k, i) = C(n - 1 - i, n - 1 - k) * inv;
@@ -40,7 +40,7 @@ void ltdl_factor(const Model& model, Data& data) {
     }
     return;
   }
-  H = data.Mass.transpose();  // 𝓜 is symmetric: a straight copy into row-major storage
+  H = data.M.transpose();  // 𝓜 is symmetric: a straight copy into row-major storage
   const auto& lambda = model.dof_parent;
   for (int k = model.nv - 1; k >= 0; --k) {
     for (int i = lambda[k]; i >= 0; i = lambda[i]) {
@@ -52,7 +52,7 @@ void ltdl_factor(const Model& model, Data& data) {
 }
 
 void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x) {
-  const auto& H = data.L;
+  const auto& H = data.work.factor.L;
   const auto& lambda = model.dof_parent;
   // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip); each over the stretches of
   // consecutive ancestors (dof_run), as one vectorized segment operation each

@@ -30,9 +30,9 @@ void mass_matrix(const Model& model, Data& data) {
   // D_{i:j} = D_i ⋯ = [e 0; −(η_i − η_j)~ e] telescopes: with every column moved once to the
   // inertial origin, F0_k = [n + η_i × f; f] for K_i G_k = [n; f] and S0_j = [a; b + η × a] for
   // G_j = [a; b], each entry is one dot product 𝓜_jk = S0_jᵀ F0_k.
-  for (int i = 0; i < model.nbodies; ++i) data.K[i] = data.M[i];
+  for (int i = 0; i < model.nbodies; ++i) data.work.composite.K[i] = data.inertia[i];
   for (int i = model.nbodies - 1; i >= 0; --i) {
-    const SpatialInertia& K = data.K[i];
+    const SpatialInertia& K = data.work.composite.K[i];
     const Vec3 eta = data.eta.col(i);
     visit_joint(model, i, [&](const auto& j) {
       using J = std::decay_t<decltype(j)>;
@@ -42,11 +42,11 @@ void mass_matrix(const Model& model, Data& data) {
         if constexpr (inertial::angular<J>) n.noalias() = K.I * a, f = a.cross(K.h);
         else if constexpr (inertial::linear<J>) n = K.h.cross(b), f = K.m * b;
         else n.noalias() = K.I * a + K.h.cross(b), f = K.m * b - K.h.cross(a);
-        data.F0.col(k) << n + eta.cross(f), f;
-        data.S0.col(k) << a, b + eta.cross(a);
+        data.work.composite.F0.col(k) << n + eta.cross(f), f;
+        data.work.composite.S0.col(k) << a, b + eta.cross(a);
       }
     });
-    if (model.parent[i] >= 0) data.K[model.parent[i]].add_transformed(K, data.d.col(i));
+    if (model.parent[i] >= 0) data.work.composite.K[model.parent[i]].add_transformed(K, data.d.col(i));
   }
   mass_matrix_entries(model, data);
 }
@@ -60,16 +60,16 @@ void mass_matrix_entries(const Model& model, Data& data) {
     // whole product and mirror, 100 3.9 against 6.0; N = 128 7.4 against 11.0 µs for two
     // products and no mirror, 256 38.5 against 40.4)
     const Eigen::Index n = model.nv;
-    data.F0t = data.F0.transpose();
+    data.work.composite.F0t = data.work.composite.F0.transpose();
     for (Eigen::Index k = 0; k < n; ++k)
-      data.Mass.col(k).tail(n - k).noalias() = data.F0t.bottomRows(n - k) * data.S0.col(k);
-    data.Mass.triangularView<Eigen::StrictlyUpper>() = data.Mass.transpose();
+      data.M.col(k).tail(n - k).noalias() = data.work.composite.F0t.bottomRows(n - k) * data.work.composite.S0.col(k);
+    data.M.triangularView<Eigen::StrictlyUpper>() = data.M.transpose();
   } else {
-    double* M = data.Mass.data();
-    const Eigen::Index n = data.Mass.rows();
+    double* M = data.M.data();
+    const Eigen::Index n = data.M.rows();
     for (int k = 0; k < model.nv; ++k) {
-      const Vec6 F0 = data.F0.col(k);
-      for (int j = k; j >= 0; j = model.dof_parent[j]) M[j + k * n] = M[k + j * n] = data.S0.col(j).dot(F0);
+      const Vec6 F0 = data.work.composite.F0.col(k);
+      for (int j = k; j >= 0; j = model.dof_parent[j]) M[j + k * n] = M[k + j * n] = data.work.composite.S0.col(j).dot(F0);
     }
   }
 }

@@ -20,6 +20,7 @@
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
 
+#include "dynamics_routes.hpp"
 #include "joint_local.hpp"
 #include "mass_matrix_entries.hpp"
 
@@ -35,7 +36,7 @@ constexpr int kLocalDepth = 22;
 // K̂_i = M̂_i for every body: its own inertia, constant in its axes
 void body_inertias(const Model& model, Data& data) {
   for (int i = 0; i < model.nbodies; ++i)
-    data.Kl[i] = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
+    data.work.local.K[i] = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
 }
 
 // body i, its subtree's composite K̂_i complete and the subtree's F̂ in its axes:
@@ -47,11 +48,11 @@ inline void local_step(const J& joint, const Model& model, Data& data, const Vec
   const auto G = local::subspace(joint, X, model, i);
   constexpr int n = decltype(G)::nv;
   const int p = model.parent[i], iv = model.idx_v[i], begin = model.dfs_begin[i], end = model.dfs_end[i];
-  const SpatialInertia& K = data.Kl[i];
-  Mat6X& F = data.Fl;
+  const SpatialInertia& K = data.work.local.K[i];
+  Mat6X& F = data.work.local.Fcol;
   G.times(K, F, begin);
-  const Eigen::Index nv = data.Mass.rows();
-  double* M = data.Mass.data();
+  const Eigen::Index nv = data.M.rows();
+  double* M = data.M.data();
   for (int m = 0; m < n; ++m)
     for (int pos = begin; pos < end; ++pos) {
       const int j = model.dfs_dof[pos];
@@ -59,7 +60,7 @@ inline void local_step(const J& joint, const Model& model, Data& data, const Vec
     }
   if (p < 0) return;
   local::move_to_parent(X, F, begin, end);
-  local::add_to_parent(X, K, data.Kl[p]);
+  local::add_to_parent(X, K, data.work.local.K[p]);
 }
 
 // Deeper models: the composites in body axes as above, but each K̂_i Ĝ_k moved once to the
@@ -69,14 +70,15 @@ inline void local_step(const J& joint, const Model& model, Data& data, const Vec
 // axes, h_w = R h
 template <class J>
 inline void frames_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
-  const SpatialInertia& K = data.Kl[i];
-  const Mat3& R = data.R[i];
-  const Vec3 eta = data.eta.col(i), hw = R * K.h;
+  const Workspace::BodyAxes& w = data.work.local;  // the frames of q (update_frames into the workspace)
+  const SpatialInertia& K = w.K[i];
+  const Mat3& R = w.R[i];
+  const Vec3 eta = w.eta.col(i), hw = R * K.h;
   const int p = model.parent[i], iv = model.idx_v[i];
   const auto X = local::transform(joint, model, data, q, i);
   using G_t = decltype(local::subspace(joint, X, model, i));
   for (int c = iv; c < iv + J::nv; ++c) {
-    const Vec3 ga = data.G.col(c).head<3>(), gb = data.G.col(c).tail<3>();
+    const Vec3 ga = w.G.col(c).head<3>(), gb = w.G.col(c).tail<3>();
     Vec3 nw, fw;
     if constexpr (local::angular_axis<G_t> >= 0) {
       nw.noalias() = joint.sign * (R * K.I.col(local::angular_axis<G_t>));  // R I Rᵀ a = ±R I e_k
@@ -87,21 +89,21 @@ inline void frames_step(const J& joint, const Model& model, Data& data, const Ve
       fw = K.m * gb - hw.cross(ga);
     }
     nw += eta.cross(fw);
-    data.F0.col(c).head<3>() = nw;
-    data.F0.col(c).tail<3>() = fw;
-    data.S0.col(c).head<3>() = ga;
-    data.S0.col(c).tail<3>() = gb + eta.cross(ga);
+    data.work.composite.F0.col(c).head<3>() = nw;
+    data.work.composite.F0.col(c).tail<3>() = fw;
+    data.work.composite.S0.col(c).head<3>() = ga;
+    data.work.composite.S0.col(c).tail<3>() = gb + eta.cross(ga);
   }
   if (p < 0) return;
   // K̂_p += X_i K̂_i X_iᵀ
-  local::add_to_parent(X, K, data.Kl[p]);
+  local::add_to_parent(X, K, data.work.local.K[p]);
 }
 
 void mass_matrix_frames(const Model& model, Data& data, const VecX& q) {
-  update_frames(model, data, q);
+  detail::update_frames(model, data, q, data.work.local);
   body_inertias(model, data);
   for (int i = model.nbodies - 1; i >= 0; --i)
-    std::visit([&](const auto& joint) { frames_step(joint, model, data, q, i); }, model.joint_model[i]);
+    visit_joint(model, i, [&](const auto& joint) { frames_step(joint, model, data, q, i); });
   mass_matrix_entries(model, data);
 }
 
@@ -113,10 +115,10 @@ void mass_matrix(const Model& model, Data& data, const VecX& q) {
     mass_matrix_frames(model, data, q);
     return;
   }
-  joint_turns(model, q, data.turn, false);
+  joint_turns(model, q, data.work.turn, false);
   body_inertias(model, data);
   for (int i = model.nbodies - 1; i >= 0; --i)
-    std::visit([&](const auto& joint) { local_step(joint, model, data, q, i); }, model.joint_model[i]);
+    visit_joint(model, i, [&](const auto& joint) { local_step(joint, model, data, q, i); });
 }
 
 }  // namespace soadyn

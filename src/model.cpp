@@ -135,15 +135,8 @@ Model Model::build(const std::vector<BodySpec>& given, const Vec3& gravity, Iner
   }
   for (int k = 0; k < m.nbodies; ++k) {
     m.inertia_origin.push_back(m.inertia[k] + parallel_axis(m.mass[k], m.com[k]));  // I_η = I_cm − m c̃ c̃
-    m.joint_model.push_back(classify_joint(m.joint_type[k], m.axis[k], m.placement[k].R));
   }
-  for (const bool roots : {true, false})
-    for (int k = 0; k < m.nbodies; ++k)
-      if (turns_by_angle(m.joint_model[k]) && (m.parent[k] < 0) == roots) {
-        m.angles.body.push_back(k);
-        m.angles.q.push_back(m.idx_q[k]);
-        m.angles.roots += roots;
-      }
+  m.classify_joints();
   // depth-first positions of the DOFs: children in index order, each subtree one run
   {
     std::vector<std::vector<int>> children(m.nbodies);
@@ -221,6 +214,19 @@ int Model::add_frame(const std::string& name, int body, const Placement& X) {
   frame_body.push_back(body);
   frame_placement.push_back(X);
   return int(frame_names.size()) - 1;
+}
+
+void Model::classify_joints() {
+  joint_model.clear();
+  angles = {};
+  for (int k = 0; k < nbodies; ++k) joint_model.push_back(classify_joint(joint_type[k], axis[k], placement[k].R));
+  for (const bool roots : {true, false})
+    for (int k = 0; k < nbodies; ++k)
+      if (turns_by_angle(joint_model[k]) && (parent[k] < 0) == roots) {
+        angles.body.push_back(k);
+        angles.q.push_back(idx_q[k]);
+        angles.roots += roots;
+      }
 }
 
 bool Model::has_free_joint() const {

@@ -131,8 +131,8 @@ void regressor_transpose_times(const Model& model, Data& data, const VecX& qdd, 
   data.check(model, "regressor_transpose_times", "out", out.size(), kParametersPerBody * model.nbodies);
   inverse_dynamics(model, data, qdd);  // data.A
   // (Yᵀ μ)_i = Σ_{j ⪯ i} (G_j μ_j)ᵀ D_{i:j}ᵀ R_i W_i = w_iᵀ R_i W_i with w_i = D_i w_p + G_i μ_i, the
-  // dual of carrying B up the ancestors: D [ω; u] = [ω; u + ω × d_i].  Base to tip, in data.Vb's columns
-  Mat6X& w = data.Vb;
+  // dual of carrying B up the ancestors: D [ω; u] = [ω; u + ω × d_i].  Base to tip, in data.work.local.V's columns
+  Mat6X& w = data.work.local.V;
   for (int i = 0; i < model.nbodies; ++i) {
     const int p = model.parent[i], iv = model.idx_v[i], n = model.nv_i[i];
     Vec6 wi = data.G.middleCols(iv, n) * mu.segment(iv, n);
@@ -151,7 +151,7 @@ void regressor_transpose_times(const Model& model, Data& data, const VecX& qdd, 
 
 void forward_dynamics_parameter_derivative(const Model& model, Data& data, const VecX& tau, MatX& dqdd_dpi) {
   data.check(model, "forward_dynamics_parameter_derivative", "tau", tau.size(), model.nv);
-  forward_dynamics(model, data, tau, FdMethod::Sparse);  // data.qdd; 𝓜 factored into data.L
+  forward_dynamics(model, data, tau, FdMethod::Sparse);  // data.qdd; 𝓜 factored into data.work.factor.L
   regressor(model, data, data.qdd, dqdd_dpi);  // inverse dynamics at q̈ writes tau, A, F, never qdd
   // ∂q̈/∂π = −𝓜⁻¹ Y: one LᵀDL solve per column
   for (Eigen::Index c = 0; c < dqdd_dpi.cols(); ++c) {

@@ -37,7 +37,7 @@ void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
     data.A.col(i).head<3>() = w;
     data.A.col(i).tail<3>() = u;
     // F_i = M_i A_i + 𝔟_i with M_i [ω; u] = [I ω + h × u; m u − h × ω]
-    const SpatialInertia& M = data.M[i];
+    const SpatialInertia& M = data.inertia[i];
     data.F.col(i).head<3>() = M.I * w + M.h.cross(u) + data.gyroscopic.col(i).head<3>();
     data.F.col(i).tail<3>() = M.m * u - M.h.cross(w) + data.gyroscopic.col(i).tail<3>();
   }

@@ -149,7 +149,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
       sys.jacobian_times(t, N_VGetArrayPointer(y), self->S_, self->Sd_);
       if (self->plan_.np() > 0) {
-        // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.L) at (q, v) are jacobian_times's; ∂q̈/∂π = −𝓜⁻¹ Y solved
+        // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.work.factor.L) at (q, v) are jacobian_times's; ∂q̈/∂π = −𝓜⁻¹ Y solved
         // for the plan's bodies' columns only
         regressor(m, sys.data, sys.data.qdd, self->dqdd_dpi_);
         const int first = self->plan_.nx0();

@@ -15,10 +15,10 @@ void operational_space_inertia(const Model& model, Data& data, const MatX& J, Ma
                 std::to_string(J.rows()) + "×" + std::to_string(J.cols()));
   // 𝓜 = L Lᵀ; Y = L⁻¹ Jᵀ; J 𝓜⁻¹ Jᵀ = Yᵀ Y
   mass_matrix(model, data);
-  data.llt.compute(data.Mass);
-  if (data.llt.info() != Eigen::Success) throw Error("operational_space_inertia: the mass matrix is not positive definite");
+  data.work.factor.llt.compute(data.M);
+  if (data.work.factor.llt.info() != Eigen::Success) throw Error("operational_space_inertia: the mass matrix is not positive definite");
   MatX Y = J.transpose();
-  data.llt.matrixL().solveInPlace(Y);
+  data.work.factor.llt.matrixL().solveInPlace(Y);
   const MatX W = Y.transpose() * Y;
   // Λ = W⁻¹ from W's eigenvalues, refused when one is (relatively) zero
   const Eigen::SelfAdjointEigenSolver<MatX> es(W);

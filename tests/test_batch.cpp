@@ -87,7 +87,7 @@ TEST(Batch, MassMatrixBiasInverseDynamicsEqualLoop) {
   Data d(m);
   for (long k = kStates - 1; k >= 0; --k) {
     mass_matrix(m, d, VecX(s.Q.col(k)));
-    M_ref.middleCols(k * nv, nv) = d.Mass;
+    M_ref.middleCols(k * nv, nv) = d.M;
     bias_forces(m, d, s.Q.col(k), s.V.col(k));
     b_ref.col(k) = d.bias;
     update_kinematics(m, d, s.Q.col(k));

@@ -33,7 +33,7 @@ TEST(BenchModels, CppAndUrdfAreTheSameMechanisms) {
       update_velocities(m, *p, v);
       bias_forces(m, *p);
     }
-    EXPECT_TRUE(near_rel(dc.Mass, du.Mass, 1e-13)) << n;
+    EXPECT_TRUE(near_rel(dc.M, du.M, 1e-13)) << n;
     EXPECT_TRUE(near_rel(dc.bias, du.bias, 1e-12)) << n;
   }
   std::filesystem::remove_all(dir);
@@ -54,7 +54,7 @@ TEST(BenchModels, LargeMechanismsEveryRouteAgrees) {
     MatX literal;
     mass_matrix_literal(model, data, literal);
     mass_matrix(model, data);
-    EXPECT_TRUE(near_rel(literal, data.Mass, 1e-12)) << n;
+    EXPECT_TRUE(near_rel(literal, data.M, 1e-12)) << n;
     const VecX tau = random_v(rng, model);
     std::vector<VecX> qdd;
     for (FdMethod m : {FdMethod::Dense, FdMethod::Sparse, FdMethod::ArticulatedBody}) {

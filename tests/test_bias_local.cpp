@@ -66,7 +66,7 @@ TEST(BodyAxesBias, WithMassMatrixGivesInverseDynamics) {
     Data data(model);
     mass_matrix(model, data, q);
     bias_forces(model, data, q, v);
-    const VecX tau = data.Mass * qdd + data.bias;
+    const VecX tau = data.M * qdd + data.bias;
     Data ref(model);
     update_kinematics(model, ref, q);
     update_velocities(model, ref, v);

@@ -47,7 +47,7 @@ TEST_P(DerivativeRoutes, ArticulatedSolveInvertsTheMassMatrix) {
     for (auto& b : B.reshaped()) b = rng.uniform();
     MatX X = B;
     articulated_solve(model, data, X, work);
-    EXPECT_TRUE(near_rel(data.Mass * X, B, 1e-10)) << c.name << ", " << rows << " right-hand sides";
+    EXPECT_TRUE(near_rel(data.M * X, B, 1e-10)) << c.name << ", " << rows << " right-hand sides";
   }
 }
 

@@ -146,7 +146,7 @@ TEST_P(Derivatives, ForwardDynamicsAgainstCentralDifferencesWithInputs) {
     // q̈ is 𝓜⁻¹ times forces: its error scales with 𝓜's conditioning
     update_kinematics(model, work, q);
     mass_matrix(model, work);
-    const Eigen::JacobiSVD<MatX> svd(work.Mass);
+    const Eigen::JacobiSVD<MatX> svd(work.M);
     const double cond = svd.singularValues()(0) / svd.singularValues().tail<1>()(0);
     const double tol = std::max(1e-7, 1e-13 * cond);
     EXPECT_TRUE(near_rel(dd.dqdd_dq, dq, tol)) << c.name << " seed " << seed << ": ∂q̈/∂q, cond " << cond;

@@ -33,7 +33,7 @@ TEST_P(Routes, ThreeForwardRoutesAgreeAndInvertInverseDynamics) {
 
     mass_matrix(model, data);
     bias_forces(model, data);
-    const MatX Mass = data.Mass;
+    const MatX Mass = data.M;
     const VecX bias = data.bias;
     std::vector<VecX> qdd;
     for (FdMethod m : {FdMethod::Dense, FdMethod::Sparse, FdMethod::ArticulatedBody}) {
@@ -65,7 +65,7 @@ TEST_P(Routes, MinverseInvertsTheCompositeMassMatrix) {
     Data data(model);
     update_kinematics(model, data, random_q(rng, model));
     mass_matrix(model, data);
-    const MatX Mass = data.Mass;
+    const MatX Mass = data.M;
     MatX Minv;
     minverse(model, data, Minv);
     const Eigen::JacobiSVD<MatX> svd(Mass);
@@ -98,7 +98,7 @@ TEST_P(Routes, MassMatrixColumnsFromInverseDynamics) {
     inverse_dynamics(model, data, e);
     cols.col(k) = data.tau - data.bias;
   }
-  EXPECT_TRUE(near_rel(cols, data.Mass, 1e-10)) << c.name;
+  EXPECT_TRUE(near_rel(cols, data.M, 1e-10)) << c.name;
 }
 
 INSTANTIATE_TEST_SUITE_P(Trees, Routes, ::testing::ValuesIn(kCases),
@@ -109,7 +109,7 @@ MatX mass_at(const Model& model, const VecX& q) {
   Data d(model);
   update_kinematics(model, d, q);
   mass_matrix(model, d);
-  return d.Mass;
+  return d.M;
 }
 
 
@@ -344,9 +344,9 @@ TEST(ForwardDynamics, LtdlFactorReproducesMassMatrix) {
     const int n = model.nv;
     MatX L = MatX::Identity(n, n), D = MatX::Zero(n, n);
     for (int k = 0; k < n; ++k) {
-      D(k, k) = data.L(k, k);
-      for (int i = model.dof_parent[k]; i >= 0; i = model.dof_parent[i]) L(k, i) = data.L(k, i);
+      D(k, k) = data.work.factor.L(k, k);
+      for (int i = model.dof_parent[k]; i >= 0; i = model.dof_parent[i]) L(k, i) = data.work.factor.L(k, i);
     }
-    EXPECT_TRUE(near_rel(L.transpose() * D * L, data.Mass, 1e-12)) << name;
+    EXPECT_TRUE(near_rel(L.transpose() * D * L, data.M, 1e-12)) << name;
   }
 }

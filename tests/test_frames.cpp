@@ -317,7 +317,7 @@ TEST_P(Frames, CoriolisMatrixGivesTheBiasAndASkewMdotMinus2C) {
     mass_matrix(m, a);
     update_kinematics(m, b, m.integrate(q, v, kH));
     mass_matrix(m, b);
-    const MatX Md = (b.Mass - a.Mass) / (2 * kH), N = Md - 2 * C;
+    const MatX Md = (b.M - a.M) / (2 * kH), N = Md - 2 * C;
     worst_skew = std::max(worst_skew, (N + N.transpose()).cwiseAbs().maxCoeff());
     EXPECT_TRUE(near_rel(N + N.transpose(), MatX::Zero(m.nv, m.nv), 1e-7 * std::max(1.0, Md.cwiseAbs().maxCoeff())));
     // and not by accident: C itself is not symmetric, nor 𝓜̇ − C skew
@@ -345,7 +345,7 @@ TEST_P(Frames, OperationalSpaceInertiaMatchesTheDenseFormula) {
   if (Eigen::FullPivLU<MatX>(task).rank() < task.rows()) GTEST_SKIP() << "the tool's body has too few DOFs above it";
   operational_space_inertia(m, d, task, L);
   mass_matrix(m, d);
-  const MatX dense = (task * d.Mass.inverse() * task.transpose()).inverse();
+  const MatX dense = (task * d.M.inverse() * task.transpose()).inverse();
   EXPECT_TRUE(near_rel(L, dense, 1e-9)) << (full ? "6 rows" : "3 rows");
 }
 
@@ -367,7 +367,7 @@ TEST(FramesSingular, OperationalSpaceInertiaRefusesMoreRowsThanJoints) {
   const MatX task = J.bottomRows<2>();
   operational_space_inertia(m, d, task, L);
   mass_matrix(m, d);
-  EXPECT_TRUE(near_rel(L, (task * d.Mass.inverse() * task.transpose()).inverse(), 1e-10));
+  EXPECT_TRUE(near_rel(L, (task * d.M.inverse() * task.transpose()).inverse(), 1e-10));
   // straight arm: the tip cannot move along the links
   update_kinematics(m, d, Vec2d(0.3, 0.0));
   frame_jacobian(m, d, f, Reference::LocalWorldAligned, J);

@@ -259,7 +259,7 @@ VecX canonical_step(const Scenario& sc, const std::string& method, double h, con
   update_kinematics(m, d, x.head(n));
   mass_matrix(m, d);
   System sys(m, sc.inputs, FdMethod::Sparse);
-  VecX y = sys.state(x.head(n), d.Mass.ldlt().solve(x.tail(n)));
+  VecX y = sys.state(x.head(n), d.M.ldlt().solve(x.tail(n)));
   SimulationSettings s;
   s.method = parse_method(method);
   s.dt = h;
@@ -268,7 +268,7 @@ VecX canonical_step(const Scenario& sc, const std::string& method, double h, con
   update_kinematics(m, d, y.head(n));
   mass_matrix(m, d);
   VecX out(2 * n);
-  out << y.head(n), d.Mass * y.segment(n, n);
+  out << y.head(n), d.M * y.segment(n, n);
   return out;
 }
 

@@ -23,7 +23,7 @@ Dyn dynamics(const Model& m, const VecX& q, const VecX& v) {
   Dyn out;
   update_kinematics(m, d, q);
   mass_matrix(m, d);
-  out.M = d.Mass;
+  out.M = d.M;
   update_velocities(m, d, v);
   bias_forces(m, d);
   out.bias = d.bias;
@@ -198,7 +198,7 @@ TEST(MultiDofJoints, AlgorithmsAgreeOnRandomTrees) {
     const VecX q = random_q(rng, m), v = random_v(rng, m, 1.5), tau = random_v(rng, m, 3.0);
     update_kinematics(m, d, q);
     mass_matrix(m, d);
-    const MatX M = d.Mass;
+    const MatX M = d.M;
     MatX Mlit;
     mass_matrix_literal(m, d, Mlit);
     EXPECT_TRUE(near_rel(M, Mlit, 1e-12)) << "seed " << seed;

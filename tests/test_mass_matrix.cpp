@@ -287,8 +287,8 @@ TEST(Kinematics, SpecializedPathEqualsReference) {
     update_kinematics_reference(model, ref, q);
     for (int i = 0; i < model.nbodies; ++i) {
       ASSERT_TRUE(near_rel(fast.R[i], ref.R[i], 1e-14)) << "seed " << seed << " body " << i;
-      ASSERT_TRUE(near_rel(fast.M[i].I, ref.M[i].I, 1e-13)) << "seed " << seed << " body " << i;
-      ASSERT_TRUE(near_rel(fast.M[i].h, ref.M[i].h, 1e-13)) << "seed " << seed << " body " << i;
+      ASSERT_TRUE(near_rel(fast.inertia[i].I, ref.inertia[i].I, 1e-13)) << "seed " << seed << " body " << i;
+      ASSERT_TRUE(near_rel(fast.inertia[i].h, ref.inertia[i].h, 1e-13)) << "seed " << seed << " body " << i;
     }
     for (const auto& [a, b] : {std::pair{&fast.eta, &ref.eta}, {&fast.d, &ref.d}, {&fast.s, &ref.s}, {&fast.r, &ref.r}})
       ASSERT_TRUE(near_rel(*a, *b, 1e-13)) << "seed " << seed;
@@ -365,12 +365,12 @@ TEST(MassMatrix, IsSecondDerivativeOfKineticEnergy) {
       for (int k = 0; k < model.nv; ++k)
         Mfd(j, k) = kinetic_energy_fd(model, q, E.col(j) + E.col(k)) - kinetic_energy_fd(model, q, E.col(j)) -
                     kinetic_energy_fd(model, q, E.col(k));
-    EXPECT_TRUE(near_rel(Mfd, data.Mass, 1e-7)) << "seed " << seed;
+    EXPECT_TRUE(near_rel(Mfd, data.M, 1e-7)) << "seed " << seed;
 
     // T = ½ q̇ᵀ 𝓜 q̇, with T from eq. (9) on the swept body velocities (eq. 6), and from the FD motion
     const VecX v = random_v(rng, model, 2.0);
     update_velocities(model, data, v);
-    const double T_quad = 0.5 * v.dot(data.Mass * v);
+    const double T_quad = 0.5 * v.dot(data.M * v);
     EXPECT_NEAR(kinetic_energy(model, data), T_quad, 1e-12 * std::max(1.0, T_quad));
     EXPECT_NEAR(kinetic_energy_fd(model, q, v), T_quad, 1e-7 * std::max(1.0, T_quad));
   }
@@ -413,7 +413,7 @@ TEST(MassMatrix, JacobianGivesBodyVelocitiesAndFactorsM) {
     Mbar.block<3, 3>(6 * i + 3, 6 * i + 3) = model.mass[i] * Mat3::Identity();
   }
   mass_matrix(model, data);
-  EXPECT_TRUE(near_rel(J.transpose() * Mbar * J, data.Mass, 1e-12));
+  EXPECT_TRUE(near_rel(J.transpose() * Mbar * J, data.M, 1e-12));
 }
 
 }  // namespace

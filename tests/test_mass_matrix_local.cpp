@@ -52,12 +52,12 @@ TEST_P(LocalRoute, EqualsInertialSweepAndLiteral) {
     const Computed ref = reference(model, q);
     Data data(model);  // fresh: the route needs no [kin]
     mass_matrix(model, data, q);
-    ASSERT_TRUE(near_rel(data.Mass, ref.composite, 1e-12)) << c.name << " seed " << seed;
-    ASSERT_TRUE(near_rel(data.Mass, ref.literal, 1e-12)) << c.name << " seed " << seed;  // every entry, both triangles
+    ASSERT_TRUE(near_rel(data.M, ref.composite, 1e-12)) << c.name << " seed " << seed;
+    ASSERT_TRUE(near_rel(data.M, ref.literal, 1e-12)) << c.name << " seed " << seed;  // every entry, both triangles
     // a second configuration on the same Data: nothing of the first one is left in 𝓜
     const VecX q2 = random_q(rng, model);
     mass_matrix(model, data, q2);
-    ASSERT_TRUE(near_rel(data.Mass, reference(model, q2).composite, 1e-12)) << c.name << " seed " << seed;
+    ASSERT_TRUE(near_rel(data.M, reference(model, q2).composite, 1e-12)) << c.name << " seed " << seed;
   }
   if (c.options.branching > 0.0) {
     EXPECT_GT(shuffled, 0) << "no model had a body order that is not depth-first";
@@ -107,7 +107,7 @@ TEST(LocalRoute, SeveralTreesInterleaved) {
     const VecX q = random_q(rng, model);
     Data data(model);
     mass_matrix(model, data, q);
-    ASSERT_TRUE(near_rel(data.Mass, reference(model, q).composite, 1e-12)) << "trial " << trial;
+    ASSERT_TRUE(near_rel(data.M, reference(model, q).composite, 1e-12)) << "trial " << trial;
   }
 }
 
@@ -133,6 +133,43 @@ TEST(LocalRoute, DepthFirstRunsCoverEachSubtree) {
       while (a > i) a = model.parent[a];
       EXPECT_EQ(a, i) << "position " << x << " is not in the subtree of body " << i;
     }
+  }
+}
+
+// The state-only entry points fill their one result and leave every other result of Data as it
+// was: [kin] and [vel] of another state survive mass_matrix(q) (shallow and past 22 bodies, whose
+// frames go to the workspace) and bias_forces(q, v) (planar joints included), bit for bit.
+TEST(LocalRoute, LeavesTheOtherResultsAsTheyWere) {
+  for (const int n : {12, 40}) {
+    Rng rng(9100 + n);
+    const Model model = random_model(rng, {.n = n, .branching = n > 22 ? 0.0 : 0.5, .prismatic = 0.2, .ball = 0.1,
+                                           .planar = 0.1, .free_root = true, .unit_axis = 0.6});
+    Data data(model);
+    const VecX q0 = random_q(rng, model), v0 = random_v(rng, model), q = random_q(rng, model), v = random_v(rng, model);
+    update_kinematics(model, data, q0);
+    update_velocities(model, data, v0);
+    inverse_dynamics(model, data, v0);
+    const Data before = data;
+    mass_matrix(model, data, q);
+    bias_forces(model, data, q, v);
+    for (int i = 0; i < model.nbodies; ++i) {
+      ASSERT_TRUE(data.R[i] == before.R[i]) << "n " << n << " body " << i;
+      ASSERT_TRUE(data.inertia[i].I == before.inertia[i].I && data.inertia[i].h == before.inertia[i].h) << "n " << n;
+    }
+    for (const auto& [a, b] : {std::pair{&data.eta, &before.eta}, {&data.d, &before.d}, {&data.s, &before.s}, {&data.r, &before.r}})
+      ASSERT_TRUE(*a == *b) << "n " << n;
+    for (const auto& [a, b] : {std::pair{&data.G, &before.G}, {&data.V, &before.V}, {&data.Vbar, &before.Vbar},
+                               {&data.coriolis, &before.coriolis}, {&data.A, &before.A}, {&data.F, &before.F}})
+      ASSERT_TRUE(*a == *b) << "n " << n;
+    ASSERT_TRUE(data.tau == before.tau) << "n " << n;
+    // and the results they fill are this state's
+    Data ref(model);
+    update_kinematics(model, ref, q);
+    mass_matrix(model, ref);
+    update_velocities(model, ref, v);
+    bias_forces(model, ref);
+    EXPECT_TRUE(near_rel(data.M, ref.M, 1e-12)) << "n " << n;
+    EXPECT_TRUE(near_rel(data.bias, ref.bias, 1e-11)) << "n " << n;
   }
 }
 

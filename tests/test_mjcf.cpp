@@ -109,7 +109,7 @@ TEST_P(AgainstMuJoCo, MassMatrixAndBiasAtRandomStates) {
     mass_matrix(model, data);
     update_velocities(model, data, v);
     bias_forces(model, data);
-    const double eM = (data.Mass - Mexpect).cwiseAbs().maxCoeff() / Mexpect.cwiseAbs().maxCoeff();
+    const double eM = (data.M - Mexpect).cwiseAbs().maxCoeff() / Mexpect.cwiseAbs().maxCoeff();
     const double eb = (data.bias - bexpect).cwiseAbs().maxCoeff() / (1.0 + bexpect.cwiseAbs().maxCoeff());
     EXPECT_LT(eM, 1e-12) << trial;
     EXPECT_LT(eb, 1e-11) << trial;
@@ -150,7 +150,7 @@ TEST(Mjcf, TheSameRobotAsUrdfAndAsMjcfHasTheSame_M_AndBias) {
       update_velocities(*model, *data, v);
       bias_forces(*model, *data);
     }
-    EXPECT_LT((du.Mass - dm.Mass).cwiseAbs().maxCoeff(), 1e-13 * du.Mass.cwiseAbs().maxCoeff()) << trial;
+    EXPECT_LT((du.M - dm.M).cwiseAbs().maxCoeff(), 1e-13 * du.M.cwiseAbs().maxCoeff()) << trial;
     EXPECT_LT((du.bias - dm.bias).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + du.bias.cwiseAbs().maxCoeff())) << trial;
   }
 }

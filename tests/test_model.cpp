@@ -165,8 +165,8 @@ TEST(ModelBuild, FixedJointMergesExactly) {
       if (std::find(welded.begin(), welded.end(), k) == welded.end()) keep.push_back(k);
     MatX Mu(keep.size(), keep.size());
     for (size_t r = 0; r < keep.size(); ++r)
-      for (size_t c = 0; c < keep.size(); ++c) Mu(r, c) = du.Mass(keep[r], keep[c]);
-    EXPECT_TRUE(near_rel(dm.Mass, Mu, 1e-12)) << "seed " << seed;
+      for (size_t c = 0; c < keep.size(); ++c) Mu(r, c) = du.M(keep[r], keep[c]);
+    EXPECT_TRUE(near_rel(dm.M, Mu, 1e-12)) << "seed " << seed;
     EXPECT_NEAR(potential_energy(merged, dm), potential_energy(unmerged, du), 1e-10);
   }
 }
@@ -269,8 +269,8 @@ TEST(ModelBuild, RefusesBodiesTooFarForADouble) {
     mass_matrix(near, dn);
     mass_matrix(far, df);
     // each entry to 1e-6 of its scale √(𝓜_ii 𝓜_jj) (entries are ~1e-5 kg m²)
-    const VecX root = dn.Mass.diagonal().cwiseSqrt();
-    const MatX scaled = (df.Mass - dn.Mass).cwiseQuotient(root * root.transpose());
+    const VecX root = dn.M.diagonal().cwiseSqrt();
+    const MatX scaled = (df.M - dn.M).cwiseQuotient(root * root.transpose());
     EXPECT_LE(scaled.cwiseAbs().maxCoeff(), 1e-6) << "trial " << trial;
     worst = std::max(worst, scaled.cwiseAbs().maxCoeff());
   }

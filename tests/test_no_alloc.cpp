@@ -227,7 +227,7 @@ TEST(NoAllocation, CounterSeesEigenAndStdAllocations) {
   const Model model = random_model(rng, {.n = 5});
   Forbidden region(false);
   Data data(model);
-  g_sink = double(data.Mass.size());
+  g_sink = double(data.M.size());
   EXPECT_GT(region.end(), 0) << "a Data was not counted";
 }
 

@@ -111,7 +111,7 @@ TEST(Parameters, RoundTripGivesTheSameModel) {
   update_kinematics(again, b, q);
   mass_matrix(model, a);
   mass_matrix(again, b);
-  EXPECT_TRUE(near_rel(a.Mass, b.Mass, 1e-13));
+  EXPECT_TRUE(near_rel(a.M, b.M, 1e-13));
   for (int i = 0; i < model.nbodies; ++i) EXPECT_TRUE(near_rel(model.com[i], again.com[i], 1e-14));
 }
 

@@ -148,7 +148,7 @@ TEST(Urdf, SameMassMatrixAsTheEquivalentYaml) {
       update_kinematics(my, dy, q);
       mass_matrix(mu, du);
       mass_matrix(my, dy);
-      ASSERT_TRUE(near_rel(du.Mass, dy.Mass, 1e-12)) << "seed " << seed;
+      ASSERT_TRUE(near_rel(du.M, dy.M, 1e-12)) << "seed " << seed;
       EXPECT_NEAR(potential_energy(mu, du), potential_energy(my, dy), 1e-10);
     }
   }
@@ -172,7 +172,7 @@ TEST(Urdf, SameAsTheHandWrittenScenario) {
       update_velocities(*m, *d, v);
       bias_forces(*m, *d);
     }
-    ASSERT_TRUE(near_rel(du.Mass, dy.Mass, 1e-12));
+    ASSERT_TRUE(near_rel(du.M, dy.M, 1e-12));
     ASSERT_TRUE(near_rel(du.bias, dy.bias, 1e-12));
     EXPECT_NEAR(potential_energy(mu, du), potential_energy(my, dy), 1e-12);
   }

@@ -56,7 +56,7 @@ Dynamics evaluate(const Model& m, const VecX& q, const VecX& v, const VecX& tau)
   update_kinematics(m, d, q);
   mass_matrix(m, d);
   Dynamics out;
-  out.M = d.Mass;
+  out.M = d.M;
   update_velocities(m, d, v);
   bias_forces(m, d);
   out.bias = d.bias;

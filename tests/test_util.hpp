@@ -131,7 +131,7 @@ inline Computed both(const Model& model, Data& data, const VecX& q) {
   Computed c;
   mass_matrix_literal(model, data, c.literal);
   mass_matrix(model, data);
-  c.composite = data.Mass;
+  c.composite = data.M;
   return c;
 }
 

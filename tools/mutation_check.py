@@ -48,7 +48,7 @@ def tool(name):
 # (item of issue 17 — or 14 for issue 14's derivatives and Jacobian —, name, file, text, replacement, what the mutant breaks, test)
 MUTATIONS = [
     (1, "dense-route-allocates", "src/dynamics.cpp",
-     "data.llt.compute(data.Mass);", "data.llt = Eigen::LLT<MatX>(data.Mass);",
+     "data.work.factor.llt.compute(data.M);", "data.work.factor.llt = Eigen::LLT<MatX>(data.M);",
      "the dense route builds a new Cholesky object (a heap matrix) on every call",
      gtest("test_no_alloc", "NoAllocation.AlgorithmsAllocateNothingPerCall")),
     (2, "quaternion-rate-sign", "src/joint.cpp",

@@ -19,30 +19,26 @@ void mass_matrix_literal(const Model& model, const Data& data, MatX& M_out);
 
 // 𝓜 = Gᵀ Ψ_Dᵀ M Ψ_D G (eq. 14) from composite inertias: one tip-to-base sweep
 // K_p += D_iᵀ K_i D_i and, per body, a walk up its ancestors.  O(N·depth).  Needs [kin];
-// fills data.Mass (both triangles).
+// fills data.M (both triangles).
 void mass_matrix(const Model& model, Data& data);
 
 // 𝓜(q) straight from q (size nq), as Pinocchio's crba(q): the same composite algorithm with every
 // quantity in body axes (mass_matrix_local.cpp), so no inertial kinematics is formed.  Needs
-// nothing; fills data.Mass, the same 𝓜 as update_kinematics + mass_matrix to rounding.  On
-// models deeper than 22 bodies it forms the frames of [kin] (R, η, d, G) and the inertial
-// sweep's dot products (faster there), so [kin] afterwards is unspecified: call update_kinematics
-// before the stages that need it.
+// nothing; fills data.M, the same 𝓜 as update_kinematics + mass_matrix to rounding, and leaves
+// every other result as it was (past 22 bodies the frames it needs are formed in its workspace).
 void mass_matrix(const Model& model, Data& data, const VecX& q);
 
 // bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D 𝔞 + 𝔟) with 𝔞 = Data::coriolis, 𝔟 = Data::gyroscopic: Coriolis, centrifugal, gyroscopic and gravity.
-// Needs [kin] and [vel]; fills data.bias.
+// Needs [kin] and [vel]; fills data.bias, and data.A and data.F at q̈ = 0.
 void bias_forces(const Model& model, Data& data);
 
 // bias(q, q̇) straight from q (nq) and v (nv), as Pinocchio's nonLinearEffects: the same two
 // sweeps with every quantity in body axes (bias_local.cpp), so no inertial kinematics is formed.
-// Needs nothing; fills data.bias (and the body-axes scratch Vb, Ab, Fb, Xr, Xp, turn), the same
-// bias as update_kinematics + update_velocities + bias_forces to rounding.  A model with a planar
-// joint takes those three calls instead, so [kin] and [vel] afterwards hold either (q, v) or what
-// they held before: call update_kinematics and update_velocities before the stages that need them.
+// Needs nothing; fills data.bias, the same bias as update_kinematics + update_velocities +
+// bias_forces to rounding, and leaves every other result as it was.
 void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v);
 
-// τ = 𝓜 q̈ + bias with the same two sweeps.  Needs [kin] and [vel]; fills data.tau.
+// τ = 𝓜 q̈ + bias with the same two sweeps.  Needs [kin] and [vel]; fills data.tau, data.A and data.F.
 void inverse_dynamics(const Model& model, Data& data, const VecX& qdd);
 
 enum class FdMethod {
@@ -67,24 +63,24 @@ inline constexpr std::string_view kFdMethodAliasOn = "on";
 FdMethod parse_fd_method(std::string_view s);  // a name of fd_methods() or "on"; throws soadyn::Error
 
 // q̈ = 𝓜⁻¹ (τ − bias).  Needs [kin] and [vel]; fills data.qdd (Dense and Sparse also fill
-// data.Mass and data.bias).
+// data.M and data.bias).
 void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method);
 
 // 𝓜⁻¹ (nv×nv) without forming 𝓜, as Pinocchio's computeMinverse: the articulated-body recursion
 // for every unit force at once, O(N·depth) tip to base and O(N) per column base to tip (O(N²) on a
 // chain).  Needs [kin]; fills Minv (nv×nv, full, symmetric to rounding; allocates only when Minv has
-// another size); overwrites the articulated-body route's workspace (data.P, U1, Dinv1, U, Dinv, A)
-// and data.Zminv.
+// another size); fills no result of Data (the articulated-body factor it leaves in the workspace is
+// the one articulated_solve reads).
 void minverse(const Model& model, Data& data, MatX& Minv);
 
 // X ← 𝓜⁻¹ X for the columns of X (nv×k), with the articulated-body factor that
-// forward_dynamics(…, ArticulatedBody) or minverse leaves in data (P, U1, Dinv1, U, Dinv): one
+// forward_dynamics(…, ArticulatedBody) or minverse leaves in data.work.articulated: one
 // tip-to-base and one base-to-tip sweep per column, O(N) each whatever the tree, several columns at
 // a time (articulated_solve.cpp).  `work` is articulated_solve_work(model); nothing allocates.
 void articulated_solve(const Model& model, const Data& data, Eigen::Ref<MatX> X, MatX& work);
 MatX articulated_solve_work(const Model& model);
 
-// The tree-sparse route in two parts, for reuse: factor data.Mass into data.L, then solve in place.
+// The tree-sparse route in two parts, for reuse: factor data.M into data.work.factor.L, then solve in place.
 void ltdl_factor(const Model& model, Data& data);
 void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x);
 

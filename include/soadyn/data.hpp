@@ -1,8 +1,11 @@
-// Per-state arrays, sized once from a Model.  Each field names the stage that fills it:
+// Per-state arrays, sized once from a Model: the results the algorithms leave, each field named
+// with the stage that fills it, and apart from them each route's own workspace.
 //   [kin]  update_kinematics(q)      [vel] update_velocities(v)
 //   [crb]  mass_matrix               [rne] bias_forces / inverse_dynamics
-//   [fd]   forward_dynamics          [minv] minverse's workspace
-// No algorithm allocates once a Data exists.
+//   [fd]   forward_dynamics
+// Every entry point says which results it fills; it leaves every other result as it was.  The
+// workspace (Data::work) holds no result: what a route leaves there is unspecified and not part
+// of the API.  No algorithm allocates once a Data exists.
 #pragma once
 
 #include "soadyn/inertia.hpp"
@@ -22,9 +25,51 @@ double memory_limit_bytes();
 // memory_limit_bytes(), naming nv, what needs it and both sizes in GB.
 void check_memory(double bytes, int nv, const std::string& what);
 
+// Each route's scratch, apart from the results (Data::work).
+struct Workspace {
+  Eigen::Matrix2Xd turn;               // (cos θ_i, sin θ_i) of each revolute joint along a unit axis (Model::angles)
+  // the composite-inertia 𝓜 (mass_matrix, mass_matrix(q) past 22 bodies, centroidal.cpp)
+  struct Composite {
+    std::vector<SpatialInertia> K;     // composite inertia of the subtree of i, about η_i
+    Mat6X S0;                          // G_k moved to the inertial origin: [a; b + η_i × a]
+    Mat6X F0;                          // K_i G_k moved to the inertial origin: [n + η_i × f; f]
+    Eigen::Matrix<double, Eigen::Dynamic, 6> F0t;  // F0ᵀ, nv×6: a chain's entries column by column
+  } composite;
+  // the body-axes routes, mass_matrix(model, data, q) and bias_forces(model, data, q, v)
+  struct BodyAxes {
+    std::vector<SpatialInertia> K;     // composite inertia of the subtree of i, body i's axes, about η_i
+    Mat6X Fcol;                        // K_j Ĝ_k of every DOF k, column dfs position of k, in the axes of
+                                       //   the body the sweep is at
+    Mat6X V, A, F;                     // v̂_i, â_i, f̂_i of each body, its own axes, about η_i
+    std::vector<Mat3> Xr;              // (R, p) of body i: placement ∘ joint motion (the kinds whose X_i
+    Mat3X Xp;                          //   is a general rigid motion)
+    std::vector<Mat3> R;               // the frames of q (R, η, d, G as [kin] has them) for the route
+    Mat3X eta, d;                      //   past 22 bodies, which leaves [kin] as it was
+    Mat6X G;
+  } local;
+  // 𝓜 factored: in place as LᵀDL along the tree (row-major: the factorization walks rows), or dense
+  struct Factor {
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> L;
+    Eigen::LLT<MatX> llt;              // 𝓜 = L Lᵀ
+  } factor;
+  // the articulated-body recursion (aba, minverse, articulated_solve's factor)
+  struct Articulated {
+    std::vector<Mat6> P;               // articulated inertias
+    Mat6X z;                           // articulated bias forces
+    std::vector<Mat6G> U;              // U_i = P_i G_i (multi-DOF joints)
+    Mat6X U1;                          // U_i = P_i g_i (1-DOF joints, column i)
+    VecX Dinv1;                        // 1 / (g_iᵀ P_i g_i) (1-DOF joints)
+    std::vector<MatGG> Dinv;           // (G_iᵀ P_i G_i)⁻¹ (multi-DOF joints)
+    VecX u;                            // τ_i − G_iᵀ z_i
+    Mat6X A;                           // minverse's per-column body accelerations
+    Mat6X Z;                           // minverse's bias forces of every unit force at once (6×nv,
+                                       //   depth-first columns: Model::dfs_begin)
+  } articulated;
+};
+
 struct Data {
-  // Data's dense nv×nv matrices (𝓜, its factor L and the LLT's copy) are its only quadratic part:
-  // 24 nv² bytes, checked against memory_limit_bytes() before anything is allocated
+  // Data's dense nv×nv matrices (𝓜 and the two factors) are its only quadratic part: 24 nv² bytes,
+  // checked against memory_limit_bytes() before anything is allocated
   explicit Data(const Model& model);
 
   // always-on: the data was sized for this model and the vector has the expected size; a wrong
@@ -38,8 +83,7 @@ struct Data {
   Mat3X s;                             // s_i = r_i − η_i, joint to cm
   Mat3X r;                             // r_i, centre of mass
   Mat6X G;                             // 6×nv: columns idx_v[i].. are G_i (g_i in [g;0] or [0;g])
-  Eigen::Matrix2Xd turn;               // (cos θ_i, sin θ_i) of each revolute joint along a unit axis
-  std::vector<SpatialInertia> M;       // M_i about η_i   (eq. 12)
+  std::vector<SpatialInertia> inertia; // M_i, body i's spatial inertia about η_i (eq. 12)
 
   // [vel] velocities and velocity-product terms
   Mat6X V;                             // v_i = [ω_i; η̇_i]      (eq. 4: v = Ψ_D G q̇)
@@ -47,41 +91,18 @@ struct Data {
   Mat6X coriolis;                      // 𝔞_i = Ḋ_i v_p + Ġ_i q̇_i, and [0; −g] at roots
   Mat6X gyroscopic;                    // 𝔟_i, the gyroscopic force pair about η_i
 
-  // [crb] system mass matrix
-  std::vector<SpatialInertia> K;       // composite inertia of the subtree of i, about η_i
-  Mat6X S0;                            // G_k moved to the inertial origin, D_{i:0}⁻ᵀ-wise: [a; b + η_i × a]
-  Mat6X F0;                            // K_i G_k moved to the inertial origin: [n + η_i × f; f]
-  Eigen::Matrix<double, Eigen::Dynamic, 6> F0t;  // F0ᵀ, nv×6: a chain's entries column by column
-  // [crb] the local-frame route, mass_matrix(model, data, q) (mass_matrix_local.cpp)
-  std::vector<SpatialInertia> Kl;      // composite inertia of the subtree of i, body i's axes, about η_i
-  Mat6X Fl;                            // K_j S_k of every DOF k, column dfs position of k, moved to the
-                                       //   frame of the body the sweep is at
-  MatX Mass;                           // 𝓜 (eq. 14), nv×nv, full symmetric
+  // [crb] the system mass matrix
+  MatX M;                              // 𝓜 (eq. 14), nv×nv, full symmetric (Python's data.M)
 
   // [rne] and [fd]
-  Mat6X A;                             // joint accelerations v̇_i
-  Mat6X F;                             // joint force pairs about η_i
+  Mat6X A;                             // v̇_i, each body's acceleration pair at the last q̈ (inverse
+                                       //   dynamics, forward dynamics by aba, the centroidal bias)
+  Mat6X F;                             // each joint's force pair about η_i (inverse dynamics, bias)
   VecX bias;                           // bias(q, q̇) incl. gravity, nv
-  // [rne] the body-axes route, bias_forces(model, data, q, v) (bias_local.cpp)
-  Mat6X Vb, Ab, Fb;                    // v̂_i, â_i, f̂_i of each body, its own axes, about η_i
-  std::vector<Mat3> Xr;                // (R, p) of body i: placement ∘ joint motion (joints off the
-  Mat3X Xp;                            //   ±e_k revolute path only)
   VecX tau;                            // inverse dynamics result, nv
   VecX qdd;                            // forward dynamics result, nv
-  // 𝓜 factored in place as LᵀDL (tree-sparse route); row-major: the factorization walks rows
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> L;
-  Eigen::LLT<MatX> llt;                // 𝓜 = L Lᵀ (dense route)
-  std::vector<Mat6> P;                 // articulated inertias (O(N) route)
-  Mat6X z;                             // articulated bias forces
-  std::vector<Mat6G> U;                // U_i = P_i G_i (multi-DOF joints)
-  Mat6X U1;                            // U_i = P_i g_i (1-DOF joints, column i)
-  VecX Dinv1;                          // 1 / (g_iᵀ P_i g_i) (1-DOF joints)
-  std::vector<MatGG> Dinv;             // (G_iᵀ P_i G_i)⁻¹ (multi-DOF joints)
-  VecX u;                              // τ_i − G_iᵀ z_i
 
-  // [minv] minverse's bias forces of every unit force at once (6×nv, depth-first columns:
-  // Model::dfs_begin)
-  Mat6X Zminv;
+  Workspace work;                      // each route's scratch: no results (see above)
 };
 
 }  // namespace soadyn

@@ -88,7 +88,7 @@ void inverse_dynamics_derivatives_transpose_times(const Model& model, Derivative
 // ∂q̈/∂q and ∂q̈/∂v of q̈ = 𝓜⁻¹ (τ − bias) at (q, v), where τ is the generalized force at this state
 // and `inputs` (may be null) says how it changes with q and v (springs, dampers).  Needs [kin] and
 // [vel] at (q, v).  Fills data.qdd, the factor of dd.route (ArticulatedBody: the articulated-body
-// route's workspace; Sparse: data.Mass, data.bias and data.L), dd.dqdd_dq, dd.dqdd_dv (and the
+// route's workspace; Sparse: data.M, data.bias and data.work.factor.L), dd.dqdd_dq, dd.dqdd_dv (and the
 // inverse-dynamics derivatives at that q̈); with `minv`, also dd.Minv = 𝓜⁻¹ = ∂q̈/∂τ.
 void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
                                   const Inputs* inputs = nullptr, bool minv = false);

@@ -80,16 +80,16 @@ Vec3 com(const Model& model, const Data& data);
 // [kin][vel] ċ = Σ m_i ṙ_i / m
 Vec3 com_velocity(const Model& model, const Data& data);
 // [kin] J_c, 3×nv, ċ = J_c v: column k of DOF k on body j is f_k / m, with K_j G_k = [n_k; f_k]
-// (K_j the composite inertia of j's subtree about η_j).  Fills data.K.
+// (K_j the composite inertia of j's subtree about η_j).  Fills data.work.composite.K.
 void com_jacobian(const Model& model, Data& data, MatX& J);
 // The same from q alone, as Pinocchio's jacobianCenterOfMass(q): the frames (update_frames, [kin]
-// without the inertias), then each subtree's mass and first moment only; fills data.K's m and h
+// without the inertias), then each subtree's mass and first moment only; fills data.work.composite.K's m and h
 // (not its rotational inertia) and leaves [kin]'s inertias and r as they were.
 void com_jacobian(const Model& model, Data& data, const VecX& q, MatX& J);
 
 // Centroidal momentum h_G = [k_G; l] (angular first): l = Σ m_i ṙ_i and k_G = Σ I_i ω_i +
 // (r_i − c) × m_i ṙ_i, the angular momentum about the centre of mass c.
-// [kin] A_G, 6×nv, h_G = A_G v: column k = [n_k + (η_j − c) × f_k; f_k].  Fills data.K.
+// [kin] A_G, 6×nv, h_G = A_G v: column k = [n_k + (η_j − c) × f_k; f_k].  Fills data.work.composite.K.
 void centroidal_momentum_matrix(const Model& model, Data& data, MatX& AG);
 // [kin][vel] h_G = A_G v, from the bodies' velocities
 Vec6 centroidal_momentum(const Model& model, const Data& data);
@@ -98,12 +98,12 @@ Vec6 centroidal_momentum(const Model& model, const Data& data);
 // [rne]/[fd] scratch).
 Vec6 centroidal_momentum_matrix_dot_times_v(const Model& model, Data& data);
 // [kin] the composite inertia of every moving body about the centre of mass, inertial axes
-// (h = 0 up to rounding): h_G = K_G [ω_G; ċ] defines the average angular velocity ω_G.  Fills data.K.
+// (h = 0 up to rounding): h_G = K_G [ω_G; ċ] defines the average angular velocity ω_G.  Fills data.work.composite.K.
 SpatialInertia centroidal_inertia(const Model& model, Data& data);
 
 // [kin] Λ = (J 𝓜⁻¹ Jᵀ)⁻¹ for a task Jacobian J (k×nv, e.g. frame_jacobian's or its 3 linear
-// rows), by 𝓜 = L Lᵀ (data.llt) and Y = L⁻¹ Jᵀ, J 𝓜⁻¹ Jᵀ = Yᵀ Y: 𝓜⁻¹ is never formed.  Fills
-// data.Mass and data.llt; allocates Y (nv×k).  Throws soadyn::Error when J 𝓜⁻¹ Jᵀ is singular
+// rows), by 𝓜 = L Lᵀ (data.work.factor.llt) and Y = L⁻¹ Jᵀ, J 𝓜⁻¹ Jᵀ = Yᵀ Y: 𝓜⁻¹ is never formed.  Fills
+// data.M and data.work.factor.llt; allocates Y (nv×k).  Throws soadyn::Error when J 𝓜⁻¹ Jᵀ is singular
 // (a smallest eigenvalue below 1e-10 of the largest): more rows than the joints can move
 // independently at this configuration.
 void operational_space_inertia(const Model& model, Data& data, const MatX& J, MatX& Lambda);

@@ -75,7 +75,7 @@ class System {
   // out = (∂f/∂y) S for the columns of S (size() rows) without forming ∂f/∂y: the inverse-dynamics
   // derivatives, then ∂q̈/∂y S = 𝓜⁻¹ ((∂τ/∂q − ∂ID/∂q) T S_q + (∂τ/∂v − ∂ID/∂v) S_v) by one LᵀDL solve
   // per column (forward sensitivities, sensitivity.hpp).  Leaves data at (q, v): [kin], [vel],
-  // data.qdd and 𝓜's factor data.L.  Allocates out and its scratch on the first call of a width.
+  // data.qdd and 𝓜's factor data.work.factor.L.  Allocates out and its scratch on the first call of a width.
   void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
   void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)

@@ -118,6 +118,9 @@ class Model {
     std::vector<int> body, q;
     int roots = 0;
   } angles;
+  // joint_model and angles from joint_type, axis and placement (build calls it; so must whoever
+  // changes those fields of a built model, as unpickling does)
+  void classify_joints();
   std::vector<std::string> warnings;       // what build accepted but a user should hear (one line each)
 
   double world_mass = 0.0;                 // bodies welded to the world: mass and first moment,

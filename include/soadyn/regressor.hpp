@@ -27,11 +27,11 @@ void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y);
 
 // Yᵀ μ (10 N) at (q, v, q̈) for a vector μ (nv), in O(N) without forming Y: one base-to-tip sweep of
 // w_i = D_i w_parent + G_i μ_i, then each body's 6×10 block (the adjoint's ∂G/∂π, adjoint.hpp).  Needs
-// [kin] and [vel]; leaves data.A, data.F and data.tau as inverse_dynamics does, and overwrites data.Vb.
+// [kin] and [vel]; leaves data.A, data.F and data.tau as inverse_dynamics does, and overwrites data.work.local.V.
 void regressor_transpose_times(const Model& model, Data& data, const VecX& qdd, const VecX& mu, Eigen::Ref<VecX> out);
 
 // ∂q̈/∂π (nv × 10 N) of forward dynamics at (q, v, τ): −𝓜⁻¹ Y(q, v, q̈), 𝓜⁻¹ applied by the tree's
-// LᵀDL factor, never formed.  Needs [kin] and [vel]; leaves data.qdd = q̈ and data.Mass = 𝓜.
+// LᵀDL factor, never formed.  Needs [kin] and [vel]; leaves data.qdd = q̈ and data.M = 𝓜.
 void forward_dynamics_parameter_derivative(const Model& model, Data& data, const VecX& tau, MatX& dqdd_dpi);
 
 }  // namespace soadyn

@@ -95,7 +95,7 @@ Inspection inspect(const Scenario& sc, const InspectOptions& o) {
   Data d(m);
   update_kinematics(m, d, r.q);
   mass_matrix(m, d);
-  r.M = d.Mass;
+  r.M = d.M;
   update_velocities(m, d, r.v);
   bias_forces(m, d);
   r.bias = d.bias;

@@ -83,8 +83,8 @@ The system mass matrix 𝓜(q) = Gᵀ Ψ_Dᵀ M Ψ_D G (eq. 14), by composite in
 q: (nq,).  Returns data.M, shape (nv, nv), symmetric positive definite: a read-only view, not a
 copy (the next call on this Data overwrites it; .copy() to keep it).
 kinematics=False: 𝓜 from q alone in body axes (C++ mass_matrix(model, data, q)), the same 𝓜 to
-rounding in 0.55–0.9 of the C++ time at robot sizes, but data's kinematics views (R, eta, …) are
-left unspecified: update_kinematics before reading them.)";
+rounding in 0.55–0.9 of the C++ time at robot sizes; data's kinematics views (R, eta, …) keep what
+they held (not this q): update_kinematics before reading them.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
     if (kinematics_wanted(name, a[1])) {
       kin(m, d, name, a[0]);
@@ -142,8 +142,8 @@ bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D a + b): Coriolis, centrifugal, gyroscopic an
 
 𝓜(q) q̈ + bias(q, q̇) = τ.  q: (nq,), v: (nv,).  Returns data.bias, shape (nv,), a read-only view.
 kinematics=False: the recursive Newton–Euler from (q, v) alone in body axes (C++
-bias_forces(model, data, q, v)), the same bias to rounding in 0.6–0.85 of the C++ time, but
-data's kinematics and velocity views are left unspecified.)";
+bias_forces(model, data, q, v)), the same bias to rounding in 0.6–0.85 of the C++ time; data's
+kinematics and velocity views keep what they held (not this q, v).)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
     if (kinematics_wanted(name, a[2])) {
       kin_vel(m, d, name, a[0], a[1]);

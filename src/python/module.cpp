@@ -127,7 +127,7 @@ PyData::PyData(const Model& model)
   py::capsule base(keep, [](void* p) { delete static_cast<std::shared_ptr<Data>*>(p); });
   Data& D = *data;
   const py::ssize_t n = nbodies;
-  M = view(base, D.Mass.data(), {nv, nv}, {1, nv});  // column-major; symmetric anyway
+  M = view(base, D.M.data(), {nv, nv}, {1, nv});  // column-major; symmetric anyway
   bias = view(base, D.bias.data(), {nv}, {1});
   tau = view(base, D.tau.data(), {nv}, {1});
   qdd = view(base, D.qdd.data(), {nv}, {1});

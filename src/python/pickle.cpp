@@ -195,6 +195,7 @@ Model model_from_state(const py::object& state) {
     m.inertia[i] = inertia[i];  // a merged body's R I Rᵀ sum may be off symmetric in its last bits
     m.inertia_origin[i] = inertia_origin[i];
   }
+  m.classify_joints();  // the kinds carry the axes: from the stored bits too
   // what no BodySpec carries: frames, merged names, the world's share, the warnings
   const auto frame_names = r.as<std::vector<std::string>>("frame_names");
   const size_t nf = frame_names.size();
@@ -216,7 +217,7 @@ Model model_from_state(const py::object& state) {
 // Data's result arrays, each the library's storage in its own (column-major) order
 std::vector<std::pair<const char*, Eigen::Map<VecX>>> data_arrays(Data& D) {
   const auto flat = [](double* p, Eigen::Index n) { return Eigen::Map<VecX>(p, n); };
-  return {{"M", flat(D.Mass.data(), D.Mass.size())},
+  return {{"M", flat(D.M.data(), D.M.size())},
           {"bias", flat(D.bias.data(), D.bias.size())},
           {"tau", flat(D.tau.data(), D.tau.size())},
           {"qdd", flat(D.qdd.data(), D.qdd.size())},

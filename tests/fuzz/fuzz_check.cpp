@@ -46,7 +46,7 @@ void check_mass_matrix(const Model& m, std::uint64_t seed) {
     }
     update_kinematics(m, d, q);
     mass_matrix(m, d);
-    const MatX& M = d.Mass;
+    const MatX& M = d.M;
     if (!M.allFinite()) trap("not finite", config, M);
     if (!M.isApprox(M.transpose(), 1e-12)) trap("not symmetric", config, M);
     // positive definite up to rounding: a Cholesky factor, or else no eigenvalue below −1e-9 λ_max

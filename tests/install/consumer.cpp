@@ -31,7 +31,7 @@ int main() {
   const soadyn::VecX q = Eigen::Vector2d(0.3, -0.7), v = Eigen::Vector2d(1.2, -0.4);
   const soadyn::VecX tau = Eigen::Vector2d(0.5, -0.2);
   soadyn::update_kinematics(model, data, q);   // [kin] frames, positions, inertias
-  soadyn::mass_matrix(model, data);            // data.Mass = 𝓜(q)
+  soadyn::mass_matrix(model, data);            // data.M = 𝓜(q)
   soadyn::update_velocities(model, data, v);   // [vel] v = Ψ_D G q̇
   soadyn::bias_forces(model, data);            // data.bias: Coriolis, centrifugal, gravity
   soadyn::forward_dynamics(model, data, tau, soadyn::FdMethod::ArticulatedBody);  // data.qdd, O(N)
@@ -46,10 +46,10 @@ int main() {
   const Eigen::Vector2d bias(-h * (2 * v[0] * v[1] + v[1] * v[1]) + g1 + g2, h * v[0] * v[0] + g2);
   const Eigen::Vector2d qdd = M.llt().solve(tau - bias);
 
-  const double error = std::fmax((data.Mass - M).cwiseAbs().maxCoeff() / M.cwiseAbs().maxCoeff(),
+  const double error = std::fmax((data.M - M).cwiseAbs().maxCoeff() / M.cwiseAbs().maxCoeff(),
                                  std::fmax((data.bias - bias).norm() / bias.norm(),
                                            (data.qdd - qdd).norm() / qdd.norm()));
-  std::printf("M(q)   = [%.15f %.15f; %.15f %.15f]\n", data.Mass(0, 0), data.Mass(0, 1), data.Mass(1, 0), data.Mass(1, 1));
+  std::printf("M(q)   = [%.15f %.15f; %.15f %.15f]\n", data.M(0, 0), data.M(0, 1), data.M(1, 0), data.M(1, 1));
   std::printf("bias   = [%.15f %.15f]\n", data.bias[0], data.bias[1]);
   std::printf("q̈      = [%.15f %.15f]\n", data.qdd[0], data.qdd[1]);
   std::printf("largest relative difference from the closed form: %.1e\n", error);

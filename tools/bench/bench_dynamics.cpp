@@ -63,13 +63,13 @@ template <bool B> void MassComposite(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
     update_kinematics(f.model, f.data, f.q);
     mass_matrix(f.model, f.data);
-    benchmark::DoNotOptimize(f.data.Mass.data());
+    benchmark::DoNotOptimize(f.data.M.data());
   });
 }
 template <bool B> void MassFromQ(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
     mass_matrix(f.model, f.data, f.q);
-    benchmark::DoNotOptimize(f.data.Mass.data());
+    benchmark::DoNotOptimize(f.data.M.data());
   });
 }
 template <bool B> void BiasFromQV(benchmark::State& st) {

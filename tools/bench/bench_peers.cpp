@@ -141,7 +141,7 @@ std::string disagreement(Setup& s, Peer& p, benchmark::State& st) {
   s.bias();  // kinematics, velocities, C
   const VecX C = s.data.bias;
   s.mass();
-  const MatX M = s.data.Mass;
+  const MatX M = s.data.M;
   auto in_body_order = [&](const std::vector<double>& x) {
     VecX r(n);
     for (int i = 0; i < n; ++i) r(s.model.idx_v[i]) = x[size_t(i)];

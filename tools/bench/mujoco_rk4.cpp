@@ -137,8 +137,8 @@ int main(int argc, char** argv) {
     Data d(m);
     update_kinematics(m, d, sc.q0);
     mass_matrix(m, d);
-    const double diff = (Mmj - d.Mass).cwiseAbs().maxCoeff();
-    if (!(diff <= 1e-9 * d.Mass.cwiseAbs().maxCoeff())) throw Error("MuJoCo's mass matrix differs by " + std::to_string(diff));
+    const double diff = (Mmj - d.M).cwiseAbs().maxCoeff();
+    if (!(diff <= 1e-9 * d.M.cwiseAbs().maxCoeff())) throw Error("MuJoCo's mass matrix differs by " + std::to_string(diff));
     if (many) {
       const int rc = rollouts(sc, mm, md, steps, std::atol(argv[5]));
       mj_deleteData(md);

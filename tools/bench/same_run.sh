@@ -73,6 +73,10 @@ if grep -q 'void bias_forces(const Model& model, Data& data, const VecX& q, cons
   grep -q 'mass_matrix(q)' "$work/harness/same_run/adapter_soadyn.cc" ||
     { echo "same_run: could not add the from-state routes to the adapter copy" >&2; exit 1; }
 fi
+# ... and names 𝓜 data.Mass, which Data calls M (as Python does)
+if ! grep -q 'MatX Mass;' "$repo/include/soadyn/data.hpp"; then
+  sed -i 's/\bdata\.Mass\b/data.M/g' "$work/harness/same_run/adapter_soadyn.cc"
+fi
 
 cmake -S "$work/harness/same_run" -B "$work/gcc" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=g++ \
   -DSOADYN_BUILD_DIR="$build" -DSOADYN_SOURCE_DIR="$repo" -DPEERS_PREFIX="$prefix"
