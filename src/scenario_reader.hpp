@@ -142,6 +142,14 @@ inline int find_joint(const Reader& rd, const Model& m, const YAML::Node& key, c
 
 // scenario_control.cpp: `limits: {joint: [lower, upper]}` onto the model's travel, and
 // `inputs: controllers: [...]` (q0: the initial state, a computed-torque target's default)
+// scenario_bodies.cpp: the bodies: list, and the model built from it
+struct BodyNodes {
+  std::vector<BodySpec> specs;
+  std::vector<YAML::Node> nodes;  // each body's node, to locate a refusal
+};
+BodyNodes read_bodies(const Reader& rd, const YAML::Node& list);
+Model build_located(const Reader& rd, const BodyNodes& bodies, const Vec3& gravity, InertiaCheck inertia_check);
+
 void read_limits(const Reader& rd, const YAML::Node& n, Model& m);
 void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0,
                       std::vector<ControllerInput>& out);
