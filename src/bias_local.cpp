@@ -33,13 +33,15 @@ inline void body_force(const SpatialInertia& K, const Vec3& w, const Vec3& u, co
 // base to tip, body i: v̂_i = X_i v̂_p + Ĝ_i q̇_i,  â_i = X_i â_p + v̂_i × Ĝ_i q̇_i + c_J,
 // f̂_i = M̂_i â_i + v̂_i ×* M̂_i v̂_i (â = [0; −g] at the ground)
 template <class J>
-inline void forward_step(const J& joint, const Model& model, Data& data, const VecX& q, const VecX& v, int i) {
+[[gnu::flatten]] void forward_step(const J& joint, const Model& model, Data& data, const VecX& q, const VecX& v, int i) {
   const auto X = local::transform(joint, model, data, q, i);
   if constexpr (std::is_same_v<decltype(X), const local::Rigid>) {
     data.work.local.Xr[i] = X.R;  // kept for the tip-to-base sweep
     data.work.local.Xp.col(i) = X.p;
   }
   const int p = model.parent[i];
+  // M̂_i, constant in body axes
+  const SpatialInertia K = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
   Vec3 w, u, aw, au;
   if (p < 0) {
     w.setZero(), u.setZero(), aw.setZero();
@@ -54,14 +56,72 @@ inline void forward_step(const J& joint, const Model& model, Data& data, const V
   local::subspace(joint, X, model, i).add_motion(v.data() + model.idx_v[i], w, u, aw, au);
   data.work.local.V.col(i).head<3>() = w, data.work.local.V.col(i).tail<3>() = u;
   data.work.local.A.col(i).head<3>() = aw, data.work.local.A.col(i).tail<3>() = au;
-  // M̂_i, constant in body axes
-  const SpatialInertia K = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
   body_force(K, w, u, aw, au, data.work.local.F, i);
+}
+
+// the same two steps for a revolute joint along ±e_k of an unturned placement, written out: X_i is
+// a turn by θ about e_k (two components mixed by (cos θ, sin θ)) and Ĝ_i q̇_i = ±q̇ e_k, so every
+// product is a few scalars with constant indices
+template <int k>
+[[gnu::flatten]] void forward_step(const joints::RevoluteAxis<k>& joint, const Model& model, Data& data, const VecX&,
+                                   const VecX& v, int i) {
+  constexpr int a = (k + 1) % 3, b = (k + 2) % 3;
+  const SpatialInertia K = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
+  const int p = model.parent[i];
+  const double c = data.work.turn(0, i), s = joint.sign * data.work.turn(1, i);
+  const Vec3& offset = model.placement[i].p;
+  Workspace::BodyAxes& w_ = data.work.local;
+  // X_i v̂_p, X_i â_p  (the ground: v̂ = 0, â = [0; −g]), Rot_kᵀ x = [.., c x_a + s x_b, c x_b − s x_a]
+  auto back = [&](const Vec3& x) {
+    Vec3 y;
+    y(k) = x(k), y(a) = c * x(a) + s * x(b), y(b) = c * x(b) - s * x(a);
+    return y;
+  };
+  Vec3 w, u, aw, au;
+  if (p < 0) {
+    w.setZero(), u.setZero(), aw.setZero();
+    au = back(-model.gravity);
+  } else {
+    const Vec3 wp = w_.V.col(p).head<3>(), awp = w_.A.col(p).head<3>();
+    w = back(wp);
+    u = back(Vec3(w_.V.col(p).tail<3>() + wp.cross(offset)));
+    aw = back(awp);
+    au = back(Vec3(w_.A.col(p).tail<3>() + awp.cross(offset)));
+  }
+  // + Ĝ q̇ = ±q̇ e_k;  â += v̂ × Ĝ q̇ = [ω × e_k; u × e_k] (±q̇)
+  const double r = joint.sign * v(model.idx_v[i]);
+  w(k) += r;
+  aw(a) += r * w(b), aw(b) -= r * w(a);
+  au(a) += r * u(b), au(b) -= r * u(a);
+  w_.V.col(i).head<3>() = w, w_.V.col(i).tail<3>() = u;
+  w_.A.col(i).head<3>() = aw, w_.A.col(i).tail<3>() = au;
+  body_force(K, w, u, aw, au, w_.F, i);
+}
+
+template <int k>
+[[gnu::flatten]] void backward_step(const joints::RevoluteAxis<k>& joint, const Model& model, Data& data, const VecX&,
+                                    int i) {
+  constexpr int a = (k + 1) % 3, b = (k + 2) % 3;
+  Mat6X& F = data.work.local.F;
+  const int p = model.parent[i];
+  const Vec3 n = F.col(i).head<3>(), f = F.col(i).tail<3>();
+  data.bias(model.idx_v[i]) = joint.sign * n(k);
+  if (p < 0) return;
+  const double c = data.work.turn(0, i), s = joint.sign * data.work.turn(1, i);
+  // Rot_k x = [.., c x_a − s x_b, c x_b + s x_a]
+  auto turn = [&](const Vec3& x) {
+    Vec3 y;
+    y(k) = x(k), y(a) = c * x(a) - s * x(b), y(b) = c * x(b) + s * x(a);
+    return y;
+  };
+  const Vec3 fp = turn(f);
+  F.col(p).head<3>() += turn(n) + model.placement[i].p.cross(fp);
+  F.col(p).tail<3>() += fp;
 }
 
 // tip to base, body i: bias_i = Ĝ_iᵀ f̂_i,  f̂_p += X_iᵀ f̂_i (X_i as the forward step found it)
 template <class J>
-inline void backward_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
+[[gnu::flatten]] void backward_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
   using X_t = decltype(local::transform(joint, model, data, q, i));
   const auto X = [&] {
     if constexpr (std::is_same_v<X_t, local::Rigid>)

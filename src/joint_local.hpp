@@ -34,16 +34,6 @@ struct AxisTurn {
   static constexpr int a = (k + 1) % 3, b = (k + 2) % 3;
   double c, s;
   const Vec3& p;
-  Vec3 to_child(const Vec3& x) const {  // Rᵀ x
-    Vec3 y;
-    y(k) = x(k), y(a) = c * x(a) + s * x(b), y(b) = c * x(b) - s * x(a);
-    return y;
-  }
-  Vec3 to_parent(const Vec3& x) const {  // R x
-    Vec3 y;
-    y(k) = x(k), y(a) = c * x(a) - s * x(b), y(b) = c * x(b) + s * x(a);
-    return y;
-  }
 };
 
 struct Rigid {
@@ -105,6 +95,26 @@ inline void move_to_parent(const X& x, Mat6X& F, int c0, int c1) {
     col[1] = n[1] + p.z() * f[0] - p.x() * f[2];
     col[2] = n[2] + p.x() * f[1] - p.y() * f[0];
     col[3] = f[0], col[4] = f[1], col[5] = f[2];
+  }
+}
+
+// the same for a turn about e_k: n' = Rot n + p × f', f' = Rot f, each component one scalar
+// product with constant indices
+template <int k>
+inline void move_to_parent(const AxisTurn<k>& X, Mat6X& F, int c0, int c1) {
+  constexpr int a = AxisTurn<k>::a, b = AxisTurn<k>::b;
+  const double c = X.c, s = X.s;
+  const Vec3& p = X.p;
+  for (int j = c0; j < c1; ++j) {
+    double* x = F.col(j).data();
+    double n[3], f[3];
+    n[k] = x[k], f[k] = x[3 + k];
+    n[a] = c * x[a] - s * x[b], n[b] = s * x[a] + c * x[b];
+    f[a] = c * x[3 + a] - s * x[3 + b], f[b] = s * x[3 + a] + c * x[3 + b];
+    x[0] = n[0] + p.y() * f[2] - p.z() * f[1];
+    x[1] = n[1] + p.z() * f[0] - p.x() * f[2];
+    x[2] = n[2] + p.x() * f[1] - p.y() * f[0];
+    x[3] = f[0], x[4] = f[1], x[5] = f[2];
   }
 }
 

@@ -69,7 +69,7 @@ inline void local_step(const J& joint, const Model& model, Data& data, const Vec
 // turned into inertial axes).  K̂_i Ĝ = K̂_i Rᵀ G: [R I Rᵀ a + h_w × b; m b − h_w × a] in inertial
 // axes, h_w = R h
 template <class J>
-inline void frames_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
+[[gnu::flatten]] void frames_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
   const Workspace::BodyAxes& w = data.work.local;  // the frames of q (update_frames into the workspace)
   const SpatialInertia& K = w.K[i];
   const Mat3& R = w.R[i];

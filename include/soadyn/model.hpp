@@ -150,10 +150,32 @@ class Model {
 };
 
 // f(joint) with body i's joint kind (one of JointModel's types): the one dispatch per body each
-// sweep makes, so the step for that kind runs with its constants known at compile time
+// sweep makes, so the step for that kind runs with its constants known at compile time.  A switch
+// on the kind's index rather than std::visit: every case is a direct call the compiler inlines
+// into the sweep (std::visit's table of function pointers costs an indirect call per body, about
+// a quarter of a chain's bias).  A kind added to JointModel fails the static_assert until it has
+// its case here.
 template <class F>
-inline decltype(auto) visit_joint(const Model& model, int i, F&& f) {
-  return std::visit(std::forward<F>(f), model.joint_model[i]);
+inline void visit_joint(const Model& model, int i, F&& f) {
+  const JointModel& j = model.joint_model[i];
+  static_assert(std::variant_size_v<JointModel> == 14, "one case per joint kind");
+  switch (j.index()) {
+    case 0: return f(*std::get_if<0>(&j));
+    case 1: return f(*std::get_if<1>(&j));
+    case 2: return f(*std::get_if<2>(&j));
+    case 3: return f(*std::get_if<3>(&j));
+    case 4: return f(*std::get_if<4>(&j));
+    case 5: return f(*std::get_if<5>(&j));
+    case 6: return f(*std::get_if<6>(&j));
+    case 7: return f(*std::get_if<7>(&j));
+    case 8: return f(*std::get_if<8>(&j));
+    case 9: return f(*std::get_if<9>(&j));
+    case 10: return f(*std::get_if<10>(&j));
+    case 11: return f(*std::get_if<11>(&j));
+    case 12: return f(*std::get_if<12>(&j));
+    case 13: return f(*std::get_if<13>(&j));
+  }
+  throw Error("visit_joint: body " + std::to_string(i) + " has no joint kind");  // valueless: never built so
 }
 
 }  // namespace soadyn
