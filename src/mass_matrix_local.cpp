@@ -41,9 +41,11 @@ void body_inertias(const Model& model, Data& data) {
 
 // body i, its subtree's composite K̂_i complete and the subtree's F̂ in its axes:
 // F̂ of its own DOFs = K̂_i Ĝ_i, 𝓜_jk = Ĝ_jᵀ F̂_k for its DOFs j and every DOF k of the subtree
-// (both triangles), then F̂ and K̂_i moved to the parent
+// (both triangles), then F̂ and K̂_i moved to the parent.  Not inlined into the driver's switch:
+// fourteen kinds' steps in one function cost a tree of 15 bodies 14 % in register spills; as a
+// call each keeps its own registers (tools/bench tree/mass_q/15: 466 → 390–415 ns)
 template <class J>
-inline void local_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
+[[gnu::noinline]] void local_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
   const auto X = local::transform(joint, model, data, q, i);
   const auto G = local::subspace(joint, X, model, i);
   constexpr int n = decltype(G)::nv;
