@@ -29,41 +29,41 @@ void add_congruence_D(Mat6& out, const Mat6& P, const Vec3& d) {
 
 // The factor both articulated-body sweeps share, at body i once its children are in P_i:
 // U_i = P_i G_i, 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ and, below a parent, P⁺_i = P_i − U_i 𝒟_i⁻¹ U_iᵀ in place
-// (P_i is not needed after this step).  The caller adds D_iᵀ P⁺_i D_i to P_p.
+// (P_i is not needed after this step).  The caller adds D_iᵀ P⁺_i D_i to P_p.  J is body i's joint
+// kind, which the caller's one dispatch for the body has chosen.
+template <class J>
 inline void articulated_factor_step(const Model& model, Data& data, int i) {
-  visit_joint(model, i, [&](const auto& j) {
-    using J = std::decay_t<decltype(j)>;
-    const int vi = model.idx_v[i], p = model.parent[i];
-    Mat6& P = data.work.articulated.P[i];
-    if constexpr (J::nv == 1) {
-      // U = P g,  𝒟 = gᵀ U;  P⁺ = P − U Uᵀ / 𝒟
-      Vec6 U;
-      inertial::times<J>(P, data.G, vi, U);
-      const double Dinv = 1.0 / data.G.col(vi).dot(U);
-      data.work.articulated.U1.col(i) = U;
-      data.work.articulated.Dinv1(i) = Dinv;
-      if (p < 0) return;
-      const Vec6 UD = Dinv * U;
-      for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
-    } else {
-      // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
-      Eigen::Matrix<double, 6, J::nv> U;
-      inertial::times<J>(P, data.G, vi, U);
-      const Eigen::Matrix<double, J::nv, J::nv> joint_inertia = data.G.middleCols<J::nv>(vi).transpose() * U;  // 𝒟_i
-      data.work.articulated.U[i] = U;
-      data.work.articulated.Dinv[i] = joint_inertia.inverse();
-      if (p < 0) return;
-      const Eigen::Matrix<double, 6, J::nv> UD = U * data.work.articulated.Dinv[i];
-      P.noalias() -= UD * U.transpose();
-    }
-  });
+  const int vi = model.idx_v[i], p = model.parent[i];
+  Mat6& P = data.work.articulated.P[i];
+  if constexpr (J::nv == 1) {
+    // U = P g,  𝒟 = gᵀ U;  P⁺ = P − U Uᵀ / 𝒟
+    Vec6 U;
+    inertial::times<J>(P, data.G, vi, U);
+    const double Dinv = 1.0 / data.G.col(vi).dot(U);
+    data.work.articulated.U1.col(i) = U;
+    data.work.articulated.Dinv1(i) = Dinv;
+    if (p < 0) return;
+    const Vec6 UD = Dinv * U;
+    for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
+  } else {
+    // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
+    Eigen::Matrix<double, 6, J::nv> U;
+    inertial::times<J>(P, data.G, vi, U);
+    const Eigen::Matrix<double, J::nv, J::nv> joint_inertia = data.G.middleCols<J::nv>(vi).transpose() * U;  // 𝒟_i
+    data.work.articulated.U[i] = U;
+    data.work.articulated.Dinv[i] = joint_inertia.inverse();
+    if (p < 0) return;
+    const Eigen::Matrix<double, 6, J::nv> UD = U * data.work.articulated.Dinv[i];
+    P.noalias() -= UD * U.transpose();
+  }
 }
 
-// aba's tip-to-base step after the factor step: u_i = τ_i − G_iᵀ z_i, then at a parent
+// aba's tip-to-base step, the factor step first, then: u_i = τ_i − G_iᵀ z_i, then at a parent
 // z⁺ = z + P⁺ a + U 𝒟⁻¹ u, P_p += D_iᵀ P⁺ D_i, z_p += D_iᵀ z⁺ = [z_ω + d_i × z_f; z_f] (added in
 // 3-vector halves: a 6-vector built whole went through the stack and was read back across two stores)
 template <class J>
-inline void aba_backward_step(const Model& model, Data& data, const VecX& tau, int i) {
+[[gnu::noinline]] void aba_backward_step(const Model& model, Data& data, const VecX& tau, int i) {
+  articulated_factor_step<J>(model, data, i);
   const int vi = model.idx_v[i], p = model.parent[i];
   const Mat6& P = data.work.articulated.P[i];  // P⁺_i below a parent
   double gz[J::nv];
@@ -129,10 +129,8 @@ void aba(const Model& model, Data& data, const VecX& tau) {
     P.block<3, 3>(3, 0) << 0.0, h2, -h1, -h2, 0.0, h0, h1, -h0, 0.0;  // h̃ᵀ, row by row
     data.work.articulated.z.col(i) = data.gyroscopic.col(i);
   }
-  for (int i = model.nbodies - 1; i >= 0; --i) {
-    articulated_factor_step(model, data, i);
+  for (int i = model.nbodies - 1; i >= 0; --i)
     visit_joint(model, i, [&](const auto& j) { aba_backward_step<std::decay_t<decltype(j)>>(model, data, tau, i); });
-  }
   // base to tip: A' = D_i A_p + a_i,  q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A'),  A_i = A' + G_i q̈_i
   for (int i = 0; i < model.nbodies; ++i)
     visit_joint(model, i, [&](const auto& j) { aba_forward_step<std::decay_t<decltype(j)>>(model, data, i); });
@@ -158,7 +156,7 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
     using J = std::decay_t<decltype(joint)>;
     const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
     const int b = model.dfs_begin[i], n = model.dfs_end[i] - b;
-    articulated_factor_step(model, data, i);
+    articulated_factor_step<J>(model, data, i);
     if constexpr (J::nv == 1) {  // 𝒟⁻¹ a number
       const Vec6 g = data.G.col(vi), U = data.work.articulated.U1.col(i);
       const double Dinv = data.work.articulated.Dinv1(i);
@@ -194,9 +192,10 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
     const int at = model.dfs_begin[model.dof_body[size_t(k)]];
     double* col = Minv.col(k).data();
     for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
-    using J = std::decay_t<decltype(joint)>;
-      const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
+      using J = std::decay_t<decltype(joint)>;
+      const int vi = model.idx_v[i], p = model.parent[i];
       const bool carries = model.dfs_begin[i] <= at && at < model.dfs_end[i];
+      const auto& ab = data.work.articulated;
       if constexpr (J::nv == 1) {
         // in 3-vector halves, which stay in registers (as aba's forward sweep): A' = [ω; u]
         Vec3 w = Vec3::Zero(), v = Vec3::Zero();
@@ -205,21 +204,22 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
           v = Acc.col(p).tail<3>() + w.cross(Vec3(data.d.col(i)));
         }
         const double qdd =
-            data.work.articulated.Dinv1(i) * ((carries ? col[vi] : 0.0) - data.work.articulated.U1.col(i).head<3>().dot(w) - data.work.articulated.U1.col(i).tail<3>().dot(v));
+            ab.Dinv1(i) * ((carries ? col[vi] : 0.0) - ab.U1.col(i).head<3>().dot(w) - ab.U1.col(i).tail<3>().dot(v));
         col[vi] = qdd;
         Acc.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
         Acc.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
-        return;
+      } else {
+        constexpr int ni = J::nv;
+        Vec6 A = Vec6::Zero();
+        if (p >= 0) D.add_apply(i, Acc.col(p), A);
+        VecG u = -(ab.U[i].transpose() * A);
+        if (carries) u += Minv.block(vi, k, ni, 1);
+        const VecG qdd = ab.Dinv[i] * u;
+        Minv.block(vi, k, ni, 1) = qdd;
+        A.noalias() += data.G.middleCols(vi, ni) * qdd;
+        Acc.col(i).head<3>() = A.head<3>();
+        Acc.col(i).tail<3>() = A.tail<3>();
       }
-      Vec6 A = Vec6::Zero();
-      if (p >= 0) D.add_apply(i, Acc.col(p), A);
-      VecG u = -(data.work.articulated.U[i].transpose() * A);
-      if (carries) u += Minv.block(vi, k, ni, 1);
-      const VecG qdd = data.work.articulated.Dinv[i] * u;
-      Minv.block(vi, k, ni, 1) = qdd;
-      A.noalias() += data.G.middleCols(vi, ni) * qdd;
-      Acc.col(i).head<3>() = A.head<3>();
-      Acc.col(i).tail<3>() = A.tail<3>();
     });
   }
 }

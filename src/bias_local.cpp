@@ -31,14 +31,13 @@ inline void body_force(const SpatialInertia& K, const Vec3& w, const Vec3& u, co
 }
 
 // base to tip, body i: v̂_i = X_i v̂_p + Ĝ_i q̇_i,  â_i = X_i â_p + v̂_i × Ĝ_i q̇_i + c_J,
-// f̂_i = M̂_i â_i + v̂_i ×* M̂_i v̂_i (â = [0; −g] at the ground)
+// f̂_i = M̂_i â_i + v̂_i ×* M̂_i v̂_i (â = [0; −g] at the ground).  Every kind but RevoluteAxis
+// (written out below) has a general X_i = (R, p), kept for the tip-to-base sweep
 template <class J>
 [[gnu::flatten]] void forward_step(const J& joint, const Model& model, Data& data, const VecX& q, const VecX& v, int i) {
-  const auto X = local::transform(joint, model, data, q, i);
-  if constexpr (std::is_same_v<decltype(X), const local::Rigid>) {
-    data.work.local.Xr[i] = X.R;  // kept for the tip-to-base sweep
-    data.work.local.Xp.col(i) = X.p;
-  }
+  const local::Rigid X = local::transform(joint, model, data, q, i);
+  data.work.local.Xr[i] = X.R;
+  data.work.local.Xp.col(i) = X.p;
   const int p = model.parent[i];
   // M̂_i, constant in body axes
   const SpatialInertia K = SpatialInertia::from_origin(model.mass[i], model.com[i], model.inertia_origin[i]);
@@ -121,14 +120,8 @@ template <int k>
 
 // tip to base, body i: bias_i = Ĝ_iᵀ f̂_i,  f̂_p += X_iᵀ f̂_i (X_i as the forward step found it)
 template <class J>
-[[gnu::flatten]] void backward_step(const J& joint, const Model& model, Data& data, const VecX& q, int i) {
-  using X_t = decltype(local::transform(joint, model, data, q, i));
-  const auto X = [&] {
-    if constexpr (std::is_same_v<X_t, local::Rigid>)
-      return local::Rigid{data.work.local.Xr[i], data.work.local.Xp.col(i)};
-    else
-      return local::transform(joint, model, data, q, i);
-  }();
+[[gnu::flatten]] void backward_step(const J& joint, const Model& model, Data& data, const VecX&, int i) {
+  const local::Rigid X{data.work.local.Xr[i], data.work.local.Xp.col(i)};
   const Vec3 n = data.work.local.F.col(i).head<3>(), f = data.work.local.F.col(i).tail<3>();
   local::subspace(joint, X, model, i).project(n, f, data.bias.data() + model.idx_v[i]);
   const int p = model.parent[i];
