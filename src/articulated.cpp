@@ -4,28 +4,12 @@
 #include "soadyn/kinematics.hpp"
 #include "soadyn/operators.hpp"
 #include "dynamics_routes.hpp"
+#include "articulated_inertia.hpp"
 #include "joint_inertial.hpp"
 
 namespace soadyn {
 
 namespace {
-
-// Dᵀ P D for a symmetric 6×6 P = [A B; Bᵀ C] and D = [e 0; −d̃ e]:
-//   [A + X + Xᵀ + d̃ C d̃ᵀ,  B + d̃ C;  (B + d̃ C)ᵀ,  C]   with X = d̃ Bᵀ,
-// each d̃ product taken as three cross products.
-void add_congruence_D(Mat6& out, const Mat6& P, const Vec3& d) {
-  const Mat3 B = P.topRightCorner<3, 3>(), C = P.bottomRightCorner<3, 3>();
-  Mat3 W, X, Y;  // W = d̃ C, X = d̃ Bᵀ, Y = d̃ Wᵀ = (W d̃ᵀ)ᵀ = d̃ C d̃ᵀ (symmetric)
-  for (int c = 0; c < 3; ++c) {
-    W.col(c) = d.cross(Vec3(C.col(c)));
-    X.col(c) = d.cross(Vec3(B.row(c).transpose()));
-  }
-  for (int c = 0; c < 3; ++c) Y.col(c) = d.cross(Vec3(W.row(c).transpose()));
-  out.topLeftCorner<3, 3>() += P.topLeftCorner<3, 3>() + X + X.transpose() + Y;
-  out.topRightCorner<3, 3>() += B + W;
-  out.bottomLeftCorner<3, 3>() += (B + W).transpose();
-  out.bottomRightCorner<3, 3>() += C;
-}
 
 // The factor both articulated-body sweeps share, at body i once its children are in P_i:
 // U_i = P_i G_i, 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ and, below a parent, P⁺_i = P_i − U_i 𝒟_i⁻¹ U_iᵀ in place
@@ -43,8 +27,7 @@ inline void articulated_factor_step(const Model& model, Data& data, int i) {
     data.work.articulated.U1.col(i) = U;
     data.work.articulated.Dinv1(i) = Dinv;
     if (p < 0) return;
-    const Vec6 UD = Dinv * U;
-    for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;  // column by column: inlined, unlike Eigen's outer product
+    articulated_inertia::remove_column(P, U, Dinv);
   } else {
     // the same with U_i = P_i G_i (6×n) and 𝒟_i = G_iᵀ U_i (n×n)
     Eigen::Matrix<double, 6, J::nv> U;
@@ -78,7 +61,7 @@ template <class J>
     const Eigen::Matrix<double, J::nv, 1> Du = data.work.articulated.Dinv[i] * data.work.articulated.u.segment<J::nv>(vi);
     za.noalias() += data.work.articulated.U[i] * Du;
   }
-  add_congruence_D(data.work.articulated.P[p], P, data.d.col(i));
+  articulated_inertia::add_to_parent(data.work.articulated.P[p], P, data.d.col(i));
   const Vec3 zf = za.tail<3>();
   data.work.articulated.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
   data.work.articulated.z.col(p).tail<3>() += zf;
@@ -184,7 +167,7 @@ void minverse(const Model& model, Data& data, MatX& Minv) {
         D.add_apply_transpose(i, zp, z);
       }
     }
-    if (p >= 0) add_congruence_D(data.work.articulated.P[p], data.work.articulated.P[i], data.d.col(i));
+    if (p >= 0) articulated_inertia::add_to_parent(data.work.articulated.P[p], data.work.articulated.P[i], data.d.col(i));
   });
   // Base to tip, one column at a time: A'_i = D_i A_p, q̈_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i), A_i = A'_i + G_i q̈_i,
   // u_i nonzero only where column k's joint lies in i's subtree.  O(N) per column.

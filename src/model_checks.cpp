@@ -3,6 +3,8 @@
 // mass matrix that is positive definite and resolvable in doubles at the neutral configuration.
 #include "model_checks.hpp"
 
+#include "articulated_inertia.hpp"
+
 #include "soadyn/inertia.hpp"
 #include "soadyn/text.hpp"
 
@@ -184,7 +186,8 @@ std::string dof_name(const Model& m, int k) {
 // 𝓜 is positive definite iff every pivot of its innovations factorization 𝓜 = (I + K) D (I + K)ᵀ
 // is: D_k = g_kᵀ P_k g_k, with P_k the articulated inertia of DOF k's subtree.  At the neutral
 // configuration every joint motion is the identity, so the frames follow from the placements.
-// Sweep tip to base, P about each body's joint point η_i in world axes, one DOF at a time:
+// Sweep tip to base, P about each body's joint point η_i in world axes, one DOF at a time, with
+// the articulated-body route's own two steps (articulated_inertia.hpp):
 //   P_i = M_i + Σ_children Φᵀ P_c⁺ Φ,   Φ = [e 0; −d̃ e], d = η_c − η_i,
 //   P⁺ = P − P g gᵀ P / (gᵀ P g) for each of the joint's columns g, last first.
 // D_k is the body's own inertia along g plus what its children's P⁺ add; each is a difference
@@ -237,18 +240,17 @@ void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const
       const double error = 8 * std::numeric_limits<double>::epsilon() *
                            (S[i] * gw * gw + 2 * T[i] * gw * gv + U[i] * gv * gv +
                             2 * reach[i] * gw * (T[i] * gw + U[i] * gv));
-      if (pivot > 1e-12 * size) P[i] -= Pg * Pg.transpose() / pivot;
+      if (pivot > 1e-12 * size) articulated_inertia::remove_column(P[i], Pg, 1.0 / pivot);
       else singular.push_back(m.idx_v[i] + j);
       const double diagonal = g.dot(C[i] * g);
       total_error += error, largest = std::max(largest, diagonal);
       if (!(error <= 1e-6 * diagonal)) coarse = m.idx_v[i] + j, coarse_diagonal = diagonal, coarse_error = error;
     }
     if (const int p = m.parent[i]; p >= 0) {
-      Mat6 Phi = Mat6::Identity();
-      Phi.bottomLeftCorner<3, 3>() = -skew(eta[i] - eta[p]);
-      P[p] += Phi.transpose() * P[i] * Phi;
-      below[p] += Phi.transpose() * before * Phi;
-      C[p] += Phi.transpose() * C[i] * Phi;
+      const Vec3 d = eta[i] - eta[p];
+      articulated_inertia::add_to_parent(P[p], P[i], d);
+      articulated_inertia::add_to_parent(below[p], before, d);
+      articulated_inertia::add_to_parent(C[p], C[i], d);
       // about η_p the subtree's bodies reach at most L = |placement| further: (r + L)² expanded
       const double L = m.placement[i].p.norm();
       S[p] += S[i] + 2 * L * T[i] + L * L * U[i], T[p] += T[i] + L * U[i], U[p] += U[i];

@@ -1,0 +1,36 @@
+// The two steps of the articulated-body factorization on one body's 6×6 articulated inertia P
+// (about its joint point, in world axes), shared by the articulated-body route (articulated.cpp)
+// and Model::build's check that 𝓜 is positive definite (model_checks.cpp).  Pure algebra on P:
+// no Model, no Data, so the model layer may use it without reaching up to the dynamics.
+#pragma once
+
+#include "soadyn/types.hpp"
+
+namespace soadyn::articulated_inertia {
+
+// One joint column g projected out: U = P g, 𝒟 = gᵀ U, P⁺ = P − U 𝒟⁻¹ Uᵀ, given U and 𝒟⁻¹;
+// column by column (inlined, unlike Eigen's outer product)
+inline void remove_column(Mat6& P, const Vec6& U, double Dinv) {
+  const Vec6 UD = Dinv * U;
+  for (int c = 0; c < 6; ++c) P.col(c) -= U(c) * UD;
+}
+
+// out += Dᵀ P D for a symmetric 6×6 P = [A B; Bᵀ C] and D = [e 0; −d̃ e] (the move of an
+// inertia from a child's joint point to its parent's, d the child's point less the parent's):
+//   [A + X + Xᵀ + d̃ C d̃ᵀ,  B + d̃ C;  (B + d̃ C)ᵀ,  C]   with X = d̃ Bᵀ,
+// each d̃ product taken as three cross products.
+inline void add_to_parent(Mat6& out, const Mat6& P, const Vec3& d) {
+  const Mat3 B = P.topRightCorner<3, 3>(), C = P.bottomRightCorner<3, 3>();
+  Mat3 W, X, Y;  // W = d̃ C, X = d̃ Bᵀ, Y = d̃ Wᵀ = (W d̃ᵀ)ᵀ = d̃ C d̃ᵀ (symmetric)
+  for (int c = 0; c < 3; ++c) {
+    W.col(c) = d.cross(Vec3(C.col(c)));
+    X.col(c) = d.cross(Vec3(B.row(c).transpose()));
+  }
+  for (int c = 0; c < 3; ++c) Y.col(c) = d.cross(Vec3(W.row(c).transpose()));
+  out.topLeftCorner<3, 3>() += P.topLeftCorner<3, 3>() + X + X.transpose() + Y;
+  out.topRightCorner<3, 3>() += B + W;
+  out.bottomLeftCorner<3, 3>() += (B + W).transpose();
+  out.bottomRightCorner<3, 3>() += C;
+}
+
+}  // namespace soadyn::articulated_inertia
