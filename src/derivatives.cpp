@@ -79,21 +79,22 @@ Vec6 fcross(const Vec6& m, const Vec6& f) {
   return out;
 }
 
-// B β = Y (β × v) + β ×* h + v ×* (Y β) with h = Y v:  B = −Y [v×] + H(h) + [v×*] Y,
-// [v×] = [ω̃ 0; ũ ω̃], [v×*] = [ω̃ ũ; 0 ω̃], H(h) = [−ñ −f̃; −f̃ 0]
-Mat6 b_matrix(const SpatialInertia& Y, const Vec6& v, const Vec6& h) {
-  const Mat6 Ym = Y.matrix();
-  const Mat3 W = skew(v.head<3>()), U = skew(v.tail<3>());
-  Mat6 Xs, Xm;  // [v×*], [v×]
-  Xs << W, U, Mat3::Zero(), W;
-  Xm << W, Mat3::Zero(), U, W;
+// B β = Y (β × v) + β ×* k + v ×* (Y β) with k = Y v = [k_n; k_f]:  B = −Y [v×] + H(k) + [v×*] Y,
+// [v×] = [ω̃ 0; ũ ω̃], [v×*] = [ω̃ ũ; 0 ω̃], H(k) = [−k̃_n −k̃_f; −k̃_f 0].  With Y = [I h̃; −h̃ m e],
+// ω̃ h̃ − h̃ ω̃ = (ω × h)~ and k_f = m u + ω × h, the right half vanishes:
+//   B = [ω̃ I − I ω̃ − (ũ h̃ + h̃ ũ) − k̃_n, 0; −2 k̃_f, 0],   ũ h̃ + h̃ ũ = h uᵀ + u hᵀ − 2 (u·h) e
+Mat6 b_matrix(const SpatialInertia& Y, const Vec6& v, const Vec6& k) {
+  const Vec3 w = v.head<3>(), u = v.tail<3>();
+  Mat3 WI;  // ω̃ I, column by column
+  for (int c = 0; c < 3; ++c) WI.col(c) = w.cross(Vec3(Y.I.col(c)));
   Mat6 out;
-  out.noalias() = Xs * Ym;
-  out.noalias() -= Ym * Xm;
-  const Mat3 N = skew(h.head<3>()), Fs = skew(h.tail<3>());
-  out.topLeftCorner<3, 3>() -= N;
-  out.topRightCorner<3, 3>() -= Fs;
-  out.bottomLeftCorner<3, 3>() -= Fs;
+  auto T = out.topLeftCorner<3, 3>();
+  T = WI + WI.transpose();  // ω̃ I − I ω̃ = ω̃ I + (ω̃ I)ᵀ, I symmetric
+  T.noalias() -= Y.h * u.transpose() + u * Y.h.transpose();
+  T.diagonal().array() += 2.0 * u.dot(Y.h);
+  T -= skew(k.head<3>());
+  out.bottomLeftCorner<3, 3>() = -2.0 * skew(k.tail<3>());
+  out.rightCols<3>().setZero();
   return out;
 }
 
