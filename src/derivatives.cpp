@@ -41,11 +41,11 @@ DerivativeData::DerivativeData(const Model& m)
       a(Mat6X::Zero(6, m.nbodies)),
       F(Mat6X::Zero(6, m.nbodies)),
       Y(m.nbodies),
-      B(m.nbodies, Mat6::Zero()),
+      B(m.nbodies),
       tau(VecX::Zero(m.nv)),
-      row(Eigen::Matrix<double, 12, Eigen::Dynamic>::Zero(12, m.nv)),
-      colq(Eigen::Matrix<double, 12, Eigen::Dynamic>::Zero(12, m.nv)),
-      colv(Eigen::Matrix<double, 12, Eigen::Dynamic>::Zero(12, m.nv)),
+      row(Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, m.nv)),
+      colq(Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, m.nv)),
+      colv(Eigen::Matrix<double, 9, Eigen::Dynamic>::Zero(9, m.nv)),
       psi(Mat6X::Zero(6, m.nv)),
       rho(Mat6X::Zero(6, m.nv)),
       phi(Mat6X::Zero(6, m.nv)),
@@ -59,12 +59,12 @@ DerivativeData::DerivativeData(const Model& m)
       work(articulated_solve_work(m)),
       w(Mat6X::Zero(6, m.nbodies)),
       T1(Mat6X::Zero(6, m.nbodies)),
-      T2(Mat6X::Zero(6, m.nbodies)) {}
+      T2(Mat3X::Zero(3, m.nbodies)) {}
 
 namespace {
 
 // m × x = [ω × ω'; ω × u' + u × ω']   (motion cross product)
-Vec6 mcross(const Vec6& m, const Vec6& x) {
+inline Vec6 mcross(const Vec6& m, const Vec6& x) {
   const Vec3 w = m.head<3>(), u = m.tail<3>(), w2 = x.head<3>(), u2 = x.tail<3>();
   Vec6 out;
   out << w.cross(w2), w.cross(u2) + u.cross(w2);
@@ -72,7 +72,7 @@ Vec6 mcross(const Vec6& m, const Vec6& x) {
 }
 
 // m ×* f = [ω × n + u × f; ω × f]   (force cross product)
-Vec6 fcross(const Vec6& m, const Vec6& f) {
+inline Vec6 fcross(const Vec6& m, const Vec6& f) {
   const Vec3 w = m.head<3>(), u = m.tail<3>(), n = f.head<3>(), fl = f.tail<3>();
   Vec6 out;
   out << w.cross(n) + u.cross(fl), w.cross(fl);
@@ -83,19 +83,18 @@ Vec6 fcross(const Vec6& m, const Vec6& f) {
 // [v×] = [ω̃ 0; ũ ω̃], [v×*] = [ω̃ ũ; 0 ω̃], H(k) = [−k̃_n −k̃_f; −k̃_f 0].  With Y = [I h̃; −h̃ m e],
 // ω̃ h̃ − h̃ ω̃ = (ω × h)~ and k_f = m u + ω × h, the right half vanishes:
 //   B = [ω̃ I − I ω̃ − (ũ h̃ + h̃ ũ) − k̃_n, 0; −2 k̃_f, 0],   ũ h̃ + h̃ ũ = h uᵀ + u hᵀ − 2 (u·h) e
-Mat6 b_matrix(const SpatialInertia& Y, const Vec6& v, const Vec6& k) {
+// (CoriolisBlock: T and f = k_f)
+CoriolisBlock b_matrix(const SpatialInertia& Y, const Vec6& v, const Vec6& k) {
   const Vec3 w = v.head<3>(), u = v.tail<3>();
   Mat3 WI;  // ω̃ I, column by column
   for (int c = 0; c < 3; ++c) WI.col(c) = w.cross(Vec3(Y.I.col(c)));
-  Mat6 out;
-  auto T = out.topLeftCorner<3, 3>();
-  T = WI + WI.transpose();  // ω̃ I − I ω̃ = ω̃ I + (ω̃ I)ᵀ, I symmetric
-  T.noalias() -= Y.h * u.transpose() + u * Y.h.transpose();
-  T.diagonal().array() += 2.0 * u.dot(Y.h);
-  T -= skew(k.head<3>());
-  out.bottomLeftCorner<3, 3>() = -2.0 * skew(k.tail<3>());
-  out.rightCols<3>().setZero();
-  return out;
+  CoriolisBlock B;
+  B.T = WI + WI.transpose();  // ω̃ I − I ω̃ = ω̃ I + (ω̃ I)ᵀ, I symmetric
+  B.T.noalias() -= Y.h * u.transpose() + u * Y.h.transpose();
+  B.T.diagonal().array() += 2.0 * u.dot(Y.h);
+  B.T -= skew(k.head<3>());
+  B.f = k.tail<3>();
+  return B;
 }
 
 void add(SpatialInertia& to, const SpatialInertia& K) {
@@ -123,7 +122,8 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
   // base to tip: S_i, v_i = v_p + S_i q̇_i, a_i = a_p + S_i q̈_i + Σ_c q̇_c μ_c × S_c, f_i, B_i
   for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
     using J = std::decay_t<decltype(joint)>;
-    const int p = model.parent[i], vi = model.idx_v[i], ni = model.nv_i[i];
+    const int p = model.parent[i], vi = model.idx_v[i];
+    constexpr int ni = J::nv;
     const Vec3 eta = data.eta.col(i);
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
     Vec6 vel = vp, acc = p < 0 ? gravity_acc : Vec6(dd.a.col(p));
@@ -154,7 +154,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     for (int c = vi; c < vi + ni; ++c) {
       dd.tau(c) = dd.S.col(c).dot(dd.F.col(i));
       dd.row.col(c).head<6>() = dd.Y[i] * dd.S.col(c);
-      dd.row.col(c).tail<6>().noalias() = dd.B[i].transpose() * dd.S.col(c);
+      dd.row.col(c).tail<3>() = dd.B[i].transpose_times(dd.S.col(c));
     }
     if (p >= 0) {
       dd.F.col(p) += dd.F.col(i);
@@ -166,7 +166,8 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
   // per column c of joint j: κ_c, β_c, λ_c, φ_c, ψ_c, ρ_c
   for (int j = 0; j < N; ++j) visit_joint(model, j, [&](const auto& joint) {
     using J = std::decay_t<decltype(joint)>;
-    const int p = model.parent[j], vj = model.idx_v[j], nj = model.nv_i[j];
+    const int p = model.parent[j], vj = model.idx_v[j];
+    constexpr int nj = J::nv;
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
     const Vec6 vel = dd.v.col(j), acc = dd.a.col(j), Fj = dd.F.col(j);
     for (int k = 0; k < nj; ++k) {
@@ -200,9 +201,9 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
       dd.psi.col(c) = dd.Y[j] * kappa + dd.B[j] * beta + dd.phi.col(c);
       dd.rho.col(c) = dd.B[j] * xi - dd.Y[j] * lambda;
       dd.colq.col(c).head<6>() = kappa;
-      dd.colq.col(c).tail<6>() = beta;
+      dd.colq.col(c).tail<3>() = beta.head<3>();
       dd.colv.col(c).head<6>() = -lambda;
-      dd.colv.col(c).tail<6>() = xi;
+      dd.colv.col(c).tail<3>() = xi.head<3>();
     }
   });
 
@@ -281,16 +282,17 @@ void inverse_dynamics_derivatives_transpose_times(const Model& model, Derivative
   const int N = model.nbodies;
   // The fill's sums, column by column, with μ folded in: s_i = Σ_{r ∈ i} S_r μ_r; the ancestors' rows
   // give w_p·ψ_c (w_i = w_p + s_i, base to tip), body i's and its descendants' rows [T1; T2]·col with
-  // T1_i = Σ_{k ⪰ i} Y_k s_k and T2_i = Σ_{k ⪰ i} B_kᵀ s_k (Y, B composite; tip to base), so that
+  // T1_i = Σ_{k ⪰ i} Y_k s_k and T2_i = Σ_{k ⪰ i} (B_kᵀ s_k)_ω (Y, B composite; tip to base; Bᵀ s has no lower half), so that
   //   (∂τ/∂q)ᵀμ at c = T1_j·κ_c + T2_j·β_c + w_p·ψ_c + Σ_{r ∈ j, c does not carry r} μ_r S_r·φ_c
   //   (∂τ/∂q̇)ᵀμ at c = −T1_j·λ_c + T2_j·S_c + w_p·ρ_c
-  Mat6X &w = dd.w, &T1 = dd.T1, &T2 = dd.T2;
+  Mat6X &w = dd.w, &T1 = dd.T1;
+  Mat3X &T2 = dd.T2;
   for (int i = 0; i < N; ++i) {
     const int p = model.parent[i], vi = model.idx_v[i], ni = model.nv_i[i];
     const Vec6 si = dd.S.middleCols(vi, ni) * mu.segment(vi, ni);
     w.col(i) = (p < 0 ? Vec6::Zero() : Vec6(w.col(p))) + si;
     T1.col(i) = dd.Y[i] * si;
-    T2.col(i).noalias() = dd.B[i].transpose() * si;
+    T2.col(i) = dd.B[i].transpose_times(si);
   }
   for (int i = N - 1; i >= 0; --i)
     if (const int p = model.parent[i]; p >= 0) T1.col(p) += T1.col(i), T2.col(p) += T2.col(i);
@@ -300,11 +302,11 @@ void inverse_dynamics_derivatives_transpose_times(const Model& model, Derivative
     const Vec6 wp = p < 0 ? Vec6::Zero() : Vec6(w.col(p));
     for (int k = 0; k < nj; ++k) {
       const int c = vj + k;
-      double q = T1.col(j).dot(dd.colq.col(c).head<6>()) + T2.col(j).dot(dd.colq.col(c).tail<6>()) + wp.dot(dd.psi.col(c));
+      double q = T1.col(j).dot(dd.colq.col(c).head<6>()) + T2.col(j).dot(dd.colq.col(c).tail<3>()) + wp.dot(dd.psi.col(c));
       for (int r = 0; r < nj; ++r)
         if (!J::carries(k, r)) q += mu(vj + r) * dd.S.col(vj + r).dot(dd.phi.col(c));
       gq(c) = q;
-      gv(c) = T1.col(j).dot(dd.colv.col(c).head<6>()) + T2.col(j).dot(dd.colv.col(c).tail<6>()) + wp.dot(dd.rho.col(c));
+      gv(c) = T1.col(j).dot(dd.colv.col(c).head<6>()) + T2.col(j).dot(dd.colv.col(c).tail<3>()) + wp.dot(dd.rho.col(c));
     }
   });
 }

@@ -37,6 +37,34 @@
 
 namespace soadyn {
 
+// B_i of the derivative sweeps (derivatives.cpp): B β = Y (β × v) + β ×* Y v + v ×* Y β for a body
+// of inertia Y and velocity v, and the sum of these over a subtree.  Its right half is zero, so it is
+// held as B = [T 0; −2 f̃ 0] (f: the linear momentum Y v, summed with the bodies).
+struct CoriolisBlock {
+  Mat3 T = Mat3::Zero();
+  Vec3 f = Vec3::Zero();
+
+  // B x = [T x_ω; −2 f × x_ω]
+  Vec6 operator*(const Vec6& x) const {
+    const Vec3 xw = x.head<3>();
+    Vec6 y;
+    y.head<3>().noalias() = T * xw;
+    y.tail<3>() = -2.0 * f.cross(xw);
+    return y;
+  }
+  // the top half of Bᵀ s (the bottom half is zero): Tᵀ s_ω + 2 f × s_u
+  Vec3 transpose_times(const Vec6& s) const {
+    Vec3 y = 2.0 * f.cross(Vec3(s.tail<3>()));
+    y.noalias() += T.transpose() * s.head<3>();
+    return y;
+  }
+  CoriolisBlock& operator+=(const CoriolisBlock& o) {
+    T += o.T;
+    f += o.f;
+    return *this;
+  }
+};
+
 // Per-state arrays of the derivative algorithms, sized once from a Model (Data holds the rest).
 // No derivative algorithm allocates once a DerivativeData exists.
 struct DerivativeData {
@@ -47,12 +75,13 @@ struct DerivativeData {
   Mat6X v, a;                       // 6×N: v_i, a_i (a includes −g)
   Mat6X F;                          // 6×N: F_i, subtree sums of f_i
   std::vector<SpatialInertia> Y;    // composite inertia of the subtree of i, about the origin
-  std::vector<Mat6> B;              // composite of B_k β = Y_k (β × v_k) + β ×* Y_k v_k + v_k ×* Y_k β
+  std::vector<CoriolisBlock> B;     // composite of B_k β = Y_k (β × v_k) + β ×* Y_k v_k + v_k ×* Y_k β
   VecX tau;                         // τ = S_iᵀ F_i (equals inverse_dynamics)
   // per DOF column c (joint j): the vectors its derivative column is made of (see derivatives.cpp)
-  Eigen::Matrix<double, 12, Eigen::Dynamic> row;   // [Y_i S_r; B_iᵀ S_r] for row r of body i
-  Eigen::Matrix<double, 12, Eigen::Dynamic> colq;  // [κ_c; β_c]
-  Eigen::Matrix<double, 12, Eigen::Dynamic> colv;  // [−λ_c; S_c]
+  // (B's zero right half drops the last three of Bᵀ S_r and so of β_c and S_c: 9 numbers each)
+  Eigen::Matrix<double, 9, Eigen::Dynamic> row;    // [Y_i S_r; (B_iᵀ S_r)_ω] for row r of body i
+  Eigen::Matrix<double, 9, Eigen::Dynamic> colq;   // [κ_c; β_c,ω]
+  Eigen::Matrix<double, 9, Eigen::Dynamic> colv;   // [−λ_c; S_c,ω]
   Mat6X psi, rho, phi;                             // ψ_c, ρ_c (rows of ancestors), φ_c = ξ ×* F_j
 
   // results
@@ -64,7 +93,8 @@ struct DerivativeData {
   // (LᵀDL); derivative_route(model) picks the faster for the model, a caller may set either
   FdMethod route;
   MatX work;                        // articulated_solve's blocks (articulated_solve_work)
-  Mat6X w, T1, T2;                  // 6×N: the vector products' sums (…_transpose_times)
+  Mat6X w, T1;                      // 6×N: the vector products' sums (…_transpose_times)
+  Mat3X T2;                         // 3×N: the same for the top half of Bᵀ (its bottom half is zero)
 };
 
 // The faster way to apply 𝓜⁻¹ in forward_dynamics_derivatives for this model (the rule and its
