@@ -9,8 +9,8 @@ quadruped_18: a 12 kg trunk and four legs of three revolute joints (hip abductio
 knee flexion about y), the mass properties of a small quadruped; load it with free_root=True for
 the 18-DOF free-floating robot (6 + 12) of tools/bench/batch.py.
 """
+import argparse
 import os
-import sys
 
 AXES = ["0 0 1", "0 1 0", "1 0 0"]
 
@@ -52,7 +52,9 @@ def quadruped():
 
 
 def main():
-    folder = sys.argv[1] if len(sys.argv) > 1 else "build/bench_models"
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("folder", nargs="?", default="build/bench_models", help="where to write (default: %(default)s)")
+    folder = ap.parse_args().folder
     os.makedirs(folder, exist_ok=True)
     for n in [1, 2, 4, 8, 16, 32, 64, 128, 256]:
         with open(os.path.join(folder, f"chain_{n}.urdf"), "w") as f:
