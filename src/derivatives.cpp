@@ -179,9 +179,10 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
         if (J::carries(m, k)) mu += dd.S.col(vj + m) * qd(vj + m);
       }
       // the joint's own term ∂a_j: ∂(S_m q̈_m) = [c carries m] ξ × S_m q̈_m, and
-      // ∂(μ_m × S_m) = ∂μ_m × S_m + [c carries m] μ_m × (ξ × S_m), ∂μ_m = ξ × Σ_l [l carries m][c carries l] S_l q̇_l
+      // ∂(μ_m × S_m) = ∂μ_m × S_m + [c carries m] μ_m × (ξ × S_m), ∂μ_m = ξ × Σ_l [l carries m][c carries l] S_l q̇_l;
+      // zero for a one-DOF joint, whose every term has ξ × S_c = S_c × S_c = 0
       Vec6 da = Vec6::Zero();
-      for (int m = 0; m < nj; ++m) {
+      if constexpr (nj > 1) for (int m = 0; m < nj; ++m) {
         const Vec6 Sm = dd.S.col(vj + m);
         Vec6 dmu = Vec6::Zero(), mu_m = vp;
         for (int l = 0; l < nj; ++l) {
