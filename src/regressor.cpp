@@ -106,24 +106,39 @@ Mat610 body_regressor(const Data& data, int i) {
 
 }  // namespace
 
+namespace {
+
+// body i's ten columns of Y into Y's columns from `at`: W_i to inertial axes, then up the chain of
+// ancestors, G_jᵀ B, B ← D_jᵀ B = [n + d_j × f; f] (rows of non-ancestors left as they are)
+void body_columns(const Model& model, const Data& data, int i, MatX& Y, int at) {
+  const Mat3& R = data.R[i];
+  const Mat610 W = body_regressor(data, i);
+  Mat610 B;
+  B.topRows<3>() = R * W.topRows<3>();
+  B.bottomRows<3>() = R * W.bottomRows<3>();
+  for (int j = i; j >= 0; j = model.parent[j]) {
+    const int iv = model.idx_v[j], n = model.nv_i[j];
+    Y.block(iv, at, n, kParametersPerBody).noalias() = data.G.middleCols(iv, n).transpose() * B;
+    const Vec3 d = data.d.col(j);
+    for (int c = 0; c < kParametersPerBody; ++c) B.block<3, 1>(0, c) += d.cross(Vec3(B.block<3, 1>(3, c)));
+  }
+}
+
+}  // namespace
+
 void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y) {
   inverse_dynamics(model, data, qdd);  // data.A: [α_i; a_i] of every body, inertial axes
   Y.setZero(model.nv, kParametersPerBody * model.nbodies);
-  for (int i = 0; i < model.nbodies; ++i) {
-    const Mat3& R = data.R[i];
-    const Mat610 W = body_regressor(data, i);
-    // to inertial axes, then up the chain of ancestors: G_jᵀ B, B ← D_jᵀ B = [n + d_j × f; f]
-    Mat610 B;
-    B.topRows<3>() = R * W.topRows<3>();
-    B.bottomRows<3>() = R * W.bottomRows<3>();
-    for (int j = i; j >= 0; j = model.parent[j]) {
-      const int iv = model.idx_v[j], n = model.nv_i[j];
-      Y.block(iv, kParametersPerBody * i, n, kParametersPerBody).noalias() =
-          data.G.middleCols(iv, n).transpose() * B;
-      const Vec3 d = data.d.col(j);
-      for (int c = 0; c < kParametersPerBody; ++c) B.block<3, 1>(0, c) += d.cross(Vec3(B.block<3, 1>(3, c)));
-    }
-  }
+  for (int i = 0; i < model.nbodies; ++i) body_columns(model, data, i, Y, kParametersPerBody * i);
+}
+
+void regressor(const Model& model, Data& data, const VecX& qdd, const std::vector<int>& bodies, MatX& Y) {
+  for (const int b : bodies)
+    if (b < 0 || b >= model.nbodies)
+      throw Error("regressor: body index " + std::to_string(b) + " out of range 0.." + std::to_string(model.nbodies - 1));
+  inverse_dynamics(model, data, qdd);
+  Y.setZero(model.nv, kParametersPerBody * Eigen::Index(bodies.size()));
+  for (size_t k = 0; k < bodies.size(); ++k) body_columns(model, data, bodies[k], Y, kParametersPerBody * int(k));
 }
 
 void regressor_transpose_times(const Model& model, Data& data, const VecX& qdd, const VecX& mu, Eigen::Ref<VecX> out) {

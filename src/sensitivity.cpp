@@ -49,7 +49,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     sys.prepare_jacobian();
     S_ = MatX::Zero(n, ns_);
     Sd_ = MatX::Zero(n, ns_);
-    if (plan.np() > 0) dqdd_dpi_ = MatX::Zero(nv, kParametersPerBody * m.nbodies);
+    if (plan.np() > 0) b_ = MatX::Zero(nv, plan.np());
     // s(0): a tangent increment of q₀ moves the coordinates by P δ; one of v₀ moves v; π moves nothing
     if (plan.initial_state) {
       S_.block(0, 0, nq, nv) = tangent_to_coordinates(m, y0.head(nq));
@@ -147,20 +147,25 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       System& sys = self->sys_;
       const Model& m = sys.model;
       for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
-      sys.jacobian_times(t, N_VGetArrayPointer(y), self->S_, self->Sd_);
-      if (self->plan_.np() > 0) {
-        // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.work.factor.L) at (q, v) are jacobian_times's; ∂q̈/∂π = −𝓜⁻¹ Y solved
+      // the staggered corrector calls again at the state it has converged: the derivatives and
+      // b_k are then still those of the last call (System::linearize), and only A s_k is new
+      const double* yy = N_VGetArrayPointer(y);
+      const bool fresh = sys.linearize(t, yy);
+      sys.linearized_times(self->S_, self->Sd_);
+      const int np = self->plan_.np();
+      const auto ymap = Eigen::Map<const VecX>(yy, sys.size());
+      if (np > 0 && (fresh || t != self->b_t_ || self->b_y_.size() != ymap.size() || self->b_y_ != ymap)) {
+        // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.work.factor.L) at (q, v) are linearize's; ∂q̈/∂π = −𝓜⁻¹ Y solved
         // for the plan's bodies' columns only
-        regressor(m, sys.data, sys.data.qdd, self->dqdd_dpi_);
-        const int first = self->plan_.nx0();
-        for (size_t b = 0; b < self->plan_.bodies.size(); ++b)
-          for (int j = 0; j < kParametersPerBody; ++j) {
-            auto col = self->dqdd_dpi_.col(kParametersPerBody * self->plan_.bodies[b] + j);
-            col = -col;
-            ltdl_solve(m, sys.data, col);
-            self->Sd_.block(m.nq, first + int(b) * kParametersPerBody + j, m.nv, 1) += col;
-          }
+        regressor(m, sys.data, sys.data.qdd, self->plan_.bodies, self->b_);
+        for (int k = 0; k < np; ++k) {
+          self->b_.col(k) = -self->b_.col(k);
+          ltdl_solve(m, sys.data, self->b_.col(k));
+        }
+        self->b_t_ = t;
+        self->b_y_ = ymap;
       }
+      if (np > 0) self->Sd_.block(m.nq, self->plan_.nx0(), m.nv, np) += self->b_;
       if (!self->Sd_.allFinite()) return 1;  // recoverable: CVODES retries with a smaller step
       for (int k = 0; k < ns; ++k) map(ySdot[k]) = self->Sd_.col(k);
       return 0;
@@ -172,7 +177,10 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
 
   SensitivityPlan plan_;
   int ns_;
-  MatX S_, S0_, Sd_, dqdd_dpi_;
+  MatX S_, S0_, Sd_;
+  MatX b_;                 // b_k = ∂q̈/∂π_k = −𝓜⁻¹ Y_k at (b_t_, b_y_)
+  double b_t_ = 0.0;
+  VecX b_y_;
   VectorArrayPtr yS_;
   cvode_impl::VectorPtr y_out_;
   cvode_impl::NonlinSolPtr nls_sens_;

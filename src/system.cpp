@@ -42,6 +42,7 @@ VecX System::state(const VecX& q0, const VecX& v0) const {
 }
 
 void System::at_state(double t, const double* y) {
+  linearized_ = false;  // data is about to hold another evaluation
   q = Eigen::Map<const VecX>(y, model.nq);
   v = Eigen::Map<const VecX>(y + model.nq, model.nv);
   update_kinematics(model, data, q);
@@ -111,10 +112,10 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   }
 }
 
-void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out) {
+bool System::linearize(double t, const double* y) {
   prepare_jacobian();
-  const int nq = model.nq, nv = model.nv;
-  const Eigen::Index ns = S.cols();
+  const int n = size();
+  if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return false;
   at_state(t, y);
   forward_dynamics(model, data, tau, FdMethod::Sparse);  // q̈ and 𝓜's LᵀDL factor
   DerivativeData& dd = *derivatives;
@@ -123,6 +124,23 @@ void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out)
   dd.dqdd_dq = -dd.dtau_dq;
   dd.dqdd_dv = -dd.dtau_dv;
   inputs.add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
+  lin_t_ = t;
+  lin_y_ = Eigen::Map<const VecX>(y, n);
+  linearized_ = true;
+  return true;
+}
+
+void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out) {
+  linearize(t, y);
+  linearized_times(S, out);
+}
+
+void System::linearized_times(const MatX& S, MatX& out) {
+  if (!linearized_) throw Error("System::linearized_times: no state linearized since the last evaluation");
+  const double t = lin_t_;
+  const int nq = model.nq, nv = model.nv;
+  const Eigen::Index ns = S.cols();
+  DerivativeData& dd = *derivatives;
   if (out.rows() != size() || out.cols() != ns) out.resize(size(), ns);
   if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns);
   // q̇(q, v) joint by joint, and S's q rows moved onto the tangent: δ = T(q) s_q

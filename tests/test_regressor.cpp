@@ -49,6 +49,44 @@ TEST_P(Regressor, TimesParametersIsInverseDynamics) {
   }
 }
 
+// the listed bodies' columns alone (any order) against inverse dynamics: making body b 1.5 times
+// heavier (same centre of mass) changes τ by its ten columns times the change of its π
+TEST_P(Regressor, ListedBodiesColumnsGiveEachBodysShareOfInverseDynamics) {
+  Rng rng(47);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Model model = random_model(rng, GetParam().options);
+    Data data(model);
+    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
+    update_kinematics(model, data, q);
+    update_velocities(model, data, v);
+    std::vector<int> bodies;
+    for (int b = model.nbodies - 1; b >= 0; b -= 2) bodies.push_back(b);  // tip first: not the model's order
+    MatX Y;
+    regressor(model, data, qdd, bodies, Y);
+    ASSERT_EQ(Y.rows(), model.nv);
+    ASSERT_EQ(Y.cols(), 10 * Eigen::Index(bodies.size()));
+    inverse_dynamics(model, data, qdd);
+    const VecX tau = data.tau;
+    for (size_t k = 0; k < bodies.size(); ++k) {
+      const int b = bodies[k];
+      VecX pi = parameters(model);
+      const VecX before = pi.segment<10>(10 * b);
+      pi.segment<10>(10 * b) *= 1.5;
+      const Model heavier = with_parameters(model, pi);
+      Data d2(heavier);
+      update_kinematics(heavier, d2, q);
+      update_velocities(heavier, d2, v);
+      inverse_dynamics(heavier, d2, qdd);
+      EXPECT_TRUE(near_rel(Y.middleCols<10>(10 * Eigen::Index(k)) * (0.5 * before), d2.tau - tau, 1e-11))
+          << trial << " body " << b;
+    }
+  }
+  Model model = random_model(rng, GetParam().options);
+  Data data(model);
+  MatX Y;
+  EXPECT_THROW(regressor(model, data, VecX::Zero(model.nv), std::vector<int>{model.nbodies}, Y), Error);
+}
+
 // the O(N) sweep against the formed regressor (two independent routes: carried down as velocities,
 // up as forces)
 TEST_P(Regressor, TransposeTimesVectorEqualsTheFormedRegressors) {

@@ -77,6 +77,12 @@ class System {
   // per column (forward sensitivities, sensitivity.hpp).  Leaves data at (q, v): [kin], [vel],
   // data.qdd and 𝓜's factor data.work.factor.L.  Allocates out and its scratch on the first call of a width.
   void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
+  // jacobian_times in two halves, for many products at one state (CVODES' staggered corrector
+  // iterates on the sensitivities at the state it has converged): linearize leaves data and the
+  // derivatives at (t, y) and returns true, or returns false and does nothing when they already hold
+  // for this very (t, y) (no evaluation since); linearized_times applies them to S
+  bool linearize(double t, const double* y);
+  void linearized_times(const MatX& S, MatX& out);
   void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
   void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
@@ -109,6 +115,11 @@ class System {
   VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
   long rhs_evals = 0;
   long jac_evals = 0;
+
+ private:
+  bool linearized_ = false;        // linearize's state (lin_t_, lin_y_) is still data's
+  double lin_t_ = 0.0;
+  VecX lin_y_;
 };
 
 struct IntegratorStats {

@@ -8,6 +8,8 @@
 // it.  τ = Y π is inverse dynamics, gravity included.
 #pragma once
 
+#include <vector>
+
 #include "soadyn/data.hpp"
 #include "soadyn/model.hpp"
 
@@ -24,6 +26,9 @@ Model with_parameters(const Model& model, const VecX& pi);
 // Y (nv × 10 N) with τ = Y π at (q, v, q̈).  Needs [kin] and [vel] (update_kinematics,
 // update_velocities); leaves data.A, data.F and data.tau as inverse_dynamics does.
 void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y);
+// The columns of the listed bodies only (nv × 10·bodies.size(), in the order listed): the same
+// numbers as regressor's, in O(N + Σ depth of the listed bodies) instead of O(N·depth)
+void regressor(const Model& model, Data& data, const VecX& qdd, const std::vector<int>& bodies, MatX& Y);
 
 // Yᵀ μ (10 N) at (q, v, q̈) for a vector μ (nv), in O(N) without forming Y: one base-to-tip sweep of
 // w_i = D_i w_parent + G_i μ_i, then each body's 6×10 block (the adjoint's ∂G/∂π, adjoint.hpp).  Needs
