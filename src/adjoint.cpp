@@ -59,7 +59,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     // forward: y and, when there is a running cost, the quadrature ∫ ℓ dt with error control
     cvode_impl::VectorPtr yq;
     if (cost_.running) {
-      yq.reset(N_VNew_Serial(1, ctx_.get()));
+      yq.reset(nvector_ops::new_vector(1, ctx_.get()));
       if (!yq) throw Error("CVODES: could not allocate the cost's quadrature");
       N_VConst(0.0, yq.get());
       check(CVodeQuadInit(mem, &CvodeAdjoint::running_cost, yq.get()), "CVodeQuadInit");
@@ -83,7 +83,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     }
     // λ(T) = (∂Φ/∂y)ᵀ at y(T)
     const VecX yT = map(y_.get());
-    cvode_impl::VectorPtr yb(N_VNew_Serial(nb_, ctx_.get()));
+    cvode_impl::VectorPtr yb(nvector_ops::new_vector(nb_, ctx_.get()));
     if (!yb) throw Error("CVODES: could not allocate the adjoint");
     N_VConst(0.0, yb.get());
     if (cost_.terminal) {

@@ -7,6 +7,8 @@
 #include "soadyn/integrators.hpp"
 #include "soadyn/newton_solver.hpp"
 
+#include "nvector_ops.hpp"
+
 #include <cvodes/cvodes.h>
 #include <cvodes/cvodes_proj.h>
 #include <nvector/nvector_serial.h>
@@ -79,11 +81,11 @@ class Cvode : public Integrator {
     SUNContext ctx = nullptr;
     check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create");
     ctx_.reset(ctx);
-    y_.reset(N_VNew_Serial(sys.size(), ctx_.get()));
-    if (!y_) throw Error("CVODE: could not allocate the state vector");
     // fused vector operations (one pass over memory for CVODE's linear combinations, and for all the
-    // sensitivities at once in CVODES); every vector cloned from y_ inherits them
-    check(N_VEnableFusedOps_Serial(y_.get(), SUNTRUE), "N_VEnableFusedOps_Serial");
+    // sensitivities at once in CVODES), compiled (nvector_ops.hpp); every vector cloned from y_
+    // inherits them
+    y_.reset(nvector_ops::new_vector(sys.size(), ctx_.get()));
+    if (!y_) throw Error("CVODE: could not allocate the state vector");
     map(y_.get()) = y0;
     mem_.reset(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, ctx_.get()));
     if (!mem_) throw Error("CVODE: CVodeCreate failed");

@@ -1,0 +1,191 @@
+// The compiled serial vector operations (src/nvector_ops.hpp) against SUNDIALS' own: every
+// installed operation on the same random vectors, including the in-place cases CVODE uses (z = x,
+// Z = Y, z = X_0), agrees with the library's to rounding; and a clone carries the compiled table.
+#include "../src/nvector_ops.hpp"
+
+#include <gtest/gtest.h>
+
+#include <sundials/sundials_context.h>
+
+#include <memory>
+#include <random>
+#include <vector>
+
+namespace {
+
+namespace ops = soadyn::nvector_ops;
+
+struct Context {
+  SUNContext ctx = nullptr;
+  Context() { SUNContext_Create(nullptr, &ctx); }
+  ~Context() { SUNContext_Free(&ctx); }
+};
+struct VectorDeleter {
+  void operator()(N_Vector v) const { N_VDestroy(v); }
+};
+using Vector = std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorDeleter>;
+
+constexpr sunindextype kN = 37;  // not a multiple of any SIMD width
+
+class NvectorOps : public ::testing::Test {
+ protected:
+  Context c;
+  std::mt19937 rng{7};
+  // the library's vector (fused operations on) and the compiled one, with the same entries
+  Vector library(const std::vector<double>& x) {
+    N_Vector v = N_VNew_Serial(kN, c.ctx);
+    N_VEnableFusedOps_Serial(v, SUNTRUE);
+    std::copy(x.begin(), x.end(), NV_DATA_S(v));
+    return Vector(v);
+  }
+  Vector compiled(const std::vector<double>& x) {
+    N_Vector v = ops::new_vector(kN, c.ctx);
+    std::copy(x.begin(), x.end(), NV_DATA_S(v));
+    return Vector(v);
+  }
+  std::vector<double> random(double lo = -2.0, double hi = 2.0) {
+    std::uniform_real_distribution<double> u(lo, hi);
+    std::vector<double> x(static_cast<size_t>(kN));
+    for (auto& e : x) e = u(rng);
+    return x;
+  }
+  static void expect_same(N_Vector a, N_Vector b, const char* what) {
+    for (sunindextype i = 0; i < kN; ++i)
+      EXPECT_NEAR(NV_Ith_S(a, i), NV_Ith_S(b, i), 1e-14 * (1.0 + std::abs(NV_Ith_S(a, i)))) << what << " entry " << i;
+  }
+};
+
+TEST_F(NvectorOps, ElementwiseOperationsAgreeWithTheLibrarys) {
+  const auto x = random(), y = random(), w = random(0.1, 3.0);
+  auto lx = library(x), ly = library(y), lz = library(random());
+  auto cx = compiled(x), cy = compiled(y), cz = compiled(random());
+  const auto both = [&](auto&& op, const char* what) {
+    op(lx.get(), ly.get(), lz.get());
+    op(cx.get(), cy.get(), cz.get());
+    expect_same(lz.get(), cz.get(), what);
+  };
+  both([](N_Vector a, N_Vector b, N_Vector z) { N_VLinearSum(0.3, a, -1.7, b, z); }, "linear sum");
+  both([](N_Vector a, N_Vector b, N_Vector) { N_VLinearSum(2.0, a, 1.0, b, b); }, "linear sum into y");
+  expect_same(ly.get(), cy.get(), "linear sum into y");
+  both([](N_Vector a, N_Vector b, N_Vector z) { N_VProd(a, b, z); }, "prod");
+  both([](N_Vector a, N_Vector b, N_Vector z) { N_VDiv(a, b, z); }, "div");
+  both([](N_Vector a, N_Vector, N_Vector z) { N_VScale(-0.25, a, z); }, "scale");
+  both([](N_Vector, N_Vector, N_Vector z) { N_VScale(3.0, z, z); }, "scale in place");
+  both([](N_Vector a, N_Vector, N_Vector z) { N_VAbs(a, z); }, "abs");
+  both([](N_Vector a, N_Vector, N_Vector z) { N_VInv(a, z); }, "inv");
+  both([](N_Vector a, N_Vector, N_Vector z) { N_VAddConst(a, 0.5, z); }, "add const");
+  both([](N_Vector a, N_Vector, N_Vector z) { N_VCompare(1.0, a, z); }, "compare");
+  both([](N_Vector, N_Vector, N_Vector z) { N_VConst(4.5, z); }, "const");
+  auto lw = library(w), cw = compiled(w);
+  EXPECT_NEAR(N_VDotProd(lx.get(), ly.get()), N_VDotProd(cx.get(), cy.get()), 1e-13);
+  EXPECT_EQ(N_VMaxNorm(lx.get()), N_VMaxNorm(cx.get()));
+  EXPECT_EQ(N_VMin(lx.get()), N_VMin(cx.get()));
+  EXPECT_NEAR(N_VL1Norm(lx.get()), N_VL1Norm(cx.get()), 1e-13);
+  EXPECT_NEAR(N_VWrmsNorm(lx.get(), lw.get()), N_VWrmsNorm(cx.get(), cw.get()), 1e-14);
+  EXPECT_NEAR(N_VWL2Norm(lx.get(), lw.get()), N_VWL2Norm(cx.get(), cw.get()), 1e-13);
+  EXPECT_NEAR(N_VWrmsNormMask(lx.get(), lw.get(), ly.get()), N_VWrmsNormMask(cx.get(), cw.get(), cy.get()), 1e-14);
+  EXPECT_NEAR(N_VWSqrSumLocal(lx.get(), lw.get()), N_VWSqrSumLocal(cx.get(), cw.get()), 1e-13);
+  EXPECT_NEAR(N_VWSqrSumMaskLocal(lx.get(), lw.get(), ly.get()), N_VWSqrSumMaskLocal(cx.get(), cw.get(), cy.get()), 1e-13);
+  EXPECT_NEAR(N_VDotProdLocal(lx.get(), ly.get()), N_VDotProdLocal(cx.get(), cy.get()), 1e-13);
+  // inverse with a zero entry: false, that entry of z untouched, the rest inverted
+  auto z0 = x;
+  z0[5] = 0.0;
+  auto lz0 = library(z0), cz0 = compiled(z0);
+  N_VConst(9.0, lz.get()), N_VConst(9.0, cz.get());
+  EXPECT_EQ(N_VInvTest(lz0.get(), lz.get()), SUNFALSE);
+  EXPECT_EQ(N_VInvTest(cz0.get(), cz.get()), SUNFALSE);
+  expect_same(lz.get(), cz.get(), "inv test");
+  EXPECT_EQ(NV_Ith_S(cz.get(), 5), 9.0);
+  EXPECT_EQ(N_VInvTest(cx.get(), cz.get()), SUNTRUE);
+}
+
+TEST_F(NvectorOps, FusedAndVectorArrayOperationsAgreeWithTheLibrarys) {
+  constexpr int k = 5, nsum = 4;
+  std::vector<std::vector<double>> xs;
+  for (int j = 0; j < k * nsum + k; ++j) xs.push_back(random());
+  std::vector<Vector> L, C;
+  for (const auto& x : xs) L.push_back(library(x)), C.push_back(compiled(x));
+  const auto vecs = [](std::vector<Vector>& v, int from, int count) {
+    std::vector<N_Vector> out;
+    for (int j = 0; j < count; ++j) out.push_back(v[size_t(from + j)].get());
+    return out;
+  };
+  std::vector<double> c{0.5, -1.25, 2.0, 0.75, -0.3};
+  const auto check = [&](int from, int count, const char* what) {
+    for (int j = from; j < from + count; ++j) expect_same(L[size_t(j)].get(), C[size_t(j)].get(), what);
+  };
+  // z = Σ c_k X_k: into a fresh z, and in place into X_0 (c_0 ≠ 1 and = 1)
+  for (auto* V : {&L, &C}) {
+    auto X = vecs(*V, 0, k);
+    N_VLinearCombination(k, c.data(), X.data(), (*V)[size_t(k)].get());
+    N_VLinearCombination(k - 1, c.data() + 1, X.data() + 1, (*V)[size_t(k + 1)].get());
+    double one[3] = {1.0, 0.5, -2.0};
+    N_VLinearCombination(3, one, X.data(), X[0]);
+    N_VLinearCombination(3, c.data(), X.data() + 1, X[1]);
+  }
+  check(0, k + 2, "linear combination");
+  // Z_k = a_k x + Y_k, into Z and in place (Z = Y); x·Y_k
+  for (auto* V : {&L, &C}) {
+    auto Y = vecs(*V, 0, k), Z = vecs(*V, k, k);
+    N_VScaleAddMulti(k, c.data(), (*V)[size_t(2 * k)].get(), Y.data(), Z.data());
+    N_VScaleAddMulti(k, c.data(), (*V)[size_t(2 * k)].get(), Y.data(), Y.data());
+  }
+  check(0, 2 * k, "scale add multi");
+  double dl[k], dc[k];
+  {
+    auto Yl = vecs(L, 0, k), Yc = vecs(C, 0, k);
+    N_VDotProdMulti(k, L[size_t(2 * k)].get(), Yl.data(), dl);
+    N_VDotProdMulti(k, C[size_t(2 * k)].get(), Yc.data(), dc);
+    for (int j = 0; j < k; ++j) EXPECT_NEAR(dl[j], dc[j], 1e-13) << "dot multi " << j;
+  }
+  // vector arrays
+  for (auto* V : {&L, &C}) {
+    auto X = vecs(*V, 0, k), Y = vecs(*V, k, k), Z = vecs(*V, 2 * k, k);
+    N_VLinearSumVectorArray(k, 0.7, X.data(), -1.3, Y.data(), Z.data());
+    N_VLinearSumVectorArray(k, 0.7, X.data(), 1.0, Y.data(), Y.data());
+    N_VScaleVectorArray(k, c.data(), Z.data(), X.data());
+  }
+  check(0, 3 * k, "linear sum / scale vector array");
+  {
+    auto Xl = vecs(L, 0, k), Wl = vecs(L, k, k), Xc = vecs(C, 0, k), Wc = vecs(C, k, k);
+    double ml[k], mc[k];
+    N_VWrmsNormVectorArray(k, Xl.data(), Wl.data(), ml);
+    N_VWrmsNormVectorArray(k, Xc.data(), Wc.data(), mc);
+    for (int j = 0; j < k; ++j) EXPECT_NEAR(ml[j], mc[j], 1e-14) << "wrms array " << j;
+    N_VWrmsNormMaskVectorArray(k, Xl.data(), Wl.data(), L[size_t(2 * k)].get(), ml);
+    N_VWrmsNormMaskVectorArray(k, Xc.data(), Wc.data(), C[size_t(2 * k)].get(), mc);
+    for (int j = 0; j < k; ++j) EXPECT_NEAR(ml[j], mc[j], 1e-14) << "wrms mask array " << j;
+  }
+  // Z[j][i] = a_j X_i + Y[j][i], into Z and in place; Z_i = Σ_j c_j X[j][i], into Z and into X[0]
+  for (auto* V : {&L, &C}) {
+    auto X = vecs(*V, 0, k);
+    std::vector<std::vector<N_Vector>> Yr, Zr;
+    for (int j = 0; j < nsum - 1; ++j) Yr.push_back(vecs(*V, k * (j + 1), k));
+    Zr.push_back(vecs(*V, k * nsum, k));
+    for (int j = 1; j < nsum - 1; ++j) Zr.push_back(Yr[size_t(j)]);
+    std::vector<N_Vector*> Y, Z;
+    for (auto& r : Yr) Y.push_back(r.data());
+    for (auto& r : Zr) Z.push_back(r.data());
+    N_VScaleAddMultiVectorArray(k, nsum - 1, c.data(), X.data(), Y.data(), Z.data());
+    N_VScaleAddMultiVectorArray(k, nsum - 1, c.data(), X.data(), Y.data(), Y.data());
+    std::vector<N_Vector*> XX{X.data()};
+    for (auto& r : Yr) XX.push_back(r.data());
+    N_VLinearCombinationVectorArray(k, nsum, c.data(), XX.data(), Zr[0].data());
+    N_VLinearCombinationVectorArray(k, nsum, c.data(), XX.data(), X.data());
+    double one[4] = {1.0, -0.5, 0.25, 2.0};
+    N_VLinearCombinationVectorArray(k, nsum, one, XX.data(), X.data());
+  }
+  check(0, k * (nsum + 1), "scale add multi / linear combination vector array");
+}
+
+TEST_F(NvectorOps, ACloneCarriesTheCompiledOperations) {
+  auto v = compiled(random());
+  Vector w(N_VClone(v.get()));
+  EXPECT_EQ(w->ops->nvlinearsum, v->ops->nvlinearsum);
+  EXPECT_EQ(w->ops->nvscaleaddmultivectorarray, v->ops->nvscaleaddmultivectorarray);
+  auto l = library(random());
+  EXPECT_NE(w->ops->nvlinearsum, l->ops->nvlinearsum);
+  EXPECT_NE(w->ops->nvwrmsnormvectorarray, l->ops->nvwrmsnormvectorarray);
+}
+
+}  // namespace
