@@ -312,23 +312,6 @@ void inverse_dynamics_derivatives_transpose_times(const Model& model, Derivative
   });
 }
 
-namespace {
-
-// X ← 𝓜⁻¹ X with the tree factor 𝓜 = Lᵀ D L (data.work.factor.L, ltdl_factor) for many right-hand sides at once,
-// held transposed (Xt = Xᵀ, so each of ltdl_solve's row operations is one contiguous axpy)
-void ltdl_solve_transposed(const Model& model, const Data& data, MatX& Xt) {
-  const auto& H = data.work.factor.L;
-  const auto& lambda = model.dof_parent;
-  // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip)
-  for (int k = model.nv - 1; k >= 0; --k)
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) Xt.col(i) -= H(k, i) * Xt.col(k);
-  for (int k = 0; k < model.nv; ++k) Xt.col(k) /= H(k, k);
-  for (int k = 0; k < model.nv; ++k)
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) Xt.col(k) -= H(k, i) * Xt.col(i);
-}
-
-}  // namespace
-
 void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
                                   const Inputs* inputs, bool minv) {
   const int nv = model.nv;

@@ -138,7 +138,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
  private:
   // ṡ_k = A s_k + b_k for all k at once: A s by the analytic derivatives without forming A
   // (System::jacobian_times: ∂q̈/∂q along the tangent chained to the coordinates, ∂q̈/∂v, ∂q̇/∂(q, v),
-  // the springs' and dampers' terms, the quadratures' rows; one LᵀDL solve per column) and
+  // the springs' and dampers' terms, the quadratures' rows; one LᵀDL solve for all columns) and
   // b_k = [0; ∂q̈/∂π_k; 0] = [0; −(𝓜⁻¹ Y)_k; 0]
   static int sensitivity_rhs(int ns, double t, N_Vector y, N_Vector, N_Vector* yS, N_Vector* ySdot, void* user,
                              N_Vector, N_Vector) {
@@ -158,10 +158,9 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
         // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.work.factor.L) at (q, v) are linearize's; ∂q̈/∂π = −𝓜⁻¹ Y solved
         // for the plan's bodies' columns only
         regressor(m, sys.data, sys.data.qdd, self->plan_.bodies, self->b_);
-        for (int k = 0; k < np; ++k) {
-          self->b_.col(k) = -self->b_.col(k);
-          ltdl_solve(m, sys.data, self->b_.col(k));
-        }
+        self->b_t_rows_ = -self->b_.transpose();
+        ltdl_solve_transposed(m, sys.data, self->b_t_rows_);
+        self->b_ = self->b_t_rows_.transpose();
         self->b_t_ = t;
         self->b_y_ = ymap;
       }
@@ -179,6 +178,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
   int ns_;
   MatX S_, S0_, Sd_;
   MatX b_;                 // b_k = ∂q̈/∂π_k = −𝓜⁻¹ Y_k at (b_t_, b_y_)
+  MatX b_t_rows_;          // b_ transposed while 𝓜⁻¹ is applied
   double b_t_ = 0.0;
   VecX b_y_;
   VectorArrayPtr yS_;

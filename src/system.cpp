@@ -160,11 +160,12 @@ void System::linearized_times(const MatX& S, MatX& out) {
       delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
     }
   }
-  // ∂q̈/∂y S = 𝓜⁻¹ (K_q δ + K_v s_v), one LᵀDL solve per column
-  auto qdd_rows = out.middleRows(nq, nv);
-  qdd_rows.noalias() = dd.dqdd_dq * delta;
-  qdd_rows.noalias() += dd.dqdd_dv * S.middleRows(nq, nv);
-  for (Eigen::Index c = 0; c < ns; ++c) ltdl_solve(model, data, out.col(c).segment(nq, nv));
+  // ∂q̈/∂y S = 𝓜⁻¹ (K_q δ + K_v s_v), every column in one LᵀDL solve, held transposed
+  if (rows_t.rows() != ns || rows_t.cols() != nv) rows_t.resize(ns, nv);
+  rows_t.noalias() = delta.transpose() * dd.dqdd_dq.transpose();
+  rows_t.noalias() += S.middleRows(nq, nv).transpose() * dd.dqdd_dv.transpose();
+  ltdl_solve_transposed(model, data, rows_t);
+  out.middleRows(nq, nv) = rows_t.transpose();
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
   if (nquad > 0) {
     inputs.power_derivatives(t, v, dP, dD);
