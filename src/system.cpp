@@ -147,18 +147,19 @@ void System::linearized_times(const MatX& S, MatX& out) {
   for (int i = 0; i < model.nbodies; ++i) {
     const JointType type = model.joint_type[i];
     const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
+    if (joint_traits(type).quaternion < 0) {  // q̇ = v: ∂q̇/∂q = 0, ∂q̇/∂v = e, and T = e
+      out.middleRows(iq, mi) = S.middleRows(nq + iv, ni);
+      delta.middleRows(iv, ni) = S.middleRows(iq, mi);
+      continue;
+    }
     auto Jq = Tq.topLeftCorner(mi, mi);
     auto Jv = Tv.topLeftCorner(mi, ni);
     joint_qdot_jacobian(type, q.data() + iq, v.data() + iv, Jq, Jv);
     out.middleRows(iq, mi).noalias() = Jq * S.middleRows(iq, mi);
     out.middleRows(iq, mi).noalias() += Jv * S.middleRows(nq + iv, ni);
-    if (joint_traits(type).quaternion < 0) {
-      delta.middleRows(iv, ni) = S.middleRows(iq, mi);
-    } else {
-      auto Ti = T.topLeftCorner(ni, mi);
-      joint_tangent_map(type, q.data() + iq, Ti);
-      delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
-    }
+    auto Ti = T.topLeftCorner(ni, mi);
+    joint_tangent_map(type, q.data() + iq, Ti);
+    delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
   }
   // ∂q̈/∂y S = 𝓜⁻¹ (K_q δ + K_v s_v), every column in one LᵀDL solve, held transposed
   if (rows_t.rows() != ns || rows_t.cols() != nv) rows_t.resize(ns, nv);
