@@ -222,18 +222,19 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       for (int i = 0; i < m.nbodies; ++i) {
         const JointType type = m.joint_type[i];
         const int iq = m.idx_q[i], iv = m.idx_v[i], ni = m.nv_i[i], mi = m.nq_i[i];
+        if (joint_traits(type).quaternion < 0) {  // q̇ = v: ∂q̇/∂q = 0, ∂q̇/∂v = e, and T = e
+          out.segment(m.nq + iv, ni) += lam.segment(iq, mi);
+          out.segment(iq, mi) += a.g_.segment(iv, ni);
+          continue;
+        }
         auto Jqq = s.Tq.topLeftCorner(mi, mi);  // System's joint scratch: rhs, run by CVODES in between, leaves it
         auto Jqv = s.Tv.topLeftCorner(mi, ni);
         joint_qdot_jacobian(type, a.q_.data() + iq, a.v_.data() + iv, Jqq, Jqv);
         out.segment(iq, mi).noalias() += Jqq.transpose() * lam.segment(iq, mi);
         out.segment(m.nq + iv, ni).noalias() += Jqv.transpose() * lam.segment(iq, mi);
-        if (joint_traits(type).quaternion < 0) {
-          out.segment(iq, mi) += a.g_.segment(iv, ni);
-        } else {
-          auto Ti = s.T.topLeftCorner(ni, mi);
-          joint_tangent_map(type, a.q_.data() + iq, Ti);
-          out.segment(iq, mi).noalias() += Ti.transpose() * a.g_.segment(iv, ni);
-        }
+        auto Ti = s.T.topLeftCorner(ni, mi);
+        joint_tangent_map(type, a.q_.data() + iq, Ti);
+        out.segment(iq, mi).noalias() += Ti.transpose() * a.g_.segment(iv, ni);
       }
       out = -out;
       if (a.cost_.running) {

@@ -124,6 +124,26 @@ void body_columns(const Model& model, const Data& data, int i, MatX& Y, int at) 
   }
 }
 
+// W_iᵀ [x; y] for [x; y] = R_iᵀ w (w in inertial axes) without forming W_i, column by column of
+// body_regressor: m: y·a;  h: a × x + y × α + (y·ω) ω − |ω|² y;  I's entry (r, c): xᵀ E α + zᵀ E ω
+// with z = x × ω and E the symmetric basis (u_r v_c + u_c v_r, or u_r v_r on the diagonal)
+Eigen::Matrix<double, kParametersPerBody, 1> body_regressor_transpose_times(const Data& data, int i, const Vec6& wi) {
+  const Mat3& R = data.R[i];
+  const Vec3 x = R.transpose() * wi.head<3>(), y = R.transpose() * wi.tail<3>();
+  const Vec3 w = R.transpose() * data.V.col(i).head<3>();
+  const Vec3 al = R.transpose() * data.A.col(i).head<3>(), a = R.transpose() * data.A.col(i).tail<3>();
+  const Vec3 z = x.cross(w);
+  Eigen::Matrix<double, kParametersPerBody, 1> out;
+  out(0) = y.dot(a);
+  out.segment<3>(1) = a.cross(x) + y.cross(al) + y.dot(w) * w - w.squaredNorm() * y;
+  static const int rc[6][2] = {{0, 0}, {0, 1}, {1, 1}, {0, 2}, {1, 2}, {2, 2}};
+  for (int k = 0; k < 6; ++k) {
+    const int r = rc[k][0], c = rc[k][1];
+    out(4 + k) = r == c ? x(r) * al(r) + z(r) * w(r) : x(r) * al(c) + x(c) * al(r) + z(r) * w(c) + z(c) * w(r);
+  }
+  return out;
+}
+
 }  // namespace
 
 void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y) {
@@ -157,10 +177,7 @@ void regressor_transpose_times(const Model& model, Data& data, const VecX& qdd, 
       wi.tail<3>() += w.col(p).tail<3>() + om.cross(Vec3(data.d.col(i)));
     }
     w.col(i) = wi;
-    const Mat3& R = data.R[i];
-    Vec6 body;
-    body << R.transpose() * wi.head<3>(), R.transpose() * wi.tail<3>();
-    out.segment<kParametersPerBody>(kParametersPerBody * i).noalias() = body_regressor(data, i).transpose() * body;
+    out.segment<kParametersPerBody>(kParametersPerBody * i) = body_regressor_transpose_times(data, i, wi);
   }
 }
 
