@@ -22,30 +22,43 @@ const TreeCase kCases[] = {
 
 class Regressor : public ::testing::TestWithParam<TreeCase> {};
 
+// a random tree of the case's kind at a random (q, v, q̈), with [kin] and [vel] there
+struct State {
+  Model model;
+  Data data;
+  VecX q, v, qdd;
+  State(Rng& rng, const TreeOptions& o) : model(random_model(rng, o)), data(model) {
+    q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
+    update_kinematics(model, data, q);
+    update_velocities(model, data, v);
+  }
+};
+
+// τ of another model (other parameters, the same joints) at the same (q, v, q̈)
+VecX inverse_dynamics_of(const Model& other, const State& x) {
+  Data d(other);
+  update_kinematics(other, d, x.q);
+  update_velocities(other, d, x.v);
+  inverse_dynamics(other, d, x.qdd);
+  return d.tau;
+}
+
 TEST_P(Regressor, TimesParametersIsInverseDynamics) {
   Rng rng(41);
   for (int trial = 0; trial < 5; ++trial) {
-    const Model model = random_model(rng, GetParam().options);
-    Data data(model);
-    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
-    update_kinematics(model, data, q);
-    update_velocities(model, data, v);
+    State x(rng, GetParam().options);
+    const Model& model = x.model;
     MatX Y;
-    regressor(model, data, qdd, Y);
+    regressor(model, x.data, x.qdd, Y);
     ASSERT_EQ(Y.rows(), model.nv);
     ASSERT_EQ(Y.cols(), 10 * model.nbodies);
-    inverse_dynamics(model, data, qdd);
-    EXPECT_TRUE(near_rel(Y * parameters(model), data.tau, 1e-12)) << trial;
+    inverse_dynamics(model, x.data, x.qdd);
+    EXPECT_TRUE(near_rel(Y * parameters(model), x.data.tau, 1e-12)) << trial;
     // linear in π: the same Y times another model's parameters is that model's inverse dynamics
     VecX pi2 = parameters(model);
     for (int i = 0; i < model.nbodies; ++i) pi2(10 * i) *= 1.5, pi2.segment<3>(10 * i + 1) *= 1.5;  // heavier, same c
     for (int i = 0; i < model.nbodies; ++i) pi2.segment<6>(10 * i + 4) *= 1.5;
-    const Model heavier = with_parameters(model, pi2);
-    Data d2(heavier);
-    update_kinematics(heavier, d2, q);
-    update_velocities(heavier, d2, v);
-    inverse_dynamics(heavier, d2, qdd);
-    EXPECT_TRUE(near_rel(Y * pi2, d2.tau, 1e-12)) << trial;
+    EXPECT_TRUE(near_rel(Y * pi2, inverse_dynamics_of(with_parameters(model, pi2), x), 1e-12)) << trial;
   }
 }
 
@@ -54,30 +67,22 @@ TEST_P(Regressor, TimesParametersIsInverseDynamics) {
 TEST_P(Regressor, ListedBodiesColumnsGiveEachBodysShareOfInverseDynamics) {
   Rng rng(47);
   for (int trial = 0; trial < 5; ++trial) {
-    const Model model = random_model(rng, GetParam().options);
-    Data data(model);
-    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
-    update_kinematics(model, data, q);
-    update_velocities(model, data, v);
+    State x(rng, GetParam().options);
+    const Model& model = x.model;
     std::vector<int> bodies;
     for (int b = model.nbodies - 1; b >= 0; b -= 2) bodies.push_back(b);  // tip first: not the model's order
     MatX Y;
-    regressor(model, data, qdd, bodies, Y);
+    regressor(model, x.data, x.qdd, bodies, Y);
     ASSERT_EQ(Y.rows(), model.nv);
     ASSERT_EQ(Y.cols(), 10 * Eigen::Index(bodies.size()));
-    inverse_dynamics(model, data, qdd);
-    const VecX tau = data.tau;
+    const VecX tau = inverse_dynamics_of(model, x);
     for (size_t k = 0; k < bodies.size(); ++k) {
       const int b = bodies[k];
       VecX pi = parameters(model);
       const VecX before = pi.segment<10>(10 * b);
       pi.segment<10>(10 * b) *= 1.5;
-      const Model heavier = with_parameters(model, pi);
-      Data d2(heavier);
-      update_kinematics(heavier, d2, q);
-      update_velocities(heavier, d2, v);
-      inverse_dynamics(heavier, d2, qdd);
-      EXPECT_TRUE(near_rel(Y.middleCols<10>(10 * Eigen::Index(k)) * (0.5 * before), d2.tau - tau, 1e-11))
+      EXPECT_TRUE(near_rel(Y.middleCols<10>(10 * Eigen::Index(k)) * (0.5 * before),
+                           inverse_dynamics_of(with_parameters(model, pi), x) - tau, 1e-11))
           << trial << " body " << b;
     }
   }
@@ -92,16 +97,13 @@ TEST_P(Regressor, ListedBodiesColumnsGiveEachBodysShareOfInverseDynamics) {
 TEST_P(Regressor, TransposeTimesVectorEqualsTheFormedRegressors) {
   Rng rng(43);
   for (int trial = 0; trial < 5; ++trial) {
-    const Model model = random_model(rng, GetParam().options);
-    Data data(model);
-    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
+    State x(rng, GetParam().options);
+    const Model& model = x.model;
     const VecX mu = random_v(rng, model);
-    update_kinematics(model, data, q);
-    update_velocities(model, data, v);
     MatX Y;
-    regressor(model, data, qdd, Y);
+    regressor(model, x.data, x.qdd, Y);
     VecX got(10 * model.nbodies);
-    regressor_transpose_times(model, data, qdd, mu, got);
+    regressor_transpose_times(model, x.data, x.qdd, mu, got);
     EXPECT_TRUE(near_rel(got, Y.transpose() * mu, 1e-12)) << trial;
   }
 }
