@@ -151,7 +151,7 @@ MUTATIONS = [
      "w.cross(hn) + u.cross(hf);", "w.cross(hn);",
      "the body-axes bias force loses u ×* f, the linear part of v ×* M v",
      gtest("test_bias_local", "*BodyAxesBias.*")),
-    (30, "fd-derivatives-solve-pivot", "src/derivatives.cpp",
+    (30, "fd-derivatives-solve-pivot", "src/ltdl.cpp",
      "for (int k = 0; k < model.nv; ++k) Xt.col(k) /= H(k, k);", "for (int k = 1; k < model.nv; ++k) Xt.col(k) /= H(k, k);",
      "∂q̈/∂q and ∂q̈/∂v forget the first pivot of 𝓜's factor",
      gtest("test_derivatives", "RandomTrees/Derivatives.*")),
