@@ -331,7 +331,8 @@ Cost tracking_cost(const Model& m, const VecX& t, const MatX& q, const MatX& v, 
     if (wx.size() == 0) return 0.0;
     const auto& splines = is_q ? ref->q : ref->v;
     VecX r(x.size());
-    for (Eigen::Index c = 0; c < x.size(); ++c) r(c) = splines[size_t(c)].value(t);
+    const CubicSpline::Where at = splines[0].where(t);  // every column's spline has the same knots
+    for (Eigen::Index c = 0; c < x.size(); ++c) r(c) = splines[size_t(c)].value(t, at);
     if (is_q)
       for (const int k : ref->quaternion)
         if (r.segment<4>(k).dot(x.segment<4>(k)) < 0) r.segment<4>(k) = -r.segment<4>(k);

@@ -192,10 +192,18 @@ int CubicSpline::interval(double t) const {
 // On [t_k, t_{k+1}], h = t_{k+1} − t_k, A = (t_{k+1} − t)/h, B = 1 − A:
 //   y = A y_k + B y_{k+1} + ((A³ − A) m_k + (B³ − B) m_{k+1}) h²/6
 //   ẏ = (y_{k+1} − y_k)/h − (3A² − 1) h m_k/6 + (3B² − 1) h m_{k+1}/6,   ÿ = A m_k + B m_{k+1}
-double CubicSpline::value(double t) const {
-  if (t <= t_(0)) return y_(0);
-  if (t >= t_(t_.size() - 1)) return y_(y_.size() - 1);
-  const int k = interval(t);
+double CubicSpline::value(double t) const { return value(t, where(t)); }
+
+CubicSpline::Where CubicSpline::where(double t) const {
+  if (t <= t_(0)) return {0, -1};
+  if (t >= t_(t_.size() - 1)) return {0, 1};
+  return {interval(t), 0};
+}
+
+double CubicSpline::value(double t, Where w) const {
+  if (w.end < 0) return y_(0);
+  if (w.end > 0) return y_(y_.size() - 1);
+  const int k = w.k;
   const double h = t_(k + 1) - t_(k), A = (t_(k + 1) - t) / h, B = 1 - A;
   return A * y_(k) + B * y_(k + 1) + ((A * A * A - A) * m_(k) + (B * B * B - B) * m_(k + 1)) * h * h / 6;
 }

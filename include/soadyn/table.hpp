@@ -50,6 +50,13 @@ class CubicSpline {
   double value(double t) const;
   double rate(double t) const;
   double acceleration(double t) const;
+  // where(t), then value(t, where): for many splines on the same knots, the search done once
+  struct Where {
+    int k = 0;              // the interval [t_k, t_{k+1}]
+    int end = 0;            // −1 before t_0, +1 after t_{n−1} (the end values held), else 0
+  };
+  Where where(double t) const;
+  double value(double t, Where w) const;
 
  private:
   // k of the interval [t_k, t_{k+1}] holding t
