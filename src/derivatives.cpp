@@ -82,9 +82,9 @@ inline Vec6 fcross(const Vec6& m, const Vec6& f) {
 // B β = Y (β × v) + β ×* k + v ×* (Y β) with k = Y v = [k_n; k_f]:  B = −Y [v×] + H(k) + [v×*] Y,
 // [v×] = [ω̃ 0; ũ ω̃], [v×*] = [ω̃ ũ; 0 ω̃], H(k) = [−k̃_n −k̃_f; −k̃_f 0].  With Y = [I h̃; −h̃ m e],
 // ω̃ h̃ − h̃ ω̃ = (ω × h)~ and k_f = m u + ω × h, the right half vanishes:
-//   B = [ω̃ I − I ω̃ − (ũ h̃ + h̃ ũ) − k̃_n, 0; −2 k̃_f, 0],   ũ h̃ + h̃ ũ = h uᵀ + u hᵀ − 2 (u·h) e
-// (CoriolisBlock: T and f = k_f)
-CoriolisBlock b_matrix(const SpatialInertia& Y, const Vec6& v, const Vec6& k) {
+//   B = [ω̃ I − I ω̃ − (ũ h̃ + h̃ ũ) − k̃_n, 0; −2 k̃_f, 0],   ũ h̃ + h̃ ũ = h uᵀ + u hᵀ − 2 (u·h) e,
+// held as its CoriolisBlock: T and f = k_f
+CoriolisBlock coriolis_block(const SpatialInertia& Y, const Vec6& v, const Vec6& k) {
   const Vec3 w = v.head<3>(), u = v.tail<3>();
   Mat3 WI;  // ω̃ I, column by column
   for (int c = 0; c < 3; ++c) WI.col(c) = w.cross(Vec3(Y.I.col(c)));
@@ -146,7 +146,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     const Vec6 h = Yi * vel;
     dd.F.col(i) = Yi * acc + fcross(vel, h);  // f_i = Y_i a_i + v_i ×* Y_i v_i
     dd.Y[i] = Yi;
-    dd.B[i] = b_matrix(Yi, vel, h);
+    dd.B[i] = coriolis_block(Yi, vel, h);
   });
   // tip to base: F_p += F_i, Y_p += Y_i, B_p += B_i (all about one point: plain sums); τ_i = S_iᵀ F_i
   for (int i = N - 1; i >= 0; --i) {

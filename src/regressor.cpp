@@ -26,11 +26,13 @@ namespace {
 
 using Mat610 = Eigen::Matrix<double, 6, kParametersPerBody>;
 
-// the symmetric basis of I's six entries, in π's order xx, xy, yy, xz, yz, zz
+// I's six entries (row, column) in π's order xx, xy, yy, xz, yz, zz
+constexpr int kInertiaEntry[6][2] = {{0, 0}, {0, 1}, {1, 1}, {0, 2}, {1, 2}, {2, 2}};
+
+// the symmetric basis of those entries
 Mat3 inertia_basis(int k) {
-  static const int rc[6][2] = {{0, 0}, {0, 1}, {1, 1}, {0, 2}, {1, 2}, {2, 2}};
   Mat3 E = Mat3::Zero();
-  E(rc[k][0], rc[k][1]) = E(rc[k][1], rc[k][0]) = 1.0;
+  E(kInertiaEntry[k][0], kInertiaEntry[k][1]) = E(kInertiaEntry[k][1], kInertiaEntry[k][0]) = 1.0;
   return E;
 }
 
@@ -104,10 +106,6 @@ Mat610 body_regressor(const Data& data, int i) {
   return W;
 }
 
-}  // namespace
-
-namespace {
-
 // body i's ten columns of Y into Y's columns from `at`: W_i to inertial axes, then up the chain of
 // ancestors, G_jᵀ B, B ← D_jᵀ B = [n + d_j × f; f] (rows of non-ancestors left as they are)
 void body_columns(const Model& model, const Data& data, int i, MatX& Y, int at) {
@@ -136,9 +134,8 @@ Eigen::Matrix<double, kParametersPerBody, 1> body_regressor_transpose_times(cons
   Eigen::Matrix<double, kParametersPerBody, 1> out;
   out(0) = y.dot(a);
   out.segment<3>(1) = a.cross(x) + y.cross(al) + y.dot(w) * w - w.squaredNorm() * y;
-  static const int rc[6][2] = {{0, 0}, {0, 1}, {1, 1}, {0, 2}, {1, 2}, {2, 2}};
   for (int k = 0; k < 6; ++k) {
-    const int r = rc[k][0], c = rc[k][1];
+    const int r = kInertiaEntry[k][0], c = kInertiaEntry[k][1];
     out(4 + k) = r == c ? x(r) * al(r) + z(r) * w(r) : x(r) * al(c) + x(c) * al(r) + z(r) * w(c) + z(c) * w(r);
   }
   return out;

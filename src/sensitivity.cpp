@@ -149,20 +149,17 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
       // the staggered corrector calls again at the state it has converged: the derivatives and
       // b_k are then still those of the last call (System::linearize), and only A s_k is new
-      const double* yy = N_VGetArrayPointer(y);
-      const bool fresh = sys.linearize(t, yy);
+      const long linearization = sys.linearize(t, N_VGetArrayPointer(y));
       sys.linearized_times(self->S_, self->Sd_);
       const int np = self->plan_.np();
-      const auto ymap = Eigen::Map<const VecX>(yy, sys.size());
-      if (np > 0 && (fresh || t != self->b_t_ || self->b_y_.size() != ymap.size() || self->b_y_ != ymap)) {
+      if (np > 0 && linearization != self->b_linearization_) {
         // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.work.factor.L) at (q, v) are linearize's; ∂q̈/∂π = −𝓜⁻¹ Y solved
         // for the plan's bodies' columns only
         regressor(m, sys.data, sys.data.qdd, self->plan_.bodies, self->b_);
         self->b_t_rows_ = -self->b_.transpose();
         ltdl_solve_transposed(m, sys.data, self->b_t_rows_);
         self->b_ = self->b_t_rows_.transpose();
-        self->b_t_ = t;
-        self->b_y_ = ymap;
+        self->b_linearization_ = linearization;
       }
       if (np > 0) self->Sd_.block(m.nq, self->plan_.nx0(), m.nv, np) += self->b_;
       if (!self->Sd_.allFinite()) return 1;  // recoverable: CVODES retries with a smaller step
@@ -177,10 +174,9 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
   SensitivityPlan plan_;
   int ns_;
   MatX S_, S0_, Sd_;
-  MatX b_;                 // b_k = ∂q̈/∂π_k = −𝓜⁻¹ Y_k at (b_t_, b_y_)
+  MatX b_;                 // b_k = ∂q̈/∂π_k = −𝓜⁻¹ Y_k at System::linearize's linearization b_linearization_
   MatX b_t_rows_;          // b_ transposed while 𝓜⁻¹ is applied
-  double b_t_ = 0.0;
-  VecX b_y_;
+  long b_linearization_ = 0;  // 0: none yet (linearize numbers from 1)
   VectorArrayPtr yS_;
   cvode_impl::VectorPtr y_out_;
   cvode_impl::NonlinSolPtr nls_sens_;

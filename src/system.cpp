@@ -112,10 +112,10 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   }
 }
 
-bool System::linearize(double t, const double* y) {
+long System::linearize(double t, const double* y) {
   prepare_jacobian();
   const int n = size();
-  if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return false;
+  if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
   at_state(t, y);
   forward_dynamics(model, data, tau, FdMethod::Sparse);  // q̈ and 𝓜's LᵀDL factor
   DerivativeData& dd = *derivatives;
@@ -127,7 +127,7 @@ bool System::linearize(double t, const double* y) {
   lin_t_ = t;
   lin_y_ = Eigen::Map<const VecX>(y, n);
   linearized_ = true;
-  return true;
+  return ++linearizations_;
 }
 
 void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out) {

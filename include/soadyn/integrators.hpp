@@ -79,9 +79,10 @@ class System {
   void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
   // jacobian_times in two halves, for many products at one state (CVODES' staggered corrector
   // iterates on the sensitivities at the state it has converged): linearize leaves data and the
-  // derivatives at (t, y) and returns true, or returns false and does nothing when they already hold
-  // for this very (t, y) (no evaluation since); linearized_times applies them to S
-  bool linearize(double t, const double* y);
+  // derivatives at (t, y), doing nothing when they already hold for this very (t, y) (no evaluation
+  // since), and returns the number of that linearization (a new number for each one it makes, so
+  // that a caller keeping more at the state knows when to redo it); linearized_times applies them to S
+  long linearize(double t, const double* y);
   void linearized_times(const MatX& S, MatX& out);
   void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
@@ -119,6 +120,7 @@ class System {
 
  private:
   bool linearized_ = false;        // linearize's state (lin_t_, lin_y_) is still data's
+  long linearizations_ = 0;        // how many linearize has made: the current one's number
   double lin_t_ = 0.0;
   VecX lin_y_;
 };
