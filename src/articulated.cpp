@@ -1,8 +1,7 @@
-// The articulated-body recursion: O(N) forward dynamics (the factored inverse mass matrix) and
-// 𝓜⁻¹ in O(N²) by the same factor (algorithms.hpp).
+// The articulated-body recursion: O(N) forward dynamics (the factored inverse mass matrix), whose
+// factor articulated_solve reuses (algorithms.hpp).
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
-#include "soadyn/operators.hpp"
 #include "dynamics_routes.hpp"
 #include "articulated_inertia.hpp"
 #include "joint_inertial.hpp"
@@ -99,17 +98,9 @@ namespace detail {
 void aba(const Model& model, Data& data, const VecX& tau) {
   // tip to base: articulated inertias P_i and bias forces z_i
   for (int i = 0; i < model.nbodies; ++i) {
-    // P_i = M_i = [I, h̃; h̃ᵀ, m e], written in place entry by entry: a 6×6 assembled from 3×3
-    // temporaries goes through the stack in 8-byte pieces read back at once in 16-byte ones,
-    // which the CPU cannot forward (a tenth of this sweep's time)
+    // P_i = M_i = [I, h̃; h̃ᵀ, m e] (in place entry by entry: a tenth of this sweep's time otherwise)
     const SpatialInertia& M = data.inertia[i];
-    Mat6& P = data.work.articulated.P[i];
-    const double h0 = M.h(0), h1 = M.h(1), h2 = M.h(2), m = M.m;
-    P.topLeftCorner<3, 3>() = M.I;
-    P.col(3) << 0.0, h2, -h1, m, 0.0, 0.0;
-    P.col(4) << -h2, 0.0, h0, 0.0, m, 0.0;
-    P.col(5) << h1, -h0, 0.0, 0.0, 0.0, m;
-    P.block<3, 3>(3, 0) << 0.0, h2, -h1, -h2, 0.0, h0, h1, -h0, 0.0;  // h̃ᵀ, row by row
+    articulated_inertia::set_inertia(data.work.articulated.P[i], M.I, M.h, M.m);
     data.work.articulated.z.col(i) = data.gyroscopic.col(i);
   }
   for (int i = model.nbodies - 1; i >= 0; --i)
@@ -120,91 +111,5 @@ void aba(const Model& model, Data& data, const VecX& tau) {
 }
 
 }  // namespace detail
-
-void minverse(const Model& model, Data& data, MatX& Minv) {
-  const int N = model.nbodies;
-  if (Minv.rows() != model.nv || Minv.cols() != model.nv) Minv.resize(model.nv, model.nv);
-  const DOperator D{data.d};
-  // The articulated-body recursion for every unit force at once (τ = e_k, no velocity, no gravity):
-  // column k of 𝓜⁻¹ is that q̈.  Tip to base, the bias forces of all unit forces are the columns Z of
-  // a 6×nv block in depth-first positions (body i's subtree at dfs_begin[i] … dfs_end[i] − 1, its own
-  // DOFs first): u_i = E_i − G_iᵀ Z_i over the subtree's columns (E_i: 1 at i's own DOFs), kept in
-  // 𝓜⁻¹'s rows of i; then Z_p = D_iᵀ (Z_i + U_i 𝒟_i⁻¹ u_i) in place (p's children's subtrees are
-  // disjoint; p's own columns stay 0) and P_p += D_iᵀ (P_i − U_i 𝒟_i⁻¹ U_iᵀ) D_i.  O(N·depth).
-  Mat6X& Z = data.work.articulated.Z;
-  Mat6X& Acc = data.work.articulated.A;  // per-column body accelerations, not [fd]'s data.A
-  Z.setZero();
-  for (int i = 0; i < N; ++i) data.work.articulated.P[i] = data.inertia[i].matrix();
-  for (int i = N - 1; i >= 0; --i) visit_joint(model, i, [&](const auto& joint) {
-    using J = std::decay_t<decltype(joint)>;
-    const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
-    const int b = model.dfs_begin[i], n = model.dfs_end[i] - b;
-    articulated_factor_step<J>(model, data, i);
-    if constexpr (J::nv == 1) {  // 𝒟⁻¹ a number
-      const Vec6 g = data.G.col(vi), U = data.work.articulated.U1.col(i);
-      const double Dinv = data.work.articulated.Dinv1(i);
-      for (int x = 0; x < n; ++x) {
-        auto z = Z.col(b + x);
-        const double u = (x == 0 ? 1.0 : 0.0) - g.dot(z);
-        Minv(vi, model.dfs_dof[size_t(b + x)]) = u;
-        if (p < 0) continue;
-        const Vec6 zp = z + (Dinv * u) * U;
-        z.setZero();
-        D.add_apply_transpose(i, zp, z);
-      }
-    } else {
-      const auto Gi = data.G.middleCols(vi, ni);
-      const Mat6G UD = data.work.articulated.U[i] * data.work.articulated.Dinv[i];
-      for (int x = 0; x < n; ++x) {
-        auto z = Z.col(b + x);
-        VecG u = -(Gi.transpose() * z);
-        if (x < ni) u(x) += 1.0;
-        Minv.block(vi, model.dfs_dof[size_t(b + x)], ni, 1) = u;
-        if (p < 0) continue;
-        Vec6 zp = z;
-        zp.noalias() += UD * u;
-        z.setZero();
-        D.add_apply_transpose(i, zp, z);
-      }
-    }
-    if (p >= 0) articulated_inertia::add_to_parent(data.work.articulated.P[p], data.work.articulated.P[i], data.d.col(i));
-  });
-  // Base to tip, one column at a time: A'_i = D_i A_p, q̈_i = 𝒟_i⁻¹ (u_i − U_iᵀ A'_i), A_i = A'_i + G_i q̈_i,
-  // u_i nonzero only where column k's joint lies in i's subtree.  O(N) per column.
-  for (int k = 0; k < model.nv; ++k) {
-    const int at = model.dfs_begin[model.dof_body[size_t(k)]];
-    double* col = Minv.col(k).data();
-    for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
-      using J = std::decay_t<decltype(joint)>;
-      const int vi = model.idx_v[i], p = model.parent[i];
-      const bool carries = model.dfs_begin[i] <= at && at < model.dfs_end[i];
-      const auto& ab = data.work.articulated;
-      if constexpr (J::nv == 1) {
-        // in 3-vector halves, which stay in registers (as aba's forward sweep): A' = [ω; u]
-        Vec3 w = Vec3::Zero(), v = Vec3::Zero();
-        if (p >= 0) {
-          w = Acc.col(p).head<3>();
-          v = Acc.col(p).tail<3>() + w.cross(Vec3(data.d.col(i)));
-        }
-        const double qdd =
-            ab.Dinv1(i) * ((carries ? col[vi] : 0.0) - ab.U1.col(i).head<3>().dot(w) - ab.U1.col(i).tail<3>().dot(v));
-        col[vi] = qdd;
-        Acc.col(i).head<3>() = w + qdd * data.G.col(vi).head<3>();
-        Acc.col(i).tail<3>() = v + qdd * data.G.col(vi).tail<3>();
-      } else {
-        constexpr int ni = J::nv;
-        Vec6 A = Vec6::Zero();
-        if (p >= 0) D.add_apply(i, Acc.col(p), A);
-        VecG u = -(ab.U[i].transpose() * A);
-        if (carries) u += Minv.block(vi, k, ni, 1);
-        const VecG qdd = ab.Dinv[i] * u;
-        Minv.block(vi, k, ni, 1) = qdd;
-        A.noalias() += data.G.middleCols(vi, ni) * qdd;
-        Acc.col(i).head<3>() = A.head<3>();
-        Acc.col(i).tail<3>() = A.tail<3>();
-      }
-    });
-  }
-}
 
 }  // namespace soadyn

@@ -8,6 +8,18 @@
 
 namespace soadyn::articulated_inertia {
 
+// P = [I h̃; −h̃ m e], the spatial inertia of a body of mass m with first moment h and inertia I
+// about P's point, written in place entry by entry: a 6×6 assembled from 3×3 temporaries goes
+// through the stack in 8-byte pieces read back at once in 16-byte ones, which the CPU cannot forward
+inline void set_inertia(Mat6& P, const Mat3& I, const Vec3& h, double m) {
+  const double h0 = h(0), h1 = h(1), h2 = h(2);
+  P.topLeftCorner<3, 3>() = I;
+  P.col(3) << 0.0, h2, -h1, m, 0.0, 0.0;
+  P.col(4) << -h2, 0.0, h0, 0.0, m, 0.0;
+  P.col(5) << h1, -h0, 0.0, 0.0, 0.0, m;
+  P.block<3, 3>(3, 0) << 0.0, h2, -h1, -h2, 0.0, h0, h1, -h0, 0.0;  // −h̃ = h̃ᵀ, row by row
+}
+
 // One joint column g projected out: U = P g, 𝒟 = gᵀ U, P⁺ = P − U 𝒟⁻¹ Uᵀ, given U and 𝒟⁻¹;
 // column by column (inlined, unlike Eigen's outer product)
 inline void remove_column(Mat6& P, const Vec6& U, double Dinv) {

@@ -29,7 +29,8 @@ void check_memory(double bytes, int nv, const std::string& what) {
 namespace {
 // runs before Data's first member is built
 int checked_bodies(const Model& m) {
-  check_memory(3.0 * 8.0 * double(m.nv) * double(m.nv), m.nv, "its nv×nv matrices (𝓜 and its Cholesky factor)");
+  check_memory(8.0 * double(m.nv) * (3.0 * double(m.nv) + 6.0 * double(m.npaths)), m.nv,
+               "its nv×nv matrices (𝓜 and its Cholesky factor) and minverse's blocks");
   return m.nbodies;
 }
 }  // namespace
@@ -71,16 +72,22 @@ Data::Data(const Model& m)
   work.factor.llt = Eigen::LLT<MatX>(nv);
   auto& a = work.articulated;
   a.P.assign(N, Mat6::Zero());
-  a.z = a.U1 = a.A = Mat6X::Zero(6, N);
+  a.z = a.U1 = Mat6X::Zero(6, N);
   a.Dinv1 = VecX::Zero(N);
   a.u = VecX::Zero(nv);
-  a.Z = Mat6X::Zero(6, nv);
   a.U.reserve(N);
   a.Dinv.reserve(N);
   for (int i = 0; i < N; ++i) {
     a.U.emplace_back(Mat6G::Zero(6, m.nv_i[i]));
     a.Dinv.emplace_back(MatGG::Zero(m.nv_i[i], m.nv_i[i]));
   }
+  auto& o = work.origin;
+  o.S = o.U = o.UD = Mat6X::Zero(6, nv);
+  o.P.assign(N, Mat6::Zero());
+  o.Dinv.assign(N, Mat6::Zero());
+  o.Z = Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(nv, 6);
+  o.A = MatX::Zero(nv, 6 * m.npaths);
+  o.row = VecX::Zero(nv);
 }
 
 void Data::check(const Model& model, const char* where, const char* what, Eigen::Index got, int expected) const {

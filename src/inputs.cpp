@@ -46,6 +46,12 @@ void Inputs::add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const {
   for (const auto& d : dampers) dv(d.dof, d.dof) -= d.damping;
 }
 
+void Inputs::add_derivatives_times(const MatX& A, Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const {
+  // add_derivatives' diagonal entries, each scaling a column of A
+  for (const auto& s : springs) dq.col(s.dof) -= s.stiffness * A.col(s.dof);
+  for (const auto& d : dampers) dv.col(d.dof) -= d.damping * A.col(d.dof);
+}
+
 void Inputs::add_derivatives_transpose_times(const VecX& mu, Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv) const {
   // the diagonal of add_derivatives: (∂τ/∂q)ᵀ μ and (∂τ/∂v)ᵀ μ
   for (const auto& s : springs) gq(s.dof) -= s.stiffness * mu(s.dof);

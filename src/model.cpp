@@ -159,6 +159,18 @@ Model Model::build(const std::vector<BodySpec>& given, const Vec3& gravity, Iner
       for (auto it = children[i].rbegin(); it != children[i].rend(); ++it) stack.push_back({*it, false});
     }
   }
+  // paths: body i continues its parent's when it is the parent's last child
+  {
+    std::vector<int> last_child(m.nbodies, -1);
+    for (int i = 0; i < m.nbodies; ++i)
+      if (m.parent[i] >= 0) last_child[m.parent[i]] = i;
+    m.path.assign(m.nbodies, 0);
+    m.npaths = 0;
+    for (int i = 0; i < m.nbodies; ++i) {
+      const int p = m.parent[i];
+      m.path[i] = p >= 0 && last_child[p] == i ? m.path[p] : m.npaths++;
+    }
+  }
   m.chain = true;
   for (int k = 0; k < m.nv; ++k) {
     m.chain = m.chain && m.dof_parent[k] == k - 1;

@@ -1,7 +1,7 @@
-// The two ways forward_dynamics_derivatives applies 𝓜⁻¹ (DerivativeData::route): the articulated-body
-// factor (articulated_solve) against 𝓜 and against the LᵀDL route, and against central differences,
-// on seeded random trees, chains of 40 and more bodies and free roots, so that the route
-// derivative_route picks for big models is the one exercised.
+// forward_dynamics_derivatives on big models (𝓜⁻¹ about the origin and its O(N²) products with the
+// sweeps' vectors, per path of the tree) against −𝓜⁻¹ ∂τ by a dense LU of 𝓜 and against central
+// differences, on seeded random trees numbered depth-first and not, chains of 40 and more bodies and
+// free roots; and articulated_solve (the articulated-body factor, many right-hand sides) against 𝓜.
 #include "soadyn/derivatives.hpp"
 
 #include "test_util.hpp"
@@ -51,24 +51,27 @@ TEST_P(DerivativeRoutes, ArticulatedSolveInvertsTheMassMatrix) {
   }
 }
 
-TEST_P(DerivativeRoutes, ArticulatedBodyRouteEqualsLtdlAndCentralDifferences) {
+TEST_P(DerivativeRoutes, ForwardDerivativesEqualDenseSolveAndCentralDifferences) {
   const TreeCase& c = GetParam();
   for (int seed = 0; seed < 2; ++seed) {
     Rng rng(307 * seed + c.options.n);
     const Model model = random_model(rng, c.options);
     Data data(model), work(model);
-    DerivativeData aba(model), ltdl(model);
-    aba.route = FdMethod::ArticulatedBody;
-    ltdl.route = FdMethod::Sparse;
+    DerivativeData dd(model), id(model);
     const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), tau = random_v(rng, model, 3.0);
     update_kinematics(model, data, q);
     update_velocities(model, data, v);
-    forward_dynamics_derivatives(model, data, v, tau, ltdl, nullptr, true);
-    forward_dynamics_derivatives(model, data, v, tau, aba, nullptr, true);
-    EXPECT_TRUE(near_rel(aba.dqdd_dq, ltdl.dqdd_dq, 1e-9)) << c.name << " seed " << seed << ": ∂q̈/∂q";
-    EXPECT_TRUE(near_rel(aba.dqdd_dv, ltdl.dqdd_dv, 1e-9)) << c.name << " seed " << seed << ": ∂q̈/∂v";
-    EXPECT_TRUE(near_rel(aba.Minv, ltdl.Minv, 1e-9)) << c.name << " seed " << seed << ": 𝓜⁻¹";
+    forward_dynamics_derivatives(model, data, v, tau, dd);
     EXPECT_TRUE(near_rel(data.qdd, qdd_at(model, work, q, v, tau), 1e-12)) << c.name;
+    // −𝓜⁻¹ ∂τ with 𝓜 by the composite route and a dense LU, ∂τ filled pair by pair
+    update_kinematics(model, work, q);
+    update_velocities(model, work, v);
+    mass_matrix(model, work);
+    const Eigen::PartialPivLU<MatX> lu(work.M);
+    inverse_dynamics_derivatives(model, work, v, data.qdd, id);
+    EXPECT_TRUE(near_rel(dd.dqdd_dq, -lu.solve(id.dtau_dq), 1e-9)) << c.name << " seed " << seed << ": ∂q̈/∂q";
+    EXPECT_TRUE(near_rel(dd.dqdd_dv, -lu.solve(id.dtau_dv), 1e-9)) << c.name << " seed " << seed << ": ∂q̈/∂v";
+    EXPECT_TRUE(near_rel(dd.Minv, lu.inverse(), 1e-9)) << c.name << " seed " << seed << ": 𝓜⁻¹";
     // central differences along the tangent of q and along v
     const double h = 1e-5;
     MatX dq(model.nv, model.nv), dv(model.nv, model.nv);
@@ -79,8 +82,8 @@ TEST_P(DerivativeRoutes, ArticulatedBodyRouteEqualsLtdlAndCentralDifferences) {
                    qdd_at(model, work, model.integrate(q, -e, 1.0), v, tau)) / (2 * h);
       dv.col(k) = (qdd_at(model, work, q, v + e, tau) - qdd_at(model, work, q, v - e, tau)) / (2 * h);
     }
-    EXPECT_TRUE(near_rel(aba.dqdd_dq, dq, 1e-6)) << c.name << " seed " << seed << ": ∂q̈/∂q by differences";
-    EXPECT_TRUE(near_rel(aba.dqdd_dv, dv, 1e-6)) << c.name << " seed " << seed << ": ∂q̈/∂v by differences";
+    EXPECT_TRUE(near_rel(dd.dqdd_dq, dq, 1e-6)) << c.name << " seed " << seed << ": ∂q̈/∂q by differences";
+    EXPECT_TRUE(near_rel(dd.dqdd_dv, dv, 1e-6)) << c.name << " seed " << seed << ": ∂q̈/∂v by differences";
     EXPECT_GT(dq.cwiseAbs().maxCoeff(), 1e-2);  // the comparison means something
   }
 }
@@ -88,20 +91,22 @@ TEST_P(DerivativeRoutes, ArticulatedBodyRouteEqualsLtdlAndCentralDifferences) {
 INSTANTIATE_TEST_SUITE_P(RandomTrees, DerivativeRoutes, ::testing::ValuesIn(kCases),
                          [](const auto& info) { return std::string(info.param.name); });
 
-// derivative_route picks the articulated-body factor for long chains, LᵀDL for short chains and
-// shallow trees; a Dense route is refused
-TEST(DerivativeRoutesChoice, LongChainsTakeTheArticulatedBodyFactor) {
-  Rng rng(3);
-  const Model big = random_model(rng, {.n = 64, .branching = 0.0});
-  EXPECT_EQ(derivative_route(big), FdMethod::ArticulatedBody);
-  EXPECT_EQ(derivative_route(random_model(rng, {.n = 8, .branching = 0.0})), FdMethod::Sparse);
-  EXPECT_EQ(derivative_route(random_model(rng, {.n = 64, .branching = 1.0})), FdMethod::Sparse);
-  Data data(big);
-  DerivativeData dd(big);
-  dd.route = FdMethod::Dense;
-  update_kinematics(big, data, random_q(rng, big));
-  update_velocities(big, data, VecX::Zero(big.nv));
-  EXPECT_THROW(forward_dynamics_derivatives(big, data, VecX::Zero(big.nv), VecX::Zero(big.nv), dd), Error);
+// The cases cover both numberings minverse and the products handle: depth-first (a subtree's DOFs one
+// run) and not, and trees of several paths
+TEST(DerivativeRoutesCases, NumberedDepthFirstAndNot) {
+  int depth_first = 0, other = 0, branched = 0;
+  for (const TreeCase& c : kCases)
+    for (int seed = 0; seed < 2; ++seed) {
+      Rng rng(307 * seed + c.options.n);
+      const Model model = random_model(rng, c.options);
+      bool dfs = true;
+      for (int x = 0; x < model.nv; ++x) dfs = dfs && model.dfs_dof[size_t(x)] == x;
+      ++(dfs ? depth_first : other);
+      branched += model.npaths > 1;
+    }
+  EXPECT_GT(depth_first, 0);
+  EXPECT_GT(other, 0);
+  EXPECT_GT(branched, 0);
 }
 
 }  // namespace

@@ -52,7 +52,7 @@ struct Workspace {
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> L;
     Eigen::LLT<MatX> llt;              // 𝓜 = L Lᵀ
   } factor;
-  // the articulated-body recursion (aba, minverse, articulated_solve's factor)
+  // the articulated-body recursion (aba, articulated_solve's factor)
   struct Articulated {
     std::vector<Mat6> P;               // articulated inertias
     Mat6X z;                           // articulated bias forces
@@ -61,15 +61,27 @@ struct Workspace {
     VecX Dinv1;                        // 1 / (g_iᵀ P_i g_i) (1-DOF joints)
     std::vector<MatGG> Dinv;           // (G_iᵀ P_i G_i)⁻¹ (multi-DOF joints)
     VecX u;                            // τ_i − G_iᵀ z_i
-    Mat6X A;                           // minverse's per-column body accelerations
-    Mat6X Z;                           // minverse's bias forces of every unit force at once (6×nv,
-                                       //   depth-first columns: Model::dfs_begin)
   } articulated;
+  // 𝓜⁻¹ by the articulated-body recursion about the inertial origin (minverse.cpp; also
+  // forward_dynamics_derivatives)
+  struct Origin {
+    Mat6X S;                           // G_k moved to the inertial origin: [a; b + η_i × a]
+    std::vector<Mat6> P;               // articulated inertias about the origin
+    Mat6X U, UD;                       // U_i = P_i S_i and U_i 𝒟_i⁻¹, column per DOF
+    std::vector<Mat6> Dinv;            // 𝒟_i⁻¹ = (S_iᵀ U_i)⁻¹ in the top-left nv_i × nv_i
+    Eigen::Matrix<double, Eigen::Dynamic, 6> Z;  // nv×6: the bias force of each unit force, row per
+                                                 //   depth-first position (Model::dfs_begin)
+    MatX A;                            // nv × 6·Model::npaths: per path, each unit force's acceleration
+                                       //   of the body the sweep is at, row per DOF
+    VecX row;                          // a row of 𝓜⁻¹ in depth-first positions (a model not
+                                       //   numbered depth-first)
+  } origin;
 };
 
 struct Data {
-  // Data's dense nv×nv matrices (𝓜 and the two factors) are its only quadratic part: 24 nv² bytes,
-  // checked against memory_limit_bytes() before anything is allocated
+  // Data's dense nv×nv matrices (𝓜 and the two factors) and minverse's blocks (48 nv bytes per
+  // path of the tree, Model::npaths) are its only quadratic part, checked against
+  // memory_limit_bytes() before anything is allocated
   explicit Data(const Model& model);
 
   // always-on: the data was sized for this model and the vector has the expected size; a wrong

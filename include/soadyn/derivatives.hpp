@@ -19,13 +19,10 @@
 //   planar, revolute, prismatic: δ is the coordinate's own increment.
 // So ∂q̈/∂q is nv×nv; joint_tangent_map (joint.hpp) gives the chain rule to the coordinates.
 //
-// Forward dynamics: ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x |_q̈) at the q̈ of the state, the 2·nv columns
-// solved all at once with one of two factors of 𝓜 (DerivativeData::route):
-//   ArticulatedBody  the articulated-body recursion's (aba gives q̈ and the factor), then two O(N)
-//                    sweeps per column (articulated_solve): O(N²) in all, on chains too;
-//   Sparse           𝓜 by the composite sweep factored along the tree (LᵀDL, no fill-in off
-//                    ancestor chains): O(Σ depth) per column, dense O(N²) per column on a chain.
-// ∂q̈/∂τ = 𝓜⁻¹ on request, by the same factor.
+// Forward dynamics: ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x |_q̈) at the q̈ of the state, without forming
+// ∂ID/∂x: 𝓜⁻¹ by the articulated-body recursion about the origin (minverse), then its products with
+// the ∂ID columns made of the sweeps' vectors directly, O(N²) on every tree (derivatives.cpp).
+// ∂q̈/∂τ = 𝓜⁻¹ comes with them.
 #pragma once
 
 #include "soadyn/algorithms.hpp"
@@ -87,19 +84,12 @@ struct DerivativeData {
   // results
   MatX dtau_dq, dtau_dv;            // ∂τ/∂q (tangent), ∂τ/∂v of inverse dynamics, nv×nv
   MatX dqdd_dq, dqdd_dv;            // ∂q̈/∂q (tangent), ∂q̈/∂v of forward dynamics, nv×nv
-  MatX Minv;                        // ∂q̈/∂τ = 𝓜⁻¹ (when asked for)
-  MatX solve;                       // 2nv×nv: [∂q̈/∂q, ∂q̈/∂v]ᵀ while 𝓜⁻¹ is applied
-  // how forward_dynamics_derivatives applies 𝓜⁻¹: FdMethod::ArticulatedBody or FdMethod::Sparse
-  // (LᵀDL); derivative_route(model) picks the faster for the model, a caller may set either
-  FdMethod route;
-  MatX work;                        // articulated_solve's blocks (articulated_solve_work)
+  MatX Minv;                        // ∂q̈/∂τ = 𝓜⁻¹
+  MatX blocks;                      // nv × 9·Model::npaths: 𝓜⁻¹'s sums over ancestors and subtrees, per path
+  std::vector<char> leaf;           // body i has no child
   Mat6X w, T1;                      // 6×N: the vector products' sums (…_transpose_times)
   Mat3X T2;                         // 3×N: the same for the top half of Bᵀ (its bottom half is zero)
 };
-
-// The faster way to apply 𝓜⁻¹ in forward_dynamics_derivatives for this model (the rule and its
-// measurement: derivatives.cpp).
-FdMethod derivative_route(const Model& model);
 
 // ∂τ/∂q and ∂τ/∂v of τ = 𝓜(q) q̈ + bias(q, v) at (q, v, q̈), q̈ held fixed.  Needs [kin] at q; v and
 // q̈ have size nv.  Fills dd.dtau_dq, dd.dtau_dv and dd.tau.  O(N·depth).
@@ -117,9 +107,10 @@ void inverse_dynamics_derivatives_transpose_times(const Model& model, Derivative
 
 // ∂q̈/∂q and ∂q̈/∂v of q̈ = 𝓜⁻¹ (τ − bias) at (q, v), where τ is the generalized force at this state
 // and `inputs` (may be null) says how it changes with q and v (springs, dampers).  Needs [kin] and
-// [vel] at (q, v).  Fills data.qdd, the factor of dd.route (ArticulatedBody: the articulated-body
-// route's workspace; Sparse: data.M, data.bias and data.work.factor.L), dd.dqdd_dq, dd.dqdd_dv (and the
-// inverse-dynamics derivatives at that q̈); with `minv`, also dd.Minv = 𝓜⁻¹ = ∂q̈/∂τ.
+// [vel] at (q, v).  Fills data.qdd (by the articulated-body route), dd.dqdd_dq, dd.dqdd_dv and
+// dd.Minv = 𝓜⁻¹ = ∂q̈/∂τ, which they are made from (`minv` is kept for callers of the time when it
+// was optional; it changes nothing); not dd.dtau_dq, dd.dtau_dv (inverse_dynamics_derivatives).
+// O(N²) on every tree.
 void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
                                   const Inputs* inputs = nullptr, bool minv = false);
 

@@ -51,8 +51,10 @@ struct SpatialInertia {
     const double hd = K.h.dot(d), dd = d.squaredNorm();
     m += K.m;
     h += K.h + K.m * d;
-    I += K.I - d * K.h.transpose() - K.h * d.transpose() - K.m * (d * d.transpose());
-    I.diagonal().array() += 2.0 * hd + K.m * dd;
+    // one expression: the diagonal written entry by entry and then read back whole would wait on
+    // the stores
+    I += K.I - d * K.h.transpose() - K.h * d.transpose() - K.m * (d * d.transpose()) +
+         (2.0 * hd + K.m * dd) * Mat3::Identity();
   }
 
   // the 6×6 matrix [I, h̃; −h̃, m e]

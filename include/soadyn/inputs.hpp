@@ -72,6 +72,8 @@ struct Inputs {
   // dq += ∂τ/∂q (along the tangent, derivatives.hpp; springs act on 1-DOF joints, where the
   // coordinate is the tangent) and dv += ∂τ/∂v: both nv×nv, constant (torques depend on t only)
   void add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const;
+  // dq += A ∂τ/∂q and dv += A ∂τ/∂v for an nv×nv A (forward_dynamics_derivatives' 𝓜⁻¹): column by column
+  void add_derivatives_times(const MatX& A, Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const;
   // gq += (∂τ/∂q)ᵀ μ and gv += (∂τ/∂v)ᵀ μ, the same derivatives as vector products (the adjoint's)
   void add_derivatives_transpose_times(const VecX& mu, Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv) const;
   // ∂P/∂v and ∂D/∂v of power(t, v) (the quadratures' rates; neither depends on q): nv each

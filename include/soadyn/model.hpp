@@ -108,6 +108,12 @@ class Model {
   // run (the local-frame 𝓜 sweep, mass_matrix_local.cpp): DOF dfs_dof[x] sits at position x, and
   // the DOFs of body i's subtree at positions dfs_begin[i] .. dfs_end[i] − 1, its own first
   std::vector<int> dfs_dof, dfs_begin, dfs_end;
+  // the tree cut into paths: a body continues its parent's path when it is the parent's last child
+  // (highest index), else starts one.  The O(N²) sweeps that keep an nv-long block per body
+  // (minverse, forward_dynamics_derivatives) keep one per path instead, updated in place along it:
+  // one on a chain, one per leaf on a tree
+  std::vector<int> path;
+  int npaths = 0;
   int depth = 0;                           // longest chain from the ground (nilpotency of Φ_D)
   bool chain = false;                      // every DOF's parent DOF is the one before it
   // each body's joint kind (joint_model.hpp): what every sweep dispatches on, once per body

@@ -4,11 +4,7 @@
 // (ratios to forward dynamics, fitted exponents, BDF analytic vs DQ).
 //   fd          kinematics + velocities + O(N) articulated-body q̈ (the unit)
 //   id_deriv    kinematics + ∂τ/∂q, ∂τ/∂v (inverse_dynamics_derivatives)
-//   fd_deriv    kinematics + velocities + ∂q̈/∂q, ∂q̈/∂v (forward_dynamics_derivatives, the route
-//               derivative_route picks)
-//   fd_deriv_ltdl, fd_deriv_aba  the same with 𝓜⁻¹ applied by the LᵀDL factor / the articulated-body
-//               factor, whatever the size (DerivativeData::route)
-//   fd_deriv_minv  the same and 𝓜⁻¹ = ∂q̈/∂τ
+//   fd_deriv    kinematics + velocities + ∂q̈/∂q, ∂q̈/∂v and ∂q̈/∂τ = 𝓜⁻¹ (forward_dynamics_derivatives)
 //   minverse       kinematics + 𝓜⁻¹ by the articulated-body recursion (minverse, O(N²) on a chain)
 //   minverse_ltdl  kinematics + 𝓜 + its LᵀDL factor solved against the identity (O(N³) on a chain)
 //   jac_analytic   System::jacobian: ∂f/∂y of ẏ = f(y) (what CVODE BDF and the midpoint rule use)
@@ -71,13 +67,11 @@ template <Shape B> void IdDeriv(benchmark::State& st) {
     benchmark::DoNotOptimize(f.dd.dtau_dq.data());
   });
 }
-// Route: 0 derivative_route's, 1 LᵀDL, 2 articulated-body
-template <Shape B, bool Minv, int Route = 0> void FdDeriv(benchmark::State& st) {
+template <Shape B> void FdDeriv(benchmark::State& st) {
   run<B>(st, [](Fixture& f) {
-    if (Route) f.dd.route = Route == 1 ? FdMethod::Sparse : FdMethod::ArticulatedBody;
     update_kinematics(f.model, f.data, f.q);
     update_velocities(f.model, f.data, f.v);
-    forward_dynamics_derivatives(f.model, f.data, f.v, f.tau, f.dd, nullptr, Minv);
+    forward_dynamics_derivatives(f.model, f.data, f.v, f.tau, f.dd);
     benchmark::DoNotOptimize(f.dd.dqdd_dq.data());
   });
 }
@@ -131,10 +125,7 @@ void leg_lengths(benchmark::internal::Benchmark* b) {
 #define SETS(group, shape, range)                                                                      \
   BENCHMARK(Fd<shape>)->Name(group "/fd")->Apply(range);                                              \
   BENCHMARK(IdDeriv<shape>)->Name(group "/id_deriv")->Apply(range);                                   \
-  BENCHMARK(FdDeriv<shape, false>)->Name(group "/fd_deriv")->Apply(range);                            \
-  BENCHMARK(FdDeriv<shape, false, 1>)->Name(group "/fd_deriv_ltdl")->Apply(range);                    \
-  BENCHMARK(FdDeriv<shape, false, 2>)->Name(group "/fd_deriv_aba")->Apply(range);                     \
-  BENCHMARK(FdDeriv<shape, true>)->Name(group "/fd_deriv_minv")->Apply(range);                        \
+  BENCHMARK(FdDeriv<shape>)->Name(group "/fd_deriv")->Apply(range);                                   \
   BENCHMARK(Minverse<shape>)->Name(group "/minverse")->Apply(range);                                  \
   BENCHMARK(MinverseLtdl<shape>)->Name(group "/minverse_ltdl")->Apply(range);                         \
   BENCHMARK(SystemJacobian<shape, true>)->Name(group "/jac_analytic")->Apply(range);                        \

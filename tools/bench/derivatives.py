@@ -4,8 +4,8 @@
 1. Runs build/soadyn_bench_derivatives (configure with -DSOADYN_BUILD_BENCH=ON) and reports each
    derivative set's CPU time per call against N, chains, binary trees and legged free-floating
    robots, as a multiple of one O(N) forward dynamics at the same N, with exponents fitted over
-   N = 16..256; and the forward derivatives on chains in ns, 𝓜⁻¹ applied by LᵀDL (the route
-   before issue 31) and by the articulated-body factor, with their fitted exponents.
+   N = 16..256; and the forward derivatives and 𝓜⁻¹ alone on chains in ns, with their fitted
+   exponents.
 2. Runs CVODE BDF at rtol 1e-8 with the analytic Jacobian and with difference quotients on the
    stiff scenes (scenarios/stiff_arm.yaml and scenarios/flexible_satellite.yaml): steps, RHS and
    Jacobian evaluations, CPU time, each the best of --repeat runs, analytic and DQ interleaved
@@ -25,10 +25,9 @@ import numpy as np
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 SETS = [("id_deriv", "∂τ/∂q, ∂τ/∂v (inverse dynamics)"),
-        ("fd_deriv", "∂q̈/∂q, ∂q̈/∂v (forward dynamics)"),
-        ("fd_deriv_ltdl", "the same, 𝓜⁻¹ by LᵀDL"),
-        ("fd_deriv_aba", "the same, 𝓜⁻¹ by the articulated-body factor"),
-        ("fd_deriv_minv", "∂q̈/∂q, ∂q̈/∂v and ∂q̈/∂τ = 𝓜⁻¹"),
+        ("fd_deriv", "∂q̈/∂q, ∂q̈/∂v and ∂q̈/∂τ = 𝓜⁻¹ (forward dynamics)"),
+        ("minverse", "𝓜⁻¹ alone (minverse)"),
+        ("minverse_ltdl", "𝓜⁻¹ by 𝓜's LᵀDL against the identity"),
         ("jac_analytic", "∂f/∂y of ẏ = f(y), analytic (BDF, midpoint)"),
         ("jac_dq", "∂f/∂y by nq + nv difference quotients of f")]
 
@@ -146,12 +145,10 @@ def derivative_tables(args):
             s = series[f"{group}/{key}"]
             lines.append(f"| {label} | " + " | ".join(f"{s[n] / fd[n]:.1f}×" for n in ns) + f" | {fit(s)} |")
         lines.append("")
-    # the forward derivatives on chains in ns: LᵀDL (before issue 31), the articulated-body factor,
-    # and the route derivative_route picks
-    rows = [("fd_deriv_ltdl", "𝓜⁻¹ by LᵀDL (before)"), ("fd_deriv_aba", "𝓜⁻¹ by the articulated-body factor"),
-            ("fd_deriv", "derivative_route's pick (after)")]
+    # the forward derivatives and 𝓜⁻¹ alone on chains in ns, with their exponents
+    rows = [("fd_deriv", "∂q̈/∂q, ∂q̈/∂v, 𝓜⁻¹"), ("minverse", "𝓜⁻¹ alone (minverse)")]
     ns = [n for n in sorted(series["chain/fd_deriv"]) if 16 <= n <= 256]
-    lines += ["∂q̈/∂q and ∂q̈/∂v on chains, CPU ns per call (kinematics and velocities included), and the exponent",
+    lines += ["The forward derivatives and 𝓜⁻¹ on chains, CPU ns per call (kinematics and velocities included), and the exponent",
               "fitted by least squares on log-log over N = 16..256 (issue 31: ≤ 2.1):", "",
               "| chain | " + " | ".join(f"N={n}" for n in ns) + " | exponent |", "|---" * (len(ns) + 2) + "|"]
     for key, label in rows:
