@@ -88,7 +88,8 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
     for (int a = 0; a < n; ++a) {
       double* row = depth_first ? Minv.col(vi + a).data() + s : o.row.data();
       Eigen::Map<VecX> r(row, m);
-      r.noalias() = -(sub * SD.col(a));
+      const Vec6 minus_sd = -SD.col(a);
+      r.noalias() = sub * minus_sd;  // (a product negated whole would go through a temporary)
       if (!depth_first)
         for (int x = 0; x < m; ++x) Minv(model.dfs_dof[size_t(s + x)], vi + a) = r(x);
     }
@@ -153,7 +154,7 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
     for (int a = 0; a < n; ++a)
       for (int c = 0; c < 6; ++c) ai.col(c) += S(c, vi + a) * qdd.col(a);
   });
-  Minv.triangularView<Eigen::StrictlyUpper>() = Minv.transpose();
+  for (int c = 1; c < nv; ++c) Minv.col(c).head(c) = Minv.row(c).head(c).transpose();  // the upper triangle
 }
 
 }  // namespace detail

@@ -231,9 +231,9 @@ struct FdDerivatives {
 (∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = 𝓜⁻¹) of q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)), τ held fixed; ∂/∂q along the
 tangent as in id_derivatives.  q: (nq,), v: (nv,), tau: (nv,).  Returns (data.dqdd_dq,
 data.dqdd_dv, data.Minv), shape (nv, nv) each: read-only views, not copies (the next derivative
-call on this Data overwrites them; .copy() to keep them).  Also fills data.qdd, and data.dtau_dq,
-data.dtau_dv at that q̈.  𝓜⁻¹ is applied by the articulated-body factor (O(N) per column) or, on
-small models, by 𝓜's LᵀDL (then data.M is filled too), whichever is faster for the model.)";
+call on this Data overwrites them; .copy() to keep them).  Also fills data.qdd.  𝓜⁻¹ by the
+articulated-body recursion, then its products with the inverse-dynamics derivatives' columns
+without forming them: O(N²) on every tree.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
     DerivativeData& dd = d.derivative_data(m);
     read_vector(m, *d.data, name, "tau", a[2], m.nv, d.x);
