@@ -55,7 +55,7 @@ DerivativeData::DerivativeData(const Model& m)
 namespace {
 
 // m × x = [ω × ω'; ω × u' + u × ω']   (motion cross product)
-inline Vec6 mcross(const Vec6& m, const Vec6& x) {
+[[gnu::always_inline]] inline Vec6 mcross(const Vec6& m, const Vec6& x) {
   const Vec3 w = m.head<3>(), u = m.tail<3>(), w2 = x.head<3>(), u2 = x.tail<3>();
   Vec6 out;
   out << w.cross(w2), w.cross(u2) + u.cross(w2);
@@ -63,7 +63,7 @@ inline Vec6 mcross(const Vec6& m, const Vec6& x) {
 }
 
 // m ×* f = [ω × n + u × f; ω × f]   (force cross product)
-inline Vec6 fcross(const Vec6& m, const Vec6& f) {
+[[gnu::always_inline]] inline Vec6 fcross(const Vec6& m, const Vec6& f) {
   const Vec3 w = m.head<3>(), u = m.tail<3>(), n = f.head<3>(), fl = f.tail<3>();
   Vec6 out;
   out << w.cross(n) + u.cross(fl), w.cross(fl);
@@ -74,17 +74,24 @@ inline Vec6 fcross(const Vec6& m, const Vec6& f) {
 // [v×] = [ω̃ 0; ũ ω̃], [v×*] = [ω̃ ũ; 0 ω̃], H(k) = [−k̃_n −k̃_f; −k̃_f 0].  With Y = [I h̃; −h̃ m e],
 // ω̃ h̃ − h̃ ω̃ = (ω × h)~ and k_f = m u + ω × h, the right half vanishes:
 //   B = [ω̃ I − I ω̃ − (ũ h̃ + h̃ ũ) − k̃_n, 0; −2 k̃_f, 0],   ũ h̃ + h̃ ũ = h uᵀ + u hᵀ − 2 (u·h) e,
-// held as its CoriolisBlock: T and f = k_f
-CoriolisBlock coriolis_block(const SpatialInertia& Y, const Vec6& v, const Vec6& k) {
-  const Vec3 w = v.head<3>(), u = v.tail<3>();
+// held as its CoriolisBlock: T and f = k_f (v = [w; u], k = [kn; kf])
+// (entry by entry, each written once: a matrix updated in passes, its diagonal entry by entry,
+// waited on its own stores)
+CoriolisBlock coriolis_block(const SpatialInertia& Y, const Vec3& w, const Vec3& u, const Vec3& kn, const Vec3& kf) {
+  const Vec3 h = Y.h;
   Mat3 WI;  // ω̃ I, column by column
   for (int c = 0; c < 3; ++c) WI.col(c) = w.cross(Vec3(Y.I.col(c)));
+  const double uh2 = 2.0 * u.dot(h);
+  // ω̃ I − I ω̃ = ω̃ I + (ω̃ I)ᵀ (I symmetric), − (h uᵀ + u hᵀ) + 2 (u·h) e − k̃_n
+  const double t00 = 2.0 * WI(0, 0) - 2.0 * h(0) * u(0) + uh2, t11 = 2.0 * WI(1, 1) - 2.0 * h(1) * u(1) + uh2,
+               t22 = 2.0 * WI(2, 2) - 2.0 * h(2) * u(2) + uh2;
+  const double s01 = WI(0, 1) + WI(1, 0) - h(0) * u(1) - u(0) * h(1), s02 = WI(0, 2) + WI(2, 0) - h(0) * u(2) - u(0) * h(2),
+               s12 = WI(1, 2) + WI(2, 1) - h(1) * u(2) - u(1) * h(2);
   CoriolisBlock B;
-  B.T = WI + WI.transpose();  // ω̃ I − I ω̃ = ω̃ I + (ω̃ I)ᵀ, I symmetric
-  B.T.noalias() -= Y.h * u.transpose() + u * Y.h.transpose();
-  B.T.diagonal().array() += 2.0 * u.dot(Y.h);
-  B.T -= skew(k.head<3>());
-  B.f = k.tail<3>();
+  B.T << t00, s01 + kn(2), s02 - kn(1),  //
+      s01 - kn(2), t11, s12 + kn(0),      //
+      s02 + kn(1), s12 - kn(0), t22;
+  B.f = kf;
   return B;
 }
 
@@ -116,6 +123,34 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     const int p = model.parent[i], vi = model.idx_v[i];
     constexpr int ni = J::nv;
     const Vec3 eta = data.eta.col(i);
+    if constexpr (ni == 1) {
+      // one DOF, in 3-vector halves (which stay in registers; a 6-vector built from two halves and
+      // read back whole waits on its stores): μ = v_i, so a_i = a_p + S q̈ + q̇ v_i × S
+      const Vec3 sw = data.G.col(vi).head<3>(), su = Vec3(data.G.col(vi).tail<3>()) + eta.cross(sw);
+      dd.S.col(vi).head<3>() = sw;
+      dd.S.col(vi).tail<3>() = su;
+      const double q1 = qd(vi), q2 = qdd(vi);
+      Vec3 vw = sw * q1, vu = su * q1, aw = sw * q2, au = su * q2;
+      if (p >= 0) {
+        vw += dd.v.col(p).head<3>(), vu += dd.v.col(p).tail<3>();
+        aw += dd.a.col(p).head<3>(), au += dd.a.col(p).tail<3>();
+      } else {
+        au -= model.gravity;
+      }
+      aw += q1 * vw.cross(sw);
+      au += q1 * (vw.cross(su) + vu.cross(sw));
+      dd.v.col(i).head<3>() = vw, dd.v.col(i).tail<3>() = vu;
+      dd.a.col(i).head<3>() = aw, dd.a.col(i).tail<3>() = au;
+      SpatialInertia& Yi = dd.Y[i];  // M_i moved from η_i to the origin
+      Yi = SpatialInertia();
+      Yi.add_transformed(data.inertia[i], eta);
+      // k = Y_i v_i,  f_i = Y_i a_i + v_i ×* k
+      const Vec3 kn = Yi.I * vw + Yi.h.cross(vu), kf = Yi.m * vu - Yi.h.cross(vw);
+      dd.F.col(i).head<3>() = Yi.I * aw + Yi.h.cross(au) + vw.cross(kn) + vu.cross(kf);
+      dd.F.col(i).tail<3>() = Yi.m * au - Yi.h.cross(aw) + vw.cross(kf);
+      dd.B[i] = coriolis_block(Yi, vw, vu, kn, kf);
+      return;
+    }
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
     Vec6 vel = vp, acc = p < 0 ? gravity_acc : Vec6(dd.a.col(p));
     for (int c = vi; c < vi + ni; ++c) {
@@ -137,7 +172,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     const Vec6 h = Yi * vel;
     dd.F.col(i) = Yi * acc + fcross(vel, h);  // f_i = Y_i a_i + v_i ×* Y_i v_i
     dd.Y[i] = Yi;
-    dd.B[i] = coriolis_block(Yi, vel, h);
+    dd.B[i] = coriolis_block(Yi, vel.head<3>(), vel.tail<3>(), h.head<3>(), h.tail<3>());
   });
   // tip to base: F_p += F_i, Y_p += Y_i, B_p += B_i (all about one point: plain sums); τ_i = S_iᵀ F_i
   for (int i = N - 1; i >= 0; --i) {
@@ -159,6 +194,33 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     using J = std::decay_t<decltype(joint)>;
     const int p = model.parent[j], vj = model.idx_v[j];
     constexpr int nj = J::nv;
+    if constexpr (nj == 1) {
+      // one DOF, in 3-vector halves (ξ = [xw; xu]): ν = v_p, μ = v_j, no own term
+      const Vec3 xw = dd.S.col(vj).head<3>(), xu = dd.S.col(vj).tail<3>();
+      const Vec3 pw = p < 0 ? Vec3::Zero() : Vec3(dd.v.col(p).head<3>()), pu = p < 0 ? Vec3::Zero() : Vec3(dd.v.col(p).tail<3>());
+      const Vec3 vw = dd.v.col(j).head<3>(), vu = dd.v.col(j).tail<3>();
+      const Vec3 aw = dd.a.col(j).head<3>(), au = dd.a.col(j).tail<3>();
+      const Vec3 Fn = dd.F.col(j).head<3>(), Ff = dd.F.col(j).tail<3>();
+      // β = −ξ × ν,  κ = −ξ × a_j − β × v_j,  λ = ξ × (ν + μ),  φ = ξ ×* F_j
+      const Vec3 bw = -xw.cross(pw), bu = -(xw.cross(pu) + xu.cross(pw));
+      const Vec3 kw = -xw.cross(aw) - bw.cross(vw), ku = -(xw.cross(au) + xu.cross(aw)) - (bw.cross(vu) + bu.cross(vw));
+      const Vec3 sw = pw + vw, su = pu + vu;
+      const Vec3 lw = xw.cross(sw), lu = xw.cross(su) + xu.cross(sw);
+      const Vec3 phw = xw.cross(Fn) + xu.cross(Ff), phu = xw.cross(Ff);
+      // ψ = Y_j κ + B_j β + φ,  ρ = B_j ξ − Y_j λ   (Y [ω; u] = [I ω + h × u; m u − h × ω], B x = [T x_ω; −2 f × x_ω])
+      const SpatialInertia& Y = dd.Y[j];
+      const CoriolisBlock& B = dd.B[j];
+      dd.phi.col(vj).head<3>() = phw, dd.phi.col(vj).tail<3>() = phu;
+      dd.psi.col(vj).head<3>() = Y.I * kw + Y.h.cross(ku) + B.T * bw + phw;
+      dd.psi.col(vj).tail<3>() = Y.m * ku - Y.h.cross(kw) - 2.0 * B.f.cross(bw) + phu;
+      dd.rho.col(vj).head<3>() = B.T * xw - (Y.I * lw + Y.h.cross(lu));
+      dd.rho.col(vj).tail<3>() = -2.0 * B.f.cross(xw) - (Y.m * lu - Y.h.cross(lw));
+      auto cq = dd.colq.col(vj);
+      auto cv = dd.colv.col(vj);
+      cq.segment<3>(0) = kw, cq.segment<3>(3) = ku, cq.segment<3>(6) = bw;
+      cv.segment<3>(0) = -lw, cv.segment<3>(3) = -lu, cv.segment<3>(6) = xw;
+      return;
+    }
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
     const Vec6 vel = dd.v.col(j), acc = dd.a.col(j), Fj = dd.F.col(j);
     for (int k = 0; k < nj; ++k) {

@@ -29,7 +29,7 @@ struct SpatialInertia {
 
   // M [ω; u] = [I ω + h × u; m u − h × ω]
   template <class Derived>
-  Vec6 operator*(const Eigen::MatrixBase<Derived>& x) const {
+  [[gnu::always_inline]] Vec6 operator*(const Eigen::MatrixBase<Derived>& x) const {
     const Vec3 w = x.template head<3>(), u = x.template tail<3>();
     Vec6 y;
     y.head<3>().noalias() = I * w + h.cross(u);
