@@ -19,6 +19,8 @@
 #include "articulated_inertia.hpp"
 #include "minverse.hpp"
 
+#include <algorithm>
+
 namespace soadyn {
 
 namespace detail {
@@ -56,9 +58,14 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
     // the rows of i over its own DOFs (𝒟⁻¹) and over its strict subtree: −𝒟⁻¹ Sᵀ z (as columns: −Z S 𝒟⁻¹)
     Minv.block<n, n>(vi, vi) = Dinv;
     if constexpr (n == 1) {
-      if (depth_first) {
-        // one pass over the subtree's positions x: r = −z·S 𝒟⁻¹ (the row), z += U r (for the parent)
-        double* __restrict row = Minv.col(vi).data() + s;
+      {
+        // one pass over the subtree's positions x: r = −z·S 𝒟⁻¹ (the row), z += U r (for the parent);
+        // the row straight into Minv when the model is numbered depth-first, else scattered after
+        double* __restrict row = depth_first ? Minv.col(vi).data() + s : o.row.data();
+        const auto scatter = [&] {
+          if (!depth_first)
+            for (int x = 0; x < m; ++x) Minv(model.dfs_dof[size_t(s + x)], vi) = row[x];
+        };
         double* z = o.Z.data() + s;
         const Eigen::Index ld = o.Z.outerStride();
         const double sd0 = SD(0), sd1 = SD(1), sd2 = SD(2), sd3 = SD(3), sd4 = SD(4), sd5 = SD(5);
@@ -67,6 +74,7 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
           for (int x = 0; x < m; ++x)
             row[x] = -(z[x] * sd0 + z[x + ld] * sd1 + z[x + 2 * ld] * sd2 + z[x + 3 * ld] * sd3 +
                        z[x + 4 * ld] * sd4 + z[x + 5 * ld] * sd5);
+          scatter();
           return;
         }
         const double u0 = U(0), u1 = U(1), u2 = U(2), u3 = U(3), u4 = U(4), u5 = U(5);
@@ -78,6 +86,7 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
           z[x] += u0 * r, z[x + ld] += u1 * r, z[x + 2 * ld] += u2 * r;
           z[x + 3 * ld] += u3 * r, z[x + 4 * ld] += u4 * r, z[x + 5 * ld] += u5 * r;
         }
+        scatter();
         o.Z.row(b) = UD.transpose();
         articulated_inertia::remove_column(o.P[i], U, Dinv(0, 0));
         o.P[p] += o.P[i];
@@ -154,7 +163,13 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
     for (int a = 0; a < n; ++a)
       for (int c = 0; c < 6; ++c) ai.col(c) += S(c, vi + a) * qdd.col(a);
   });
-  for (int c = 1; c < nv; ++c) Minv.col(c).head(c) = Minv.row(c).head(c).transpose();  // the upper triangle
+  // the upper triangle from the lower, in 8×8 tiles (a row of a column-major matrix read whole
+  // touches a cache line per entry)
+  constexpr int kTile = 8;
+  for (int c0 = 0; c0 < nv; c0 += kTile)
+    for (int r0 = 0; r0 <= c0; r0 += kTile)
+      for (int c = c0; c < std::min(c0 + kTile, nv); ++c)
+        for (int r = r0; r < std::min(r0 + kTile, c); ++r) Minv(r, c) = Minv(c, r);
 }
 
 }  // namespace detail
