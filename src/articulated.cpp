@@ -33,7 +33,7 @@ inline void articulated_factor_step(const Model& model, Data& data, int i) {
     inertial::times<J>(P, data.G, vi, U);
     const Eigen::Matrix<double, J::nv, J::nv> joint_inertia = data.G.middleCols<J::nv>(vi).transpose() * U;  // 𝒟_i
     data.work.articulated.U[i] = U;
-    data.work.articulated.Dinv[i] = joint_inertia.inverse();
+    data.work.articulated.Dinv[i] = articulated_inertia::joint_inertia_inverse<J::nv>(joint_inertia);
     if (p < 0) return;
     const Eigen::Matrix<double, 6, J::nv> UD = U * data.work.articulated.Dinv[i];
     P.noalias() -= UD * U.transpose();

@@ -6,6 +6,8 @@
 
 #include "soadyn/types.hpp"
 
+#include <Eigen/LU>
+
 namespace soadyn::articulated_inertia {
 
 // P = [I h̃; −h̃ m e], the spatial inertia of a body of mass m with first moment h and inertia I
@@ -43,6 +45,29 @@ inline void add_to_parent(Mat6& out, const Mat6& P, const Vec3& d) {
   out.topRightCorner<3, 3>() += B + W;
   out.bottomLeftCorner<3, 3>() += (B + W).transpose();
   out.bottomRightCorner<3, 3>() += C;
+}
+
+// 𝒟⁻¹ of a joint's n×n 𝒟 = Gᵀ P G (symmetric positive definite): Eigen's closed forms up to
+// n = 4; for the free joint's 6×6, by its 3×3 blocks 𝒟 = [A B; Bᵀ C] with X = A⁻¹ B and the Schur
+// complement Σ = C − Bᵀ X: 𝒟⁻¹ = [A⁻¹ + X Σ⁻¹ Xᵀ, −X Σ⁻¹; −Σ⁻¹ Xᵀ, Σ⁻¹] (Eigen's general 6×6 inverse,
+// an LU with pivoting, costs several times as much)
+template <int n>
+inline Eigen::Matrix<double, n, n> joint_inertia_inverse(const Eigen::Matrix<double, n, n>& D) {
+  if constexpr (n != 6) {
+    return D.inverse();
+  } else {
+    const Mat3 Ai = Mat3(D.template topLeftCorner<3, 3>()).inverse();
+    const Mat3 B = D.template topRightCorner<3, 3>();
+    const Mat3 X = Ai * B;
+    const Mat3 Si = (Mat3(D.template bottomRightCorner<3, 3>()) - B.transpose() * X).inverse();
+    const Mat3 XS = X * Si;
+    Eigen::Matrix<double, 6, 6> out;
+    out.template topLeftCorner<3, 3>() = Ai + XS * X.transpose();
+    out.template topRightCorner<3, 3>() = -XS;
+    out.template bottomLeftCorner<3, 3>() = -XS.transpose();
+    out.template bottomRightCorner<3, 3>() = Si;
+    return out;
+  }
 }
 
 }  // namespace soadyn::articulated_inertia

@@ -82,12 +82,11 @@ Data::Data(const Model& m)
     a.Dinv.emplace_back(MatGG::Zero(m.nv_i[i], m.nv_i[i]));
   }
   auto& o = work.origin;
-  o.S = o.U = o.UD = Mat6X::Zero(6, nv);
+  o.S = o.UD = Mat6X::Zero(6, nv);
   o.P.assign(N, Mat6::Zero());
-  o.Dinv.assign(N, Mat6::Zero());
   o.Z = Eigen::Matrix<double, Eigen::Dynamic, 6>::Zero(nv, 6);
   o.A = MatX::Zero(nv, 6 * m.npaths);
-  o.row = VecX::Zero(nv);
+  o.row = VecX::Zero(6 * nv);
 }
 
 void Data::check(const Model& model, const char* where, const char* what, Eigen::Index got, int expected) const {

@@ -394,6 +394,7 @@ void ancestors_step(const double* Q, double* Qc, Eigen::Index ld, const double* 
     for (int c = 0; c < 6; ++c) {
       double* __restrict to = Qc + c * ld;
       const double* from = Q + c * ld;
+#pragma GCC ivdep
       for (int k = 0; k < nv; ++k) {
         double t = root ? 0.0 : from[k];
         for (int a = 0; a < n; ++a) t += m[a * lx + k] * S[a][c];
@@ -420,6 +421,7 @@ void subtree_step(double* P, Eigen::Index ld, const double* m, double* x, double
   } else {
     for (int c = 0; c < 9; ++c) {
       double* __restrict pc = P + c * ld;
+#pragma GCC ivdep
       for (int k = 0; k < nv; ++k) {
         double t = first ? 0.0 : pc[k];
         for (int a = 0; a < n; ++a) t += m[a * lx + k] * row[a][c];
@@ -429,6 +431,7 @@ void subtree_step(double* P, Eigen::Index ld, const double* m, double* x, double
     for (int a = 0; a < n; ++a) {
       double* __restrict xa = x + a * lx;
       double* __restrict ya = y + a * lx;
+#pragma GCC ivdep
       for (int k = 0; k < nv; ++k) {
         double sx = 0.0, sy = 0.0;
         for (int c = 0; c < 9; ++c) sx += P[c * ld + k] * cq[a][c], sy += P[c * ld + k] * cv[a][c];

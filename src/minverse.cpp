@@ -25,6 +25,62 @@ namespace soadyn {
 
 namespace detail {
 
+namespace {
+
+// Tip to base over the subtree's m positions x (Z: 6 columns at stride lz; row: n columns at stride
+// lr): r_a = −z·(S 𝒟⁻¹)_a, the rows of 𝓜⁻¹; then, below a parent, z += U r.  One pass over x.
+template <int n, bool root>
+void subtree_rows(double* z, Eigen::Index lz, double* row, Eigen::Index lr, const double (&SD)[n][6],
+                  const double (&U)[n][6], int m) {
+#pragma GCC ivdep
+  for (int x = 0; x < m; ++x) {
+    double zc[6], r[n];
+    for (int c = 0; c < 6; ++c) zc[c] = z[c * lz + x];
+    for (int a = 0; a < n; ++a) {
+      double t = 0.0;
+      for (int c = 0; c < 6; ++c) t -= zc[c] * SD[a][c];
+      row[a * lr + x] = r[a] = t;
+    }
+    if constexpr (!root)
+      for (int c = 0; c < 6; ++c) {
+        double t = zc[c];
+        for (int a = 0; a < n; ++a) t += U[a][c] * r[a];
+        z[c * lz + x] = t;
+      }
+  }
+}
+
+// Base to tip over k ≥ the first DOF of i (q: the n columns of Minv from that row, stride lq; a_p,
+// a_i: 6 columns at stride la, a_i possibly a_p itself): q̈ −= (U 𝒟⁻¹)ᵀ a_p, a_i = a_p + S q̈.  One pass.
+template <int n, bool root>
+void row_accelerations(double* q, Eigen::Index lq, const double* ap, double* ai, Eigen::Index la,
+                       const double (&UD)[n][6], const double (&S)[n][6], int rows) {
+#pragma GCC ivdep
+  for (int k = 0; k < rows; ++k) {
+    double a[6], qk[n];
+    for (int c = 0; c < 6; ++c) a[c] = root ? 0.0 : ap[c * la + k];
+    for (int j = 0; j < n; ++j) {
+      double t = q[j * lq + k];
+      if constexpr (!root)
+        for (int c = 0; c < 6; ++c) t -= UD[j][c] * a[c];
+      q[j * lq + k] = qk[j] = t;
+    }
+    for (int c = 0; c < 6; ++c) {
+      double t = a[c];
+      for (int j = 0; j < n; ++j) t += S[j][c] * qk[j];
+      ai[c * la + k] = t;
+    }
+  }
+}
+
+template <int n, class M>
+void columns_of(const M& from, double (&to)[n][6]) {
+  for (int a = 0; a < n; ++a)
+    for (int c = 0; c < 6; ++c) to[a][c] = from(c, a);
+}
+
+}  // namespace
+
 void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv) {
   const int N = model.nbodies, nv = model.nv;
   auto& o = data.work.origin;
@@ -39,6 +95,7 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
     articulated_inertia::set_inertia(o.P[i], Y.I, Y.h, Y.m);
   }
   o.Z.setZero();
+  const Eigen::Index lz = o.Z.outerStride(), lm = Minv.outerStride(), la = o.A.outerStride();
   // tip to base
   for (int i = N - 1; i >= 0; --i) visit_joint(model, i, [&](const auto& joint) {
     using J = std::decay_t<decltype(joint)>;
@@ -50,118 +107,46 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
     const Mat6N Si = S.middleCols<n>(vi);
     // U = P S,  𝒟⁻¹ = (Sᵀ U)⁻¹
     const Mat6N U = o.P[i] * Si;
-    const MatN Dinv = MatN(Si.transpose() * U).inverse();
+    const MatN Dinv = articulated_inertia::joint_inertia_inverse<n>(MatN(Si.transpose() * U));
     const Mat6N UD = U * Dinv, SD = Si * Dinv;
-    o.U.middleCols<n>(vi) = U;
     o.UD.middleCols<n>(vi) = UD;
-    o.Dinv[i].topLeftCorner<n, n>() = Dinv;
-    // the rows of i over its own DOFs (𝒟⁻¹) and over its strict subtree: −𝒟⁻¹ Sᵀ z (as columns: −Z S 𝒟⁻¹)
+    // the rows of i over its own DOFs (𝒟⁻¹) and over its strict subtree (−𝒟⁻¹ Sᵀ z), then z += U r;
+    // straight into Minv when the model is numbered depth-first, else through o.row and scattered
     Minv.block<n, n>(vi, vi) = Dinv;
-    if constexpr (n == 1) {
-      {
-        // one pass over the subtree's positions x: r = −z·S 𝒟⁻¹ (the row), z += U r (for the parent);
-        // the row straight into Minv when the model is numbered depth-first, else scattered after
-        double* __restrict row = depth_first ? Minv.col(vi).data() + s : o.row.data();
-        const auto scatter = [&] {
-          if (!depth_first)
-            for (int x = 0; x < m; ++x) Minv(model.dfs_dof[size_t(s + x)], vi) = row[x];
-        };
-        double* z = o.Z.data() + s;
-        const Eigen::Index ld = o.Z.outerStride();
-        const double sd0 = SD(0), sd1 = SD(1), sd2 = SD(2), sd3 = SD(3), sd4 = SD(4), sd5 = SD(5);
-        if (p < 0) {
-#pragma GCC ivdep
-          for (int x = 0; x < m; ++x)
-            row[x] = -(z[x] * sd0 + z[x + ld] * sd1 + z[x + 2 * ld] * sd2 + z[x + 3 * ld] * sd3 +
-                       z[x + 4 * ld] * sd4 + z[x + 5 * ld] * sd5);
-          scatter();
-          return;
-        }
-        const double u0 = U(0), u1 = U(1), u2 = U(2), u3 = U(3), u4 = U(4), u5 = U(5);
-#pragma GCC ivdep
-        for (int x = 0; x < m; ++x) {
-          const double r = -(z[x] * sd0 + z[x + ld] * sd1 + z[x + 2 * ld] * sd2 + z[x + 3 * ld] * sd3 +
-                             z[x + 4 * ld] * sd4 + z[x + 5 * ld] * sd5);
-          row[x] = r;
-          z[x] += u0 * r, z[x + ld] += u1 * r, z[x + 2 * ld] += u2 * r;
-          z[x + 3 * ld] += u3 * r, z[x + 4 * ld] += u4 * r, z[x + 5 * ld] += u5 * r;
-        }
-        scatter();
-        o.Z.row(b) = UD.transpose();
-        articulated_inertia::remove_column(o.P[i], U, Dinv(0, 0));
-        o.P[p] += o.P[i];
-        return;
-      }
-    }
-    auto sub = o.Z.middleRows(s, m);
-    for (int a = 0; a < n; ++a) {
-      double* row = depth_first ? Minv.col(vi + a).data() + s : o.row.data();
-      Eigen::Map<VecX> r(row, m);
-      const Vec6 minus_sd = -SD.col(a);
-      r.noalias() = sub * minus_sd;  // (a product negated whole would go through a temporary)
-      if (!depth_first)
-        for (int x = 0; x < m; ++x) Minv(model.dfs_dof[size_t(s + x)], vi + a) = r(x);
-    }
+    double sd[n][6], u[n][6];
+    columns_of<n>(SD, sd);
+    columns_of<n>(U, u);
+    double* row = depth_first ? Minv.col(vi).data() + s : o.row.data();
+    const Eigen::Index lr = depth_first ? lm : nv;
+    if (p < 0)
+      subtree_rows<n, true>(o.Z.data() + s, lz, row, lr, sd, u, m);
+    else
+      subtree_rows<n, false>(o.Z.data() + s, lz, row, lr, sd, u, m);
+    if (!depth_first)
+      for (int a = 0; a < n; ++a)
+        for (int x = 0; x < m; ++x) Minv(model.dfs_dof[size_t(s + x)], vi + a) = row[a * lr + x];
     if (p < 0) return;
-    // z_p = z_i + U 𝒟⁻¹ u over the subtree: its own positions (u = e) and the rest (u = 𝒟 · the rows above)
+    // the own positions' z (u = e there): U 𝒟⁻¹;  P_p += P⁺ = P − U 𝒟⁻¹ Uᵀ
     o.Z.middleRows<n>(b) = UD.transpose();
-    for (int a = 0; a < n; ++a) {
-      const double* row = depth_first ? Minv.col(vi + a).data() + s : o.row.data();
-      if (!depth_first)
-        for (int x = 0; x < m; ++x) o.row(x) = Minv(model.dfs_dof[size_t(s + x)], vi + a);
-      const Eigen::Map<const VecX> r(row, m);
-      for (int c = 0; c < 6; ++c) sub.col(c) += U(c, a) * r;
-    }
-    // P_p += P⁺ = P − U 𝒟⁻¹ Uᵀ
+    if constexpr (n == 1)
+      articulated_inertia::remove_column(o.P[i], U, Dinv(0, 0));
+    else
+      o.P[i].noalias() -= UD * U.transpose();
     o.P[p] += o.P[i];
-    o.P[p].noalias() -= UD * U.transpose();
   });
   // base to tip: q̈_i = 𝒟⁻¹ u − (U 𝒟⁻¹)ᵀ a_p,  a_i = a_p + S_i q̈_i, over k ≥ the first DOF of i
   for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
-    using J = std::decay_t<decltype(joint)>;
-    constexpr int n = J::nv;
+    constexpr int n = std::decay_t<decltype(joint)>::nv;
     const int vi = model.idx_v[i], p = model.parent[i], rows = nv - vi;
-    if constexpr (n == 1) {
-      // one pass over k ≥ vi: q̈ −= (U 𝒟⁻¹)ᵀ a_p, a_i = a_p + S q̈ (a_i in place of a_p along a path)
-      const Eigen::Index ld = o.A.outerStride();
-      double* __restrict qdd = Minv.col(vi).data() + vi;
-      double* ai = o.A.data() + 6 * model.path[i] * ld + vi;
-      const double s0 = S(0, vi), s1 = S(1, vi), s2 = S(2, vi), s3 = S(3, vi), s4 = S(4, vi), s5 = S(5, vi);
-      if (p < 0) {
-#pragma GCC ivdep
-        for (int k = 0; k < rows; ++k) {
-          const double q = qdd[k];
-          ai[k] = s0 * q, ai[k + ld] = s1 * q, ai[k + 2 * ld] = s2 * q;
-          ai[k + 3 * ld] = s3 * q, ai[k + 4 * ld] = s4 * q, ai[k + 5 * ld] = s5 * q;
-        }
-        return;
-      }
-      const double* ap = o.A.data() + 6 * model.path[p] * ld + vi;
-      const double d0 = o.UD(0, vi), d1 = o.UD(1, vi), d2 = o.UD(2, vi), d3 = o.UD(3, vi), d4 = o.UD(4, vi),
-                   d5 = o.UD(5, vi);
-#pragma GCC ivdep
-      for (int k = 0; k < rows; ++k) {
-        const double a0 = ap[k], a1 = ap[k + ld], a2 = ap[k + 2 * ld], a3 = ap[k + 3 * ld], a4 = ap[k + 4 * ld],
-                     a5 = ap[k + 5 * ld];
-        const double q = qdd[k] - (d0 * a0 + d1 * a1 + d2 * a2 + d3 * a3 + d4 * a4 + d5 * a5);
-        qdd[k] = q;
-        ai[k] = a0 + s0 * q, ai[k + ld] = a1 + s1 * q, ai[k + 2 * ld] = a2 + s2 * q;
-        ai[k + 3 * ld] = a3 + s3 * q, ai[k + 4 * ld] = a4 + s4 * q, ai[k + 5 * ld] = a5 + s5 * q;
-      }
-      return;
-    }
-    auto ai = o.A.middleCols<6>(6 * model.path[i]).middleRows(vi, rows);
-    auto qdd = Minv.block(vi, vi, rows, n);
-    if (p >= 0) {
-      const auto ap = o.A.middleCols<6>(6 * model.path[p]).middleRows(vi, rows);
-      for (int a = 0; a < n; ++a)
-        for (int c = 0; c < 6; ++c) qdd.col(a) -= o.UD(c, vi + a) * ap.col(c);
-      if (model.path[p] != model.path[i]) ai = ap;
-    } else {
-      ai.setZero();
-    }
-    for (int a = 0; a < n; ++a)
-      for (int c = 0; c < 6; ++c) ai.col(c) += S(c, vi + a) * qdd.col(a);
+    double ud[n][6], si[n][6];
+    columns_of<n>(o.UD.middleCols<n>(vi), ud);
+    columns_of<n>(S.middleCols<n>(vi), si);
+    double* q = Minv.data() + vi * lm + vi;
+    double* ai = o.A.data() + 6 * model.path[i] * la + vi;
+    if (p < 0)
+      row_accelerations<n, true>(q, lm, nullptr, ai, la, ud, si, rows);
+    else
+      row_accelerations<n, false>(q, lm, o.A.data() + 6 * model.path[p] * la + vi, ai, la, ud, si, rows);
   });
   // the upper triangle from the lower, in 8×8 tiles (a row of a column-major matrix read whole
   // touches a cache line per entry)

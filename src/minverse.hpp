@@ -8,7 +8,7 @@
 namespace soadyn::detail {
 
 // 𝓜⁻¹ into Minv (nv×nv, full) from S (6×nv: each G_k moved to the inertial origin, [a; b + η × a]).
-// Needs [kin]; leaves U_i, U_i 𝒟_i⁻¹ and 𝒟_i⁻¹ about the origin in data.work.origin.
+// Needs [kin]; works in data.work.origin.
 void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv);
 
 }  // namespace soadyn::detail

@@ -67,14 +67,13 @@ struct Workspace {
   struct Origin {
     Mat6X S;                           // G_k moved to the inertial origin: [a; b + η_i × a]
     std::vector<Mat6> P;               // articulated inertias about the origin
-    Mat6X U, UD;                       // U_i = P_i S_i and U_i 𝒟_i⁻¹, column per DOF
-    std::vector<Mat6> Dinv;            // 𝒟_i⁻¹ = (S_iᵀ U_i)⁻¹ in the top-left nv_i × nv_i
+    Mat6X UD;                          // U_i 𝒟_i⁻¹ (U_i = P_i S_i, 𝒟_i = S_iᵀ U_i), column per DOF
     Eigen::Matrix<double, Eigen::Dynamic, 6> Z;  // nv×6: the bias force of each unit force, row per
                                                  //   depth-first position (Model::dfs_begin)
     MatX A;                            // nv × 6·Model::npaths: per path, each unit force's acceleration
                                        //   of the body the sweep is at, row per DOF
-    VecX row;                          // a row of 𝓜⁻¹ in depth-first positions (a model not
-                                       //   numbered depth-first)
+    VecX row;                          // a joint's rows of 𝓜⁻¹ in depth-first positions, nv
+                                       //   apart (a model not numbered depth-first)
   } origin;
 };
 
