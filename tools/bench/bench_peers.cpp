@@ -9,6 +9,7 @@
 //   peer/com_jacobian/<robot>/<lib>     com_jacobian(q) against jacobianCenterOfMass(q)
 //   peer/centroidal_map/<robot>/<lib>   update_kinematics + centroidal_momentum_matrix against
 //                                       computeCentroidalMap(q)
+//   peer/minverse/<robot>/<lib>         update_kinematics + minverse against computeMinverse(q)
 // for the robots of kFrameRobots (their URDFs in the models directory, tools/bench/run.sh).  The peers are
 // plugins (peer.hpp) that CMake built when it found the library: MuJoCo always looked up,
 // Pinocchio and RBDL under -DSOADYN_PEERS_PREFIX.
@@ -251,8 +252,8 @@ struct FrameSetup {
 };
 
 // The task-space rows: one matrix from q, by soadyn and by a peer (peer.hpp says each's layout)
-enum TaskCall { kFrameJacobian, kComJacobian, kCentroidalMap };
-const char* const kTaskCall[] = {"frame_jacobian", "com_jacobian", "centroidal_map"};
+enum TaskCall { kFrameJacobian, kComJacobian, kCentroidalMap, kMinverse };
+const char* const kTaskCall[] = {"frame_jacobian", "com_jacobian", "centroidal_map", "minverse"};
 
 // soadyn's, from q alone, as the peers' calls: the frame's ancestors' frames then its Jacobian;
 // the frames then J_c from the subtrees' masses and first moments; the kinematics then A_G (frames.hpp)
@@ -261,6 +262,7 @@ void task_call(FrameSetup& s, TaskCall call) {
     case kFrameJacobian: frame_jacobian(s.model, s.data, s.q, s.frame, Reference::LocalWorldAligned, s.J); return;
     case kComJacobian: com_jacobian(s.model, s.data, s.q, s.J); return;
     case kCentroidalMap: update_kinematics(s.model, s.data, s.q); centroidal_momentum_matrix(s.model, s.data, s.J); return;
+    case kMinverse: update_kinematics(s.model, s.data, s.q); minverse(s.model, s.data, s.J); return;
   }
 }
 
@@ -278,9 +280,11 @@ void run_task(benchmark::State& st, const FrameRobot* robot, TaskCall call, cons
   if (!peer) return;
   const std::function<void()>& timed = call == kFrameJacobian ? peer->frame_jacobian
                                        : call == kComJacobian  ? peer->com_jacobian
+                                       : call == kMinverse     ? peer->minverse
                                                                : peer->centroidal_map;
   const std::function<std::vector<double>()>& out = call == kFrameJacobian ? peer->frame_jacobian_out
                                                     : call == kComJacobian  ? peer->com_jacobian_out
+                                                    : call == kMinverse     ? peer->minverse_out
                                                                             : peer->centroidal_map_out;
   if (!timed || !out) {
     st.SkipWithError((entry->name + ": no " + kTaskCall[call] + " call").c_str());
@@ -361,7 +365,7 @@ void register_peers() {
       std::fprintf(stderr, "task-space rows on %s left out: %s\n", r.name, e.what());
       continue;
     }
-    for (TaskCall call : {kFrameJacobian, kComJacobian, kCentroidalMap}) {
+    for (TaskCall call : {kFrameJacobian, kComJacobian, kCentroidalMap, kMinverse}) {
       const std::string base = std::string("peer/") + kTaskCall[call] + "/" + r.name + "/";
       benchmark::RegisterBenchmark((base + "soadyn").c_str(), run_task, &r, call, nullptr)->Arg(nv);
       for (const Entry& e : entries)

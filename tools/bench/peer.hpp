@@ -52,8 +52,9 @@ struct Peer {
   //                   LOCAL_WORLD_ALIGNED), 6 × nv, rows [ω; ṗ]
   //   com_jacobian    J_c, 3 × nv, ċ = J_c v
   //   centroidal_map  A_G, 6 × nv, h_G = A_G v about the centre of mass, rows [k_G; l]
-  std::function<void()> frame_jacobian, com_jacobian, centroidal_map;
-  std::function<std::vector<double>()> frame_jacobian_out, com_jacobian_out, centroidal_map_out;
+  //   minverse        𝓜⁻¹, nv × nv, rows and columns soadyn's v
+  std::function<void()> frame_jacobian, com_jacobian, centroidal_map, minverse;
+  std::function<std::vector<double>()> frame_jacobian_out, com_jacobian_out, centroidal_map_out, minverse_out;
 };
 
 // x in the problem's order, from a peer's own: r[k] = x[idx[k]] (any indexable vector)

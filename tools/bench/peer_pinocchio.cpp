@@ -11,6 +11,7 @@
 //                   frame's supporting joints), when the problem names a frame
 //   com_jacobian    jacobianCenterOfMass(q, false)
 //   centroidal_map  computeCentroidalMap(q)  (A_G, rows [l; k_G] there)
+//   minverse        computeMinverse(q)  (the upper triangle; mirrored after, untimed)
 #include "peer.hpp"
 
 #include <pinocchio/algorithm/aba.hpp>
@@ -95,6 +96,18 @@ struct Pinocchio : soadyn::bench::Peer {
     com_jacobian_out = [this] { return out(data.Jcom); };
     centroidal_map = [this] { pin::computeCentroidalMap(model, data, q); };
     centroidal_map_out = [this] { return out((Eigen::MatrixXd(6, model.nv) << data.Ag.bottomRows<3>(), data.Ag.topRows<3>()).finished()); };
+    minverse = [this] { pin::computeMinverse(model, data, q); };
+    // 𝓜⁻¹ in soadyn's v: with Pinocchio's v = T v_s, 𝓜_s⁻¹ = Tᵀ 𝓜⁻¹ T (T orthogonal); `out` applies T
+    // on the right, so twice, the second time to the transpose of the first's result
+    minverse_out = [this] {
+      Eigen::MatrixXd M = data.Minv;
+      M.triangularView<Eigen::StrictlyLower>() = M.transpose();
+      const std::vector<double> c = out(M);
+      Eigen::MatrixXd C(model.nv, model.nv);
+      for (int i = 0; i < model.nv; ++i)
+        for (int j = 0; j < model.nv; ++j) C(i, j) = c[size_t(i * model.nv + j)];
+      return out(C.transpose());
+    };
   }
   // A (rows in soadyn's order, columns Pinocchio's v) row-major with soadyn's columns: the free
   // flyer's from its local v to soadyn's inertial [ω; ṗ] (A [Rᵀ ṗ; Rᵀ ω] = A_s [ω; ṗ] gives
@@ -125,4 +138,4 @@ const char* soadyn_bench_peer_version() { return "Pinocchio " PINOCCHIO_VERSION 
 
 const char* soadyn_bench_peer_variants() { return "world"; }
 
-const char* soadyn_bench_peer_extra_calls() { return "frame_jacobian,com_jacobian,centroidal_map"; }
+const char* soadyn_bench_peer_extra_calls() { return "frame_jacobian,com_jacobian,centroidal_map,minverse"; }

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# soadyn's dynamics derivatives against Pinocchio (g++ in process, clang as a child executable) in
+# one run, with the derivative harness kept outside the repository (../shared/peers/derivs): q̈,
+# ∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = 𝓜⁻¹, τ, ∂τ/∂q, ∂τ/∂v from the same URDF and state, each library first
+# checked against the other (1e-9) and soadyn against central differences.
+#
+#   tools/bench/derivs_peers.sh [SOADYN_BUILD_DIR]    (default: build/ of this repository)
+#
+# Builds soadyn's CLI target in SOADYN_BUILD_DIR (a plain Release build when it is not configured
+# yet), builds the harness's two executables, writes the robots it times besides the harness's
+# chains (tools/bench/make_models.py's quadruped_18, fixed and free; tools/humanoid_urdf.py's
+# 50-DOF humanoid, fixed and free; tests/data/arm7.urdf) and saves the whole output.  Environment:
+#   PEERS_HARNESS       the harness (default: <repository>/../shared/peers)
+#   PEERS_PREFIX        Pinocchio built by g++ or clang (default /tmp/peerbuild/install)
+#   PEERS_CLANG_PREFIX  Pinocchio built by clang++ (default PEERS_PREFIX-clang; left out if absent)
+#   DERIVS_DIR          where the harness is built (default /tmp/derivs_peers)
+#   OUT                 the saved output (default DERIVS_DIR/derivs_peers.txt)
+#   ROUNDS              the harness's --rounds (default 3)
+# Exits 0 with a note when the harness or Pinocchio is missing (the peers are optional).
+set -euo pipefail
+repo=$(cd "$(dirname "$0")/../.." && pwd)
+build=$(realpath -m "${1:-$repo/build}")
+harness=${PEERS_HARNESS:-$repo/../shared/peers}
+prefix=${PEERS_PREFIX:-/tmp/peerbuild/install}
+clang_prefix=${PEERS_CLANG_PREFIX:-$prefix-clang}
+work=${DERIVS_DIR:-/tmp/derivs_peers}
+out=${OUT:-$work/derivs_peers.txt}
+
+if [[ ! -f $harness/derivs/CMakeLists.txt ]]; then
+  echo "derivs_peers: no harness at $harness (set PEERS_HARNESS to the directory holding derivs/); nothing measured"
+  exit 0
+fi
+if [[ ! -d $prefix/lib/cmake/pinocchio ]]; then
+  echo "derivs_peers: no Pinocchio at $prefix (PEERS_PREFIX; $harness/build_peers.sh builds it); nothing measured"
+  exit 0
+fi
+
+echo "== soadyn: $build"
+if [[ ! -f $build/CMakeCache.txt ]]; then
+  cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release
+fi
+cmake --build "$build" -j2 --target soadyn_cli
+
+echo "== harness: $harness/derivs"
+mkdir -p "$work"
+cmake -S "$harness/derivs" -B "$work/gcc" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=g++ \
+  -DSOADYN_BUILD_DIR="$build" -DSOADYN_SOURCE_DIR="$repo" -DPEERS_PREFIX="$prefix"
+cmake --build "$work/gcc" -j2
+child=()
+if [[ -d $clang_prefix/lib/cmake/pinocchio ]] && command -v clang++ >/dev/null; then
+  cmake -S "$harness/derivs" -B "$work/clang" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ \
+    -DDERIVS_PINOCCHIO_ONLY=ON -DPEERS_PREFIX="$clang_prefix"
+  cmake --build "$work/clang" -j2
+  child=(--child-exe "$work/clang/bench_derivs_pinocchio" --child-name pinocchio-clang)
+else
+  echo "derivs_peers: no Pinocchio built by clang++ at $clang_prefix: the pinocchio-clang column is left out"
+fi
+
+# the robots: the quadruped and the humanoid as URDF, fixed and free-floating (":free")
+models=$work/models
+mkdir -p "$models"
+/usr/bin/python3 "$repo/tools/bench/make_models.py" "$models" >/dev/null
+/usr/bin/python3 "$repo/tools/humanoid_urdf.py" -o "$models/humanoid.urdf" >/dev/null
+
+echo "== running (output saved to $out)"
+mkdir -p "$(dirname "$out")"
+cd "$harness"
+"$work/gcc/bench_derivs" --rounds "${ROUNDS:-3}" "${child[@]}" \
+  models/chain_8.urdf models/chain_32.urdf models/chain_64.urdf "$repo/tests/data/arm7.urdf" \
+  "$models/quadruped_18.urdf" "$models/quadruped_18.urdf:free" "$models/humanoid.urdf" "$models/humanoid.urdf:free" 2>&1 |
+  tee "$out"
