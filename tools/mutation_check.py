@@ -151,16 +151,17 @@ MUTATIONS = [
      "w.cross(hn) + u.cross(hf);", "w.cross(hn);",
      "the body-axes bias force loses u ×* f, the linear part of v ×* M v",
      gtest("test_bias_local", "*BodyAxesBias.*")),
-    (30, "fd-derivatives-solve-pivot", "src/ltdl.cpp",
-     "for (int k = 0; k < model.nv; ++k) Xt.col(k) /= H(k, k);", "for (int k = 1; k < model.nv; ++k) Xt.col(k) /= H(k, k);",
-     "∂q̈/∂q and ∂q̈/∂v forget the first pivot of 𝓜's factor",
+    (31, "fd-derivatives-subtree-sum", "src/forward_derivatives.cpp",
+     "for (int k = 0; k < nv; ++k) Pp[c * ld + k] += Pj[c * ld + k];",
+     "for (int k = 0; k < nv; ++k) Pp[c * ld + k] += 0.0 * Pj[c * ld + k];",
+     "∂q̈/∂q and ∂q̈/∂v lose a branch's subtree sum 𝒫 at its parent (another path's block)",
      gtest("test_derivatives", "RandomTrees/Derivatives.*")),
 ]
 
 
 # the mutants tools/test.sh runs in CI (each costs one recompiled file and one test)
 CI = {"local-mass-turned-product", "local-mass-column-turn", "local-bias-turn-back", "local-bias-gyroscopic",
-      "fd-derivatives-solve-pivot", "derivative-phi-term", "vjp-forgets-ancestor-rows",
+      "fd-derivatives-subtree-sum", "derivative-phi-term", "vjp-forgets-ancestor-rows",
       "regressor-transpose-not-carried", "sparse-route-solve"}
 
 

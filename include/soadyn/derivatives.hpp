@@ -21,7 +21,7 @@
 //
 // Forward dynamics: ∂q̈/∂x = 𝓜⁻¹ (∂τ_in/∂x − ∂ID/∂x |_q̈) at the q̈ of the state, without forming
 // ∂ID/∂x: 𝓜⁻¹ by the articulated-body recursion about the origin (minverse), then its products with
-// the ∂ID columns made of the sweeps' vectors directly, O(N²) on every tree (derivatives.cpp).
+// the ∂ID columns made of the sweeps' vectors directly, O(N²) on every tree (forward_derivatives.cpp).
 // ∂q̈/∂τ = 𝓜⁻¹ comes with them.
 #pragma once
 
