@@ -102,6 +102,67 @@ void add(SpatialInertia& to, const SpatialInertia& K) {
   to.I += K.I;
 }
 
+// The two steps of one-DOF joints (every kind alike, so one copy of each, called from each kind's
+// case of the sweeps), in 3-vector halves, which stay in registers: a 6-vector built from two
+// halves and read back whole waits on its stores.
+// Base to tip: S_i, v_i, a_i (μ = v_i, so a_i = a_p + S q̈ + q̇ v_i × S), Y_i, f_i, B_i
+[[gnu::noinline]] void one_dof_forward(const Model& model, const Data& data, const VecX& qd, const VecX& qdd,
+                                       DerivativeData& dd, int i) {
+  const int p = model.parent[i], vi = model.idx_v[i];
+  const Vec3 eta = data.eta.col(i);
+  const Vec3 sw = data.G.col(vi).head<3>(), su = Vec3(data.G.col(vi).tail<3>()) + eta.cross(sw);
+  dd.S.col(vi).head<3>() = sw;
+  dd.S.col(vi).tail<3>() = su;
+  const double q1 = qd(vi), q2 = qdd(vi);
+  Vec3 vw = sw * q1, vu = su * q1, aw = sw * q2, au = su * q2;
+  if (p >= 0) {
+    vw += dd.v.col(p).head<3>(), vu += dd.v.col(p).tail<3>();
+    aw += dd.a.col(p).head<3>(), au += dd.a.col(p).tail<3>();
+  } else {
+    au -= model.gravity;
+  }
+  aw += q1 * vw.cross(sw);
+  au += q1 * (vw.cross(su) + vu.cross(sw));
+  dd.v.col(i).head<3>() = vw, dd.v.col(i).tail<3>() = vu;
+  dd.a.col(i).head<3>() = aw, dd.a.col(i).tail<3>() = au;
+  SpatialInertia& Yi = dd.Y[i];  // M_i moved from η_i to the origin
+  Yi = SpatialInertia();
+  Yi.add_transformed(data.inertia[i], eta);
+  // k = Y_i v_i,  f_i = Y_i a_i + v_i ×* k
+  const Vec3 kn = Yi.I * vw + Yi.h.cross(vu), kf = Yi.m * vu - Yi.h.cross(vw);
+  dd.F.col(i).head<3>() = Yi.I * aw + Yi.h.cross(au) + vw.cross(kn) + vu.cross(kf);
+  dd.F.col(i).tail<3>() = Yi.m * au - Yi.h.cross(aw) + vw.cross(kf);
+  dd.B[i] = coriolis_block(Yi, vw, vu, kn, kf);
+}
+
+// Per column (ξ = [xw; xu]): ν = v_p, μ = v_j, no own term; κ, β, λ, φ, ψ, ρ
+[[gnu::noinline]] void one_dof_column(const Model& model, DerivativeData& dd, int j) {
+  const int p = model.parent[j], vj = model.idx_v[j];
+  const Vec3 xw = dd.S.col(vj).head<3>(), xu = dd.S.col(vj).tail<3>();
+  const Vec3 pw = p < 0 ? Vec3::Zero() : Vec3(dd.v.col(p).head<3>()), pu = p < 0 ? Vec3::Zero() : Vec3(dd.v.col(p).tail<3>());
+  const Vec3 vw = dd.v.col(j).head<3>(), vu = dd.v.col(j).tail<3>();
+  const Vec3 aw = dd.a.col(j).head<3>(), au = dd.a.col(j).tail<3>();
+  const Vec3 Fn = dd.F.col(j).head<3>(), Ff = dd.F.col(j).tail<3>();
+  // β = −ξ × ν,  κ = −ξ × a_j − β × v_j,  λ = ξ × (ν + μ),  φ = ξ ×* F_j
+  const Vec3 bw = -xw.cross(pw), bu = -(xw.cross(pu) + xu.cross(pw));
+  const Vec3 kw = -xw.cross(aw) - bw.cross(vw), ku = -(xw.cross(au) + xu.cross(aw)) - (bw.cross(vu) + bu.cross(vw));
+  const Vec3 sw = pw + vw, su = pu + vu;
+  const Vec3 lw = xw.cross(sw), lu = xw.cross(su) + xu.cross(sw);
+  const Vec3 phw = xw.cross(Fn) + xu.cross(Ff), phu = xw.cross(Ff);
+  // ψ = Y_j κ + B_j β + φ,  ρ = B_j ξ − Y_j λ   (Y [ω; u] = [I ω + h × u; m u − h × ω], B x = [T x_ω; −2 f × x_ω])
+  const SpatialInertia& Y = dd.Y[j];
+  const CoriolisBlock& B = dd.B[j];
+  dd.phi.col(vj).head<3>() = phw, dd.phi.col(vj).tail<3>() = phu;
+  dd.psi.col(vj).head<3>() = Y.I * kw + Y.h.cross(ku) + B.T * bw + phw;
+  dd.psi.col(vj).tail<3>() = Y.m * ku - Y.h.cross(kw) - 2.0 * B.f.cross(bw) + phu;
+  dd.rho.col(vj).head<3>() = B.T * xw - (Y.I * lw + Y.h.cross(lu));
+  dd.rho.col(vj).tail<3>() = -2.0 * B.f.cross(xw) - (Y.m * lu - Y.h.cross(lw));
+  auto cq = dd.colq.col(vj);
+  auto cv = dd.colv.col(vj);
+  cq.segment<3>(0) = kw, cq.segment<3>(3) = ku, cq.segment<3>(6) = bw;
+  cv.segment<3>(0) = -lw, cv.segment<3>(3) = -lu, cv.segment<3>(6) = xw;
+}
+
 }  // namespace
 
 namespace detail {
@@ -123,31 +184,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     constexpr int ni = J::nv;
     const Vec3 eta = data.eta.col(i);
     if constexpr (ni == 1) {
-      // one DOF, in 3-vector halves (which stay in registers; a 6-vector built from two halves and
-      // read back whole waits on its stores): μ = v_i, so a_i = a_p + S q̈ + q̇ v_i × S
-      const Vec3 sw = data.G.col(vi).head<3>(), su = Vec3(data.G.col(vi).tail<3>()) + eta.cross(sw);
-      dd.S.col(vi).head<3>() = sw;
-      dd.S.col(vi).tail<3>() = su;
-      const double q1 = qd(vi), q2 = qdd(vi);
-      Vec3 vw = sw * q1, vu = su * q1, aw = sw * q2, au = su * q2;
-      if (p >= 0) {
-        vw += dd.v.col(p).head<3>(), vu += dd.v.col(p).tail<3>();
-        aw += dd.a.col(p).head<3>(), au += dd.a.col(p).tail<3>();
-      } else {
-        au -= model.gravity;
-      }
-      aw += q1 * vw.cross(sw);
-      au += q1 * (vw.cross(su) + vu.cross(sw));
-      dd.v.col(i).head<3>() = vw, dd.v.col(i).tail<3>() = vu;
-      dd.a.col(i).head<3>() = aw, dd.a.col(i).tail<3>() = au;
-      SpatialInertia& Yi = dd.Y[i];  // M_i moved from η_i to the origin
-      Yi = SpatialInertia();
-      Yi.add_transformed(data.inertia[i], eta);
-      // k = Y_i v_i,  f_i = Y_i a_i + v_i ×* k
-      const Vec3 kn = Yi.I * vw + Yi.h.cross(vu), kf = Yi.m * vu - Yi.h.cross(vw);
-      dd.F.col(i).head<3>() = Yi.I * aw + Yi.h.cross(au) + vw.cross(kn) + vu.cross(kf);
-      dd.F.col(i).tail<3>() = Yi.m * au - Yi.h.cross(aw) + vw.cross(kf);
-      dd.B[i] = coriolis_block(Yi, vw, vu, kn, kf);
+      one_dof_forward(model, data, qd, qdd, dd, i);
       return;
     }
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
@@ -194,30 +231,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
     const int p = model.parent[j], vj = model.idx_v[j];
     constexpr int nj = J::nv;
     if constexpr (nj == 1) {
-      // one DOF, in 3-vector halves (ξ = [xw; xu]): ν = v_p, μ = v_j, no own term
-      const Vec3 xw = dd.S.col(vj).head<3>(), xu = dd.S.col(vj).tail<3>();
-      const Vec3 pw = p < 0 ? Vec3::Zero() : Vec3(dd.v.col(p).head<3>()), pu = p < 0 ? Vec3::Zero() : Vec3(dd.v.col(p).tail<3>());
-      const Vec3 vw = dd.v.col(j).head<3>(), vu = dd.v.col(j).tail<3>();
-      const Vec3 aw = dd.a.col(j).head<3>(), au = dd.a.col(j).tail<3>();
-      const Vec3 Fn = dd.F.col(j).head<3>(), Ff = dd.F.col(j).tail<3>();
-      // β = −ξ × ν,  κ = −ξ × a_j − β × v_j,  λ = ξ × (ν + μ),  φ = ξ ×* F_j
-      const Vec3 bw = -xw.cross(pw), bu = -(xw.cross(pu) + xu.cross(pw));
-      const Vec3 kw = -xw.cross(aw) - bw.cross(vw), ku = -(xw.cross(au) + xu.cross(aw)) - (bw.cross(vu) + bu.cross(vw));
-      const Vec3 sw = pw + vw, su = pu + vu;
-      const Vec3 lw = xw.cross(sw), lu = xw.cross(su) + xu.cross(sw);
-      const Vec3 phw = xw.cross(Fn) + xu.cross(Ff), phu = xw.cross(Ff);
-      // ψ = Y_j κ + B_j β + φ,  ρ = B_j ξ − Y_j λ   (Y [ω; u] = [I ω + h × u; m u − h × ω], B x = [T x_ω; −2 f × x_ω])
-      const SpatialInertia& Y = dd.Y[j];
-      const CoriolisBlock& B = dd.B[j];
-      dd.phi.col(vj).head<3>() = phw, dd.phi.col(vj).tail<3>() = phu;
-      dd.psi.col(vj).head<3>() = Y.I * kw + Y.h.cross(ku) + B.T * bw + phw;
-      dd.psi.col(vj).tail<3>() = Y.m * ku - Y.h.cross(kw) - 2.0 * B.f.cross(bw) + phu;
-      dd.rho.col(vj).head<3>() = B.T * xw - (Y.I * lw + Y.h.cross(lu));
-      dd.rho.col(vj).tail<3>() = -2.0 * B.f.cross(xw) - (Y.m * lu - Y.h.cross(lw));
-      auto cq = dd.colq.col(vj);
-      auto cv = dd.colv.col(vj);
-      cq.segment<3>(0) = kw, cq.segment<3>(3) = ku, cq.segment<3>(6) = bw;
-      cv.segment<3>(0) = -lw, cv.segment<3>(3) = -lu, cv.segment<3>(6) = xw;
+      one_dof_column(model, dd, j);
       return;
     }
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));

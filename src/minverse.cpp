@@ -79,27 +79,21 @@ void columns_of(const M& from, double (&to)[n][6]) {
     for (int c = 0; c < 6; ++c) to[a][c] = from(c, a);
 }
 
-}  // namespace
+// What both sweeps' steps read, and the step at body i for a joint of n DOFs (one copy per n:
+// every joint kind of n DOFs alike)
+struct Sweep {
+  const Model& model;
+  Data& data;
+  const Mat6X& S;
+  MatX& Minv;
+  bool depth_first;
+  Eigen::Index lz, lm, la;
+  int nv;
 
-void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv) {
-  const int N = model.nbodies, nv = model.nv;
-  auto& o = data.work.origin;
-  if (Minv.rows() != nv || Minv.cols() != nv) Minv.resize(nv, nv);
-  // the rows of 𝓜⁻¹ the first sweep does not write (k outside the subtree) start at zero
-  Minv.triangularView<Eigen::Lower>().setZero();
-  bool depth_first = true;
-  for (int x = 0; x < nv; ++x) depth_first = depth_first && model.dfs_dof[size_t(x)] == x;
-  for (int i = 0; i < N; ++i) {
-    SpatialInertia Y;  // M_i moved from η_i to the origin
-    Y.add_transformed(data.inertia[i], data.eta.col(i));
-    articulated_inertia::set_inertia(o.P[i], Y.I, Y.h, Y.m);
-  }
-  o.Z.setZero();
-  const Eigen::Index lz = o.Z.outerStride(), lm = Minv.outerStride(), la = o.A.outerStride();
   // tip to base
-  for (int i = N - 1; i >= 0; --i) visit_joint(model, i, [&](const auto& joint) {
-    using J = std::decay_t<decltype(joint)>;
-    constexpr int n = J::nv;
+  template <int n>
+  [[gnu::noinline]] void backward(int i) {
+    auto& o = data.work.origin;
     using MatN = Eigen::Matrix<double, n, n>;
     using Mat6N = Eigen::Matrix<double, 6, n>;
     const int vi = model.idx_v[i], p = model.parent[i];
@@ -133,10 +127,12 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
     else
       o.P[i].noalias() -= UD * U.transpose();
     o.P[p] += o.P[i];
-  });
-  // base to tip: q̈_i = 𝒟⁻¹ u − (U 𝒟⁻¹)ᵀ a_p,  a_i = a_p + S_i q̈_i, over k ≥ the first DOF of i
-  for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
-    constexpr int n = std::decay_t<decltype(joint)>::nv;
+  }
+
+  // base to tip
+  template <int n>
+  [[gnu::noinline]] void forward(int i) {
+    auto& o = data.work.origin;
     const int vi = model.idx_v[i], p = model.parent[i], rows = nv - vi;
     double ud[n][6], si[n][6];
     columns_of<n>(o.UD.middleCols<n>(vi), ud);
@@ -147,7 +143,31 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
       row_accelerations<n, true>(q, lm, nullptr, ai, la, ud, si, rows);
     else
       row_accelerations<n, false>(q, lm, o.A.data() + 6 * model.path[p] * la + vi, ai, la, ud, si, rows);
-  });
+  }
+};
+
+}  // namespace
+
+void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv) {
+  const int N = model.nbodies, nv = model.nv;
+  auto& o = data.work.origin;
+  if (Minv.rows() != nv || Minv.cols() != nv) Minv.resize(nv, nv);
+  // the rows of 𝓜⁻¹ the first sweep does not write (k outside the subtree) start at zero
+  Minv.triangularView<Eigen::Lower>().setZero();
+  bool depth_first = true;
+  for (int x = 0; x < nv; ++x) depth_first = depth_first && model.dfs_dof[size_t(x)] == x;
+  for (int i = 0; i < N; ++i) {
+    SpatialInertia Y;  // M_i moved from η_i to the origin
+    Y.add_transformed(data.inertia[i], data.eta.col(i));
+    articulated_inertia::set_inertia(o.P[i], Y.I, Y.h, Y.m);
+  }
+  o.Z.setZero();
+  Sweep sweep{model, data, S, Minv, depth_first, o.Z.outerStride(), Minv.outerStride(), o.A.outerStride(), nv};
+  // tip to base, then base to tip
+  for (int i = N - 1; i >= 0; --i)
+    visit_joint(model, i, [&](const auto& joint) { sweep.backward<std::decay_t<decltype(joint)>::nv>(i); });
+  for (int i = 0; i < N; ++i)
+    visit_joint(model, i, [&](const auto& joint) { sweep.forward<std::decay_t<decltype(joint)>::nv>(i); });
   // the upper triangle from the lower, in 8×8 tiles (a row of a column-major matrix read whole
   // touches a cache line per entry)
   constexpr int kTile = 8;
