@@ -8,7 +8,6 @@
 #include "derivative_sweeps.hpp"
 #include "minverse.hpp"
 
-#include <iterator>
 
 namespace soadyn {
 
@@ -96,25 +95,27 @@ void subtree_step(double* P, Eigen::Index ld, const double* m, double* x, double
 // carry; the same for v with colv, ρ.  𝒬 grows base to tip and 𝒫 tip to base, each held per path
 // (Model::path) and updated in place along it: O(nv) per DOF for each, O(N²) in all where the
 // product with ∂ID would be O(N³) on a chain.
-void minv_times_derivatives(const Model& model, DerivativeData& dd, const Inputs* inputs) {
-  const int N = model.nbodies, nv = model.nv;
-  const MatX& Mi = dd.Minv;
-  MatX &Xq = dd.dqdd_dq, &Xv = dd.dqdd_dv;
-  const Eigen::Index ld = dd.blocks.outerStride();
-  auto block = [&](int body) { return dd.blocks.data() + 9 * model.path[size_t(body)] * ld; };
-  const Eigen::Index lx = Mi.outerStride();
-  if (Xq.outerStride() != lx || Xv.outerStride() != lx) throw Error("forward_dynamics_derivatives: DerivativeData's sizes");
+// The two passes' steps at joint j, one copy per number of DOFs n (every joint kind of n DOFs alike)
+struct Products {
+  const Model& model;
+  DerivativeData& dd;
+  Eigen::Index ld, lx;
+  int nv;
+
+  double* block(int body) const { return dd.blocks.data() + 9 * model.path[size_t(body)] * ld; }
   // the coefficients of the joint's n DOFs
-  auto coefficients = [](const auto& from, int vj, auto& to) {
-    for (size_t a = 0; a < std::size(to); ++a)
-      for (size_t c = 0; c < std::size(to[0]); ++c) to[a][c] = from(Eigen::Index(c), vj + Eigen::Index(a));
-  };
+  template <int n, int C, class M>
+  static void coefficients(const M& from, int vj, double (&to)[n][C]) {
+    for (int a = 0; a < n; ++a)
+      for (int c = 0; c < C; ++c) to[a][c] = from(c, vj + a);
+  }
+
   // base to tip: X = −𝒬_j [ψ_c, ρ_c], then 𝒬 for the children: 𝒬_j + Σ_{r ∈ j} 𝓜⁻¹_r S_rᵀ
-  for (int j = 0; j < N; ++j) visit_joint(model, j, [&](const auto& joint) {
-    constexpr int n = std::decay_t<decltype(joint)>::nv;
+  template <int n>
+  [[gnu::noinline]] void ancestors(int j) {
     const int vj = model.idx_v[j], p = model.parent[j];
-    const double* m = Mi.col(vj).data();
-    double *x = Xq.col(vj).data(), *y = Xv.col(vj).data();
+    const double* m = dd.Minv.col(vj).data();
+    double *x = dd.dqdd_dq.col(vj).data(), *y = dd.dqdd_dv.col(vj).data();
     double S[n][6], psi[n][6], rho[n][6];
     coefficients(dd.S, vj, S);
     coefficients(dd.psi, vj, psi);
@@ -127,14 +128,15 @@ void minv_times_derivatives(const Model& model, DerivativeData& dd, const Inputs
     else
       dd.leaf[size_t(j)] ? ancestors_step<n, false, true>(Q, Qc, ld, m, x, y, lx, S, psi, rho, nv)
                          : ancestors_step<n, false, false>(Q, Qc, ld, m, x, y, lx, S, psi, rho, nv);
-  });
-  // tip to base: 𝒫_j = Σ_{r ∈ j} 𝓜⁻¹_r row_rᵀ + Σ_children 𝒫_c, then X −= 𝒫_j [colq_c, colv_c]
-  for (int j = N - 1; j >= 0; --j) visit_joint(model, j, [&](const auto& joint) {
-    using J = std::decay_t<decltype(joint)>;
-    constexpr int n = J::nv;
+  }
+
+  // tip to base: 𝒫_j = Σ_{r ∈ j} 𝓜⁻¹_r row_rᵀ + Σ_children 𝒫_c, then X −= 𝒫_j [colq_c, colv_c], and
+  // 𝒫_j into the parent's block when the parent is on another path
+  template <int n>
+  [[gnu::noinline]] void subtree(int j) {
     const int vj = model.idx_v[j], p = model.parent[j];
-    const double* m = Mi.col(vj).data();
-    double *x = Xq.col(vj).data(), *y = Xv.col(vj).data();
+    const double* m = dd.Minv.col(vj).data();
+    double *x = dd.dqdd_dq.col(vj).data(), *y = dd.dqdd_dv.col(vj).data();
     double row[n][9], cq[n][9], cv[n][9];
     coefficients(dd.row, vj, row);
     coefficients(dd.colq, vj, cq);
@@ -142,18 +144,34 @@ void minv_times_derivatives(const Model& model, DerivativeData& dd, const Inputs
     double* Pj = block(j);
     dd.leaf[size_t(j)] ? subtree_step<n, true>(Pj, ld, m, x, y, lx, row, cq, cv, nv)
                        : subtree_step<n, false>(Pj, ld, m, x, y, lx, row, cq, cv, nv);
-    // the joint's own rows that column c does not carry: S_r·φ_c
-    if constexpr (n > 1)
-      for (int a = 0; a < n; ++a)
-        for (int r = 0; r < n; ++r)
-          if (!J::carries(a, r)) Xq.col(vj + a) -= dd.S.col(vj + r).dot(dd.phi.col(vj + a)) * Mi.col(vj + r);
     if (p >= 0 && model.path[size_t(p)] != model.path[size_t(j)]) {
       double* Pp = block(p);
       for (int c = 0; c < 9; ++c)
         for (int k = 0; k < nv; ++k) Pp[c * ld + k] += Pj[c * ld + k];
     }
+  }
+};
+
+void minv_times_derivatives(const Model& model, DerivativeData& dd, const Inputs* inputs) {
+  const int N = model.nbodies;
+  const Eigen::Index lx = dd.Minv.outerStride();
+  if (dd.dqdd_dq.outerStride() != lx || dd.dqdd_dv.outerStride() != lx)
+    throw Error("forward_dynamics_derivatives: DerivativeData's sizes");
+  Products products{model, dd, dd.blocks.outerStride(), lx, model.nv};
+  for (int j = 0; j < N; ++j)
+    visit_joint(model, j, [&](const auto& joint) { products.ancestors<std::decay_t<decltype(joint)>::nv>(j); });
+  for (int j = N - 1; j >= 0; --j) visit_joint(model, j, [&](const auto& joint) {
+    using J = std::decay_t<decltype(joint)>;
+    products.subtree<J::nv>(j);
+    // the joint's own rows that column c does not carry: S_r·φ_c
+    if constexpr (J::nv > 1) {
+      const int vj = model.idx_v[j];
+      for (int a = 0; a < J::nv; ++a)
+        for (int r = 0; r < J::nv; ++r)
+          if (!J::carries(a, r)) dd.dqdd_dq.col(vj + a) -= dd.S.col(vj + r).dot(dd.phi.col(vj + a)) * dd.Minv.col(vj + r);
+    }
   });
-  if (inputs) inputs->add_derivatives_times(Mi, Xq, Xv);
+  if (inputs) inputs->add_derivatives_times(dd.Minv, dd.dqdd_dq, dd.dqdd_dv);
 }
 
 }  // namespace
