@@ -138,7 +138,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
  private:
   // ṡ_k = A s_k + b_k for all k at once: A s by the analytic derivatives without forming A
   // (System::jacobian_times: ∂q̈/∂q along the tangent chained to the coordinates, ∂q̈/∂v, ∂q̇/∂(q, v),
-  // the springs' and dampers' terms, the quadratures' rows; one LᵀDL solve for all columns) and
+  // the springs' and dampers' terms, the quadratures' rows; one product with ∂q̈/∂q, ∂q̈/∂v for all columns) and
   // b_k = [0; ∂q̈/∂π_k; 0] = [0; −(𝓜⁻¹ Y)_k; 0]
   static int sensitivity_rhs(int ns, double t, N_Vector y, N_Vector, N_Vector* yS, N_Vector* ySdot, void* user,
                              N_Vector, N_Vector) {
@@ -153,12 +153,11 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       sys.linearized_times(self->S_, self->Sd_);
       const int np = self->plan_.np();
       if (np > 0 && linearization != self->b_linearization_) {
-        // [kin], [vel], q̈ and 𝓜's LᵀDL factor (data.work.factor.L) at (q, v) are linearize's; ∂q̈/∂π = −𝓜⁻¹ Y solved
-        // for the plan's bodies' columns only
-        regressor(m, sys.data, sys.data.qdd, self->plan_.bodies, self->b_);
-        self->b_t_rows_ = -self->b_.transpose();
-        ltdl_solve_transposed(m, sys.data, self->b_t_rows_);
-        self->b_ = self->b_t_rows_.transpose();
+        // [kin], [vel], q̈ and 𝓜⁻¹ (derivatives->Minv) at (q, v) are linearize's; ∂q̈/∂π = −𝓜⁻¹ Y for the
+        // plan's bodies' columns only
+        regressor(m, sys.data, sys.data.qdd, self->plan_.bodies, self->Y_);
+        self->b_.noalias() = sys.derivatives->Minv * self->Y_;
+        self->b_ = -self->b_;
         self->b_linearization_ = linearization;
       }
       if (np > 0) self->Sd_.block(m.nq, self->plan_.nx0(), m.nv, np) += self->b_;
@@ -175,7 +174,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
   int ns_;
   MatX S_, S0_, Sd_;
   MatX b_;                 // b_k = ∂q̈/∂π_k = −𝓜⁻¹ Y_k at System::linearize's linearization b_linearization_
-  MatX b_t_rows_;          // b_ transposed while 𝓜⁻¹ is applied
+  MatX Y_;                 // the regressor's columns of the plan's bodies at that linearization
   long b_linearization_ = 0;  // 0: none yet (linearize numbers from 1)
   VectorArrayPtr yS_;
   cvode_impl::VectorPtr y_out_;

@@ -117,13 +117,8 @@ long System::linearize(double t, const double* y) {
   const int n = size();
   if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
   at_state(t, y);
-  forward_dynamics(model, data, tau, FdMethod::Sparse);  // q̈ and 𝓜's LᵀDL factor
-  DerivativeData& dd = *derivatives;
-  inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
-  // K_x = ∂τ_in/∂x − ∂ID/∂x, in the forward derivatives' blocks (unused here otherwise)
-  dd.dqdd_dq = -dd.dtau_dq;
-  dd.dqdd_dv = -dd.dtau_dv;
-  inputs.add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
+  // q̈, ∂q̈/∂q (along the tangent), ∂q̈/∂v with the inputs' terms, and 𝓜⁻¹: O(N²)
+  forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
   lin_t_ = t;
   lin_y_ = Eigen::Map<const VecX>(y, n);
   linearized_ = true;
@@ -161,12 +156,9 @@ void System::linearized_times(const MatX& S, MatX& out) {
     joint_tangent_map(type, q.data() + iq, Ti);
     delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
   }
-  // ∂q̈/∂y S = 𝓜⁻¹ (K_q δ + K_v s_v), every column in one LᵀDL solve, held transposed
-  if (rows_t.rows() != ns || rows_t.cols() != nv) rows_t.resize(ns, nv);
-  rows_t.noalias() = delta.transpose() * dd.dqdd_dq.transpose();
-  rows_t.noalias() += S.middleRows(nq, nv).transpose() * dd.dqdd_dv.transpose();
-  ltdl_solve_transposed(model, data, rows_t);
-  out.middleRows(nq, nv) = rows_t.transpose();
+  // ∂q̈/∂y S = ∂q̈/∂q δ + ∂q̈/∂v s_v
+  out.middleRows(nq, nv).noalias() = dd.dqdd_dq * delta;
+  out.middleRows(nq, nv).noalias() += dd.dqdd_dv * S.middleRows(nq, nv);
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
   if (nquad > 0) {
     inputs.power_derivatives(t, v, dP, dD);

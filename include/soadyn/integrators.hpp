@@ -72,10 +72,10 @@ class System {
   // prepare_jacobian) allocates the derivatives' workspace, 7 nv² doubles: a run that never asks for
   // ∂f/∂y (CVODE Adams, the explicit methods) keeps memory linear in nv beyond Data's 𝓜
   void jacobian(double t, const double* y, Eigen::Ref<MatX> J);
-  // out = (∂f/∂y) S for the columns of S (size() rows) without forming ∂f/∂y: the inverse-dynamics
-  // derivatives, then ∂q̈/∂y S = 𝓜⁻¹ ((∂τ/∂q − ∂ID/∂q) T S_q + (∂τ/∂v − ∂ID/∂v) S_v) by one LᵀDL solve
-  // for all columns at once (forward sensitivities, sensitivity.hpp).  Leaves data at (q, v): [kin], [vel],
-  // data.qdd and 𝓜's factor data.work.factor.L.  Allocates out and its scratch on the first call of a width.
+  // out = (∂f/∂y) S for the columns of S (size() rows) without forming ∂f/∂y: the forward-dynamics
+  // derivatives (O(N²), derivatives.hpp), then ∂q̈/∂y S = ∂q̈/∂q T S_q + ∂q̈/∂v S_v for all columns at
+  // once (forward sensitivities, sensitivity.hpp).  Leaves data at (q, v): [kin], [vel], data.qdd, and
+  // 𝓜⁻¹ in derivatives->Minv.  Allocates out and its scratch on the first call of a width.
   void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
   // jacobian_times in two halves, for many products at one state (CVODES' staggered corrector
   // iterates on the sensitivities at the state it has converged): linearize leaves data and the
@@ -113,7 +113,6 @@ class System {
   VecX y_work, f0, f1;             // jacobian_dq's scratch
   MatX T;                          // one joint's tangent map (≤ 6×7)
   MatX Tq, Tv, delta;              // jacobian_times: one joint's ∂q̇/∂q, ∂q̇/∂v; S's q rows on the tangent
-  MatX rows_t;                     // jacobian_times: ∂q̈/∂y S transposed, while 𝓜⁻¹ is applied
   VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
   long rhs_evals = 0;
   long jac_evals = 0;
