@@ -67,28 +67,4 @@ void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x) {
     });
 }
 
-namespace {
-
-// y −= h x over n contiguous entries (x and y distinct columns)
-inline void axpy_minus(double* __restrict y, const double* __restrict x, double h, Eigen::Index n) {
-  for (Eigen::Index r = 0; r < n; ++r) y[r] -= h * x[r];
-}
-
-}  // namespace
-
-// the same for the rows of Xt, each one right-hand side (Xt ← Xt 𝓜⁻¹): each of the factor's row
-// operations is one contiguous axpy over all of them
-void ltdl_solve_transposed(const Model& model, const Data& data, Eigen::Ref<MatX> Xt) {
-  const auto& H = data.work.factor.L;
-  const auto& lambda = model.dof_parent;
-  const Eigen::Index n = Xt.rows(), ld = Xt.outerStride();
-  double* X = Xt.data();
-  // Lᵀ y = x (tip to base), D w = y, L x = w (base to tip)
-  for (int k = model.nv - 1; k >= 0; --k)
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) axpy_minus(X + i * ld, X + k * ld, H(k, i), n);
-  for (int k = 0; k < model.nv; ++k) Xt.col(k) /= H(k, k);
-  for (int k = 0; k < model.nv; ++k)
-    for (int i = lambda[k]; i >= 0; i = lambda[i]) axpy_minus(X + k * ld, X + i * ld, H(k, i), n);
-}
-
 }  // namespace soadyn

@@ -83,9 +83,6 @@ MatX articulated_solve_work(const Model& model);
 // The tree-sparse route in two parts, for reuse: factor data.M into data.work.factor.L, then solve in place.
 void ltdl_factor(const Model& model, Data& data);
 void ltdl_solve(const Model& model, const Data& data, Eigen::Ref<VecX> x);
-// Many right-hand sides at once, held as the rows of Xt (k × nv): Xt ← Xt 𝓜⁻¹ (= (𝓜⁻¹ Xtᵀ)ᵀ, 𝓜
-// symmetric), each of the factor's row operations one axpy over all k of them.
-void ltdl_solve_transposed(const Model& model, const Data& data, Eigen::Ref<MatX> Xt);
 
 // T = ½ Σ (ω_iᵀ I_i ω_i + m_i ṙ_iᵀ ṙ_i)   (eq. 9).  Needs [vel].
 double kinetic_energy(const Model& model, const Data& data);
