@@ -18,11 +18,7 @@
 #   ROUNDS              the harness's --rounds (default 3)
 # Exits 0 with a note when the harness or Pinocchio is missing (the peers are optional).
 set -euo pipefail
-repo=$(cd "$(dirname "$0")/../.." && pwd)
-build=$(realpath -m "${1:-$repo/build}")
-harness=${PEERS_HARNESS:-$repo/../shared/peers}
-prefix=${PEERS_PREFIX:-/tmp/peerbuild/install}
-clang_prefix=${PEERS_CLANG_PREFIX:-$prefix-clang}
+source "$(dirname "$0")/peers_env.sh"  # repo, build, harness, prefix, clang_prefix, build_soadyn_cli
 work=${DERIVS_DIR:-/tmp/derivs_peers}
 out=${OUT:-$work/derivs_peers.txt}
 
@@ -35,11 +31,7 @@ if [[ ! -d $prefix/lib/cmake/pinocchio ]]; then
   exit 0
 fi
 
-echo "== soadyn: $build"
-if [[ ! -f $build/CMakeCache.txt ]]; then
-  cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release
-fi
-cmake --build "$build" -j2 --target soadyn_cli
+build_soadyn_cli
 
 echo "== harness: $harness/derivs"
 mkdir -p "$work"

@@ -19,11 +19,7 @@
 # Exits 0 with a note when the harness, the peers or MuJoCo (installed when running as root) are
 # missing (the peers are optional).
 set -euo pipefail
-repo=$(cd "$(dirname "$0")/../.." && pwd)
-build=$(realpath -m "${1:-$repo/build}")
-harness=${PEERS_HARNESS:-$repo/../shared/peers}
-prefix=${PEERS_PREFIX:-/tmp/peerbuild/install}
-clang_prefix=${PEERS_CLANG_PREFIX:-$prefix-clang}
+source "$(dirname "$0")/peers_env.sh"  # repo, build, harness, prefix, clang_prefix, build_soadyn_cli
 work=${SAME_RUN_DIR:-/tmp/same_run}
 out=${OUT:-$work/same_run.txt}
 
@@ -45,11 +41,7 @@ if ! dpkg-query -W -f='${Status}' libmujoco-dev 2>/dev/null | grep -q "install o
   apt-get update && DEBIAN_FRONTEND=noninteractive apt-get install -y libmujoco-dev
 fi
 
-echo "== soadyn: $build"
-if [[ ! -f $build/CMakeCache.txt ]]; then
-  cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release
-fi
-cmake --build "$build" -j2 --target soadyn_cli
+build_soadyn_cli
 
 # The harness is copied, and the copy measured: its soadyn adapter names the O(N) route
 # FdMethod::ON, which soadyn's API calls FdMethod::ArticulatedBody.
