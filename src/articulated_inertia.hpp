@@ -1,7 +1,9 @@
-// The two steps of the articulated-body factorization on one body's 6×6 articulated inertia P
-// (about its joint point, in world axes), shared by the articulated-body route (articulated.cpp)
-// and Model::build's check that 𝓜 is positive definite (model_checks.cpp).  Pure algebra on P:
-// no Model, no Data, so the model layer may use it without reaching up to the dynamics.
+// The steps of the articulated-body factorization on one body's 6×6 articulated inertia P (in world
+// axes): setting it from a body's inertia, projecting out a joint column, moving it to the parent,
+// and inverting a joint's 𝒟.  Shared by the articulated-body route (articulated.cpp), 𝓜⁻¹ about
+// the origin (minverse.cpp) and Model::build's check that 𝓜 is positive definite
+// (model_checks.cpp).  Pure algebra on P: no Model, no Data, so the model layer may use it without
+// reaching up to the dynamics.
 #pragma once
 
 #include "soadyn/types.hpp"

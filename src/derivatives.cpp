@@ -180,13 +180,13 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
   // base to tip: S_i, v_i = v_p + S_i q̇_i, a_i = a_p + S_i q̈_i + Σ_c q̇_c μ_c × S_c, f_i, B_i
   for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
     using J = std::decay_t<decltype(joint)>;
-    const int p = model.parent[i], vi = model.idx_v[i];
     constexpr int ni = J::nv;
-    const Vec3 eta = data.eta.col(i);
     if constexpr (ni == 1) {
       one_dof_forward(model, data, qd, qdd, dd, i);
       return;
     }
+    const int p = model.parent[i], vi = model.idx_v[i];
+    const Vec3 eta = data.eta.col(i);
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
     Vec6 vel = vp, acc = p < 0 ? gravity_acc : Vec6(dd.a.col(p));
     for (int c = vi; c < vi + ni; ++c) {
@@ -228,12 +228,12 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
   // per column c of joint j: κ_c, β_c, λ_c, φ_c, ψ_c, ρ_c
   for (int j = 0; j < N; ++j) visit_joint(model, j, [&](const auto& joint) {
     using J = std::decay_t<decltype(joint)>;
-    const int p = model.parent[j], vj = model.idx_v[j];
     constexpr int nj = J::nv;
     if constexpr (nj == 1) {
       one_dof_column(model, dd, j);
       return;
     }
+    const int p = model.parent[j], vj = model.idx_v[j];
     const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
     const Vec6 vel = dd.v.col(j), acc = dd.a.col(j), Fj = dd.F.col(j);
     for (int k = 0; k < nj; ++k) {

@@ -8,7 +8,6 @@
 #include "derivative_sweeps.hpp"
 #include "minverse.hpp"
 
-
 namespace soadyn {
 
 namespace {
@@ -87,14 +86,6 @@ void subtree_step(double* P, Eigen::Index ld, const double* m, double* x, double
   }
 }
 
-// X_q = 𝓜⁻¹ (∂τ_in/∂q − ∂ID/∂q) and X_v the same for v, from 𝓜⁻¹ and the sweeps' vectors.  With
-// ∂ID(r, c) = row_r·colq_c for r ⪰ j (j: the joint of c) and S_r·ψ_c for r ≺ j (derivatives.cpp's
-// header), column c of 𝓜⁻¹ ∂ID is
-//   𝒫_j colq_c + 𝒬_j ψ_c,   𝒫_j = Σ_{r ⪰ j} 𝓜⁻¹_r row_rᵀ (nv×9),   𝒬_j = Σ_{r ≺ j} 𝓜⁻¹_r S_rᵀ (nv×6)
-// (𝓜⁻¹_r: column r), plus, for a joint of several DOFs, 𝓜⁻¹_r S_r·φ_c for its r that c does not
-// carry; the same for v with colv, ρ.  𝒬 grows base to tip and 𝒫 tip to base, each held per path
-// (Model::path) and updated in place along it: O(nv) per DOF for each, O(N²) in all where the
-// product with ∂ID would be O(N³) on a chain.
 // The two passes' steps at joint j, one copy per number of DOFs n (every joint kind of n DOFs alike)
 struct Products {
   const Model& model;
@@ -152,6 +143,14 @@ struct Products {
   }
 };
 
+// X_q = 𝓜⁻¹ (∂τ_in/∂q − ∂ID/∂q) and X_v the same for v, from 𝓜⁻¹ and the sweeps' vectors.  With
+// ∂ID(r, c) = row_r·colq_c for r ⪰ j (j: the joint of c) and S_r·ψ_c for r ≺ j (derivatives.cpp's
+// header), column c of 𝓜⁻¹ ∂ID is
+//   𝒫_j colq_c + 𝒬_j ψ_c,   𝒫_j = Σ_{r ⪰ j} 𝓜⁻¹_r row_rᵀ (nv×9),   𝒬_j = Σ_{r ≺ j} 𝓜⁻¹_r S_rᵀ (nv×6)
+// (𝓜⁻¹_r: column r), plus, for a joint of several DOFs, 𝓜⁻¹_r S_r·φ_c for its r that c does not
+// carry; the same for v with colv, ρ.  𝒬 grows base to tip and 𝒫 tip to base, each held per path
+// (Model::path) and updated in place along it: O(nv) per DOF for each, O(N²) in all where the
+// product with ∂ID would be O(N³) on a chain.
 void minv_times_derivatives(const Model& model, DerivativeData& dd, const Inputs* inputs) {
   const int N = model.nbodies;
   const Eigen::Index lx = dd.Minv.outerStride();
