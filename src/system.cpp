@@ -76,14 +76,13 @@ void System::rhs(double t, const double* y, double* ydot) {
 
 void System::prepare_jacobian() {
   if (!derivatives) derivatives.emplace(model);
+  if (lin_y_.size() != size()) lin_y_ = VecX::Zero(size());  // linearize's record of its state
 }
 
 void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
-  prepare_jacobian();
   ++jac_evals;
   const int nq = model.nq, nv = model.nv;
-  at_state(t, y);
-  forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
+  linearize(t, y);  // q̈, ∂q̈/∂q, ∂q̈/∂v (kept when (t, y) is the last linearization's)
   const MatX& dq = derivatives->dqdd_dq;
   J.setZero();
   for (int i = 0; i < model.nbodies; ++i) {
