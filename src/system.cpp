@@ -136,6 +136,28 @@ void System::linearized_times(const MatX& S, MatX& out) {
   const Eigen::Index ns = S.cols();
   DerivativeData& dd = *derivatives;
   if (out.rows() != size() || out.cols() != ns) out.resize(size(), ns);
+  const auto s_v = S.middleRows(nq, nv);
+  if (!model.has_quaternions()) {
+    // q = the tangent coordinates and q̇ = v: ∂q̈/∂y S = ∂q̈/∂q S_q + ∂q̈/∂v S_v, and the q rows are S_v
+    out.topRows(nq) = s_v;
+    out.middleRows(nq, nv).noalias() = dd.dqdd_dq * S.topRows(nq);
+    out.middleRows(nq, nv).noalias() += dd.dqdd_dv * s_v;
+  } else {
+    linearized_tangent_times(S, out);
+  }
+  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
+  if (nquad > 0) {
+    inputs.power_derivatives(t, v, dP, dD);
+    if (control_work && controlled) dP += control;
+    out.row(nq + nv).noalias() = dP.transpose() * s_v;
+    out.row(nq + nv + 1).noalias() = dD.transpose() * s_v;
+  }
+}
+
+void System::linearized_tangent_times(const MatX& S, MatX& out) {
+  const int nq = model.nq, nv = model.nv;
+  const Eigen::Index ns = S.cols();
+  const DerivativeData& dd = *derivatives;
   if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns);
   // q̇(q, v) joint by joint, and S's q rows moved onto the tangent: δ = T(q) s_q
   for (int i = 0; i < model.nbodies; ++i) {
@@ -158,13 +180,6 @@ void System::linearized_times(const MatX& S, MatX& out) {
   // ∂q̈/∂y S = ∂q̈/∂q δ + ∂q̈/∂v s_v
   out.middleRows(nq, nv).noalias() = dd.dqdd_dq * delta;
   out.middleRows(nq, nv).noalias() += dd.dqdd_dv * S.middleRows(nq, nv);
-  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
-  if (nquad > 0) {
-    inputs.power_derivatives(t, v, dP, dD);
-    if (control_work && controlled) dP += control;
-    out.row(nq + nv).noalias() = dP.transpose() * S.middleRows(nq, nv);
-    out.row(nq + nv + 1).noalias() = dD.transpose() * S.middleRows(nq, nv);
-  }
 }
 
 void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {

@@ -118,6 +118,8 @@ class System {
   long jac_evals = 0;
 
  private:
+  // linearized_times' rows q̇ and q̈ when a joint holds a quaternion: S's q rows moved onto the tangent
+  void linearized_tangent_times(const MatX& S, MatX& out);
   bool linearized_ = false;        // linearize's state (lin_t_, lin_y_) is still data's
   long linearizations_ = 0;        // how many linearize has made: the current one's number
   double lin_t_ = 0.0;
