@@ -35,6 +35,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
         nb_(sys.model.nq + sys.model.nv),
         y0q_(y0.head(sys.model.nq)) {
     const Model& m = sys.model;
+    solve_work_ = articulated_solve_work(m);
     q_ = VecX::Zero(m.nq);
     v_ = VecX::Zero(m.nv);
     tau_ = VecX::Zero(m.nv);
@@ -179,7 +180,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     }
   }
 
-  // at (t, y): q̈, 𝓜 factored (data_.L) and the derivative sweeps, kept while (t, y) stays (Newton's iterations, the parameter
+  // at (t, y): q̈ with the articulated-body factor and the derivative sweeps, kept while (t, y) stays (Newton's iterations, the parameter
   // quadrature); then μ = 𝓜⁻¹ λ_v.  The adjoint's own Data: CVODES re-runs the forward problem between checkpoints, through
   // the System's
   void solve_at(double t, const double* y, const double* lam) {
@@ -190,14 +191,14 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       update_kinematics(m, data_, q_);
       update_velocities(m, data_, v_);
       sys_.inputs.evaluate(t, q_, v_, tau_);
-      forward_dynamics(m, data_, tau_, FdMethod::Sparse);
+      forward_dynamics(m, data_, tau_, FdMethod::ArticulatedBody);  // q̈ and the articulated-body factor
       inverse_dynamics_derivative_sweeps(m, data_, v_, data_.qdd, dd_);
       have_point_ = true;
       t_point_ = t;
       y_point_ = Eigen::Map<const VecX>(y, nb_);
     }
     mu_ = Eigen::Map<const VecX>(lam + m.nq, m.nv);
-    ltdl_solve(m, data_, mu_);
+    articulated_solve(m, data_, Eigen::Map<MatX>(mu_.data(), m.nv, 1), solve_work_);
   }
 
   // f_B = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ, (∂f/∂y)ᵀ λ by the vector–Jacobian product of the header comment
@@ -287,6 +288,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
   int which_ = -1;
   VecX q_, v_, tau_, mu_, g_, dq_, dv_, ytmu_;
   MatX J_;
+  MatX solve_work_;  // articulated_solve's
   bool have_point_ = false;
   double t_point_ = 0.0;
   VecX y_point_;

@@ -11,6 +11,8 @@
 #include "soadyn/algorithms.hpp"
 #include "soadyn/operators.hpp"
 
+#include "row_blocks.hpp"
+
 #include <algorithm>
 
 namespace soadyn {
@@ -19,17 +21,17 @@ namespace {
 
 using Stride = Eigen::OuterStride<>;
 
-// right-hand sides per pass: a column of a body's block is two AVX-512 registers (measured against
-// 4 and 8: the fastest on chains of 16 and more bodies)
-constexpr int kRows = 16;
+// right-hand sides per pass (row_blocks.hpp): 16, a column of a body's block two AVX-512 registers
+// (measured against 4 and 8: the fastest on chains of 16 and more bodies); fewer for a last group
+constexpr int kRows = detail::kMaxRows;
 
 // the K right-hand sides held as the rows of x (column stride ld) solved in place; w: the K×6
 // blocks of N bodies
 template <int K>
 void solve_rows(const Model& model, const Data& data, double* x, Eigen::Index ld, double* w) {
   using Col = Eigen::Matrix<double, K, 1>;
-  using Block = Eigen::Matrix<double, K, 6>;
-  using Cols = Eigen::Matrix<double, K, Eigen::Dynamic, 0, K, 6>;
+  using Block = detail::RowBlock<K, 6>;
+  using Cols = detail::RowBlock<K, Eigen::Dynamic, 6>;
   const int N = model.nbodies;
   const DOperator D{data.d};
   std::fill(w, w + 6 * K * N, 0.0);
@@ -89,14 +91,16 @@ void articulated_solve(const Model& model, const Data& data, Eigen::Ref<MatX> X,
                 std::to_string(6 * K) + " × " + std::to_string(N + (nv + 5) / 6) + " (articulated_solve_work); got " +
                 std::to_string(X.rows()) + " rows and " + std::to_string(work.rows()) + " × " + std::to_string(work.cols()));
   // K columns of X at a time, turned into the K rows of `rows` (after the bodies' blocks): each
-  // DOF's K entries contiguous; a last, narrower group zero-padded
-  Eigen::Map<Eigen::Matrix<double, K, Eigen::Dynamic>> rows(work.data() + 6 * K * N, K, nv);
+  // DOF's K entries contiguous; a last, narrower group in 4, 8 or 12 rows, zero-padded
   for (Eigen::Index c0 = 0; c0 < X.cols(); c0 += K) {
     const Eigen::Index n = std::min<Eigen::Index>(K, X.cols() - c0);
-    if (n < K) rows.setZero();
-    rows.topRows(n) = X.middleCols(c0, n).transpose();
-    solve_rows<K>(model, data, rows.data(), K, work.data());
-    X.middleCols(c0, n) = rows.topRows(n).transpose();
+    detail::with_rows(int(n), [&]<int R>() {
+      Eigen::Map<detail::RowBlock<R, Eigen::Dynamic>> rows(work.data() + 6 * K * N, R, nv);
+      if (n < R) rows.setZero();
+      rows.topRows(n) = X.middleCols(c0, n).transpose();
+      solve_rows<R>(model, data, rows.data(), R, work.data());
+      X.middleCols(c0, n) = rows.topRows(n).transpose();
+    });
   }
 }
 

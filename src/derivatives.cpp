@@ -48,7 +48,8 @@ DerivativeData::DerivativeData(const Model& m)
       leaf(size_t(m.nbodies), 1),
       w(Mat6X::Zero(6, m.nbodies)),
       T1(Mat6X::Zero(6, m.nbodies)),
-      T2(Mat3X::Zero(3, m.nbodies)) {
+      T2(Mat3X::Zero(3, m.nbodies)),
+      directions(MatX::Zero(kDirections, 15 * m.nbodies + 3 * m.nv)) {
   for (int i = 0; i < m.nbodies; ++i)
     if (m.parent[i] >= 0) leaf[size_t(m.parent[i])] = 0;
 }
@@ -339,43 +340,6 @@ void inverse_dynamics_derivatives(const Model& model, const Data& data, const Ve
 void inverse_dynamics_derivative_sweeps(const Model& model, const Data& data, const VecX& qd, const VecX& qdd,
                                         DerivativeData& dd) {
   detail::derivative_sweeps(model, data, qd, qdd, dd, "inverse_dynamics_derivative_sweeps");
-}
-
-void inverse_dynamics_derivatives_transpose_times(const Model& model, DerivativeData& dd, const VecX& mu,
-                                                  Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv) {
-  if (mu.size() != model.nv || gq.size() != model.nv || gv.size() != model.nv || dd.S.cols() != model.nv)
-    throw Error("inverse_dynamics_derivatives_transpose_times: mu, gq, gv: expected " + std::to_string(model.nv) +
-                " entries each, for a DerivativeData of this model");
-  const int N = model.nbodies;
-  // The fill's sums, column by column, with μ folded in: s_i = Σ_{r ∈ i} S_r μ_r; the ancestors' rows
-  // give w_p·ψ_c (w_i = w_p + s_i, base to tip), body i's and its descendants' rows [T1; T2]·col with
-  // T1_i = Σ_{k ⪰ i} Y_k s_k and T2_i = Σ_{k ⪰ i} (B_kᵀ s_k)_ω (Y, B composite; tip to base; Bᵀ s has no lower half), so that
-  //   (∂τ/∂q)ᵀμ at c = T1_j·κ_c + T2_j·β_c + w_p·ψ_c + Σ_{r ∈ j, c does not carry r} μ_r S_r·φ_c
-  //   (∂τ/∂q̇)ᵀμ at c = −T1_j·λ_c + T2_j·S_c + w_p·ρ_c
-  Mat6X &w = dd.w, &T1 = dd.T1;
-  Mat3X &T2 = dd.T2;
-  for (int i = 0; i < N; ++i) {
-    const int p = model.parent[i], vi = model.idx_v[i], ni = model.nv_i[i];
-    const Vec6 si = dd.S.middleCols(vi, ni) * mu.segment(vi, ni);
-    w.col(i) = (p < 0 ? Vec6::Zero() : Vec6(w.col(p))) + si;
-    T1.col(i) = dd.Y[i] * si;
-    T2.col(i) = dd.B[i].transpose_times(si);
-  }
-  for (int i = N - 1; i >= 0; --i)
-    if (const int p = model.parent[i]; p >= 0) T1.col(p) += T1.col(i), T2.col(p) += T2.col(i);
-  for (int j = 0; j < N; ++j) visit_joint(model, j, [&](const auto& joint) {
-    using J = std::decay_t<decltype(joint)>;
-    const int p = model.parent[j], vj = model.idx_v[j], nj = model.nv_i[j];
-    const Vec6 wp = p < 0 ? Vec6::Zero() : Vec6(w.col(p));
-    for (int k = 0; k < nj; ++k) {
-      const int c = vj + k;
-      double q = T1.col(j).dot(dd.colq.col(c).head<6>()) + T2.col(j).dot(dd.colq.col(c).tail<3>()) + wp.dot(dd.psi.col(c));
-      for (int r = 0; r < nj; ++r)
-        if (!J::carries(k, r)) q += mu(vj + r) * dd.S.col(vj + r).dot(dd.phi.col(c));
-      gq(c) = q;
-      gv(c) = T1.col(j).dot(dd.colv.col(c).head<6>()) + T2.col(j).dot(dd.colv.col(c).tail<3>()) + wp.dot(dd.rho.col(c));
-    }
-  });
 }
 
 }  // namespace soadyn

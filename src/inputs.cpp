@@ -52,6 +52,13 @@ void Inputs::add_derivatives_times(const MatX& A, Eigen::Ref<MatX> dq, Eigen::Re
   for (const auto& d : dampers) dv.col(d.dof) -= d.damping * A.col(d.dof);
 }
 
+void Inputs::add_derivatives_directions(const Eigen::Ref<const MatX>& xq, const Eigen::Ref<const MatX>& xv,
+                                        Eigen::Ref<MatX> out) const {
+  // the diagonal of add_derivatives, each entry scaling a row of the directions
+  for (const auto& s : springs) out.row(s.dof) -= s.stiffness * xq.row(s.dof);
+  for (const auto& d : dampers) out.row(d.dof) -= d.damping * xv.row(d.dof);
+}
+
 void Inputs::add_derivatives_transpose_times(const VecX& mu, Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv) const {
   // the diagonal of add_derivatives: (∂τ/∂q)ᵀ μ and (∂τ/∂v)ᵀ μ
   for (const auto& s : springs) gq(s.dof) -= s.stiffness * mu(s.dof);

@@ -11,6 +11,7 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 namespace soadyn {
@@ -73,7 +74,10 @@ struct Runner {
   void run(System& sys, const std::function<void()>& poll) {
     const long K = Y0.cols(), T = rs.steps;
     const int nq = model.nq, nv = model.nv, ny = nq + nv;
-    VecX y(sys.size()), previous(nv);
+    VecX y(sys.size()), previous(nv), qe(nq), ve(nv);
+    // the energies' own Data: the System's holds what rhs and linearize evaluated (System::holds_rhs_at)
+    std::optional<Data> energy_data;
+    if (energies.size() > 0) energy_data.emplace(model);
     sys.controlled = controls || control;
     for (;;) {
       const long k = next.fetch_add(1);
@@ -99,14 +103,13 @@ struct Runner {
           integrator->advance(t_out, t, y);
           if (t < t_out) break;  // stopped before a step
           states.col(k * T + s) = y.head(ny);
-          if (energies.size() > 0) {
-            const VecX& q = sys.q;
-            sys.q = y.head(nq);
-            sys.v = y.segment(nq, nv);
-            update_kinematics(model, sys.data, q);
-            update_velocities(model, sys.data, sys.v);
-            energies(s, k) = kinetic_energy(model, sys.data) + potential_energy(model, sys.data) +
-                             sys.inputs.spring_energy(q);
+          if (energy_data) {
+            qe = y.head(nq);
+            ve = y.segment(nq, nv);
+            update_kinematics(model, *energy_data, qe);
+            update_velocities(model, *energy_data, ve);
+            energies(s, k) = kinetic_energy(model, *energy_data) + potential_energy(model, *energy_data) +
+                             sys.inputs.spring_energy(qe);
           }
         }
         if (s == T) {

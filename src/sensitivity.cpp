@@ -49,7 +49,6 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     sys.prepare_jacobian();
     S_ = MatX::Zero(n, ns_);
     Sd_ = MatX::Zero(n, ns_);
-    if (plan.np() > 0) b_ = MatX::Zero(nv, plan.np());
     // s(0): a tangent increment of q₀ moves the coordinates by P δ; one of v₀ moves v; π moves nothing
     if (plan.initial_state) {
       S_.block(0, 0, nq, nv) = tangent_to_coordinates(m, y0.head(nq));
@@ -136,10 +135,9 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
   }
 
  private:
-  // ṡ_k = A s_k + b_k for all k at once: A s by the analytic derivatives without forming A
-  // (System::jacobian_times: ∂q̈/∂q along the tangent chained to the coordinates, ∂q̈/∂v, ∂q̇/∂(q, v),
-  // the springs' and dampers' terms, the quadratures' rows; one product with ∂q̈/∂q, ∂q̈/∂v for all columns) and
-  // b_k = [0; ∂q̈/∂π_k; 0] = [0; −(𝓜⁻¹ Y)_k; 0]
+  // ṡ_k = A s_k + b_k for all k at once, A = ∂f/∂y and b_k = [0; ∂q̈/∂π_k; 0] = [0; −𝓜⁻¹ Y_k; 0]
+  // never formed (System::linearize and linearized_times: the products O(N) per column, −Y_k added as
+  // a generalized force before 𝓜⁻¹ is applied; Y the regressor's columns of the plan's bodies)
   static int sensitivity_rhs(int ns, double t, N_Vector y, N_Vector, N_Vector* yS, N_Vector* ySdot, void* user,
                              N_Vector, N_Vector) {
     auto* self = static_cast<CvodeSensitivity*>(static_cast<Cvode*>(user));
@@ -147,20 +145,17 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       System& sys = self->sys_;
       const Model& m = sys.model;
       for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
-      // the staggered corrector calls again at the state it has converged: the derivatives and
-      // b_k are then still those of the last call (System::linearize), and only A s_k is new
+      // the staggered corrector calls again at the state it has converged: the sweeps and Y are then
+      // still those of the last call, and only the products are new
       const long linearization = sys.linearize(t, N_VGetArrayPointer(y));
-      sys.linearized_times(self->S_, self->Sd_);
-      const int np = self->plan_.np();
-      if (np > 0 && linearization != self->b_linearization_) {
-        // [kin], [vel], q̈ and 𝓜⁻¹ (derivatives->Minv) at (q, v) are linearize's; ∂q̈/∂π = −𝓜⁻¹ Y for the
-        // plan's bodies' columns only
+      const bool parameters = self->plan_.np() > 0;
+      if (parameters && linearization != self->y_linearization_) {
+        // at the linearization's q̈ (sys.data; the regressor writes τ, A, F, not q̈ or the factor)
         regressor(m, sys.data, sys.data.qdd, self->plan_.bodies, self->Y_);
-        self->b_.noalias() = sys.derivatives->Minv * self->Y_;
-        self->b_ = -self->b_;
-        self->b_linearization_ = linearization;
+        self->Y_ = -self->Y_;
+        self->y_linearization_ = linearization;
       }
-      if (np > 0) self->Sd_.block(m.nq, self->plan_.nx0(), m.nv, np) += self->b_;
+      sys.linearized_times(self->S_, self->Sd_, parameters ? &self->Y_ : nullptr);
       if (!self->Sd_.allFinite()) return 1;  // recoverable: CVODES retries with a smaller step
       for (int k = 0; k < ns; ++k) map(ySdot[k]) = self->Sd_.col(k);
       return 0;
@@ -173,9 +168,8 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
   SensitivityPlan plan_;
   int ns_;
   MatX S_, S0_, Sd_;
-  MatX b_;                 // b_k = ∂q̈/∂π_k = −𝓜⁻¹ Y_k at System::linearize's linearization b_linearization_
-  MatX Y_;                 // the regressor's columns of the plan's bodies at that linearization
-  long b_linearization_ = 0;  // 0: none yet (linearize numbers from 1)
+  MatX Y_;                    // −Y: the regressor's columns of the plan's bodies, negated, at linearization y_linearization_
+  long y_linearization_ = 0;  // 0: none yet (linearize numbers from 1)
   VectorArrayPtr yS_;
   cvode_impl::VectorPtr y_out_;
   cvode_impl::NonlinSolPtr nls_sens_;

@@ -32,7 +32,8 @@ System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
       Tq(MatX::Zero(7, 7)),
       Tv(MatX::Zero(7, 6)),
       dP(m.nv),
-      dD(m.nv) {}
+      dD(m.nv),
+      eval_y_(VecX::Zero(m.nq + m.nv + nquad)) {}
 
 VecX System::state(const VecX& q0, const VecX& v0) const {
   VecX y = VecX::Zero(size());
@@ -43,6 +44,7 @@ VecX System::state(const VecX& q0, const VecX& v0) const {
 
 void System::at_state(double t, const double* y) {
   linearized_ = false;  // data is about to hold another evaluation
+  evaluated_ = false;
   q = Eigen::Map<const VecX>(y, model.nq);
   v = Eigen::Map<const VecX>(y + model.nq, model.nv);
   update_kinematics(model, data, q);
@@ -72,17 +74,28 @@ void System::rhs(double t, const double* y, double* ydot) {
     ydot[model.nq + model.nv] = p.inputs + controller;
     ydot[model.nq + model.nv + 1] = p.dissipated;
   }
+  evaluated_ = true;
+  eval_t_ = t;
+  eval_y_ = Eigen::Map<const VecX>(y, size());
+}
+
+bool System::holds_rhs_at(double t, const double* y) const {
+  return evaluated_ && t == eval_t_ && Eigen::Map<const VecX>(y, size()) == eval_y_;
 }
 
 void System::prepare_jacobian() {
   if (!derivatives) derivatives.emplace(model);
   if (lin_y_.size() != size()) lin_y_ = VecX::Zero(size());  // linearize's record of its state
+  if (solve_work.size() == 0) solve_work = articulated_solve_work(model);
 }
 
 void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   ++jac_evals;
   const int nq = model.nq, nv = model.nv;
-  linearize(t, y);  // q̈, ∂q̈/∂q, ∂q̈/∂v (kept when (t, y) is the last linearization's)
+  prepare_jacobian();
+  at_state(t, y);
+  // q̈, ∂q̈/∂q (along the tangent), ∂q̈/∂v with the inputs' terms, and 𝓜⁻¹: O(N²)
+  forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
   const MatX& dq = derivatives->dqdd_dq;
   J.setZero();
   for (int i = 0; i < model.nbodies; ++i) {
@@ -115,9 +128,15 @@ long System::linearize(double t, const double* y) {
   prepare_jacobian();
   const int n = size();
   if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
-  at_state(t, y);
-  // q̈, ∂q̈/∂q (along the tangent), ∂q̈/∂v with the inputs' terms, and 𝓜⁻¹: O(N²)
-  forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
+  // [kin], [vel], τ, q̈ and the articulated-body factor: rhs's when it has just evaluated this very
+  // (t, y) by that route without limits (CVODES evaluates f at the state it has converged before
+  // the sensitivities' corrector), else evaluated here
+  if (!(method == FdMethod::ArticulatedBody && !limits && holds_rhs_at(t, y))) {
+    at_state(t, y);
+    forward_dynamics(model, data, tau, FdMethod::ArticulatedBody);
+  }
+  // the sweeps ∂ID/∂x is made of, at that q̈: O(N)
+  inverse_dynamics_derivative_sweeps(model, data, v, data.qdd, *derivatives);
   lin_t_ = t;
   lin_y_ = Eigen::Map<const VecX>(y, n);
   linearized_ = true;
@@ -129,22 +148,30 @@ void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out)
   linearized_times(S, out);
 }
 
-void System::linearized_times(const MatX& S, MatX& out) {
+void System::linearized_times(const MatX& S, MatX& out, const MatX* forces) {
   if (!linearized_) throw Error("System::linearized_times: no state linearized since the last evaluation");
   const double t = lin_t_;
   const int nq = model.nq, nv = model.nv;
   const Eigen::Index ns = S.cols();
-  DerivativeData& dd = *derivatives;
+  if (forces && (forces->rows() != nv || forces->cols() > ns))
+    throw Error("System::linearized_times: forces: expected " + std::to_string(nv) + " rows and at most as many columns as S");
   if (out.rows() != size() || out.cols() != ns) out.resize(size(), ns);
+  if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns), W.resize(nv, ns);
   const auto s_v = S.middleRows(nq, nv);
-  if (!model.has_quaternions()) {
-    // q = the tangent coordinates and q̇ = v: ∂q̈/∂y S = ∂q̈/∂q S_q + ∂q̈/∂v S_v, and the q rows are S_v
+  // q̇'s rows, and S's q rows on the tangent: δ = T(q) s_q (q itself when no joint holds a quaternion)
+  if (!model.has_quaternions())
     out.topRows(nq) = s_v;
-    out.middleRows(nq, nv).noalias() = dd.dqdd_dq * S.topRows(nq);
-    out.middleRows(nq, nv).noalias() += dd.dqdd_dv * s_v;
-  } else {
-    linearized_tangent_times(S, out);
-  }
+  else
+    linearized_tangent_rows(S, out);
+  const auto dq = model.has_quaternions() ? Eigen::Ref<const MatX>(delta) : Eigen::Ref<const MatX>(S.topRows(nq));
+  // q̈'s rows: 𝓜⁻¹ ((∂τ_in/∂q − ∂ID/∂q) δ + (∂τ_in/∂v − ∂ID/∂v) s_v + F): the products O(N) per
+  // column, then 𝓜⁻¹ by the articulated-body factor, O(N) per column
+  inverse_dynamics_derivatives_times(model, *derivatives, dq, s_v, W);
+  W = -W;
+  inputs.add_derivatives_directions(dq, s_v, W);
+  if (forces) W.rightCols(forces->cols()) += *forces;
+  articulated_solve(model, data, W, solve_work);
+  out.middleRows(nq, nv) = W;
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
   if (nquad > 0) {
     inputs.power_derivatives(t, v, dP, dD);
@@ -154,12 +181,9 @@ void System::linearized_times(const MatX& S, MatX& out) {
   }
 }
 
-void System::linearized_tangent_times(const MatX& S, MatX& out) {
-  const int nq = model.nq, nv = model.nv;
-  const Eigen::Index ns = S.cols();
-  const DerivativeData& dd = *derivatives;
-  if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns);
-  // q̇(q, v) joint by joint, and S's q rows moved onto the tangent: δ = T(q) s_q
+void System::linearized_tangent_rows(const MatX& S, MatX& out) {
+  const int nq = model.nq;
+  // q̇(q, v) joint by joint, and δ = T(q) s_q
   for (int i = 0; i < model.nbodies; ++i) {
     const JointType type = model.joint_type[i];
     const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
@@ -177,9 +201,6 @@ void System::linearized_tangent_times(const MatX& S, MatX& out) {
     joint_tangent_map(type, q.data() + iq, Ti);
     delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
   }
-  // ∂q̈/∂y S = ∂q̈/∂q δ + ∂q̈/∂v s_v
-  out.middleRows(nq, nv).noalias() = dd.dqdd_dq * delta;
-  out.middleRows(nq, nv).noalias() += dd.dqdd_dv * S.middleRows(nq, nv);
 }
 
 void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {

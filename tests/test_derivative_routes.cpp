@@ -31,7 +31,8 @@ VecX qdd_at(const Model& m, Data& d, const VecX& q, const VecX& v, const VecX& t
 
 class DerivativeRoutes : public ::testing::TestWithParam<TreeCase> {};
 
-// 𝓜 X = B for numbers of right-hand sides that are and are not multiples of those solved at once
+// 𝓜 X = B for numbers of right-hand sides that are and are not multiples of those solved at once:
+// one (a one-row pass), 3 and 10 (four and twelve rows, padded), 16, and 29 (16, then 16 padded)
 TEST_P(DerivativeRoutes, ArticulatedSolveInvertsTheMassMatrix) {
   const TreeCase& c = GetParam();
   Rng rng(17 + c.options.n);
@@ -42,7 +43,7 @@ TEST_P(DerivativeRoutes, ArticulatedSolveInvertsTheMassMatrix) {
   forward_dynamics(model, data, random_v(rng, model), FdMethod::ArticulatedBody);  // the factor
   mass_matrix(model, data);
   MatX work = articulated_solve_work(model);
-  for (const int rows : {1, 8, 16, 29}) {
+  for (const int rows : {1, 3, 8, 10, 16, 29}) {
     MatX B(model.nv, rows);
     for (auto& b : B.reshaped()) b = rng.uniform();
     MatX X = B;

@@ -125,6 +125,30 @@ TEST_P(Derivatives, TransposeTimesVectorEqualsTheMatrices) {
   }
 }
 
+// the products with many directions at once against the matrices: 19 columns (16 rows, then 3 in
+// four rows, zero-padded), 10 (twelve rows) and one (one row)
+TEST_P(Derivatives, TimesDirectionsEqualsTheMatrices) {
+  const Case& c = GetParam();
+  for (int seed = 0; seed < 3; ++seed) {
+    Rng rng(107 * seed + 7 * c.options.n);
+    const Model model = random_model(rng, c.options);
+    Data data(model);
+    DerivativeData full(model), jvp(model);
+    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
+    update_kinematics(model, data, q);
+    inverse_dynamics_derivatives(model, data, v, qdd, full);
+    inverse_dynamics_derivative_sweeps(model, data, v, qdd, jvp);
+    for (const int k : {DerivativeData::kDirections + 3, 10, 1}) {
+      MatX xq(model.nv, k), xv(model.nv, k), out(model.nv, k);
+      for (int j = 0; j < k; ++j) xq.col(j) = random_v(rng, model), xv.col(j) = random_v(rng, model);
+      inverse_dynamics_derivatives_times(model, jvp, xq, xv, out);
+      const MatX want = full.dtau_dq * xq + full.dtau_dv * xv;
+      EXPECT_TRUE(near_rel(out, want, 1e-12)) << c.name << " seed " << seed << ": ∂τ/∂q xq + ∂τ/∂v xv, " << k << " columns";
+      EXPECT_GT(want.cwiseAbs().maxCoeff(), 1e-2);
+    }
+  }
+}
+
 TEST_P(Derivatives, ForwardDynamicsAgainstCentralDifferencesWithInputs) {
   const Case& c = GetParam();
   for (int seed = 0; seed < 3; ++seed) {

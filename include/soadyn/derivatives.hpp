@@ -89,6 +89,10 @@ struct DerivativeData {
   std::vector<char> leaf;           // body i has no child
   Mat6X w, T1;                      // 6×N: the vector products' sums (…_transpose_times)
   Mat3X T2;                         // 3×N: the same for the top half of Bᵀ (its bottom half is zero)
+  // inverse_dynamics_derivatives_times: its directions go kDirections at a time, as rows; its
+  // per-body blocks (9 + 6 columns of kDirections rows each) and the rows of xq, xv and out
+  static constexpr int kDirections = 16;  // row_blocks.hpp's kMaxRows
+  MatX directions;                  // kDirections × (15 N + 3 nv)
 };
 
 // ∂τ/∂q and ∂τ/∂v of τ = 𝓜(q) q̈ + bias(q, v) at (q, v, q̈), q̈ held fixed.  Needs [kin] at q; v and
@@ -104,6 +108,12 @@ void inverse_dynamics_derivative_sweeps(const Model& model, const Data& data, co
                                         DerivativeData& dd);
 void inverse_dynamics_derivatives_transpose_times(const Model& model, DerivativeData& dd, const VecX& mu,
                                                   Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv);
+// out = (∂τ/∂q) xq + (∂τ/∂v) xv for the columns of xq and xv (nv × k each; out nv × k), after the
+// same sweeps, without the matrices: per column one O(N) base-to-tip and one tip-to-base sum in place
+// of the O(N·depth) fill, kDirections columns at a time (derivative_products.cpp).  The forward
+// sensitivities' products (sensitivity.hpp).
+void inverse_dynamics_derivatives_times(const Model& model, DerivativeData& dd, const Eigen::Ref<const MatX>& xq,
+                                        const Eigen::Ref<const MatX>& xv, Eigen::Ref<MatX> out);
 
 // ∂q̈/∂q and ∂q̈/∂v of q̈ = 𝓜⁻¹ (τ − bias) at (q, v), where τ is the generalized force at this state
 // and `inputs` (may be null) says how it changes with q and v (springs, dampers).  Needs [kin] and

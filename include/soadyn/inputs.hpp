@@ -74,6 +74,9 @@ struct Inputs {
   void add_derivatives(Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const;
   // dq += A ∂τ/∂q and dv += A ∂τ/∂v for an nv×nv A (forward_dynamics_derivatives' 𝓜⁻¹): column by column
   void add_derivatives_times(const MatX& A, Eigen::Ref<MatX> dq, Eigen::Ref<MatX> dv) const;
+  // out += (∂τ/∂q) xq + (∂τ/∂v) xv for directions as columns (nv × k each; the forward sensitivities')
+  void add_derivatives_directions(const Eigen::Ref<const MatX>& xq, const Eigen::Ref<const MatX>& xv,
+                                  Eigen::Ref<MatX> out) const;
   // gq += (∂τ/∂q)ᵀ μ and gv += (∂τ/∂v)ᵀ μ, the same derivatives as vector products (the adjoint's)
   void add_derivatives_transpose_times(const VecX& mu, Eigen::Ref<VecX> gq, Eigen::Ref<VecX> gv) const;
   // ∂P/∂v and ∂D/∂v of power(t, v) (the quadratures' rates; neither depends on q): nv each

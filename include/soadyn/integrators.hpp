@@ -66,24 +66,32 @@ class System {
   // q, v and [kin], [vel] at y, and τ: the inputs', the held control's and the feedback controller's
   // (rhs, jacobian and jacobian_times begin with it)
   void at_state(double t, const double* y);
+  // whether data holds rhs's evaluation at exactly (t, y), nothing evaluated since: [kin], [vel], τ,
+  // q̈ and the factor of `method` (the forward sensitivities start from it at the state CVODES has
+  // just converged, sensitivity.cpp)
+  bool holds_rhs_at(double t, const double* y) const;
   // ∂f/∂y (size()×size()) by the analytic derivatives: ∂q̈/∂q along the tangent, chained to the
   // coordinates y holds (joint_tangent_map), ∂q̈/∂v, and the Jacobian of q̇(q, v) (joint_qdot_jacobian);
   // the inputs' springs and dampers included.  Counts evaluations.  The first call (or
   // prepare_jacobian) allocates the derivatives' workspace, 7 nv² doubles: a run that never asks for
   // ∂f/∂y (CVODE Adams, the explicit methods) keeps memory linear in nv beyond Data's 𝓜
   void jacobian(double t, const double* y, Eigen::Ref<MatX> J);
-  // out = (∂f/∂y) S for the columns of S (size() rows) without forming ∂f/∂y: the forward-dynamics
-  // derivatives (O(N²), derivatives.hpp), then ∂q̈/∂y S = ∂q̈/∂q T S_q + ∂q̈/∂v S_v for all columns at
-  // once (forward sensitivities, sensitivity.hpp).  Leaves data at (q, v): [kin], [vel], data.qdd, and
-  // 𝓜⁻¹ in derivatives->Minv.  Allocates out and its scratch on the first call of a width.
+  // out = (∂f/∂y) S for the columns of S (size() rows) without forming ∂f/∂y: the q̇ rows joint by
+  // joint, and q̈'s = 𝓜⁻¹ ((∂τ_in/∂q − ∂ID/∂q) T S_q + (∂τ_in/∂v − ∂ID/∂v) S_v) by the inverse-dynamics
+  // derivatives' products (O(N) per column after O(N) sweeps, derivatives.hpp) and the articulated-body
+  // factor (O(N) per column, articulated_solve); springs and dampers included (forward sensitivities,
+  // sensitivity.hpp).  Allocates out and its scratch on the first call of a width.
   void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
   // jacobian_times in two halves, for many products at one state (CVODES' staggered corrector
-  // iterates on the sensitivities at the state it has converged): linearize leaves data and the
-  // derivatives at (t, y), doing nothing when they already hold for this very (t, y) (no evaluation
-  // since), and returns the number of that linearization (a new number for each one it makes, so
-  // that a caller keeping more at the state knows when to redo it); linearized_times applies them to S
+  // iterates on the sensitivities at the state it has converged): linearize leaves data (q̈ and the
+  // articulated-body factor; τ, A, F free for the caller) and the sweeps at (t, y), doing nothing when
+  // they already hold for this very (t, y) (no evaluation since), and starting from rhs's evaluation
+  // when it has just made one there; it returns the number of that linearization (a new number for
+  // each one it makes, so that a caller keeping more at the state knows when to redo it).
+  // linearized_times applies it to S; with `forces` (nv × m, m ≤ S's columns), the last m columns
+  // also move along τ by them: their q̈ rows gain ∂q̈/∂τ F = 𝓜⁻¹ F (∂q̈/∂π = −𝓜⁻¹ Y, sensitivity.cpp)
   long linearize(double t, const double* y);
-  void linearized_times(const MatX& S, MatX& out);
+  void linearized_times(const MatX& S, MatX& out, const MatX* forces = nullptr);
   void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
   void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
@@ -112,14 +120,18 @@ class System {
   JointLimits* limits = nullptr;
   VecX y_work, f0, f1;             // jacobian_dq's scratch
   MatX T;                          // one joint's tangent map (≤ 6×7)
-  MatX Tq, Tv, delta;              // jacobian_times: one joint's ∂q̇/∂q, ∂q̇/∂v; S's q rows on the tangent
+  MatX Tq, Tv, delta, W;           // jacobian_times: one joint's ∂q̇/∂q, ∂q̇/∂v; S's q rows on the tangent; the forces
+  MatX solve_work;                 // articulated_solve's (prepare_jacobian)
   VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
   long rhs_evals = 0;
   long jac_evals = 0;
 
  private:
-  // linearized_times' rows q̇ and q̈ when a joint holds a quaternion: S's q rows moved onto the tangent
-  void linearized_tangent_times(const MatX& S, MatX& out);
+  // linearized_times' q̇ rows and δ = T(q) S_q when a joint holds a quaternion
+  void linearized_tangent_rows(const MatX& S, MatX& out);
+  bool evaluated_ = false;         // rhs's state (eval_t_, eval_y_) is still data's
+  double eval_t_ = 0.0;
+  VecX eval_y_;
   bool linearized_ = false;        // linearize's state (lin_t_, lin_y_) is still data's
   long linearizations_ = 0;        // how many linearize has made: the current one's number
   double lin_t_ = 0.0;

@@ -29,9 +29,14 @@ void read_vector(const Model& model, const Data& data, const char* where, const 
     const auto* p = py::detail::array_proxy(h.ptr());
     const auto* descr = py::detail::array_descriptor_proxy(p->descr);
     if (p->nd == 1 && descr->type_num == py::detail::npy_api::NPY_DOUBLE_ && descr->byteorder != '>') {
-      data.check(model, where, what, p->dimensions[0], expected);
+      // the checks of Data::check written out, so that the call is made only to throw
+      if (p->dimensions[0] != expected || data.G.cols() != model.nv || int(data.R.size()) != model.nbodies)
+        data.check(model, where, what, p->dimensions[0], expected);
       const char* src = p->data;
-      for (int k = 0; k < expected; ++k, src += p->strides[0]) std::memcpy(&out(k), src, sizeof(double));
+      if (p->strides[0] == sizeof(double))
+        std::memcpy(out.data(), src, sizeof(double) * size_t(expected));
+      else
+        for (int k = 0; k < expected; ++k, src += p->strides[0]) std::memcpy(&out(k), src, sizeof(double));
       check_finite(where, what, out.head(expected));
       return;
     }
@@ -145,7 +150,7 @@ PyData::PyData(const Model& model)
 }
 
 DerivativeData& PyData::derivative_data(const Model& model) {
-  check(model, "derivatives");
+  if (nv != model.nv || nbodies != model.nbodies) check(model, "derivatives");  // throws
   if (derivatives) return *derivatives;
   auto dd = std::make_shared<DerivativeData>(model);
   auto* keep = new std::shared_ptr<DerivativeData>(dd);
