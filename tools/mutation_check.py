@@ -121,10 +121,18 @@ MUTATIONS = [
      "Gi = b.lu.solve(Jqv);", "Gi = Jqv;",
      "BDF's structured Newton solve forgets P⁻¹ = (I − γ ∂q̇/∂q)⁻¹ on a quaternion's rows (issue 14)",
      gtest("test_newton_solver", "NewtonSolver.*")),
-    (36, "vjp-forgets-ancestor-rows", "src/derivatives.cpp",
+    (36, "vjp-forgets-ancestor-rows", "src/derivative_products.cpp",
      "+ wp.dot(dd.psi.col(c));", ";",
      "(∂τ/∂q)ᵀμ without the ancestors' rows w_p·ψ_c (issue 36)",
      gtest("test_derivatives", "RandomTrees/Derivatives.TransposeTimes*")),
+    (36, "jvp-forgets-subtree-sums", "src/derivative_products.cpp",
+     "for (int j = 0; j < 6; ++j) o += In(Zi + K * j) * dd.S(j, r);", "",
+     "(∂τ/∂q) x + (∂τ/∂v) y without the subtree's columns Z_i·S_r (issue 36: the forward sensitivities' products)",
+     gtest("test_derivatives", "RandomTrees/Derivatives.TimesDirections*")),
+    (36, "sensitivity-parameter-force-sign", "src/sensitivity.cpp",
+     "self->Y_ = -self->Y_;", "self->Y_ = 1.0 * self->Y_;",
+     "∂q̈/∂π = +𝓜⁻¹ Y in the forward sensitivities' right-hand side (issue 36)",
+     gtest("test_sensitivity", "*")),
     (36, "regressor-transpose-not-carried", "src/regressor.cpp",
      "wi.tail<3>() += w.col(p).tail<3>() + om.cross(Vec3(data.d.col(i)));", "wi.tail<3>() += w.col(p).tail<3>();",
      "Yᵀμ carries w to the child's joint point without ω × d (issue 36)",
@@ -161,7 +169,7 @@ MUTATIONS = [
 
 # the mutants tools/test.sh runs in CI (each costs one recompiled file and one test)
 CI = {"local-mass-turned-product", "local-mass-column-turn", "local-bias-turn-back", "local-bias-gyroscopic",
-      "fd-derivatives-subtree-sum", "derivative-phi-term", "vjp-forgets-ancestor-rows",
+      "fd-derivatives-subtree-sum", "derivative-phi-term", "vjp-forgets-ancestor-rows", "jvp-forgets-subtree-sums",
       "regressor-transpose-not-carried", "sparse-route-solve"}
 
 
