@@ -74,6 +74,17 @@ TEST(SystemJacobian, AgainstCentralDifferencesOfTheRightHandSide) {
     for (Eigen::Index c = 0; c < S.size(); ++c) S.data()[c] = rng.uniform();
     sys.jacobian_times(0.7, y.data(), S, JS);
     EXPECT_TRUE(near_rel(JS, J * S, 1e-11)) << "case " << k;
+    // with generalized forces F on the last two columns (the sensitivities' −Y): their q̈ rows gain
+    // 𝓜⁻¹ F, and nothing else moves
+    MatX F(model.nv, 2), JSF;
+    for (Eigen::Index c = 0; c < F.size(); ++c) F.data()[c] = rng.uniform();
+    EXPECT_EQ(sys.linearize(0.7, y.data()), sys.linearize(0.7, y.data()));  // kept at the same state
+    sys.linearized_times(S, JSF, &F);
+    MatX moved = JSF - JS;
+    mass_matrix(model, sys.data);  // at the linearized state's kinematics
+    EXPECT_TRUE(near_rel(sys.data.M * moved.block(model.nq, 3, model.nv, 2), F, 1e-10)) << "case " << k;
+    moved.block(model.nq, 3, model.nv, 2).setZero();
+    EXPECT_LT(moved.cwiseAbs().maxCoeff(), 1e-12) << "case " << k;
   }
 }
 

@@ -8,7 +8,8 @@
 // [q; v] (quaternions' four coordinates), f its rate and λ the adjoint:
 //   λ̇ = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ,   λ(T) = (∂Φ/∂y)ᵀ               (backward, T → 0)
 //   ∂G/∂y₀ = λ(0),   ∂G/∂π = ∫₀ᵀ (∂f/∂π)ᵀ λ dt                      (a quadrature of the backward run)
-// (∂f/∂y)ᵀ λ is a vector–Jacobian product, never the Jacobian: with μ = 𝓜⁻¹ λ_v (one LᵀDL solve),
+// (∂f/∂y)ᵀ λ is a vector–Jacobian product, never the Jacobian: with μ = 𝓜⁻¹ λ_v (the articulated-body
+// factor of q̈'s recursion, articulated_solve),
 //   λ_vᵀ ∂q̈/∂x = μᵀ (∂τ_in/∂x − ∂ID/∂x |_q̈)   (x = q along the tangent, or v: the inverse-dynamics
 //                                              derivatives as O(N) vector products, derivatives.hpp)
 //   λ_vᵀ ∂q̈/∂π = −μᵀ Y(q, v, q̈)               (the regressor; Yᵀ μ by an O(N) sweep)

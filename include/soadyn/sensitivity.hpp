@@ -1,8 +1,10 @@
 // Forward sensitivities of a whole run by SUNDIALS CVODES: ∂x(t)/∂x₀ and ∂x(t)/∂π at every output,
 // integrated with the state under the same error control (CVodeSetSensErrCon), from the analytic
-// derivatives: ṡ = A s + b with A = [[∂q̇/∂q, ∂q̇/∂v], [∂q̈/∂q, ∂q̈/∂v]] applied to the columns
-// without forming it (System::jacobian_times: derivatives.hpp, springs and dampers included) and b = [0; ∂q̈/∂π] = [0; −𝓜⁻¹ Y(q, v, q̈)]
-// (regressor.hpp).  No finite differences.
+// derivatives: ṡ = A s + b with A = [[∂q̇/∂q, ∂q̇/∂v], [∂q̈/∂q, ∂q̈/∂v]] and b = [0; ∂q̈/∂π] =
+// [0; −𝓜⁻¹ Y(q, v, q̈)] (regressor.hpp), neither formed: per state the inverse-dynamics derivative
+// sweeps, O(N); per column their products and 𝓜⁻¹ by the articulated-body factor, O(N) each, with −Y
+// added as a generalized force before 𝓜⁻¹ (System::linearize, linearized_times; springs and dampers
+// included).  No finite differences.
 //
 // Tangent-space convention.  x = [δq; v] has 2 nv numbers: δq the increment along the tangent,
 // q ⊕ δq = Model::integrate(q, δq, 1) (derivatives.hpp), the coordinate's own increment on

@@ -13,7 +13,10 @@ PyObject* error_type = nullptr;
 
 // NaN or ±inf in an argument would come back as NaN everywhere: refused, naming the entry
 static void check_finite(const char* where, const char* what, const Eigen::Ref<const VecX>& x) {
-  if (x.allFinite()) return;
+  // one pass of compares (Eigen's allFinite forms x − x first)
+  bool finite = true;
+  for (Eigen::Index k = 0; k < x.size(); ++k) finite &= std::isfinite(x(k));
+  if (finite) return;
   Eigen::Index k = 0;
   while (std::isfinite(x(k))) ++k;
   char value[32];
