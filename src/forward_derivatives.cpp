@@ -8,6 +8,8 @@
 #include "derivative_sweeps.hpp"
 #include "minverse.hpp"
 
+#include <algorithm>
+
 namespace soadyn {
 
 namespace {
@@ -15,11 +17,12 @@ namespace {
 // The two passes' steps for a joint of n DOFs, each one pass over k < nv (m, x, y: the joint's n
 // columns of 𝓜⁻¹, X_q, X_v, at stride lx; Q, Qc, P: 6 or 9 columns at stride ld; the coefficients:
 // the sweeps' 6- and 9-vectors of the n DOFs).
-// Base to tip: x_a = −𝒬 ψ_a, y_a = −𝒬 ρ_a from 𝒬 (Q: 6 columns, null at a root), and into Qc
-// (null at a leaf) 𝒬 + Σ_a m_a S_aᵀ, the children's 𝒬 (Qc may be Q: in place along a path)
+// Base to tip: x_a = −𝒬 ψ_a, y_a = −𝒬 ρ_a from 𝒬 (Q: 6 columns; zeros at a root), and into Qc
+// 𝒬 + Σ_a m_a S_aᵀ, the children's 𝒬 (Qc may be Q: in place along a path; at a leaf no child reads
+// it).  One copy per n, not one per root and leaf: the code a call runs stays small
 // (one DOF: one pass over k for the whole step; several: one per output column, which keeps each
 // loop to a few streams the compiler vectorizes)
-template <int n, bool root, bool leaf>
+template <int n>
 void ancestors_step(const double* Q, double* Qc, Eigen::Index ld, const double* m, double* x, double* y, Eigen::Index lx,
                     const double (&S)[n][6], const double (&psi)[n][6], const double (&rho)[n][6], int nv) {
   constexpr bool fused = n == 1;
@@ -27,29 +30,29 @@ void ancestors_step(const double* Q, double* Qc, Eigen::Index ld, const double* 
 #pragma GCC ivdep
     for (int k = 0; k < nv; ++k) {
       double q[6];
-      for (int c = 0; c < 6; ++c) q[c] = root ? 0.0 : Q[c * ld + k];
+      for (int c = 0; c < 6; ++c) q[c] = Q[c * ld + k];
       double sx = 0.0, sy = 0.0;
       for (int c = 0; c < 6; ++c) sx += q[c] * psi[a][c], sy += q[c] * rho[a][c];
       x[a * lx + k] = -sx, y[a * lx + k] = -sy;
-      if constexpr (fused && !leaf)
+      if constexpr (fused)
         for (int c = 0; c < 6; ++c) Qc[c * ld + k] = q[c] + m[k] * S[0][c];
     }
   }
-  if constexpr (!fused && !leaf)
+  if constexpr (!fused)
     for (int c = 0; c < 6; ++c) {
       double* __restrict to = Qc + c * ld;
       const double* from = Q + c * ld;
 #pragma GCC ivdep
       for (int k = 0; k < nv; ++k) {
-        double t = root ? 0.0 : from[k];
+        double t = from[k];
         for (int a = 0; a < n; ++a) t += m[a * lx + k] * S[a][c];
         to[k] = t;
       }
     }
 }
 
-// Tip to base: 𝒫 (9 columns) += Σ_a m_a row_aᵀ (from zero at a leaf), then x_a −= 𝒫 colq_a, y_a −= 𝒫 colv_a
-template <int n, bool first>
+// Tip to base: 𝒫 (9 columns) += Σ_a m_a row_aᵀ (zeroed first at a leaf), then x_a −= 𝒫 colq_a, y_a −= 𝒫 colv_a
+template <int n>
 void subtree_step(double* P, Eigen::Index ld, const double* m, double* x, double* y, Eigen::Index lx,
                   const double (&row)[n][9], const double (&cq)[n][9], const double (&cv)[n][9], int nv) {
   if constexpr (n == 1) {
@@ -57,7 +60,7 @@ void subtree_step(double* P, Eigen::Index ld, const double* m, double* x, double
     for (int k = 0; k < nv; ++k) {
       double sx = 0.0, sy = 0.0;
       for (int c = 0; c < 9; ++c) {
-        const double t = (first ? 0.0 : P[c * ld + k]) + m[k] * row[0][c];
+        const double t = P[c * ld + k] + m[k] * row[0][c];
         P[c * ld + k] = t;
         sx += t * cq[0][c], sy += t * cv[0][c];
       }
@@ -68,7 +71,7 @@ void subtree_step(double* P, Eigen::Index ld, const double* m, double* x, double
       double* __restrict pc = P + c * ld;
 #pragma GCC ivdep
       for (int k = 0; k < nv; ++k) {
-        double t = first ? 0.0 : pc[k];
+        double t = pc[k];
         for (int a = 0; a < n; ++a) t += m[a * lx + k] * row[a][c];
         pc[k] = t;
       }
@@ -94,6 +97,10 @@ struct Products {
   int nv;
 
   double* block(int body) const { return dd.blocks.data() + 9 * model.path[size_t(body)] * ld; }
+  // the first `columns` columns of a block, each nv long, set to zero
+  void zero(double* b, int columns) const {
+    for (int c = 0; c < columns; ++c) std::fill(b + c * ld, b + c * ld + nv, 0.0);
+  }
   // the coefficients of the joint's n DOFs
   template <int n, int C, class M>
   static void coefficients(const M& from, int vj, double (&to)[n][C]) {
@@ -111,14 +118,9 @@ struct Products {
     coefficients(dd.S, vj, S);
     coefficients(dd.psi, vj, psi);
     coefficients(dd.rho, vj, rho);
-    const double* Q = p < 0 ? nullptr : block(p);
     double* Qc = block(j);
-    if (p < 0)
-      dd.leaf[size_t(j)] ? ancestors_step<n, true, true>(Q, Qc, ld, m, x, y, lx, S, psi, rho, nv)
-                         : ancestors_step<n, true, false>(Q, Qc, ld, m, x, y, lx, S, psi, rho, nv);
-    else
-      dd.leaf[size_t(j)] ? ancestors_step<n, false, true>(Q, Qc, ld, m, x, y, lx, S, psi, rho, nv)
-                         : ancestors_step<n, false, false>(Q, Qc, ld, m, x, y, lx, S, psi, rho, nv);
+    if (p < 0) zero(Qc, 6);  // a root's 𝒬 = 0, in place in its own block
+    ancestors_step<n>(p < 0 ? Qc : block(p), Qc, ld, m, x, y, lx, S, psi, rho, nv);
   }
 
   // tip to base: 𝒫_j = Σ_{r ∈ j} 𝓜⁻¹_r row_rᵀ + Σ_children 𝒫_c, then X −= 𝒫_j [colq_c, colv_c], and
@@ -133,8 +135,8 @@ struct Products {
     coefficients(dd.colq, vj, cq);
     coefficients(dd.colv, vj, cv);
     double* Pj = block(j);
-    dd.leaf[size_t(j)] ? subtree_step<n, true>(Pj, ld, m, x, y, lx, row, cq, cv, nv)
-                       : subtree_step<n, false>(Pj, ld, m, x, y, lx, row, cq, cv, nv);
+    if (dd.leaf[size_t(j)]) zero(Pj, 9);  // a leaf's 𝒫 starts from its own rows
+    subtree_step<n>(Pj, ld, m, x, y, lx, row, cq, cv, nv);
     if (p >= 0 && model.path[size_t(p)] != model.path[size_t(j)]) {
       double* Pp = block(p);
       for (int c = 0; c < 9; ++c)
