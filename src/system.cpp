@@ -159,11 +159,12 @@ void System::linearized_times(const MatX& S, MatX& out, const MatX* forces) {
   if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns), W.resize(nv, ns);
   const auto s_v = S.middleRows(nq, nv);
   // q̇'s rows, and S's q rows on the tangent: δ = T(q) s_q (q itself when no joint holds a quaternion)
-  if (!model.has_quaternions())
-    out.topRows(nq) = s_v;
-  else
+  const bool tangent = model.has_quaternions();
+  if (tangent)
     linearized_tangent_rows(S, out);
-  const auto dq = model.has_quaternions() ? Eigen::Ref<const MatX>(delta) : Eigen::Ref<const MatX>(S.topRows(nq));
+  else
+    out.topRows(nq) = s_v;
+  const auto dq = tangent ? Eigen::Ref<const MatX>(delta) : Eigen::Ref<const MatX>(S.topRows(nq));
   // q̈'s rows: 𝓜⁻¹ ((∂τ_in/∂q − ∂ID/∂q) δ + (∂τ_in/∂v − ∂ID/∂v) s_v + F): the products O(N) per
   // column, then 𝓜⁻¹ by the articulated-body factor, O(N) per column
   inverse_dynamics_derivatives_times(model, *derivatives, dq, s_v, W);
