@@ -4,7 +4,6 @@
 #include "soadyn/adjoint.hpp"
 
 #include "soadyn/derivatives.hpp"
-#include "soadyn/kinematics.hpp"
 #include "soadyn/sensitivity.hpp"
 #include "soadyn/simulate.hpp"
 #include "soadyn/table.hpp"
@@ -30,15 +29,11 @@ class CvodeAdjoint : public cvode_impl::Cvode {
         settings_(s),
         plan_(plan),
         cost_(cost),
-        data_(sys.model),
-        dd_(sys.model),
+        lin_(sys.model, sys.inputs, FdMethod::ArticulatedBody, sys.control_work),
         nb_(sys.model.nq + sys.model.nv),
         y0q_(y0.head(sys.model.nq)) {
     const Model& m = sys.model;
-    solve_work_ = articulated_solve_work(m);
-    q_ = VecX::Zero(m.nq);
-    v_ = VecX::Zero(m.nv);
-    tau_ = VecX::Zero(m.nv);
+    lin_.prepare_jacobian();
     mu_ = VecX::Zero(m.nv);
     g_ = VecX::Zero(m.nv);
     dq_ = VecX::Zero(m.nq);
@@ -180,25 +175,14 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     }
   }
 
-  // at (t, y): q̈ with the articulated-body factor and the derivative sweeps, kept while (t, y) stays (Newton's iterations, the parameter
-  // quadrature); then μ = 𝓜⁻¹ λ_v.  The adjoint's own Data: CVODES re-runs the forward problem between checkpoints, through
-  // the System's
+  // at (t, y): q̈ with the articulated-body factor and the derivative sweeps (System::linearize, kept
+  // while (t, y) stays: Newton's iterations, the parameter quadrature); then μ = 𝓜⁻¹ λ_v.  A System of
+  // its own: CVODES re-runs the forward problem between checkpoints, through the run's
   void solve_at(double t, const double* y, const double* lam) {
     const Model& m = sys_.model;
-    if (!(have_point_ && t == t_point_ && Eigen::Map<const VecX>(y, nb_) == y_point_)) {
-      q_ = Eigen::Map<const VecX>(y, m.nq);
-      v_ = Eigen::Map<const VecX>(y + m.nq, m.nv);
-      update_kinematics(m, data_, q_);
-      update_velocities(m, data_, v_);
-      sys_.inputs.evaluate(t, q_, v_, tau_);
-      forward_dynamics(m, data_, tau_, FdMethod::ArticulatedBody);  // q̈ and the articulated-body factor
-      inverse_dynamics_derivative_sweeps(m, data_, v_, data_.qdd, dd_);
-      have_point_ = true;
-      t_point_ = t;
-      y_point_ = Eigen::Map<const VecX>(y, nb_);
-    }
+    lin_.linearize(t, y);
     mu_ = Eigen::Map<const VecX>(lam + m.nq, m.nv);
-    articulated_solve(m, data_, Eigen::Map<MatX>(mu_.data(), m.nv, 1), solve_work_);
+    articulated_solve(m, lin_.data, Eigen::Map<MatX>(mu_.data(), m.nv, 1), lin_.solve_work);
   }
 
   // f_B = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ, (∂f/∂y)ᵀ λ by the vector–Jacobian product of the header comment
@@ -214,7 +198,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       a.solve_at(t, yy, N_VGetArrayPointer(yB));
       // g = (∂τ_in/∂x − ∂ID/∂x)ᵀ μ for x = δ (tangent) and x = v, by the O(N) vector products
       auto gv = out.segment(m.nq, m.nv);
-      inverse_dynamics_derivatives_transpose_times(m, a.dd_, a.mu_, a.g_, gv);
+      inverse_dynamics_derivatives_transpose_times(m, *a.lin_.derivatives, a.mu_, a.g_, gv);
       a.g_ = -a.g_;
       gv = -gv;
       s.inputs.add_derivatives_transpose_times(a.mu_, a.g_, gv);
@@ -230,18 +214,18 @@ class CvodeAdjoint : public cvode_impl::Cvode {
         }
         auto Jqq = s.Tq.topLeftCorner(mi, mi);  // System's joint scratch: rhs, run by CVODES in between, leaves it
         auto Jqv = s.Tv.topLeftCorner(mi, ni);
-        joint_qdot_jacobian(type, a.q_.data() + iq, a.v_.data() + iv, Jqq, Jqv);
+        joint_qdot_jacobian(type, a.lin_.q.data() + iq, a.lin_.v.data() + iv, Jqq, Jqv);
         out.segment(iq, mi).noalias() += Jqq.transpose() * lam.segment(iq, mi);
         out.segment(m.nq + iv, ni).noalias() += Jqv.transpose() * lam.segment(iq, mi);
         auto Ti = s.T.topLeftCorner(ni, mi);
-        joint_tangent_map(type, a.q_.data() + iq, Ti);
+        joint_tangent_map(type, a.lin_.q.data() + iq, Ti);
         out.segment(iq, mi).noalias() += Ti.transpose() * a.g_.segment(iv, ni);
       }
       out = -out;
       if (a.cost_.running) {
         a.dq_.setZero();
         a.dv_.setZero();
-        a.cost_.running(t, a.q_, a.v_, a.dq_, a.dv_);
+        a.cost_.running(t, a.lin_.q, a.lin_.v, a.dq_, a.dv_);
         out.head(m.nq) -= a.dq_;
         out.segment(m.nq, m.nv) -= a.dv_;
       }
@@ -256,7 +240,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
   // state y and the adjoint λ of time t
   void parameter_integrand(double t, const double* y, const double* lam, VecX& out) {
     solve_at(t, y, lam);
-    regressor_transpose_times(sys_.model, data_, data_.qdd, mu_, ytmu_);  // O(N), Y never formed
+    regressor_transpose_times(sys_.model, lin_.data, lin_.data.qdd, mu_, ytmu_);  // O(N), Y never formed
     for (size_t b = 0; b < plan_.bodies.size(); ++b)
       out.segment(int(b) * kParametersPerBody, kParametersPerBody) =
           ytmu_.segment(kParametersPerBody * plan_.bodies[b], kParametersPerBody);
@@ -281,17 +265,12 @@ class CvodeAdjoint : public cvode_impl::Cvode {
   const SimulationSettings& settings_;
   const SensitivityPlan& plan_;
   const Cost& cost_;
-  Data data_;
-  DerivativeData dd_;
+  System lin_;  // the linearization at the forward state of the backward run (solve_at)
   int nb_;
   VecX y0q_;  // the initial coordinates (normalized), for ∂G/∂x₀ along the tangent
   int which_ = -1;
-  VecX q_, v_, tau_, mu_, g_, dq_, dv_, ytmu_;
+  VecX mu_, g_, dq_, dv_, ytmu_;
   MatX J_;
-  MatX solve_work_;  // articulated_solve's
-  bool have_point_ = false;
-  double t_point_ = 0.0;
-  VecX y_point_;
   cvode_impl::MatrixPtr AB_;
   cvode_impl::LinSolPtr lsB_;
   cvode_impl::NonlinSolPtr nlsB_;
