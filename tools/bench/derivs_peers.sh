@@ -35,18 +35,7 @@ build_soadyn_cli
 
 echo "== harness: $harness/derivs"
 mkdir -p "$work"
-cmake -S "$harness/derivs" -B "$work/gcc" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=g++ \
-  -DSOADYN_BUILD_DIR="$build" -DSOADYN_SOURCE_DIR="$repo" -DPEERS_PREFIX="$prefix"
-cmake --build "$work/gcc" -j2
-child=()
-if [[ -d $clang_prefix/lib/cmake/pinocchio ]] && command -v clang++ >/dev/null; then
-  cmake -S "$harness/derivs" -B "$work/clang" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ \
-    -DDERIVS_PINOCCHIO_ONLY=ON -DPEERS_PREFIX="$clang_prefix"
-  cmake --build "$work/clang" -j2
-  child=(--child-exe "$work/clang/bench_derivs_pinocchio" --child-name pinocchio-clang)
-else
-  echo "derivs_peers: no Pinocchio built by clang++ at $clang_prefix: the pinocchio-clang column is left out"
-fi
+build_harness "$harness/derivs" "$work" DERIVS_PINOCCHIO_ONLY bench_derivs_pinocchio derivs_peers
 
 # the robots: the quadruped and the humanoid as URDF, fixed and free-floating (":free")
 models=$work/models

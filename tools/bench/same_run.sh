@@ -70,18 +70,7 @@ if ! grep -q 'MatX Mass;' "$repo/include/soadyn/data.hpp"; then
   sed -i 's/\bdata\.Mass\b/data.M/g' "$work/harness/same_run/adapter_soadyn.cc"
 fi
 
-cmake -S "$work/harness/same_run" -B "$work/gcc" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=g++ \
-  -DSOADYN_BUILD_DIR="$build" -DSOADYN_SOURCE_DIR="$repo" -DPEERS_PREFIX="$prefix"
-cmake --build "$work/gcc" -j2
-child=()
-if [[ -d $clang_prefix/lib/cmake/pinocchio ]] && command -v clang++ >/dev/null; then
-  cmake -S "$work/harness/same_run" -B "$work/clang" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ \
-    -DSAME_RUN_PINOCCHIO_ONLY=ON -DPEERS_PREFIX="$clang_prefix"
-  cmake --build "$work/clang" -j2
-  child=(--child-exe "$work/clang/bench_same_run_pinocchio" --child-name pinocchio-clang)
-else
-  echo "same_run: no Pinocchio built by clang++ at $clang_prefix: the pinocchio-clang column is left out"
-fi
+build_harness "$work/harness/same_run" "$work" SAME_RUN_PINOCCHIO_ONLY bench_same_run_pinocchio same_run
 
 echo "== running (output saved to $out)"
 mkdir -p "$(dirname "$out")"
