@@ -12,23 +12,33 @@ namespace soadyn::python {
 
 PyObject* error_type = nullptr;
 
-// NaN or ±inf in an argument would come back as NaN everywhere: refused, naming the entry.  The
-// test is on the bits, an exponent of all ones, in one pass that vectorizes (Eigen's allFinite forms
-// x − x first)
-static void check_finite(const char* where, const char* what, const Eigen::Ref<const VecX>& x) {
-  constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
-  std::uint64_t not_finite = 0;
-  for (Eigen::Index k = 0; k < x.size(); ++k) {
-    std::uint64_t bits;
-    std::memcpy(&bits, x.data() + k, sizeof bits);
-    not_finite |= std::uint64_t((bits & exponent) == exponent);
-  }
-  if (!not_finite) return;
-  Eigen::Index k = 0;
-  while (std::isfinite(x(k))) ++k;
+// NaN or ±inf in an argument would come back as NaN everywhere: refused, naming the entry
+[[noreturn]] static void not_finite(const char* where, const char* what, const double* x) {
+  int k = 0;
+  while (std::isfinite(x[k])) ++k;
   char value[32];
-  std::snprintf(value, sizeof value, "%g", x(k));
+  std::snprintf(value, sizeof value, "%g", x[k]);
   throw Error(std::string(where) + ": " + what + "[" + std::to_string(k) + "] = " + value + ": expected a finite number");
+}
+
+// out[k] = the double at src + k·stride, k < n, and whether any was NaN or ±inf: one pass, the test
+// on the bits (an exponent of all ones; Eigen's allFinite forms x − x first), no call for a few
+// entries (a memcpy call and a second pass cost about as much as a 7-vector's whole copy)
+static inline bool copy_finite(const char* src, Py_ssize_t stride, int n, double* out) {
+  constexpr std::uint64_t exponent = 0x7ff0000000000000ull;
+  std::uint64_t bad = 0;
+  for (int k = 0; k < n; ++k, src += stride) {
+    std::uint64_t bits;
+    std::memcpy(&bits, src, sizeof bits);
+    std::memcpy(out + k, &bits, sizeof bits);
+    bad |= std::uint64_t((bits & exponent) == exponent);
+  }
+  return bad != 0;
+}
+
+static void check_finite(const char* where, const char* what, const double* x, int n) {
+  for (int k = 0; k < n; ++k)
+    if (!std::isfinite(x[k])) not_finite(where, what, x);
 }
 
 void read_vector(const Model& model, const Data& data, const char* where, const char* what, py::handle h,
@@ -42,12 +52,9 @@ void read_vector(const Model& model, const Data& data, const char* where, const 
       // the checks of Data::check written out, so that the call is made only to throw
       if (p->dimensions[0] != expected || data.G.cols() != model.nv || int(data.R.size()) != model.nbodies)
         data.check(model, where, what, p->dimensions[0], expected);
-      const char* src = p->data;
-      if (p->strides[0] == sizeof(double))
-        std::memcpy(out.data(), src, sizeof(double) * size_t(expected));
-      else
-        for (int k = 0; k < expected; ++k, src += p->strides[0]) std::memcpy(&out(k), src, sizeof(double));
-      check_finite(where, what, out.head(expected));
+      const bool bad = p->strides[0] == sizeof(double) ? copy_finite(p->data, sizeof(double), expected, out.data())
+                                                        : copy_finite(p->data, p->strides[0], expected, out.data());
+      if (bad) not_finite(where, what, out.data());
       return;
     }
   }
@@ -65,7 +72,7 @@ void read_vector(const Model& model, const Data& data, const char* where, const 
   // element by element: any stride, no temporary
   const auto u = a.unchecked<1>();
   for (int k = 0; k < expected; ++k) out(k) = u(k);
-  check_finite(where, what, out.head(expected));
+  check_finite(where, what, out.data(), expected);
 }
 
 VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expected) {
@@ -75,7 +82,7 @@ VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expe
   VecX out(expected);
   const auto u = a.unchecked<1>();
   for (int k = 0; k < expected; ++k) out(k) = u(k);
-  check_finite(where, what, out);
+  check_finite(where, what, out.data(), expected);
   return out;
 }
 

@@ -179,6 +179,10 @@ def test_non_finite_arguments_are_refused_naming_the_entry():
         assert "q[1] = " in msg and "expected a finite number" in msg, msg
         msg = raised(soadyn.mass_matrix, model, data, [0.1, bad])  # a list takes the converting path
         assert "q[1] = " in msg, msg
+        msg = raised(soadyn.mass_matrix, model, data, np.array([0.1, 0.0, bad, 0.0])[::2])  # read through its stride
+        assert "q[1] = " in msg, msg
+        msg = raised(soadyn.forward_dynamics, model, data, np.zeros(2), np.zeros(2), np.array([bad, 0.0]))
+        assert "tau[0] = " in msg, msg
     assert np.isfinite(soadyn.mass_matrix(model, data, np.array([0.1, 0.2]))).all()
 
 
