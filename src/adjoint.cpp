@@ -11,6 +11,8 @@
 #include "cvode.hpp"
 #include "step_quadrature.hpp"
 
+#include <algorithm>
+
 
 namespace soadyn {
 
@@ -55,14 +57,16 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     // forward: y and, when there is a running cost, the quadrature ∫ ℓ dt with error control
     cvode_impl::VectorPtr yq;
     if (cost_.running) {
-      yq.reset(nvector_ops::new_vector(1, ctx_.get()));
+      yq.reset(pool_.make(1, ctx_.get()));
       if (!yq) throw Error("CVODES: could not allocate the cost's quadrature");
       N_VConst(0.0, yq.get());
       check(CVodeQuadInit(mem, &CvodeAdjoint::running_cost, yq.get()), "CVodeQuadInit");
       check(CVodeSetQuadErrCon(mem, SUNTRUE), "CVodeSetQuadErrCon");
       check(CVodeQuadSStolerances(mem, settings_.rtol, settings_.atol), "CVodeQuadSStolerances");
     }
-    check(CVodeAdjInit(mem, std::max(1L, steps_per_checkpoint), CV_HERMITE), "CVodeAdjInit");
+    check(CVodeAdjInit(mem, steps_per_checkpoint > 0 ? steps_per_checkpoint : automatic_steps_per_checkpoint(sys_.size()),
+                       CV_HERMITE),
+          "CVodeAdjInit");
     check(CVodeSetMaxNumSteps(mem, settings_.max_steps), "CVodeSetMaxNumSteps");
     double t = 0.0;
     int ncheck = 0;
@@ -79,7 +83,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     }
     // λ(T) = (∂Φ/∂y)ᵀ at y(T)
     const VecX yT = map(y_.get());
-    cvode_impl::VectorPtr yb(nvector_ops::new_vector(nb_, ctx_.get()));
+    cvode_impl::VectorPtr yb(pool_.make(nb_, ctx_.get()));
     if (!yb) throw Error("CVODES: could not allocate the adjoint");
     N_VConst(0.0, yb.get());
     if (cost_.terminal) {
@@ -335,9 +339,21 @@ Cost tracking_cost(const Model& m, const VecX& t, const MatX& q, const MatX& v, 
   return cost;
 }
 
+// 50 steps per entry of the state, from 500 to 10000.  CVODES sets up all Nd + 1 interpolation
+// points of an interval before the first step (two allocations each, and two vectors from the pool:
+// ~0.1 µs a point), and integrates every interval but the last forward a second time during the
+// backward run.  A step costs about in proportion to the state's size, so the set-up stays a small
+// share of the run's steps while a longer interval spares the second pass: a 7-DOF arm checkpoints
+// every 700 steps, the 50-DOF humanoid every 5000.  Memory: at most Nd · 2n doubles per interval,
+// reserved up front and touched as the steps fill it (nvector_pool.hpp)
+long automatic_steps_per_checkpoint(int n) { return std::clamp(50L * n, 500L, 10000L); }
+
 CostGradient gradient(const Scenario& sc, const SimulationSettings& settings, const Cost& cost,
                       const SensitivitySettings& wrt, long steps_per_checkpoint) {
   const Model& m = sc.model;
+  if (steps_per_checkpoint < 0)
+    throw Error("gradient: steps_per_checkpoint: expected a number of steps, or 0 to choose it from the state's size; got " +
+                std::to_string(steps_per_checkpoint));
   SimulationSettings s = settings;
   s.sensitivities = wrt;
   check_run(sc, s);

@@ -8,6 +8,7 @@
 #include "soadyn/newton_solver.hpp"
 
 #include "nvector_ops.hpp"
+#include "nvector_pool.hpp"
 
 #include <cvodes/cvodes.h>
 #include <cvodes/cvodes_proj.h>
@@ -83,8 +84,8 @@ class Cvode : public Integrator {
     ctx_.reset(ctx);
     // fused vector operations (one pass over memory for CVODE's linear combinations, and for all the
     // sensitivities at once in CVODES), compiled (nvector_ops.hpp); every vector cloned from y_
-    // inherits them
-    y_.reset(nvector_ops::new_vector(sys.size(), ctx_.get()));
+    // inherits them and comes from the pool (nvector_pool.hpp)
+    y_.reset(pool_.make(sys.size(), ctx_.get()));
     if (!y_) throw Error("CVODE: could not allocate the state vector");
     map(y_.get()) = y0;
     mem_.reset(CVodeCreate(bdf ? CV_BDF : CV_ADAMS, ctx_.get()));
@@ -346,8 +347,10 @@ class Cvode : public Integrator {
   RootFunction root_fn_;
   std::exception_ptr pending_;
   std::string error_message_;
-  // declared in creation order, destroyed in reverse: the CVODE memory before what it uses
+  // declared in creation order, destroyed in reverse: the CVODE memory before what it uses, every
+  // vector (a derived class's too) before the pool
   ContextPtr ctx_;
+  nvector_ops::VectorPool pool_;
   VectorPtr y_;
   MatrixPtr A_;
   LinSolPtr ls_;

@@ -203,6 +203,16 @@ TEST(Adjoint, CheckpointSpacingChangesMemoryNotTheGradient) {
   EXPECT_GE(many.checkpoints, few.forward_steps / 5 - 1);
   EXPECT_LT(relative(many.d_initial_state, few.d_initial_state), 1e-8);
   EXPECT_LT(relative(many.d_parameters, few.d_parameters), 1e-8);
+  // 0: the spacing from the state's size (double pendulum: 4 entries, the floor of 500 steps), the
+  // same gradient; a negative spacing is refused
+  EXPECT_EQ(automatic_steps_per_checkpoint(4), 500);
+  EXPECT_EQ(automatic_steps_per_checkpoint(14), 700);
+  EXPECT_EQ(automatic_steps_per_checkpoint(1000), 10000);
+  const CostGradient automatic = gradient(sc, s, cost, {true, {"all"}});
+  EXPECT_EQ(automatic.checkpoints, few.forward_steps > 500 ? few.forward_steps / 500 : 0);
+  EXPECT_LT(relative(automatic.d_initial_state, few.d_initial_state), 1e-8);
+  EXPECT_THAT([&] { gradient(sc, s, cost, {true, {}}, -1); },
+              testing::ThrowsMessage<Error>(HasSubstr("steps_per_checkpoint: expected a number of steps")));
 }
 
 TEST(Adjoint, RefusesWhatItDoesNotDifferentiate) {

@@ -66,10 +66,13 @@ struct CostGradient {
 // sensitivities are ignored) with respect to what `wrt` names (sensitivity.hpp's settings: the
 // initial state, the parameters of bodies or "all").  steps_per_checkpoint: CVODES' Nd, the steps
 // between checkpoints; memory holds one interpolation point per step of one interval plus one
-// checkpoint per interval.  Throws soadyn::Error for what forward sensitivities refuse, for nothing
+// checkpoint per interval.  0: 50 per entry of the state y = [q; v], from 500 to 10000
+// (automatic_steps_per_checkpoint); negative: refused.  Throws soadyn::Error for what forward sensitivities refuse, for nothing
 // to differentiate, and SimulationError when either run fails.  The parameter quadrature has no error
 // test of its own (CVodeSetQuadErrConB off): it rides on the adjoint's controlled steps.
 CostGradient gradient(const Scenario& sc, const SimulationSettings& settings, const Cost& cost,
-                      const SensitivitySettings& wrt, long steps_per_checkpoint = 1000);
+                      const SensitivitySettings& wrt, long steps_per_checkpoint = 0);
+// the Nd that steps_per_checkpoint = 0 chooses for a state of n entries
+long automatic_steps_per_checkpoint(int n);
 
 }  // namespace soadyn
