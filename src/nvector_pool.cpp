@@ -28,10 +28,8 @@ VectorPool::~VectorPool() = default;
 N_Vector VectorPool::make(sunindextype n, SUNContext ctx) {
   if (!ops_ready_) {
     // the serial table with the compiled loops and the fused operations, then the pool's three
-    N_Vector t = N_VNewEmpty_Serial(1, ctx);
+    N_Vector t = new_vector(1, ctx);
     if (!t) return nullptr;
-    N_VEnableFusedOps_Serial(t, SUNTRUE);
-    install(t);
     ops_ = *t->ops;
     N_VDestroy(t);
     ops_.nvclone = &VectorPool::clone;

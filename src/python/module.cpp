@@ -36,11 +36,6 @@ static inline bool copy_finite(const char* src, Py_ssize_t stride, int n, double
   return bad != 0;
 }
 
-static void check_finite(const char* where, const char* what, const double* x, int n) {
-  for (int k = 0; k < n; ++k)
-    if (!std::isfinite(x[k])) not_finite(where, what, x);
-}
-
 void read_vector(const Model& model, const Data& data, const char* where, const char* what, py::handle h,
                  int expected, VecX& out) {
   // fast path: a 1-D float64 ndarray in native byte order, read where it lies
@@ -70,9 +65,8 @@ void read_vector(const Model& model, const Data& data, const char* where, const 
   }
   data.check(model, where, what, a.shape(0), expected);
   // element by element: any stride, no temporary
-  const auto u = a.unchecked<1>();
-  for (int k = 0; k < expected; ++k) out(k) = u(k);
-  check_finite(where, what, out.data(), expected);
+  if (copy_finite(reinterpret_cast<const char*>(a.data()), a.strides(0), expected, out.data()))
+    not_finite(where, what, out.data());
 }
 
 VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expected) {
@@ -80,9 +74,8 @@ VecX read_vector(const char* where, const char* what, const ArrayIn& a, int expe
     throw Error(std::string(where) + ": " + what + ": expected a 1-D array of " + std::to_string(expected) +
                 " entries, got " + (a.ndim() == 1 ? std::to_string(a.shape(0)) + " entries" : std::to_string(a.ndim()) + " dimensions"));
   VecX out(expected);
-  const auto u = a.unchecked<1>();
-  for (int k = 0; k < expected; ++k) out(k) = u(k);
-  check_finite(where, what, out.data(), expected);
+  if (copy_finite(reinterpret_cast<const char*>(a.data()), a.strides(0), expected, out.data()))
+    not_finite(where, what, out.data());
   return out;
 }
 
