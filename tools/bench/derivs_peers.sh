@@ -18,14 +18,11 @@
 #   ROUNDS              the harness's --rounds (default 3)
 # Exits 0 with a note when the harness or Pinocchio is missing (the peers are optional).
 set -euo pipefail
-source "$(dirname "$0")/peers_env.sh"  # repo, build, harness, prefix, clang_prefix, build_soadyn_cli
+source "$(dirname "$0")/peers_env.sh"  # repo, build, harness, prefix, clang_prefix, require_harness, build_soadyn_cli
 work=${DERIVS_DIR:-/tmp/derivs_peers}
 out=${OUT:-$work/derivs_peers.txt}
 
-if [[ ! -f $harness/derivs/CMakeLists.txt ]]; then
-  echo "derivs_peers: no harness at $harness (set PEERS_HARNESS to the directory holding derivs/); nothing measured"
-  exit 0
-fi
+require_harness derivs_peers derivs
 if [[ ! -d $prefix/lib/cmake/pinocchio ]]; then
   echo "derivs_peers: no Pinocchio at $prefix (PEERS_PREFIX; $harness/build_peers.sh builds it); nothing measured"
   exit 0

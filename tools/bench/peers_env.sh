@@ -1,7 +1,8 @@
 # Sourced by tools/bench/same_run.sh and tools/bench/derivs_peers.sh, which time soadyn against
 # peer libraries with harnesses kept outside the repository: where the repository, the soadyn
 # build (the caller's first argument, default build/), the harnesses (PEERS_HARNESS) and the peer
-# installs (PEERS_PREFIX, PEERS_CLANG_PREFIX) are; build_soadyn_cli, which configures the build
+# installs (PEERS_PREFIX, PEERS_CLANG_PREFIX) are; require_harness, which ends the caller with a
+# note when its harness is missing (the peers are optional); build_soadyn_cli, which configures the build
 # as a plain Release build when it is not configured yet and builds soadyn's CLI target; and
 # build_harness, which builds a harness twice: by g++ against soadyn and the g++ Pinocchio, and by
 # clang++ with Pinocchio alone when a clang-built Pinocchio is installed.
@@ -10,6 +11,14 @@ build=$(realpath -m "${1:-$repo/build}")
 harness=${PEERS_HARNESS:-$repo/../shared/peers}
 prefix=${PEERS_PREFIX:-/tmp/peerbuild/install}
 clang_prefix=${PEERS_CLANG_PREFIX:-$prefix-clang}
+
+# require_harness NAME DIR: exit 0 with a note unless the harnesses hold DIR/CMakeLists.txt
+require_harness() {
+  if [[ ! -f $harness/$2/CMakeLists.txt ]]; then
+    echo "$1: no harness at $harness (set PEERS_HARNESS to the directory holding $2/); nothing measured"
+    exit 0
+  fi
+}
 
 build_soadyn_cli() {
   echo "== soadyn: $build"

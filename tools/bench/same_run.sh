@@ -19,14 +19,11 @@
 # Exits 0 with a note when the harness, the peers or MuJoCo (installed when running as root) are
 # missing (the peers are optional).
 set -euo pipefail
-source "$(dirname "$0")/peers_env.sh"  # repo, build, harness, prefix, clang_prefix, build_soadyn_cli
+source "$(dirname "$0")/peers_env.sh"  # repo, build, harness, prefix, clang_prefix, require_harness, build_soadyn_cli
 work=${SAME_RUN_DIR:-/tmp/same_run}
 out=${OUT:-$work/same_run.txt}
 
-if [[ ! -f $harness/same_run/CMakeLists.txt ]]; then
-  echo "same_run: no harness at $harness (set PEERS_HARNESS to the directory holding same_run/); nothing measured"
-  exit 0
-fi
+require_harness same_run same_run
 if [[ ! -d $prefix/lib/cmake/pinocchio && ! -f $prefix/include/rbdl/rbdl.h ]]; then
   echo "same_run: neither Pinocchio nor RBDL is installed at $prefix (PEERS_PREFIX; $harness/build_peers.sh builds them); nothing measured"
   exit 0
