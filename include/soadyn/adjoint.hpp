@@ -67,8 +67,8 @@ struct CostGradient {
 // initial state, the parameters of bodies or "all").  steps_per_checkpoint: CVODES' Nd, the steps
 // between checkpoints; memory holds one interpolation point per step of one interval plus one
 // checkpoint per interval.  0: 50 per entry of the state y = [q; v], from 500 to 10000
-// (automatic_steps_per_checkpoint); negative: refused.  Throws soadyn::Error for what forward sensitivities refuse, for nothing
-// to differentiate, and SimulationError when either run fails.  The parameter quadrature has no error
+// (automatic_steps_per_checkpoint); negative: refused.  Throws soadyn::Error for what forward
+// sensitivities refuse, for nothing to differentiate, and SimulationError when either run fails.  The parameter quadrature has no error
 // test of its own (CVodeSetQuadErrConB off): it rides on the adjoint's controlled steps.
 CostGradient gradient(const Scenario& sc, const SimulationSettings& settings, const Cost& cost,
                       const SensitivitySettings& wrt, long steps_per_checkpoint = 0);
