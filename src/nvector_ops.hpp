@@ -172,8 +172,26 @@ inline int dot_multi(int nvec, N_Vector x, N_Vector* Y, realtype* d) {
   for (int k = 0; k < nvec; ++k) d[k] = dot(x, Y[k]);
   return 0;
 }
-// Z_k = a X_k + b Y_k
+// the first entry of V_0 when V_0 … V_{nvec−1} lie one after the other in memory (as a pool's
+// consecutive clones do: nvector_pool.hpp), else nullptr
+inline realtype* contiguous(int nvec, N_Vector* V) {
+  realtype* first = data(V[0]);
+  const sunindextype n = length(V[0]);
+  for (int k = 1; k < nvec; ++k)
+    if (data(V[k]) != first + k * n || length(V[k]) != n) return nullptr;
+  return first;
+}
+// Z_k = a X_k + b Y_k; one loop over all the entries when each array lies in one piece (CVODES'
+// predictor calls this q(q+1)/2 times a step on the sensitivities' Nordsieck arrays: 2–4 % of the
+// humanoid's forward-sensitivity runs against a loop per vector)
 inline int linear_sum_array(int nvec, realtype a, N_Vector* X, realtype b, N_Vector* Y, N_Vector* Z) {
+  const realtype *xd = contiguous(nvec, X), *yd = contiguous(nvec, Y);
+  realtype* zd = contiguous(nvec, Z);
+  if (xd && yd && zd && length(X[0]) == length(Z[0]) && length(Y[0]) == length(Z[0])) {
+    const sunindextype n = nvec * length(Z[0]);
+    for (sunindextype i = 0; i < n; ++i) zd[i] = a * xd[i] + b * yd[i];
+    return 0;
+  }
   for (int k = 0; k < nvec; ++k) linear_sum(a, X[k], b, Y[k], Z[k]);
   return 0;
 }

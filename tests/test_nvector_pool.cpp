@@ -9,6 +9,7 @@
 
 #include <sundials/sundials_context.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <random>
 #include <unistd.h>
@@ -106,8 +107,18 @@ TEST(NvectorPool, VectorArrayOperationsAgreeWithTheLibrarysVectors) {
       NV_Ith_S(X[j], i) = NV_Ith_S(LX[j], i) = u(rng);
       NV_Ith_S(Y[j], i) = NV_Ith_S(LY[j], i) = u(rng);
     }
+  // a pool's array lies in one piece, so linear_sum_array takes its one loop; the library's does not
+  ASSERT_NE(soadyn::nvector_ops::detail::contiguous(k, X), nullptr);
+  ASSERT_EQ(soadyn::nvector_ops::detail::contiguous(k, LX), nullptr);
   N_VLinearSumVectorArray(k, 0.5, X, -2.0, Y, X);
   N_VLinearSumVectorArray(k, 0.5, LX, -2.0, LY, LX);
+  // out of order, the same vectors take the loop per vector
+  std::vector<N_Vector> RX(X, X + k), RY(Y, Y + k), RLX(LX, LX + k), RLY(LY, LY + k);
+  std::reverse(RX.begin(), RX.end()), std::reverse(RY.begin(), RY.end());
+  std::reverse(RLX.begin(), RLX.end()), std::reverse(RLY.begin(), RLY.end());
+  ASSERT_EQ(soadyn::nvector_ops::detail::contiguous(k, RX.data()), nullptr);
+  N_VLinearSumVectorArray(k, -1.5, RY.data(), 0.25, RX.data(), RX.data());
+  N_VLinearSumVectorArray(k, -1.5, RLY.data(), 0.25, RLX.data(), RLX.data());
   std::vector<double> norms(k), lnorms(k);
   N_VConst(0.7, t), N_VConst(0.7, lt);
   std::vector<N_Vector> W(k, t), LW(k, lt);
