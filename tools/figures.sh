@@ -6,6 +6,7 @@
 #   run_<scenario>.png        trajectories, energy error and momentum of the demo runs (tools/plot.py)
 #   ensemble_{wp,stability}.{png,csv}   charts over ensembles (soadyn sweep, tools/ensemble_charts.py)
 #   gradient.md               a whole run's derivatives against a plain run (tools/bench/gradient.py)
+#   python_overhead.md        what a call from Python adds to the library's time (tools/bench/python_overhead.py)
 #   identify_arm.png          soadyn identify: the logged arm, the scene 30 % off and the fitted scene (tools/plot.py --compare)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -33,5 +34,6 @@ cp out/ensemble_wp/ensemble_wp.{png,csv} tools/results/
 build/soadyn sweep scenarios/double_pendulum_stability.sweep.yaml -o out/ensemble_stability -q
 tools/ensemble_charts.py out/ensemble_stability/results.h5 -o out/ensemble_stability
 cp out/ensemble_stability/ensemble_stability.{png,csv} tools/results/
-tools/bench/gradient.py >tools/results/gradient.md
+{ tools/bench/gradient.py --repeat 7 --t-end 0.5; echo; tools/bench/gradient.py --repeat 7 --t-end 1.0; } >tools/results/gradient.md
+tools/bench/python_overhead.py --processes 15 >tools/results/python_overhead.md
 echo "figures and tables written to tools/results/"

@@ -216,6 +216,9 @@ struct FrameRobot {
 const FrameRobot kFrameRobots[] = {
     {"arm7", "arm7.urdf", false, "link_7"},                       // tests/data/arm7.urdf: the 7-DOF arm's flange
     {"humanoid", "humanoid.urdf", true, "left_index_tip"},        // tools/humanoid_urdf.py: 50 DOF on a free root
+    {"chain_8", "chain_8.urdf", false, "link8"},                  // tools/bench/make_models.py's chains: the tip
+    {"chain_32", "chain_32.urdf", false, "link32"},
+    {"chain_64", "chain_64.urdf", false, "link64"},
 };
 
 // soadyn on the robot at a random state, and the same problem for a peer: the free root's q, then

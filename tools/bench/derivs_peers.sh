@@ -8,8 +8,9 @@
 #
 # Builds soadyn's CLI target in SOADYN_BUILD_DIR (a plain Release build when it is not configured
 # yet), builds the harness's two executables, writes the robots it times besides the harness's
-# chains (tools/bench/make_models.py's quadruped_18, fixed and free; tools/humanoid_urdf.py's
-# 50-DOF humanoid, fixed and free; tests/data/arm7.urdf) and saves the whole output.  Environment:
+# chains (tools/bench/make_models.py's binary trees of 7, 15 and 63 bodies and quadruped_18, fixed
+# and free; tools/humanoid_urdf.py's 50-DOF humanoid, fixed and free; tests/data/arm7.urdf) and
+# saves the whole output.  Environment:
 #   PEERS_HARNESS       the harness (default: <repository>/../shared/peers)
 #   PEERS_PREFIX        Pinocchio built by g++ or clang (default /tmp/peerbuild/install)
 #   PEERS_CLANG_PREFIX  Pinocchio built by clang++ (default PEERS_PREFIX-clang; left out if absent)
@@ -34,7 +35,7 @@ echo "== harness: $harness/derivs"
 mkdir -p "$work"
 build_harness "$harness/derivs" "$work" DERIVS_PINOCCHIO_ONLY bench_derivs_pinocchio derivs_peers
 
-# the robots: the quadruped and the humanoid as URDF, fixed and free-floating (":free")
+# the binary trees, and the robots: the quadruped and the humanoid as URDF, fixed and free-floating (":free")
 models=$work/models
 mkdir -p "$models"
 /usr/bin/python3 "$repo/tools/bench/make_models.py" "$models" >/dev/null
@@ -44,6 +45,7 @@ echo "== running (output saved to $out)"
 mkdir -p "$(dirname "$out")"
 cd "$harness"
 "$work/gcc/bench_derivs" --rounds "${ROUNDS:-3}" "${child[@]}" \
-  models/chain_8.urdf models/chain_32.urdf models/chain_64.urdf "$repo/tests/data/arm7.urdf" \
+  models/chain_8.urdf models/chain_32.urdf models/chain_64.urdf \
+  "$models/tree_7.urdf" "$models/tree_15.urdf" "$models/tree_63.urdf" "$repo/tests/data/arm7.urdf" \
   "$models/quadruped_18.urdf" "$models/quadruped_18.urdf:free" "$models/humanoid.urdf" "$models/humanoid.urdf:free" 2>&1 |
   tee "$out"

@@ -69,17 +69,18 @@ def main():
         reference.v0 = np.zeros(model.nv)
         ref = soadyn.simulate(reference, output_dt=0.01, **settings)
         cost = soadyn.tracking_cost(model, ref, q=1.0, v=0.1)
-        plain, _ = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end, **settings))
+        plain, run = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end, **settings))
         adj, g = best(args.repeat, lambda: soadyn.gradient(scene, cost, **settings))
         body = model.body_names[model.nbodies // 2]
-        fwd_p, _ = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
+        fwd_p, run_p = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
                                                               sensitivities={"parameters": [body]}, **settings))
-        fwd_x, _ = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
+        fwd_x, run_x = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
                                                               sensitivities={"initial_state": True}, **settings))
         runs = 2 * (10 * model.nbodies + 2 * model.nv) + 1
-        print(f"| {name} | {model.nv} | {model.nbodies} | {plain * 1e3:.2f} ms | {adj * 1e3:.2f} ms "
-              f"({g.stats['forward_steps']} + {g.stats['backward_steps']} steps) | {adj / plain:.2f} | "
-              f"{fwd_p * 1e3:.2f} ms | {fwd_p / plain:.2f} | {fwd_x * 1e3:.2f} ms | {fwd_x / plain:.2f} | "
+        print(f"| {name} | {model.nv} | {model.nbodies} | {plain * 1e3:.2f} ms ({run.summary.steps} steps) | "
+              f"{adj * 1e3:.2f} ms ({g.stats['forward_steps']} + {g.stats['backward_steps']} steps) | {adj / plain:.2f} | "
+              f"{fwd_p * 1e3:.2f} ms ({run_p.summary.steps} steps) | {fwd_p / plain:.2f} | "
+              f"{fwd_x * 1e3:.2f} ms ({run_x.summary.steps} steps) | {fwd_x / plain:.2f} | "
               f"{runs} × plain = {runs * plain * 1e3:.0f} ms | {runs:.0f} |")
 
 
