@@ -245,7 +245,7 @@ class Cvode : public Integrator {
     try {
       self->sys_.rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
       // a non-finite derivative is recoverable: CVODE retries with a smaller step
-      return map(ydot).allFinite() ? 0 : 1;
+      return nvector_ops::all_finite(N_VGetArrayPointer(ydot), N_VGetLength(ydot)) ? 0 : 1;
     } catch (...) {
       self->pending_ = std::current_exception();
       return -1;

@@ -144,7 +144,19 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     try {
       System& sys = self->sys_;
       const Model& m = sys.model;
-      for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
+      // CVODES' vector arrays as the columns of S and Ṡ where each lies in one piece (the pool's
+      // clones do, nvector_pool.hpp); an array that does not is copied to S_ or from Sd_
+      const Eigen::Index n = self->S_.rows();
+      const auto in_one_piece = [&](N_Vector* V) {
+        double* p = nvector_ops::detail::contiguous(ns, V);
+        return p && N_VGetLength(V[0]) == n ? p : nullptr;
+      };
+      const double* s_in = in_one_piece(yS);
+      double* s_out = in_one_piece(ySdot);
+      if (!s_in) {
+        for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
+        s_in = self->S_.data();
+      }
       // the staggered corrector calls again at the state it has converged: the sweeps and Y are then
       // still those of the last call, and only the products are new
       const long linearization = sys.linearize(t, N_VGetArrayPointer(y));
@@ -155,9 +167,11 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
         self->Y_ = -self->Y_;
         self->y_linearization_ = linearization;
       }
-      sys.linearized_times(self->S_, self->Sd_, parameters ? &self->Y_ : nullptr);
-      if (!self->Sd_.allFinite()) return 1;  // recoverable: CVODES retries with a smaller step
-      for (int k = 0; k < ns; ++k) map(ySdot[k]) = self->Sd_.col(k);
+      Eigen::Map<MatX> out(s_out ? s_out : self->Sd_.data(), n, ns);
+      sys.linearized_times(Eigen::Map<const MatX>(s_in, n, ns), out, parameters ? &self->Y_ : nullptr);
+      if (!nvector_ops::all_finite(out.data(), out.size())) return 1;  // recoverable: CVODES retries with a smaller step
+      if (!s_out)
+        for (int k = 0; k < ns; ++k) map(ySdot[k]) = self->Sd_.col(k);
       return 0;
     } catch (...) {
       self->pending_ = std::current_exception();

@@ -149,13 +149,19 @@ void System::jacobian_times(double t, const double* y, const MatX& S, MatX& out)
 }
 
 void System::linearized_times(const MatX& S, MatX& out, const MatX* forces) {
+  if (out.rows() != size() || out.cols() != S.cols()) out.resize(size(), S.cols());
+  linearized_times(Eigen::Ref<const MatX>(S), Eigen::Ref<MatX>(out), forces);
+}
+
+void System::linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces) {
   if (!linearized_) throw Error("System::linearized_times: no state linearized since the last evaluation");
   const double t = lin_t_;
   const int nq = model.nq, nv = model.nv;
   const Eigen::Index ns = S.cols();
   if (forces && (forces->rows() != nv || forces->cols() > ns))
     throw Error("System::linearized_times: forces: expected " + std::to_string(nv) + " rows and at most as many columns as S");
-  if (out.rows() != size() || out.cols() != ns) out.resize(size(), ns);
+  if (S.rows() != size() || out.rows() != size() || out.cols() != ns)
+    throw Error("System::linearized_times: expected S and out of " + std::to_string(size()) + " rows and the same columns");
   if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns), W.resize(nv, ns);
   const auto s_v = S.middleRows(nq, nv);
   // q̇'s rows, and S's q rows on the tangent: δ = T(q) s_q (q itself when no joint holds a quaternion)
@@ -182,7 +188,7 @@ void System::linearized_times(const MatX& S, MatX& out, const MatX* forces) {
   }
 }
 
-void System::linearized_tangent_rows(const MatX& S, MatX& out) {
+void System::linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out) {
   const int nq = model.nq;
   // q̇(q, v) joint by joint, and δ = T(q) s_q
   for (int i = 0; i < model.nbodies; ++i) {

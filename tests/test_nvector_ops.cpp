@@ -7,6 +7,7 @@
 
 #include <sundials/sundials_context.h>
 
+#include <limits>
 #include <memory>
 #include <random>
 #include <vector>
@@ -196,6 +197,31 @@ TEST_F(NvectorOps, ACloneCarriesTheCompiledOperations) {
   auto l = library(random());
   EXPECT_NE(w->ops->nvlinearsum, l->ops->nvlinearsum);
   EXPECT_NE(w->ops->nvwrmsnormvectorarray, l->ops->nvwrmsnormvectorarray);
+}
+
+// all_finite, the test on the bits the sensitivity and state right-hand sides end with: true for
+// every finite double (zeros of both signs, subnormals, the largest), false for NaN or ±inf at any
+// position, as std::isfinite says entry by entry
+TEST(NvectorOpsAllFinite, FindsNanAndInfinityAtAnyPosition) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1e3, 1e3);
+  const double specials[] = {0.0, -0.0, std::numeric_limits<double>::denorm_min(), -std::numeric_limits<double>::max(),
+                             std::numeric_limits<double>::max(), std::numeric_limits<double>::min()};
+  const double bad[] = {std::numeric_limits<double>::quiet_NaN(), -std::numeric_limits<double>::quiet_NaN(),
+                        std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  for (const sunindextype n : {sunindextype(1), sunindextype(7), kN, sunindextype(1000)}) {
+    std::vector<double> x(static_cast<size_t>(n));
+    for (sunindextype i = 0; i < n; ++i) x[size_t(i)] = i % 5 == 0 ? specials[size_t(i / 5) % 6] : u(rng);
+    EXPECT_TRUE(ops::all_finite(x.data(), n)) << "n " << n;
+    for (const sunindextype at : {sunindextype(0), n / 2, n - 1})
+      for (const double b : bad) {
+        const double keep = x[size_t(at)];
+        x[size_t(at)] = b;
+        EXPECT_FALSE(ops::all_finite(x.data(), n)) << "n " << n << ", " << b << " at " << at;
+        EXPECT_TRUE(ops::all_finite(x.data(), at)) << "the entries before it";
+        x[size_t(at)] = keep;
+      }
+  }
 }
 
 }  // namespace

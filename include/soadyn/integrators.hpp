@@ -89,9 +89,12 @@ class System {
   // when it has just made one there; it returns the number of that linearization (a new number for
   // each one it makes, so that a caller keeping more at the state knows when to redo it).
   // linearized_times applies it to S; with `forces` (nv × m, m ≤ S's columns), the last m columns
-  // also move along τ by them: their q̈ rows gain ∂q̈/∂τ F = 𝓜⁻¹ F (∂q̈/∂π = −𝓜⁻¹ Y, sensitivity.cpp)
+  // also move along τ by them: their q̈ rows gain ∂q̈/∂τ F = 𝓜⁻¹ F (∂q̈/∂π = −𝓜⁻¹ Y, sensitivity.cpp).
+  // The MatX form sizes out; the Ref form writes into out as it is (size() × S's columns), so
+  // that CVODES' own vectors can be S and out without a copy
   long linearize(double t, const double* y);
   void linearized_times(const MatX& S, MatX& out, const MatX* forces = nullptr);
+  void linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces = nullptr);
   void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
   void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
@@ -128,7 +131,7 @@ class System {
 
  private:
   // linearized_times' q̇ rows and δ = T(q) S_q when a joint holds a quaternion
-  void linearized_tangent_rows(const MatX& S, MatX& out);
+  void linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out);
   bool evaluated_ = false;         // rhs's state (eval_t_, eval_y_) is still data's
   double eval_t_ = 0.0;
   VecX eval_y_;
