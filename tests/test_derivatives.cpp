@@ -100,28 +100,38 @@ TEST_P(Derivatives, InverseDynamicsAgainstCentralDifferences) {
   }
 }
 
+// a seeded random tree at a random state (q, v, q̈), with its inverse-dynamics derivatives as
+// matrices (full) and the sweeps the O(N) products start from (swept): what the product tests compare
+struct SweptState {
+  Model model;
+  Data data;
+  DerivativeData full, swept;
+  VecX q, v, qdd;
+  SweptState(Rng& rng, const TreeOptions& o)
+      : model(random_model(rng, o)), data(model), full(model), swept(model), q(random_q(rng, model)),
+        v(random_v(rng, model, 2.0)), qdd(random_v(rng, model, 3.0)) {
+    update_kinematics(model, data, q);
+    inverse_dynamics_derivatives(model, data, v, qdd, full);
+    inverse_dynamics_derivative_sweeps(model, data, v, qdd, swept);
+  }
+};
+
 // the O(N) vector products against the O(N·depth) matrices they leave out (and so, through the test
 // above, against central differences), on every joint type
 TEST_P(Derivatives, TransposeTimesVectorEqualsTheMatrices) {
   const Case& c = GetParam();
   for (int seed = 0; seed < 3; ++seed) {
     Rng rng(103 * seed + 5 * c.options.n);
-    const Model model = random_model(rng, c.options);
-    Data data(model);
-    DerivativeData full(model), vjp(model);
-    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
-    const VecX mu = random_v(rng, model);
-    update_kinematics(model, data, q);
-    inverse_dynamics_derivatives(model, data, v, qdd, full);
+    SweptState s(rng, c.options);
+    const Model& model = s.model;
     VecX gq(model.nv), gv(model.nv);
-    inverse_dynamics_derivative_sweeps(model, data, v, qdd, vjp);
     for (int k = 0; k < 2; ++k) {  // two vectors at one state share the sweeps
-      const VecX m = k == 0 ? mu : random_v(rng, model);
-      inverse_dynamics_derivatives_transpose_times(model, vjp, m, gq, gv);
-      EXPECT_TRUE(near_rel(gq, full.dtau_dq.transpose() * m, 1e-12)) << c.name << " seed " << seed << ": (∂τ/∂q)ᵀμ";
-      EXPECT_TRUE(near_rel(gv, full.dtau_dv.transpose() * m, 1e-12)) << c.name << " seed " << seed << ": (∂τ/∂v)ᵀμ";
+      const VecX m = random_v(rng, model);
+      inverse_dynamics_derivatives_transpose_times(model, s.swept, m, gq, gv);
+      EXPECT_TRUE(near_rel(gq, s.full.dtau_dq.transpose() * m, 1e-12)) << c.name << " seed " << seed << ": (∂τ/∂q)ᵀμ";
+      EXPECT_TRUE(near_rel(gv, s.full.dtau_dv.transpose() * m, 1e-12)) << c.name << " seed " << seed << ": (∂τ/∂v)ᵀμ";
     }
-    EXPECT_TRUE(near_rel(vjp.tau, full.tau, 1e-14)) << c.name;
+    EXPECT_TRUE(near_rel(s.swept.tau, s.full.tau, 1e-14)) << c.name;
   }
 }
 
@@ -131,18 +141,13 @@ TEST_P(Derivatives, TimesDirectionsEqualsTheMatrices) {
   const Case& c = GetParam();
   for (int seed = 0; seed < 3; ++seed) {
     Rng rng(107 * seed + 7 * c.options.n);
-    const Model model = random_model(rng, c.options);
-    Data data(model);
-    DerivativeData full(model), jvp(model);
-    const VecX q = random_q(rng, model), v = random_v(rng, model, 2.0), qdd = random_v(rng, model, 3.0);
-    update_kinematics(model, data, q);
-    inverse_dynamics_derivatives(model, data, v, qdd, full);
-    inverse_dynamics_derivative_sweeps(model, data, v, qdd, jvp);
+    SweptState s(rng, c.options);
+    const Model& model = s.model;
     for (const int k : {DerivativeData::kDirections + 3, 10, 1}) {
       MatX xq(model.nv, k), xv(model.nv, k), out(model.nv, k);
       for (int j = 0; j < k; ++j) xq.col(j) = random_v(rng, model), xv.col(j) = random_v(rng, model);
-      inverse_dynamics_derivatives_times(model, jvp, xq, xv, out);
-      const MatX want = full.dtau_dq * xq + full.dtau_dv * xv;
+      inverse_dynamics_derivatives_times(model, s.swept, xq, xv, out);
+      const MatX want = s.full.dtau_dq * xq + s.full.dtau_dv * xv;
       EXPECT_TRUE(near_rel(out, want, 1e-12)) << c.name << " seed " << seed << ": ∂τ/∂q xq + ∂τ/∂v xv, " << k << " columns";
       EXPECT_GT(want.cwiseAbs().maxCoeff(), 1e-2);
     }
