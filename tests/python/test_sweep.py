@@ -163,21 +163,41 @@ def test_progress_and_the_dashboard_link(sweep_file, cluster, tmp_path, capsys):
         assert w.split("://")[1] in body or w in body, w
 
 
-def test_killed_sweep_resumes_with_only_the_missing_cases(sweep_file, serial, cluster, tmp_path):
-    out = tmp_path / "out"
-    # the real command on the real cluster, small tasks (the 4 cases sharing a reference), killed
-    # once some batches are in
+def killed_sweep(sweep_file, cluster, out):
+    """The real command on the real cluster, small tasks (the 4 cases sharing a reference), killed once
+    some batches are in.  Returns its parts (name → (mtime, bytes)) once the workers have finished
+    the tasks they were running when it died (those still write their parts; the scheduler drops the
+    rest with the client), or None when the sweep ended before the kill reached it."""
     p = subprocess.Popen([SOADYN, "sweep", sweep_file, "-o", str(out), "--scheduler", cluster.address, "--batch-size", "1"],
                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     parts = out / "parts"
     deadline = time.monotonic() + 60
     while not (parts.exists() and len(list(parts.glob("*.json"))) >= 3):
-        assert p.poll() is None and time.monotonic() < deadline, "the sweep ended or stalled before it could be killed"
+        if p.poll() is not None:
+            return None
+        assert time.monotonic() < deadline, "the sweep stalled before it could be killed"
         time.sleep(0.02)
     os.killpg(p.pid, signal.SIGKILL)
     p.wait()
-    before = {f.name: (f.stat().st_mtime_ns, f.read_bytes()) for f in parts.glob("*.json")}
-    done = sum(len(__import__("json").loads(d)) for _, d in before.values())  # the rows in the files
+    seen, still_since = None, time.monotonic()
+    while time.monotonic() - still_since < 2.0:  # no new part for 2 s
+        now = sorted(f.name for f in parts.glob("*.json"))
+        if now != seen:
+            seen, still_since = now, time.monotonic()
+        time.sleep(0.05)
+    return {f.name: (f.stat().st_mtime_ns, f.read_bytes()) for f in parts.glob("*.json")}
+
+
+def test_killed_sweep_resumes_with_only_the_missing_cases(sweep_file, serial, cluster, tmp_path):
+    # a sweep that outran its kill (on two busy cores the polling process can wake after the last
+    # batch) resumes nothing: that attempt is set aside and the sweep killed again, up to 5 times
+    for attempt in range(5):
+        out = tmp_path / f"out{attempt}"
+        before = killed_sweep(sweep_file, cluster, out)
+        done = 48 if before is None else sum(len(__import__("json").loads(d)) for _, d in before.values())
+        if done < 48:
+            break
+    parts = out / "parts"
     assert 3 <= done < 48
     assert not (out / "results.h5").exists()
     r = soadyn.sweep(sweep_file, str(out), scheduler=cluster.address, quiet=True)
