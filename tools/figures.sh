@@ -34,6 +34,6 @@ cp out/ensemble_wp/ensemble_wp.{png,csv} tools/results/
 build/soadyn sweep scenarios/double_pendulum_stability.sweep.yaml -o out/ensemble_stability -q
 tools/ensemble_charts.py out/ensemble_stability/results.h5 -o out/ensemble_stability
 cp out/ensemble_stability/ensemble_stability.{png,csv} tools/results/
-{ tools/bench/gradient.py --repeat 7 --t-end 0.5; echo; tools/bench/gradient.py --repeat 7 --t-end 1.0; } >tools/results/gradient.md
+{ tools/bench/gradient.py --repeat 7 --t-end 0.5; echo; tools/bench/gradient.py --repeat 5 --t-end 1.0 --every-body; } >tools/results/gradient.md
 tools/bench/python_overhead.py --processes 15 >tools/results/python_overhead.md
 echo "figures and tables written to tools/results/"

@@ -5,14 +5,15 @@ sensitivities (simulate(sensitivities=…)) for one body's 10 parameters and for
 baseline of central differences of whole runs, 2·(10·N + 2·nv) + 1 plain runs.  Not a test: a
 benchmark.
 
-    tools/bench/gradient.py [--build build] [--repeat 3] [--t-end 1.0] [--rtol 1e-8] [--processes 3]
+    tools/bench/gradient.py [--build build] [--repeat 3] [--t-end 1.0] [--rtol 1e-8] [--processes 3] [--every-body]
 
 Models: the 7-DOF arm (tests/data/arm7.urdf) and the 50-DOF humanoid of tools/humanoid_urdf.py
 (fixed root), gravity on, a seeded initial state, CVODE Adams.  The cost tracks a run of the same
 robot from another initial state (∫ ½|q − q̂|² + ½·0.1|v − v̂|² dt, soadyn.tracking_cost).  CPU
 seconds of the calling thread (time.thread_time), best of --repeat.  The bars of the issue: the
 adjoint ≤ 5× a plain run; forward sensitivities for k parameters ≤ (1 + 0.5 k)×.  Prints a
-Markdown table.
+Markdown table; --every-body adds a second: one body's 10 parameters for each body in turn, with
+the steps its error control takes against the plain run's.
 
 The measurement runs in --processes fresh processes, one after the other, and each cell is the
 median over them: a process's times move with where its stack and heap lie (the same plain run of
@@ -80,8 +81,25 @@ def measure(args):
             rows.append(dict(name=name, nv=model.nv, nbodies=model.nbodies, plain=plain, adjoint=adj, sens_p=fwd_p,
                              sens_x=fwd_x, steps=run.summary.steps, adjoint_steps=[g.stats["forward_steps"],
                                                                                    g.stats["backward_steps"]],
-                             steps_p=run_p.summary.steps, steps_x=run_x.summary.steps))
+                             steps_p=run_p.summary.steps, steps_x=run_x.summary.steps, bodies=[]))
+            if args.every_body:
+                pi = soadyn.parameters(model)
+                for b, body in enumerate(model.body_names):
+                    t, out = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
+                                                                      sensitivities={"parameters": [body]}, **settings))
+                    rows[-1]["bodies"].append(dict(name=body, mass=pi[10 * b], time=t, steps=out.summary.steps))
     return rows
+
+
+def every_body_table(runs):
+    """One body's 10 parameters for each body of each model: the median ratio over the processes."""
+    print("\n| model | body | mass (kg) | steps (× plain run's) | forward sens. 10 parameters: ratio (bar 6) |")
+    print("|---|---|---|---|---|")
+    for k, r in enumerate(runs[0]):
+        for j, b in enumerate(r["bodies"]):
+            xs = [run[k]["bodies"][j]["time"] / run[k]["plain"] for run in runs]
+            print(f"| {r['name']} | {b['name']} | {b['mass']:.3g} | {b['steps'] / r['steps']:.2f} | "
+                  f"{statistics.median(xs):.2f} [{min(xs):.2f}, {max(xs):.2f}] |")
 
 
 def main():
@@ -91,6 +109,7 @@ def main():
     ap.add_argument("--t-end", type=float, default=1.0)
     ap.add_argument("--rtol", type=float, default=1e-8)
     ap.add_argument("--processes", type=int, default=3, help="fresh processes measured one after the other")
+    ap.add_argument("--every-body", action="store_true", help="also one body's 10 parameters for every body")
     ap.add_argument("--json", action="store_true", help="measure in this process and print its rows as JSON")
     args = ap.parse_args()
     if args.repeat < 1 or args.processes < 1:
@@ -101,7 +120,8 @@ def main():
     runs = []
     for _ in range(args.processes):
         out = subprocess.run([sys.executable, os.path.abspath(__file__), "--json", "--build", args.build,
-                              "--repeat", str(args.repeat), "--t-end", repr(args.t_end), "--rtol", repr(args.rtol)],
+                              "--repeat", str(args.repeat), "--t-end", repr(args.t_end), "--rtol", repr(args.rtol)]
+                             + (["--every-body"] if args.every_body else []),
                              check=True, capture_output=True, text=True).stdout
         runs.append(json.loads(out))
     print(f"CVODE Adams, rtol {args.rtol:g}, t_end {args.t_end:g} s; CPU time of the calling thread, best of "
@@ -126,6 +146,8 @@ def main():
               f"{ms('sens_p'):.2f} ms ({r['steps_p']} steps) | {ratio('sens_p')} | "
               f"{ms('sens_x'):.2f} ms ({r['steps_x']} steps) | {ratio('sens_x')} | "
               f"{calls} × plain = {calls * ms('plain'):.0f} ms | {calls:.0f} |")
+    if args.every_body:
+        every_body_table(runs)
 
 
 if __name__ == "__main__":
