@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
 namespace soadyn::nvector_ops {
 
@@ -314,6 +315,41 @@ inline void install(N_Vector v) {
   o->nvwsqrsummasklocal = detail::wsqr_sum_mask;
   o->nvdotprodmultilocal = detail::dot_multi;
 }
+
+// V_0 … V_{nvec−1}, n entries each, as the columns of one n × nvec column-major block, for code that
+// works on all of them at once (the sensitivities' right-hand side): the vectors' own entries when
+// they lie in one piece, as a pool's consecutive clones do, else `scratch`, which load() fills from
+// the vectors and store() writes back to them (both nothing in place)
+class ColumnBlock {
+ public:
+  ColumnBlock(int nvec, N_Vector* V, sunindextype n, std::vector<realtype>& scratch) : nvec_(nvec), V_(V), n_(n) {
+    realtype* first = detail::contiguous(nvec, V);
+    if (first && detail::length(V[0]) == n) {
+      data_ = first;
+      return;
+    }
+    scratch.resize(static_cast<size_t>(n) * static_cast<size_t>(nvec));
+    data_ = scratch.data();
+    in_place_ = false;
+  }
+  realtype* data() const { return data_; }
+  bool in_place() const { return in_place_; }
+  void load() const {
+    if (!in_place_)
+      for (int k = 0; k < nvec_; ++k) std::copy_n(detail::data(V_[k]), n_, data_ + k * n_);
+  }
+  void store() const {
+    if (!in_place_)
+      for (int k = 0; k < nvec_; ++k) std::copy_n(data_ + k * n_, n_, detail::data(V_[k]));
+  }
+
+ private:
+  int nvec_;
+  N_Vector* V_;
+  sunindextype n_;
+  realtype* data_ = nullptr;
+  bool in_place_ = true;
+};
 
 // A serial vector of length n with fused and vector-array operations, and the loops above
 inline N_Vector new_vector(sunindextype n, SUNContext ctx) {

@@ -48,7 +48,6 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     if (ns_ == 0) throw Error("sensitivities: nothing to differentiate (initial_state false, no parameters)");
     sys.prepare_jacobian();
     S_ = MatX::Zero(n, ns_);
-    Sd_ = MatX::Zero(n, ns_);
     // s(0): a tangent increment of q₀ moves the coordinates by P δ; one of v₀ moves v; π moves nothing
     if (plan.initial_state) {
       S_.block(0, 0, nq, nv) = tangent_to_coordinates(m, y0.head(nq));
@@ -144,19 +143,11 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     try {
       System& sys = self->sys_;
       const Model& m = sys.model;
-      // CVODES' vector arrays as the columns of S and Ṡ where each lies in one piece (the pool's
-      // clones do, nvector_pool.hpp); an array that does not is copied to S_ or from Sd_
+      // CVODES' vector arrays as the columns of S and Ṡ, in place where each lies in one piece (the
+      // pool's clones do, nvector_pool.hpp), else through a copy
       const Eigen::Index n = self->S_.rows();
-      const auto in_one_piece = [&](N_Vector* V) {
-        double* p = nvector_ops::detail::contiguous(ns, V);
-        return p && N_VGetLength(V[0]) == n ? p : nullptr;
-      };
-      const double* s_in = in_one_piece(yS);
-      double* s_out = in_one_piece(ySdot);
-      if (!s_in) {
-        for (int k = 0; k < ns; ++k) self->S_.col(k) = map(yS[k]);
-        s_in = self->S_.data();
-      }
+      const nvector_ops::ColumnBlock in(ns, yS, n, self->s_scratch_), out(ns, ySdot, n, self->sd_scratch_);
+      in.load();
       // the staggered corrector calls again at the state it has converged: the sweeps and Y are then
       // still those of the last call, and only the products are new
       const long linearization = sys.linearize(t, N_VGetArrayPointer(y));
@@ -167,11 +158,10 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
         self->Y_ = -self->Y_;
         self->y_linearization_ = linearization;
       }
-      Eigen::Map<MatX> out(s_out ? s_out : self->Sd_.data(), n, ns);
-      sys.linearized_times(Eigen::Map<const MatX>(s_in, n, ns), out, parameters ? &self->Y_ : nullptr);
-      if (!nvector_ops::all_finite(out.data(), out.size())) return 1;  // recoverable: CVODES retries with a smaller step
-      if (!s_out)
-        for (int k = 0; k < ns; ++k) map(ySdot[k]) = self->Sd_.col(k);
+      Eigen::Map<MatX> sd(out.data(), n, ns);
+      sys.linearized_times(Eigen::Map<const MatX>(in.data(), n, ns), sd, parameters ? &self->Y_ : nullptr);
+      if (!nvector_ops::all_finite(sd.data(), sd.size())) return 1;  // recoverable: CVODES retries with a smaller step
+      out.store();
       return 0;
     } catch (...) {
       self->pending_ = std::current_exception();
@@ -181,7 +171,8 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
 
   SensitivityPlan plan_;
   int ns_;
-  MatX S_, S0_, Sd_;
+  MatX S_, S0_;
+  std::vector<double> s_scratch_, sd_scratch_;  // S and Ṡ when CVODES' arrays do not lie in one piece
   MatX Y_;                    // −Y: the regressor's columns of the plan's bodies, negated, at linearization y_linearization_
   long y_linearization_ = 0;  // 0: none yet (linearize numbers from 1)
   VectorArrayPtr yS_;

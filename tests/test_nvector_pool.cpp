@@ -1,7 +1,8 @@
 // The pool of CVODE's vectors (src/nvector_pool.hpp): its vectors are serial vectors with the
 // compiled operations, clones of clones stay in the pool, a destroyed vector is the next clone,
-// lengths keep apart, operations on them agree with SUNDIALS' own vectors, and the entries of
-// vectors never written cost no memory (the resident size, read from /proc).
+// lengths keep apart, operations on them agree with SUNDIALS' own vectors, a pool's array is a
+// ColumnBlock in place and any other one a copy, and the entries of vectors never written cost no
+// memory (the resident size, read from /proc).
 #include "../src/nvector_ops.hpp"
 #include "../src/nvector_pool.hpp"
 
@@ -130,6 +131,58 @@ TEST(NvectorPool, VectorArrayOperationsAgreeWithTheLibrarysVectors) {
   }
   N_VDestroyVectorArray(X, k), N_VDestroyVectorArray(Y, k), N_VDestroy(t);
   N_VDestroyVectorArray(LX, k), N_VDestroyVectorArray(LY, k), N_VDestroy(lt);
+  EXPECT_EQ(pool.live(), 0);
+}
+
+// ColumnBlock, how the sensitivities' right-hand side sees CVODES' arrays: a pool's array is the
+// block itself (writes through it land in the vectors, the scratch is never used); the library's
+// array and the pool's out of order go through the scratch, load() reading each vector into its
+// column and store() writing each column back, nothing else touched
+TEST(NvectorPool, ColumnBlockIsAPoolArrayInPlaceAndCopiesAnyOther) {
+  using soadyn::nvector_ops::ColumnBlock;
+  Context c;
+  VectorPool pool;
+  constexpr int n = 37, k = 5;
+  N_Vector t = pool.make(n, c.ctx);
+  N_Vector* X = N_VCloneVectorArray(k, t);
+  N_Vector lt = N_VNew_Serial(n, c.ctx);
+  N_Vector* LX = N_VCloneVectorArray(k, lt);
+  std::vector<N_Vector> RX(X, X + k);
+  std::reverse(RX.begin(), RX.end());
+  const auto entry = [](int j, int i) { return 1000.0 * j + i + 0.5; };
+  {
+    std::vector<double> scratch;
+    const ColumnBlock b(k, X, n, scratch);
+    ASSERT_TRUE(b.in_place());
+    EXPECT_EQ(b.data(), NV_DATA_S(X[0]));
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i < n; ++i) b.data()[j * n + i] = entry(j, i);
+    b.load(), b.store();
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i < n; ++i) EXPECT_EQ(NV_Ith_S(X[j], i), entry(j, i)) << "pool vector " << j << " entry " << i;
+    EXPECT_TRUE(scratch.empty());
+  }
+  for (N_Vector* V : {LX, RX.data()}) {
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i < n; ++i) NV_Ith_S(V[j], i) = entry(j, i);
+    std::vector<double> scratch;
+    const ColumnBlock b(k, V, n, scratch);
+    ASSERT_FALSE(b.in_place());
+    ASSERT_EQ(b.data(), scratch.data());
+    ASSERT_EQ(scratch.size(), size_t(n * k));
+    b.load();
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i < n; ++i) {
+        EXPECT_EQ(b.data()[j * n + i], entry(j, i)) << "column " << j << " row " << i;
+        b.data()[j * n + i] = -2.0 * entry(j, i);
+      }
+    for (int j = 0; j < k; ++j) EXPECT_EQ(NV_Ith_S(V[j], 0), entry(j, 0)) << "written before store";
+    b.store();
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i < n; ++i) EXPECT_EQ(NV_Ith_S(V[j], i), -2.0 * entry(j, i)) << "vector " << j << " entry " << i;
+  }
+  N_VDestroyVectorArray(X, k), N_VDestroy(t);
+  N_VDestroyVectorArray(LX, k), N_VDestroy(lt);
   EXPECT_EQ(pool.live(), 0);
 }
 
