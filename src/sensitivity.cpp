@@ -58,7 +58,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     if (!yS_) throw Error("CVODES: could not allocate the sensitivity vectors");
     for (int k = 0; k < ns_; ++k) map(yS_[k]) = S_.col(k);
     void* mem = mem_.get();
-    check(CVodeSensInit(mem, ns_, CV_STAGGERED, &CvodeSensitivity::sensitivity_rhs, yS_.get()), "CVodeSensInit");
+    check(CVodeSensInit(mem, ns_, corrector(), &CvodeSensitivity::sensitivity_rhs, yS_.get()), "CVodeSensInit");
     // error control on every sensitivity, scaled by the parameter's size: CVODES tests s_k against
     // rtol and atol / |p̄_k| (CVodeSensEEtolerances), so π_k s_k is held to the state's tolerances
     std::vector<double> pbar(size_t(ns_), 1.0);
@@ -78,11 +78,11 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     check(CVodeSensEEtolerances(mem), "CVodeSensEEtolerances");
     check(CVodeSetSensErrCon(mem, SUNTRUE), "CVodeSetSensErrCon");
     if (!bdf_) {
-      // Adams' fixed-point iteration for the sensitivities too (BDF: CVODES' Newton on I − γJ, the
-      // state's linear solver)
-      nls_sens_.reset(SUNNonlinSol_FixedPointSens(ns_, y_.get(), 0, ctx_.get()));
+      // Adams: one fixed-point iteration for the state and its sensitivities together (BDF: CVODES'
+      // Newton on I − γJ, the state's linear solver, for the sensitivities after the state)
+      nls_sens_.reset(SUNNonlinSol_FixedPointSens(ns_ + 1, y_.get(), 0, ctx_.get()));
       if (!nls_sens_) throw Error("CVODES: could not allocate the sensitivities' fixed-point solver");
-      check(CVodeSetNonlinearSolverSensStg(mem, nls_sens_.get()), "CVodeSetNonlinearSolverSensStg");
+      check(CVodeSetNonlinearSolverSensSim(mem, nls_sens_.get()), "CVodeSetNonlinearSolverSensSim");
     }
     y_out_.reset(N_VClone(y_.get()));
     if (!y_out_) throw Error("CVODES: could not allocate a state vector");
@@ -130,7 +130,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       check(CVodeGetSensDky(mem_.get(), t, 0, yS_.get()), "CVodeGetSensDky");
     }
     Cvode::restart(t, y);
-    check(CVodeSensReInit(mem_.get(), CV_STAGGERED, yS_.get()), "CVodeSensReInit");
+    check(CVodeSensReInit(mem_.get(), corrector(), yS_.get()), "CVodeSensReInit");
   }
 
  private:
@@ -148,8 +148,8 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       const Eigen::Index n = self->S_.rows();
       const nvector_ops::ColumnBlock in(ns, yS, n, self->s_scratch_), out(ns, ySdot, n, self->sd_scratch_);
       in.load();
-      // the staggered corrector calls again at the state it has converged: the sweeps and Y are then
-      // still those of the last call, and only the products are new
+      // a call at the state of the last one (the staggered corrector's iterations) keeps its sweeps
+      // and Y, and only the products are new
       const long linearization = sys.linearize(t, N_VGetArrayPointer(y));
       const bool parameters = self->plan_.np() > 0;
       if (parameters && linearization != self->y_linearization_) {
@@ -168,6 +168,12 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       return -1;
     }
   }
+
+  // Adams: the simultaneous corrector, whose fixed-point iterations take the state and the
+  // sensitivities together (on the humanoid over 1 s, one body's 10 parameters: 6276 steps and 1.58
+  // state evaluations a step against the staggered corrector's 6570 and 2.24, 7 % less time); BDF:
+  // the staggered one, the sensitivities' Newton iteration after the state's with its factor
+  int corrector() const { return bdf_ ? CV_STAGGERED : CV_SIMULTANEOUS; }
 
   SensitivityPlan plan_;
   int ns_;

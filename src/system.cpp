@@ -129,8 +129,9 @@ long System::linearize(double t, const double* y) {
   const int n = size();
   if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
   // [kin], [vel], τ, q̈ and the articulated-body factor: rhs's when it has just evaluated this very
-  // (t, y) by that route without limits (CVODES evaluates f at the state it has converged before
-  // the sensitivities' corrector), else evaluated here
+  // (t, y) by that route without limits (CVODES evaluates f at each iterate before the
+  // sensitivities' right-hand side there, and at the state it has converged before the staggered
+  // corrector), else evaluated here
   if (!(method == FdMethod::ArticulatedBody && !limits && holds_rhs_at(t, y))) {
     at_state(t, y);
     forward_dynamics(model, data, tau, FdMethod::ArticulatedBody);
