@@ -82,8 +82,8 @@ class System {
   // factor (O(N) per column, articulated_solve); springs and dampers included (forward sensitivities,
   // sensitivity.hpp).  Allocates out and its scratch on the first call of a width.
   void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
-  // jacobian_times in two halves, for many products at one state (CVODES' staggered corrector
-  // iterates on the sensitivities at the state it has converged): linearize leaves data (q̈ and the
+  // jacobian_times in two halves, for many products at one state (CVODES' BDF, with the staggered
+  // corrector, iterates on the sensitivities at the state it has converged): linearize leaves data (q̈ and the
   // articulated-body factor; τ, A, F free for the caller) and the sweeps at (t, y), doing nothing when
   // they already hold for this very (t, y) (no evaluation since), and starting from rhs's evaluation
   // when it has just made one there; it returns the number of that linearization (a new number for
