@@ -9,7 +9,7 @@ summaries, E(0) and, with a reference, the samples.  The reference runs of a gro
 Per case that saves the parse of its scenario (~0.1 ms) and soadyn.simulate's Trajectory (every
 sample's body poses, momenta, energies as numpy arrays).
 
-The rows are those soadyn.ensemble.run_case gives (tests/python/test_sweep_batched.py: bit for
+The rows are those soadyn._cases.run_case gives (tests/python/test_sweep_batched.py: bit for
 bit, the CPU time aside): an initial value set here lands where the parser puts it (the same
 joint's slot of q0 or v0, the same double: a float's JSON text is its shortest round-trip form),
 and a value the parser would refuse (not a number, a boolean, |value| > 1e6) makes its case run
@@ -27,7 +27,7 @@ import numpy as np
 
 from . import _soadyn
 from ._soadyn import Error, parse_scenario
-from .ensemble import _CASE_PREFIX, _Copy, _text, _tokens, apply, case_path, compare_reference, empty_row
+from ._cases import _CASE_PREFIX, _Copy, _text, _tokens, apply, case_path, compare_reference, empty_row
 
 MAX_STATE = 1e6  # kMaxStateMagnitude (scenario.hpp): the parser refuses an initial value beyond it
 

@@ -34,7 +34,9 @@ from typing import Any, Dict, List, Optional, Tuple
 import numpy as np
 
 from ._soadyn import Error, __version__
-from .ensemble import RESULT_COLUMNS, Sweep, printable, read_text, run_batch
+from ._cases import RESULT_COLUMNS, run_batch
+from ._yaml_doc import printable, read_text
+from .ensemble import Sweep
 
 MAX_PART_BYTES = 1 << 30  # a part file (a batch's rows, ~0.5 kB each)
 
