@@ -85,7 +85,8 @@ from ._soadyn import (forward_dynamics_parameter_derivative, parameters, regress
 from . import _soadyn
 from ._soadyn import Cost, batch
 from ._trajectory import FramePoses, Gradient, RunSummary, Sensitivities, Trajectory, read_log, summary_from_dict
-from ._sweep import SweepResult, read_results, sweep
+from ._sweep import SweepResult, sweep
+from ._sweep_store import read_results
 from .ensemble import Sweep, load_sweep
 from ._identify import Identification, identify
 

@@ -9,7 +9,7 @@ import math
 import os
 import re
 import stat
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import yaml
 
