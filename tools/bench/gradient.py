@@ -73,21 +73,23 @@ def measure(args):
             cost = soadyn.tracking_cost(model, ref, q=1.0, v=0.1)
             plain, run = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end, **settings))
             adj, g = best(args.repeat, lambda: soadyn.gradient(scene, cost, **settings))
-            body = model.body_names[model.nbodies // 2]
-            fwd_p, run_p = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
-                                                                  sensitivities={"parameters": [body]}, **settings))
+            # one body's 10 parameters: the middle body's for the main table, or every body's
+            middle = model.body_names[model.nbodies // 2]
+            bodies = list(model.body_names) if args.every_body else [middle]
+            one_body = {body: best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
+                                                                       sensitivities={"parameters": [body]}, **settings))
+                        for body in bodies}
+            fwd_p, run_p = one_body[middle]
             fwd_x, run_x = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
                                                                   sensitivities={"initial_state": True}, **settings))
+            pi = soadyn.parameters(model)
             rows.append(dict(name=name, nv=model.nv, nbodies=model.nbodies, plain=plain, adjoint=adj, sens_p=fwd_p,
                              sens_x=fwd_x, steps=run.summary.steps, adjoint_steps=[g.stats["forward_steps"],
                                                                                    g.stats["backward_steps"]],
-                             steps_p=run_p.summary.steps, steps_x=run_x.summary.steps, bodies=[]))
-            if args.every_body:
-                pi = soadyn.parameters(model)
-                for b, body in enumerate(model.body_names):
-                    t, out = best(args.repeat, lambda: soadyn.simulate(scene, output_dt=args.t_end,
-                                                                      sensitivities={"parameters": [body]}, **settings))
-                    rows[-1]["bodies"].append(dict(name=body, mass=pi[10 * b], time=t, steps=out.summary.steps))
+                             steps_p=run_p.summary.steps, steps_x=run_x.summary.steps,
+                             bodies=[dict(name=body, mass=pi[10 * b], time=one_body[body][0],
+                                          steps=one_body[body][1].summary.steps)
+                                     for b, body in enumerate(model.body_names) if args.every_body]))
     return rows
 
 
