@@ -25,7 +25,7 @@
 namespace soadyn::cli {
 
 namespace assets {
-extern const std::string_view page_html, page_css, page_js, plot_js, frames_js, three_js, orbit_js;
+extern const std::string_view page_html, page_css, page_js, plot_js, frames_js, bodies_js, three_js, orbit_js;
 }
 
 namespace {
@@ -335,6 +335,7 @@ int run_view(const ViewOptions& o) {
                                                              {"ORBIT", assets::orbit_js},
                                                              {"PLOT", assets::plot_js},
                                                              {"FRAMES", assets::frames_js},
+                                                             {"BODIES", assets::bodies_js},
                                                              {"VIEWER", assets::page_js}});
 
   try {
