@@ -6,7 +6,7 @@
 #include "soadyn/operators.hpp"
 #include "soadyn/text.hpp"
 
-#include "joint_inertial.hpp"
+#include "point_motion.hpp"
 
 namespace soadyn {
 
@@ -64,33 +64,6 @@ void point_velocity(const Data& data, int b, const Vec3& p, Vec3& w, Vec3& pd) {
   }
   w = data.V.col(b).head<3>();
   pd = data.V.col(b).tail<3>() + w.cross(p - data.eta.col(b));
-}
-
-// α and p̈ of the body's point p for joint accelerations qdd (nullptr: q̈ = 0).
-// v̇_b = [Ψ_D (G q̈ + 𝔞)]_b = Σ_{j ≤ b} D_{b:j} x_j, x_j = G_j q̈_j + 𝔞_j (a root's 𝔞 is zero: the
-// −g Data::coriolis holds there is gravity's base acceleration, not the frame's), then
-// p̈ = η̈_b + α × r + ω × (ω × r), r = p − η_b
-void point_acceleration(const Model& model, const Data& data, int b, const Vec3& p, const VecX* qdd, Vec3& alpha,
-                        Vec3& pdd) {
-  alpha.setZero(), pdd.setZero();
-  if (b < 0) return;
-  const Vec3 eta_b = data.eta.col(b);
-  for (int j = b; j >= 0; j = model.parent[j]) {
-    Vec3 xw = Vec3::Zero(), xv = Vec3::Zero();
-    if (model.parent[j] >= 0) xw = data.coriolis.col(j).head<3>(), xv = data.coriolis.col(j).tail<3>();
-    if (qdd) {
-      Vec3 gw, gu;
-      visit_joint(model, j, [&](const auto& joint) {
-        inertial::motion<std::decay_t<decltype(joint)>>(data.G, model.idx_v[j], qdd->data() + model.idx_v[j], gw, gu);
-      });
-      xw += gw, xv += gu;
-    }
-    // D_{b:j} x = [x_ω; x_v + x_ω × (η_b − η_j)]
-    alpha += xw;
-    pdd += xv + xw.cross(eta_b - data.eta.col(j));
-  }
-  const Vec3 w = data.V.col(b).head<3>(), r = p - eta_b;
-  pdd += alpha.cross(r) + w.cross(w.cross(r));
 }
 
 // [a; b] in the reference, from the same pair about p in inertial axes (a velocity's or a
@@ -165,7 +138,7 @@ Vec6 frame_acceleration(const Model& model, const Data& data, int frame, const V
   const Placement X = place(model, data, frame);
   Vec3 w, pd, alpha, pdd;
   point_velocity(data, b, X.p, w, pd);
-  point_acceleration(model, data, b, X.p, &qdd, alpha, pdd);
+  detail::point_acceleration(model, data, b, X.p, &qdd, alpha, pdd);
   Vec3 lin;
   if (classical) {
     // the body's point at the reference point: p itself, or the one at the origin for world
@@ -197,7 +170,7 @@ void frame_jacobian_dot_times_v(const Model& model, const Data& data, int frame,
   const Placement X = place(model, data, frame);
   Vec3 w, pd, alpha, pdd;
   point_velocity(data, b, X.p, w, pd);
-  point_acceleration(model, data, b, X.p, nullptr, alpha, pdd);
+  detail::point_acceleration(model, data, b, X.p, nullptr, alpha, pdd);
   switch (reference) {
     case Reference::LocalWorldAligned: break;                                    // d/dt [ω; ṗ]
     case Reference::Local: pdd = X.R.transpose() * (pdd - w.cross(pd)), alpha = X.R.transpose() * alpha; break;

@@ -4,6 +4,7 @@
 
 #include "dynamics_routes.hpp"
 #include "joint_inertial.hpp"
+#include "point_motion.hpp"
 
 #include <cmath>
 
@@ -307,5 +308,36 @@ Eigen::Vector4d attitude_quaternion(const Mat3& R) {
   if (u.w() < 0) u.coeffs() = -u.coeffs();
   return {u.w(), u.x(), u.y(), u.z()};
 }
+
+namespace detail {
+
+// α and p̈ of the body's point p (point_motion.hpp):
+// v̇_b = [Ψ_D (G q̈ + 𝔞)]_b = Σ_{j ≤ b} D_{b:j} x_j, x_j = G_j q̈_j + 𝔞_j (a root's 𝔞 is zero: the
+// −g Data::coriolis holds there is gravity's base acceleration, not the frame's), then
+// p̈ = η̈_b + α × r + ω × (ω × r), r = p − η_b
+void point_acceleration(const Model& model, const Data& data, int b, const Vec3& p, const VecX* qdd, Vec3& alpha,
+                        Vec3& pdd) {
+  alpha.setZero(), pdd.setZero();
+  if (b < 0) return;
+  const Vec3 eta_b = data.eta.col(b);
+  for (int j = b; j >= 0; j = model.parent[j]) {
+    Vec3 xw = Vec3::Zero(), xv = Vec3::Zero();
+    if (model.parent[j] >= 0) xw = data.coriolis.col(j).head<3>(), xv = data.coriolis.col(j).tail<3>();
+    if (qdd) {
+      Vec3 gw, gu;
+      visit_joint(model, j, [&](const auto& joint) {
+        inertial::motion<std::decay_t<decltype(joint)>>(data.G, model.idx_v[j], qdd->data() + model.idx_v[j], gw, gu);
+      });
+      xw += gw, xv += gu;
+    }
+    // D_{b:j} x = [x_ω; x_v + x_ω × (η_b − η_j)]
+    alpha += xw;
+    pdd += xv + xw.cross(eta_b - data.eta.col(j));
+  }
+  const Vec3 w = data.V.col(b).head<3>(), r = p - eta_b;
+  pdd += alpha.cross(r) + w.cross(w.cross(r));
+}
+
+}  // namespace detail
 
 }  // namespace soadyn

@@ -153,7 +153,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       const long linearization = sys.linearize(t, N_VGetArrayPointer(y));
       const bool parameters = self->plan_.np() > 0;
       if (parameters && linearization != self->y_linearization_) {
-        // at the linearization's q̈ (sys.data; the regressor writes τ, A, F, not q̈ or the factor)
+        // at the linearization's q̈ (sys.data; the listed bodies' regressor writes their A only, not q̈ or the factor)
         regressor(m, sys.data, sys.data.qdd, self->plan_.bodies, self->Y_);
         self->Y_ = -self->Y_;
         self->y_linearization_ = linearization;

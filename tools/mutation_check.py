@@ -36,8 +36,8 @@ def gtest(binary, test_filter):
             "test": f"{binary} {test_filter}"}
 
 
-CLI_ROUTES = {"build": ["soadyn_cli"], "run": [PY, "tests/test_cli.py", "ForwardDynamicsRoutes"],
-              "test": "test_cli.py ForwardDynamicsRoutes"}
+CLI_ROUTES = {"build": ["soadyn_cli"], "run": [PY, "tests/test_cli_routes.py", "ForwardDynamicsRoutes"],
+              "test": "test_cli_routes.py ForwardDynamicsRoutes"}
 
 
 def tool(name):
@@ -137,6 +137,10 @@ MUTATIONS = [
      "wi.tail<3>() += w.col(p).tail<3>() + om.cross(Vec3(data.d.col(i)));", "wi.tail<3>() += w.col(p).tail<3>();",
      "Yᵀμ carries w to the child's joint point without ω × d (issue 36)",
      gtest("test_regressor", "Trees/Regressor.TransposeTimes*")),
+    (36, "regressor-listed-gravity-sign", "src/regressor.cpp",
+     "data.A.col(b).tail<3>() = eta_dd - model.gravity;", "data.A.col(b).tail<3>() = eta_dd + model.gravity;",
+     "the listed bodies' regressor columns with gravity's base acceleration the wrong way (issue 36)",
+     gtest("test_regressor", "Trees/Regressor.ListedBodies*")),
     (36, "adjoint-vjp-sign", "src/adjoint.cpp",
      "      a.g_ = -a.g_;", "",
      "the adjoint's λ_vᵀ ∂q̈/∂q with the wrong sign (issue 36)",
