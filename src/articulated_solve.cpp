@@ -61,8 +61,11 @@ void solve_rows(const Model& model, const Data& data, double* x, Eigen::Index ld
   for (int i = 0; i < N; ++i) visit_joint(model, i, [&](const auto& joint) {
     using J = std::decay_t<decltype(joint)>;
     const int vi = model.idx_v[i], ni = J::nv, p = model.parent[i];
-    Block A = Block::Zero();
-    if (p >= 0) D.add_apply_rows(i, Eigen::Map<const Block>(w + 6 * K * p), A);
+    Block A;
+    if (p >= 0)
+      D.apply_rows(i, Eigen::Map<const Block>(w + 6 * K * p), A);
+    else
+      A.setZero();
     if constexpr (J::nv == 1) {
       Eigen::Map<Col> xi(x + vi * ld);
       Col xv = xi;

@@ -64,15 +64,15 @@ struct DOperator {
 
   // The same for k vectors held as the rows of a k×6 block (one right-hand side per row, so each
   // of the six components is a contiguous column and every line below one vectorized pass):
-  // dst += src D_iᵀ, row by row [ω; u] ↦ [ω; u + ω × d_i]
+  // dst = src D_iᵀ, row by row [ω; u] ↦ [ω; u + ω × d_i] (written, not added: no zeroed block first)
   template <class S, class T>
-  void add_apply_rows(int i, const Eigen::MatrixBase<S>& src, const Eigen::MatrixBase<T>& dst_) const {
+  void apply_rows(int i, const Eigen::MatrixBase<S>& src, const Eigen::MatrixBase<T>& dst_) const {
     auto& dst = const_cast<Eigen::MatrixBase<T>&>(dst_);
     const double x = d(0, i), y = d(1, i), z = d(2, i);
-    dst.template leftCols<3>() += src.template leftCols<3>();
-    dst.col(3) += src.col(3) + z * src.col(1) - y * src.col(2);
-    dst.col(4) += src.col(4) + x * src.col(2) - z * src.col(0);
-    dst.col(5) += src.col(5) + y * src.col(0) - x * src.col(1);
+    dst.template leftCols<3>() = src.template leftCols<3>();
+    dst.col(3) = src.col(3) + z * src.col(1) - y * src.col(2);
+    dst.col(4) = src.col(4) + x * src.col(2) - z * src.col(0);
+    dst.col(5) = src.col(5) + y * src.col(0) - x * src.col(1);
   }
   // dst += src D_i, row by row [n; f] ↦ [n + d_i × f; f]
   template <class S, class T>
