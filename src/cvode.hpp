@@ -78,7 +78,7 @@ class Cvode : public Integrator {
  public:
   // project: keep a free root's quaternion unit by CVODE's projection where it can (BDF)
   Cvode(bool bdf, System& sys, const SimulationSettings& s, double t0, const VecX& y0, bool project = true)
-      : sys_(sys), bdf_(bdf), max_steps_(s.max_steps) {
+      : sys_(sys), bdf_(bdf), max_steps_(s.max_steps), rtol_(s.rtol), atol_(s.atol) {
     SUNContext ctx = nullptr;
     check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create");
     ctx_.reset(ctx);
@@ -94,7 +94,8 @@ class Cvode : public Integrator {
     check(CVodeSetErrHandlerFn(mem, &Cvode::on_error, this), "CVodeSetErrHandlerFn");
     check(CVodeInit(mem, &Cvode::rhs, t0, y_.get()), "CVodeInit");
     check(CVodeSetUserData(mem, this), "CVodeSetUserData");
-    check(CVodeSStolerances(mem, s.rtol, s.atol), "CVodeSStolerances");
+    // rtol and atol (scalars, atol > 0) as CVodeSStolerances would take them, the weights in one pass
+    check(CVodeWFtolerances(mem, &Cvode::error_weights), "CVodeWFtolerances");
     if (s.max_step > 0) check(CVodeSetMaxStep(mem, s.max_step), "CVodeSetMaxStep");
     if (bdf) {
       // stiff: Newton iterations with a direct solver.  Analytic: the Jacobian from System::jacobian
@@ -252,6 +253,14 @@ class Cvode : public Integrator {
     }
   }
 
+  // CVODE's error weights 1/(rtol·|y| + atol) (nvector_ops::error_weights); CVODES calls it on
+  // p̄_k s_k for the sensitivities too
+  static int error_weights(N_Vector y, N_Vector w, void* user) {
+    const auto* self = static_cast<const Cvode*>(user);
+    nvector_ops::error_weights(self->rtol_, self->atol_, y, w);
+    return 0;
+  }
+
   static int root(double t, N_Vector y, double* g, void* user) {
     auto* self = static_cast<Cvode*>(user);
     try {
@@ -340,6 +349,7 @@ class Cvode : public Integrator {
   System& sys_;
   bool bdf_;
   long max_steps_;
+  double rtol_, atol_;
   bool projection_ = false;
   bool exact_stops_ = false;
   IntegratorStats before_;  // the counters of the run before the last restart

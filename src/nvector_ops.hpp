@@ -275,6 +275,16 @@ inline bool all_finite(const realtype* x, sunindextype n) {
   return bad == 0;
 }
 
+// w = 1/(rtol·|y| + atol), entry by entry: CVODE's weights for scalar tolerances (cvEwtSetSS's
+// |y|, ·rtol, +atol and 1/x, four passes over memory, in one), for CVodeWFtolerances.  CVODES'
+// sensitivities under CVodeSensEEtolerances take their weights from the same function (on p̄ s)
+inline void error_weights(realtype rtol, realtype atol, N_Vector y, N_Vector w) {
+  const sunindextype n = detail::length(w);
+  const realtype* yd = detail::data(y);
+  realtype* wd = detail::data(w);
+  for (sunindextype i = 0; i < n; ++i) wd[i] = 1.0 / (rtol * std::abs(yd[i]) + atol);
+}
+
 // Installs the loops above on a serial vector (with its fused and vector-array operations on);
 // N_VClone copies the table, so every vector cloned from v has them too.
 inline void install(N_Vector v) {

@@ -1,6 +1,7 @@
 // The compiled serial vector operations (src/nvector_ops.hpp) against SUNDIALS' own: each of the
 // 35 installed operations on the same random vectors, including the in-place cases CVODE uses (z = x,
-// Z = Y, z = X_0), agrees with the library's to rounding; and a clone carries the compiled table.
+// Z = Y, z = X_0), agrees with the library's to rounding, as do the error weights CVodeWFtolerances
+// is given; and a clone carries the compiled table.
 #include "../src/nvector_ops.hpp"
 
 #include <gtest/gtest.h>
@@ -187,6 +188,23 @@ TEST_F(NvectorOps, FusedAndVectorArrayOperationsAgreeWithTheLibrarys) {
     N_VLinearCombinationVectorArray(k, nsum, one, XX.data(), X.data());
   }
   check(0, k * (nsum + 1), "scale add multi / linear combination vector array");
+}
+
+// CVODE's error weights for scalar tolerances, as cvEwtSetSS forms them with the library's
+// operations (|y|, ·rtol, +atol, 1/x), against the one-pass loop CVodeWFtolerances is given
+TEST_F(NvectorOps, ErrorWeightsAreTheLibrarysScalarTolerancesWeights) {
+  for (const double atol : {1e-10, 1e-3}) {
+    auto y = random(-300.0, 300.0);
+    y[3] = 0.0;  // atol alone
+    auto ly = library(y), lw = library(random()), cy = compiled(y), cw = compiled(random());
+    N_VAbs(ly.get(), lw.get());
+    N_VScale(1e-8, lw.get(), lw.get());
+    N_VAddConst(lw.get(), atol, lw.get());
+    N_VInv(lw.get(), lw.get());
+    ops::error_weights(1e-8, atol, cy.get(), cw.get());
+    expect_same(lw.get(), cw.get(), "error weights");
+    EXPECT_DOUBLE_EQ(NV_Ith_S(cw.get(), 3), 1.0 / atol);
+  }
 }
 
 TEST_F(NvectorOps, ACloneCarriesTheCompiledOperations) {
