@@ -108,7 +108,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       check(CVodeSetJacFnB(mem, which_, &CvodeAdjoint::adjoint_jacobian), "CVodeSetJacFnB");
       J_ = MatX::Zero(sys_.size(), sys_.size());
     } else {
-      nlsB_.reset(SUNNonlinSol_FixedPoint(yb.get(), 0, ctx_.get()));
+      nlsB_.reset(cvode_impl::make_fixed_point(ctx_.get()));
       if (!nlsB_) throw Error("CVODES: could not allocate the adjoint's fixed-point solver");
       check(CVodeSetNonlinearSolverB(mem, which_, nlsB_.get()), "CVodeSetNonlinearSolverB");
     }

@@ -7,6 +7,7 @@
 #include "soadyn/integrators.hpp"
 #include "soadyn/newton_solver.hpp"
 
+#include "fixed_point.hpp"
 #include "nvector_ops.hpp"
 #include "nvector_pool.hpp"
 
@@ -16,7 +17,6 @@
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
-#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <cmath>
 #include <cstdio>
@@ -109,8 +109,8 @@ class Cvode : public Integrator {
       check(CVodeSetLinearSolver(mem, ls_.get(), A_.get()), "CVodeSetLinearSolver");
       if (analytic) check(CVodeSetLinSysFn(mem, &Cvode::linear_system), "CVodeSetLinSysFn");
     } else {
-      // non-stiff: fixed-point (functional) iterations, no Jacobian
-      nls_.reset(SUNNonlinSol_FixedPoint(y_.get(), 0, ctx_.get()));
+      // non-stiff: fixed-point (functional) iterations, no Jacobian (fixed_point.hpp)
+      nls_.reset(make_fixed_point(ctx_.get()));
       if (!nls_) throw Error("CVODE: could not allocate the fixed-point solver");
       check(CVodeSetNonlinearSolver(mem, nls_.get()), "CVodeSetNonlinearSolver");
     }

@@ -80,7 +80,7 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
     if (!bdf_) {
       // Adams: one fixed-point iteration for the state and its sensitivities together (BDF: CVODES'
       // Newton on I − γJ, the state's linear solver, for the sensitivities after the state)
-      nls_sens_.reset(SUNNonlinSol_FixedPointSens(ns_ + 1, y_.get(), 0, ctx_.get()));
+      nls_sens_.reset(cvode_impl::make_fixed_point(ctx_.get()));
       if (!nls_sens_) throw Error("CVODES: could not allocate the sensitivities' fixed-point solver");
       check(CVodeSetNonlinearSolverSensSim(mem, nls_sens_.get()), "CVodeSetNonlinearSolverSensSim");
     }
