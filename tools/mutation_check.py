@@ -73,7 +73,7 @@ MUTATIONS = [
      "the tree-sparse route forgets the first pivot",
      CLI_ROUTES),
     (5, "bdf-ignores-rtol", "src/cvode.hpp",
-     "CVodeSStolerances(mem, s.rtol, s.atol)", "CVodeSStolerances(mem, bdf ? 1e4 * s.rtol : s.rtol, s.atol)",
+     "rtol_(s.rtol), atol_(s.atol)", "rtol_(bdf ? 1e4 * s.rtol : s.rtol), atol_(s.atol)",
      "BDF runs at 10^4 times the requested relative tolerance",
      gtest("test_stability", "Stability.BdfOnTheStiffArmIsAccurate")),
     (6, "placement-not-turned", "src/kinematics.cpp",
