@@ -19,6 +19,7 @@ struct Content {
   long nconvfails = 0;  // likewise
   N_Vector other = nullptr;  // the second buffer for the iterates
   N_Vector delta = nullptr;  // the change of the last iteration
+  N_Vector cloned_from = nullptr;  // the correction vector `other` and `delta` were cloned from
 };
 
 Content& content(SUNNonlinearSolver S) { return *static_cast<Content*>(S->content); }
@@ -36,10 +37,13 @@ int initialize(SUNNonlinearSolver S) {
 // prediction y0 is not read), the solution on return; w the weights for the test
 int solve(SUNNonlinearSolver S, N_Vector, N_Vector ycor, N_Vector w, realtype tol, booleantype, void* mem) {
   Content& c = content(S);
-  if (!c.other) {
+  if (ycor != c.cloned_from) {  // the first solve, or CVODE hands over other vectors: buffers like them
+    if (c.other) N_VDestroy(c.other);
+    if (c.delta) N_VDestroy(c.delta);
     c.other = N_VClone(ycor);
     c.delta = N_VClone(ycor);
-    if (!c.other || !c.delta) return SUN_NLS_MEM_FAIL;
+    c.cloned_from = c.other && c.delta ? ycor : nullptr;
+    if (!c.cloned_from) return SUN_NLS_MEM_FAIL;
   }
   c.niters = 0, c.nconvfails = 0;
   // iterate k in `cur`, g(cur) into `next`; SUNDIALS' ycor is `next` after each iteration
