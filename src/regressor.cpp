@@ -155,14 +155,22 @@ void regressor(const Model& model, Data& data, const VecX& qdd, const std::vecto
   for (const int b : bodies)
     if (b < 0 || b >= model.nbodies)
       throw Error("regressor: body index " + std::to_string(b) + " out of range 0.." + std::to_string(model.nbodies - 1));
+  // A_b = [α_b; η̈_b − g], inverse dynamics' pair: along each listed body's chain alone (O(depth)),
+  // or for the whole tree by inverse dynamics (O(N)) when the chains together are longer
+  long chains = 0;
+  for (const int b : bodies)
+    for (int j = b; j >= 0; j = model.parent[j]) ++chains;
+  const bool whole_tree = chains > model.nbodies;
+  if (whole_tree) inverse_dynamics(model, data, qdd);
   Y.setZero(model.nv, kParametersPerBody * Eigen::Index(bodies.size()));
   for (size_t k = 0; k < bodies.size(); ++k) {
-    // A_b = [α_b; η̈_b − g] along b's chain alone (inverse dynamics' pair, O(depth)), then its columns
     const int b = bodies[k];
-    Vec3 alpha, eta_dd;
-    detail::point_acceleration(model, data, b, data.eta.col(b), &qdd, alpha, eta_dd);
-    data.A.col(b).head<3>() = alpha;
-    data.A.col(b).tail<3>() = eta_dd - model.gravity;
+    if (!whole_tree) {
+      Vec3 alpha, eta_dd;
+      detail::point_acceleration(model, data, b, data.eta.col(b), &qdd, alpha, eta_dd);
+      data.A.col(b).head<3>() = alpha;
+      data.A.col(b).tail<3>() = eta_dd - model.gravity;
+    }
     body_columns(model, data, b, Y, kParametersPerBody * int(k));
   }
 }

@@ -63,7 +63,8 @@ TEST_P(Regressor, TimesParametersIsInverseDynamics) {
 }
 
 // the listed bodies' columns alone (any order) against inverse dynamics: making body b 1.5 times
-// heavier (same centre of mass) changes τ by its ten columns times the change of its π
+// heavier (same centre of mass) changes τ by its ten columns times the change of its π; and each
+// body listed alone gives the same columns by the other route to its acceleration
 TEST_P(Regressor, ListedBodiesColumnsGiveEachBodysShareOfInverseDynamics) {
   Rng rng(47);
   for (int trial = 0; trial < 5; ++trial) {
@@ -84,6 +85,11 @@ TEST_P(Regressor, ListedBodiesColumnsGiveEachBodysShareOfInverseDynamics) {
       EXPECT_TRUE(near_rel(Y.middleCols<10>(10 * Eigen::Index(k)) * (0.5 * before),
                            inverse_dynamics_of(with_parameters(model, pi), x) - tau, 1e-11))
           << trial << " body " << b;
+      // the body alone: its acceleration along its own chain, where the list above (chains longer
+      // than the tree) took the whole tree's inverse dynamics
+      MatX Yb;
+      regressor(model, x.data, x.qdd, std::vector<int>{b}, Yb);
+      EXPECT_TRUE(near_rel(Yb, Y.middleCols<10>(10 * Eigen::Index(k)), 1e-12)) << trial << " body " << b << " alone";
     }
   }
   Model model = random_model(rng, GetParam().options);

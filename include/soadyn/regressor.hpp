@@ -28,8 +28,9 @@ Model with_parameters(const Model& model, const VecX& pi);
 void regressor(const Model& model, Data& data, const VecX& qdd, MatX& Y);
 // The columns of the listed bodies only (nv × 10·bodies.size(), in the order listed): the same
 // numbers as regressor's, in O(Σ depth of the listed bodies) instead of O(N·depth): each body's
-// acceleration along its own chain.  Needs [kin] and [vel]; writes data.A of the listed bodies
-// only, and neither data.F nor data.tau
+// acceleration along its own chain, or the whole tree's by inverse dynamics when the chains
+// together are longer than the tree.  Needs [kin] and [vel]; writes data.A of the listed bodies
+// (and then data.A, data.F and data.tau as inverse_dynamics does)
 void regressor(const Model& model, Data& data, const VecX& qdd, const std::vector<int>& bodies, MatX& Y);
 
 // Yᵀ μ (10 N) at (q, v, q̈) for a vector μ (nv), in O(N) without forming Y: one base-to-tip sweep of
