@@ -4,6 +4,7 @@
 #include <sundials/sundials_nvector.h>
 
 #include <new>
+#include <utility>
 
 namespace soadyn::cvode_impl {
 
