@@ -98,4 +98,12 @@ void Data::check(const Model& model, const char* where, const char* what, Eigen:
                 std::to_string(got));
 }
 
+void Data::refuse_stage(const char* where, bool velocities) const {
+  if (!stages.kinematics)
+    throw Error(std::string(where) + ": needs [kin], which this Data does not hold: call update_kinematics(model, data, q)" +
+                (velocities ? " and update_velocities(model, data, v)" : "") + " first");
+  throw Error(std::string(where) + ": needs [vel], which this Data does not hold" +
+              " (update_kinematics at a new q clears it): call update_velocities(model, data, v) first");
+}
+
 }  // namespace soadyn

@@ -172,6 +172,7 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
                        const char* where) {
   data.check(model, where, "v", qd.size(), model.nv);
   data.check(model, where, "qdd", qdd.size(), model.nv);
+  data.require(where, false);
   if (dd.S.cols() != model.nv || int(dd.Y.size()) != model.nbodies)
     throw Error(std::string(where) + ": this DerivativeData was built for another model");
   const int N = model.nbodies;

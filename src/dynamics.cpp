@@ -1,6 +1,7 @@
 // The forward-dynamics routes by name, and forward_dynamics choosing one (algorithms.hpp); the
 // routes themselves: rnea.cpp (bias), mass_matrix.cpp, ltdl.cpp, articulated.cpp.
 #include "soadyn/algorithms.hpp"
+#include "soadyn/kinematics.hpp"
 
 #include "dynamics_routes.hpp"
 
@@ -38,6 +39,7 @@ FdMethod parse_fd_method(std::string_view s) {
 
 void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method) {
   data.check(model, "forward_dynamics", "tau", tau.size(), model.nv);
+  data.require("forward_dynamics", true);
   switch (method) {
     case FdMethod::Dense:
       mass_matrix(model, data);
@@ -58,6 +60,16 @@ void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod 
       detail::aba(model, data, tau);
       return;
   }
+}
+
+const VecX& forward_dynamics(const Model& model, Data& data, const VecX& q, const VecX& v, const VecX& tau,
+                             FdMethod method) {
+  data.check(model, "forward_dynamics", "v", v.size(), model.nv);  // every size before any work
+  data.check(model, "forward_dynamics", "tau", tau.size(), model.nv);
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  forward_dynamics(model, data, tau, method);
+  return data.qdd;
 }
 
 }  // namespace soadyn

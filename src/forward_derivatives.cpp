@@ -179,6 +179,7 @@ void minv_times_derivatives(const Model& model, DerivativeData& dd, const Inputs
 
 void forward_dynamics_derivatives(const Model& model, Data& data, const VecX& v, const VecX& tau, DerivativeData& dd,
                                   const Inputs* inputs, bool /*minv: always formed*/) {
+  data.require("forward_dynamics_derivatives", true);
   // q̈, then at that q̈ the sweeps ∂ID is made of, 𝓜⁻¹ about the origin with the sweeps' S, and the products
   forward_dynamics(model, data, tau, FdMethod::ArticulatedBody);
   detail::derivative_sweeps(model, data, v, data.qdd, dd, "forward_dynamics_derivatives");

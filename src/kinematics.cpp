@@ -181,6 +181,7 @@ void frames_to(const Model& model, Data& data, const VecX& q, int b) {
 void update_kinematics(const Model& model, Data& data, const VecX& q) {
   data.check(model, "update_kinematics", "q", q.size(), model.nq);
   kinematics_sweep<true>(model, data, frames_of(data), q);
+  data.stages = {true, false};
 }
 
 namespace detail {
@@ -192,6 +193,7 @@ void update_frames(const Model& model, Data& data, const VecX& q, Workspace::Bod
 void update_frames(const Model& model, Data& data, const VecX& q) {
   data.check(model, "update_frames", "q", q.size(), model.nq);
   kinematics_sweep<false>(model, data, frames_of(data), q);
+  data.stages = {false, false};  // s, r and M_i are another q's
 }
 
 void update_frames_to(const Model& model, Data& data, const VecX& q, int body) {
@@ -200,6 +202,7 @@ void update_frames_to(const Model& model, Data& data, const VecX& q, int body) {
     throw Error("update_frames_to: body: expected -1 (the world) .. " + std::to_string(model.nbodies - 1) + ", got " +
                 std::to_string(body));
   if (body >= 0) frames_to(model, data, q, body);
+  if (body >= 0) data.stages = {false, false};  // the other bodies' frames are another q's
 }
 
 void update_kinematics_reference(const Model& model, Data& data, const VecX& q) {
@@ -226,10 +229,12 @@ void update_kinematics_reference(const Model& model, Data& data, const VecX& q) 
     data.inertia[i].h = model.mass[i] * data.s.col(i);
     data.inertia[i].I.noalias() = data.R[i] * model.inertia_origin[i] * data.R[i].transpose();
   }
+  data.stages = {true, false};
 }
 
 void update_velocities(const Model& model, Data& data, const VecX& v) {
   data.check(model, "update_velocities", "v", v.size(), model.nv);
+  data.require("update_velocities", false);
   // one base-to-tip sweep: (3)-(4) v_i = D_i v_p + G_i q̇_i, i.e. v = Ψ_D G q̇, with what the
   // dynamics needs of body i formed as soon as v_i is known.  6-vectors are read and written in
   // their 3-vector halves only (see rnea in rnea.cpp: whole reads of half-written columns
@@ -266,6 +271,7 @@ void update_velocities(const Model& model, Data& data, const VecX& v) {
     data.gyroscopic.col(i).head<3>() = w.cross(data.inertia[i].I * w);
     data.gyroscopic.col(i).tail<3>() = w.cross(w.cross(h));
   }
+  data.stages.velocities = true;
 }
 
 Mat6 D_matrix(const Data& data, int i) {
@@ -292,6 +298,7 @@ Mat6G G_matrix(const Model& model, const Data& data, int i) {
 }
 
 void jacobian(const Model& model, const Data& data, MatX& J) {
+  data.require("jacobian", false);
   // (7) J = S Ψ_D G: all columns at once, one base-to-tip sweep over 6×nv blocks
   J.setZero(6 * model.nbodies, model.nv);
   for (int i = 0; i < model.nbodies; ++i)

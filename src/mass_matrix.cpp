@@ -8,6 +8,7 @@
 namespace soadyn {
 
 void mass_matrix_literal(const Model& model, const Data& data, MatX& M_out) {
+  data.require("mass_matrix_literal", false);
   const int n6 = 6 * model.nbodies;
   // 1. J(:,k) = Ψ_D G(:,k), one base-to-tip sweep per column   (Alg. for z = Ψ_A x)
   MatX J = MatX::Zero(n6, model.nv);
@@ -24,6 +25,7 @@ void mass_matrix_literal(const Model& model, const Data& data, MatX& M_out) {
 }
 
 void mass_matrix(const Model& model, Data& data) {
+  data.require("mass_matrix", false);
   // K_i = M_i + Σ_children D_cᵀ K_c D_c   (tip to base); K_i is complete when the sweep reaches i.
   //
   // 𝓜_jk = G_jᵀ D_{i:j}ᵀ K_i G_k for DOF j on the chain of DOF k (body i), and the note's

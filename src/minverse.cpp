@@ -180,6 +180,7 @@ void minverse_origin(const Model& model, Data& data, const Mat6X& S, MatX& Minv)
 }  // namespace detail
 
 void minverse(const Model& model, Data& data, MatX& Minv) {
+  data.require("minverse", false);
   auto& S = data.work.origin.S;
   for (int i = 0; i < model.nbodies; ++i) {
     const Vec3 eta = data.eta.col(i);

@@ -53,11 +53,24 @@ void rnea(const Model& model, Data& data, const VecX* qdd, VecX& out) {
 
 }  // namespace
 
-void bias_forces(const Model& model, Data& data) { rnea(model, data, nullptr, data.bias); }
+void bias_forces(const Model& model, Data& data) {
+  data.require("bias_forces", true);
+  rnea(model, data, nullptr, data.bias);
+}
 
 void inverse_dynamics(const Model& model, Data& data, const VecX& qdd) {
   data.check(model, "inverse_dynamics", "qdd", qdd.size(), model.nv);
+  data.require("inverse_dynamics", true);
   rnea(model, data, &qdd, data.tau);
+}
+
+const VecX& inverse_dynamics(const Model& model, Data& data, const VecX& q, const VecX& v, const VecX& qdd) {
+  data.check(model, "inverse_dynamics", "v", v.size(), model.nv);  // every size before any work
+  data.check(model, "inverse_dynamics", "qdd", qdd.size(), model.nv);
+  update_kinematics(model, data, q);
+  update_velocities(model, data, v);
+  inverse_dynamics(model, data, qdd);
+  return data.tau;
 }
 
 }  // namespace soadyn

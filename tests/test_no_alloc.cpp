@@ -94,6 +94,8 @@ TEST(NoAllocation, AlgorithmsAllocateNothingPerCall) {
     bias_forces(model, data);
     inverse_dynamics(model, data, qdd);
     for (FdMethod m : {FdMethod::Dense, FdMethod::Sparse, FdMethod::ArticulatedBody}) forward_dynamics(model, data, tau, m);
+    inverse_dynamics(model, data, q, v, qdd);  // the one-call entry points, stage flags set and checked
+    forward_dynamics(model, data, q, v, tau);
     const double e = kinetic_energy(model, data) + potential_energy(model, data);
     const Momentum h = momentum(model, data);
     EXPECT_EQ(region.end(), 0) << "free root " << free_root;

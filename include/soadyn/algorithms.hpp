@@ -1,7 +1,11 @@
 // The system mass matrix and the equations of motion 𝓜(q) q̈ = τ − bias(q, q̇).
 //
 // Pipeline: update_kinematics(q) → [mass_matrix] → update_velocities(v) → bias / inverse /
-// forward dynamics.  Each stage reads what the earlier ones cached in Data.
+// forward dynamics.  Each stage reads what the earlier ones cached in Data, and a call whose stage
+// does not hold (a fresh Data; [vel] after update_kinematics at a new q) throws soadyn::Error
+// (Data::stages).  One call from the state, as Pinocchio's crba / nonLinearEffects / rnea / aba:
+// mass_matrix(model, data, q), bias_forces(model, data, q, v), inverse_dynamics(model, data, q, v,
+// q̈), forward_dynamics(model, data, q, v, τ).
 #pragma once
 
 #include "soadyn/data.hpp"
@@ -41,6 +45,10 @@ void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v);
 // τ = 𝓜 q̈ + bias with the same two sweeps.  Needs [kin] and [vel]; fills data.tau, data.A and data.F.
 void inverse_dynamics(const Model& model, Data& data, const VecX& qdd);
 
+// The same in one call, as Pinocchio's rnea(q, v, a): update_kinematics(q), update_velocities(v),
+// then the sweeps.  Needs nothing; leaves [kin] and [vel] at (q, v); returns data.tau.
+const VecX& inverse_dynamics(const Model& model, Data& data, const VecX& q, const VecX& v, const VecX& qdd);
+
 enum class FdMethod {
   Dense,           // "dense": composite 𝓜, then Cholesky
   Sparse,          // "sparse": composite 𝓜 factored in place as LᵀDL along the tree (no fill-in off
@@ -65,6 +73,12 @@ FdMethod parse_fd_method(std::string_view s);  // a name of fd_methods() or "on"
 // q̈ = 𝓜⁻¹ (τ − bias).  Needs [kin] and [vel]; fills data.qdd (Dense and Sparse also fill
 // data.M and data.bias).
 void forward_dynamics(const Model& model, Data& data, const VecX& tau, FdMethod method);
+
+// The same in one call, as Pinocchio's aba(q, v, τ): update_kinematics(q), update_velocities(v),
+// then the route (the O(N) one unless told).  Needs nothing; leaves [kin] and [vel] at (q, v);
+// returns data.qdd.
+const VecX& forward_dynamics(const Model& model, Data& data, const VecX& q, const VecX& v, const VecX& tau,
+                             FdMethod method = FdMethod::ArticulatedBody);
 
 // 𝓜⁻¹ (nv×nv) without forming 𝓜, as Pinocchio's computeMinverse: the articulated-body recursion
 // for every unit force at once, O(N·depth) tip to base and O(N) per column base to tip (O(N²) on a

@@ -87,6 +87,22 @@ struct Data {
   // size would otherwise read or write past an array (soadyn::Error names what and where)
   void check(const Model& model, const char* where, const char* what, Eigen::Index got, int expected) const;
 
+  // Which stages hold: update_kinematics sets [kin] and clears [vel] (its v belongs to the old q);
+  // update_velocities sets [vel]; update_frames and update_frames_to, which leave s, r and M_i of
+  // another q, clear both.  Every algorithm that reads a stage checks its flag first (one branch)
+  // and refuses (soadyn::Error naming the call and the missing update) a stage that does not hold:
+  // a fresh Data, or [vel] after update_kinematics at a new q.  The results' stages ([crb], [rne],
+  // [fd]) are outputs and not tracked.
+  struct Stages {
+    bool kinematics = false;           // [kin] holds for the q last given to update_kinematics
+    bool velocities = false;           // [vel] holds for that q and the v last given
+  } stages;
+  // throws soadyn::Error unless [kin] (and, with velocities, [vel]) holds
+  void require(const char* where, bool velocities) const {
+    if (!stages.kinematics || (velocities && !stages.velocities)) [[unlikely]] refuse_stage(where, velocities);
+  }
+  [[noreturn]] void refuse_stage(const char* where, bool velocities) const;
+
   // [kin] positions, all inertial (the note's symbols)
   std::vector<Mat3> R;                 // body i frame → inertial (C_i^in)
   Mat3X eta;                           // η_i, joint point of body i (its frame origin)
