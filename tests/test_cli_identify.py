@@ -3,7 +3,8 @@
 scene with the forearm 30 % heavier and its inertia 30 % lower fitted back by least squares and by
 Gauss-Newton (1e-6 relative), the fitted scene written and loaded back (its own fit moves nothing),
 a URDF robot's fitted scene written in another directory (the urdf: path relative to it), and each
-bad input refused with exit 2, one line naming the file or field, and nothing written."""
+bad input refused with exit 2, one line naming the file or field, and nothing written (a scene
+with enforced joint limits by either method: least squares would be biased)."""
 import os
 import re
 import shutil
@@ -180,6 +181,29 @@ class Identify(unittest.TestCase):
         # values while the rest move they make no rigid body: refused, the body named
         self.refused([self.start, *base, "--parameters", "upper_arm,forearm"], "the fit is no rigid body: body 'upper_arm'")
         for f in (notrun, other, energy):
+            os.remove(f)
+
+    def test_enforced_limits_are_refused_by_either_method(self):
+        # the arm's forearm stopped at ±0.6 rad (limits: true): the run hits the stop, where a holding
+        # force and impulses act that τ = Y π does not have; least squares (asked, or chosen by auto
+        # for a run with /qdd) refuses as Gauss-Newton does, one line, exit 2, nothing written
+        with open(ARM) as f:
+            text = f.read().replace("simulation:\n", "simulation:\n  limits: true\n  restitution: 0.5\n")
+        limited = os.path.join(self.dir, "limited.yaml")
+        with open(limited, "w") as f:
+            f.write(text + "limits: {theta3: [-0.6, 0.6]}\n")
+        data = os.path.join(self.dir, "limited.h5")
+        p = soadyn("run", limited, "-o", data, "--t-end", "2", "-q")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        out = os.path.join(self.dir, "never.yaml")
+        for method in ("least-squares", "auto"):
+            line = self.refused([limited, "--data", data, "-o", out, "--parameters", "forearm", "--method", method],
+                                "identify: least-squares: " + limited + ": the scene enforces joint limits (simulation: "
+                                "limits: true)")
+            self.assertIn("set limits: false", line)
+        self.refused([limited, "--data", data, "-o", out, "--parameters", "forearm", "--method", "gauss-newton"],
+                     "enforced joint limits")
+        for f in (limited, data):
             os.remove(f)
 
     def test_outputs_that_are_not_its_own_are_refused(self):
