@@ -102,6 +102,18 @@ std::uint64_t row_bytes(const Model& model, const LogGroups& groups) {
   return std::uint64_t(log::layout(model, groups).columns.size()) * sizeof(double);
 }
 
+LogGroups logged_groups(const Scenario& sc, const SimulationSettings& settings, const LogGroups& groups) {
+  LogGroups g = groups;
+  g.impacts = settings.limits && sc.model.has_limits();
+  g.control = groups.control || !sc.inputs.controllers.empty();
+  if (settings.sensitivities.any())
+    g.sensitivities = std::make_shared<const SensitivityPlan>(plan_sensitivities(sc.model, settings.sensitivities));
+  for (const std::string& name : sc.log_frames)
+    if (const int f = sc.model.frame_index(name); f >= 0 && std::find(g.frames.begin(), g.frames.end(), f) == g.frames.end())
+      g.frames.push_back(f);
+  return g;
+}
+
 struct H5Log::Impl {
   std::string path, tmp_path;
   bool published = false, closed = false, broken = false;
@@ -177,16 +189,8 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
   Impl& im = *impl_;
   im.path = path;
   im.tmp_path = temporary_path(path);
-  im.groups = groups;
-  im.groups.impacts = settings.limits && sc.model.has_limits();
-  im.groups.control = groups.control || !sc.inputs.controllers.empty();
-  if (settings.sensitivities.any())
-    im.groups.sensitivities = std::make_shared<const SensitivityPlan>(plan_sensitivities(sc.model, settings.sensitivities));
+  im.groups = logged_groups(sc, settings, groups);
   const Model& m = sc.model;
-  for (const std::string& name : sc.log_frames)
-    if (const int f = m.frame_index(name);
-        f >= 0 && std::find(im.groups.frames.begin(), im.groups.frames.end(), f) == im.groups.frames.end())
-      im.groups.frames.push_back(f);
   im.model = std::make_unique<Model>(m);
   im.data = std::make_unique<Data>(m);
   const log::Layout lay = log::layout(m, im.groups);
@@ -194,7 +198,10 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
   try {
     Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "H5Pcreate");
     check(H5Pset_libver_bounds(fapl, H5F_LIBVER_LATEST, H5F_LIBVER_LATEST), "H5Pset_libver_bounds");
-    const hid_t f = H5Fcreate(im.tmp_path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    // a new file, never an existing one's target: a name left there (a killed run's file, or a
+    // symlink) is removed, not followed, and H5F_ACC_EXCL (O_CREAT | O_EXCL) opens no symlink
+    ::unlink(im.tmp_path.c_str());
+    const hid_t f = H5Fcreate(im.tmp_path.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, fapl);
     if (f < 0) {
       h5::record_cause();
       const std::string& cause = h5::last_cause;

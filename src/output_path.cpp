@@ -53,9 +53,31 @@ std::string head(int fd, size_t n) {
   return s;
 }
 
+// Why "<path>.lock" (described by `st`, from lstat or fstat) cannot be soadyn's lock file, or "":
+// soadyn writes its pid there and truncates it, so only a regular file of ours, with one name,
+// holding at most a pid, is taken; never a symlink's target, a FIFO, a device, a directory, a hard
+// link to another file, or another user's file.
+std::string lock_file_problem(const std::string& lock_path, const struct stat& st, int fd) {
+  const std::string remove = ": remove it (soadyn keeps its lock there as a file of its own)";
+  if (S_ISLNK(st.st_mode)) return lock_path + ": a symbolic link where soadyn keeps its lock, not followed" + remove;
+  if (S_ISDIR(st.st_mode)) return lock_path + ": a directory where soadyn keeps its lock" + remove;
+  if (!S_ISREG(st.st_mode)) return lock_path + ": not a regular file (a FIFO, device or socket) where soadyn keeps its lock" + remove;
+  if (st.st_nlink != 1)
+    return lock_path + ": has " + std::to_string(st.st_nlink) + " names (a hard link to another file), so it is not soadyn's lock" + remove;
+  if (st.st_uid != ::geteuid()) return lock_path + ": belongs to another user, so it is not this user's soadyn lock" + remove;
+  if (fd >= 0) {  // a lock file holds a pid and a newline, or nothing yet
+    char buf[40] = {};
+    const ssize_t n = st.st_size > 32 ? -1 : ::pread(fd, buf, sizeof buf - 1, 0);
+    const std::string text = n >= 0 ? std::string(buf, size_t(n)) : std::string("x");
+    if (text.find_first_not_of("0123456789\n") != std::string::npos)
+      return lock_path + ": holds something other than a soadyn writer's pid, so it is not soadyn's lock" + remove;
+  }
+  return "";
+}
+
 // the pid in "<path>.lock", or 0
 long lock_owner(const std::string& lock_path) {
-  Fd f(::open(lock_path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
+  Fd f(::open(lock_path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOFOLLOW));
   if (f.fd < 0) return 0;
   const std::string s = head(f.fd, 31);
   return std::atol(s.c_str());
@@ -64,7 +86,7 @@ long lock_owner(const std::string& lock_path) {
 // A soadyn writer holds "<path>.lock"?  (Its flock; the file alone may be a killed run's leftover.)
 bool held_by_soadyn(const std::string& path, long& pid) {
   const std::string lock = path + ".lock";
-  Fd f(::open(lock.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
+  Fd f(::open(lock.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOFOLLOW));
   if (f.fd < 0) return false;
   if (::flock(f.fd, LOCK_SH | LOCK_NB) == 0 || errno != EWOULDBLOCK) return false;
   pid = lock_owner(lock);
@@ -125,6 +147,13 @@ OutputTarget check_output_path(const std::string& path, OutputKind kind, const s
     if (!text) throw Error("-: a run file cannot go to stdout (HDF5 needs a file); give a file name");
     return OutputTarget::Stdout;
   }
+  // the lock file a writer would take: refused now, before anything is touched, if it is not one
+  const std::string lock_path = path + ".lock";
+  struct stat lst {};
+  if (::lstat(lock_path.c_str(), &lst) == 0) {
+    Fd lf(S_ISREG(lst.st_mode) ? ::open(lock_path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOFOLLOW) : -1);
+    if (const std::string why = lock_file_problem(lock_path, lst, lf.fd); !why.empty()) throw Error(why);
+  }
   long pid = 0;
   if (held_by_soadyn(path, pid))
     throw Error(path + ": in use by another soadyn run" + (pid > 0 ? " (pid " + std::to_string(pid) + ")" : std::string()) +
@@ -163,10 +192,23 @@ OutputLock::OutputLock(const std::string& path) : lock_path_(path + ".lock") {
   std::error_code ec;
   if (p.has_parent_path()) fs::create_directories(p.parent_path(), ec);
   for (int attempt = 0; attempt < 100; ++attempt) {
-    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NONBLOCK, 0644);
-    if (fd_ < 0)
-      throw Error(path + ": cannot create the lock file " + lock_path_ + " (" + std::strerror(errno) +
+    // O_NOFOLLOW: never a symlink's target; O_NONBLOCK: never waiting on a FIFO; then only a
+    // regular file of ours with one name (lock_file_problem) is written
+    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NONBLOCK | O_NOFOLLOW, 0644);
+    if (fd_ < 0) {
+      const int err = errno;
+      struct stat lst {};
+      if (::lstat(lock_path_.c_str(), &lst) == 0)
+        if (const std::string why = lock_file_problem(lock_path_, lst, -1); !why.empty()) throw Error(why);
+      throw Error(path + ": cannot create the lock file " + lock_path_ + " (" + std::strerror(err) +
                   "; is the directory writable?)");
+    }
+    if (struct stat st {}; ::fstat(fd_, &st) != 0 || !lock_file_problem(lock_path_, st, fd_).empty()) {
+      const std::string why = lock_file_problem(lock_path_, st, fd_);
+      ::close(fd_);
+      fd_ = -1;
+      throw Error(why.empty() ? lock_path_ + ": cannot be checked (" + std::strerror(errno) + ")" : why);
+    }
     if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
       char buf[32] = {};
       const ssize_t n = ::pread(fd_, buf, sizeof buf - 1, 0);

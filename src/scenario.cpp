@@ -1,10 +1,10 @@
 #include "soadyn/scenario.hpp"
 
-#include "soadyn/input_file.hpp"
 #include "soadyn/integrators.hpp"
 #include "soadyn/mjcf.hpp"
 #include "soadyn/text.hpp"
 
+#include "mjcf_files.hpp"
 #include "scenario_reader.hpp"
 
 #include <fcntl.h>
@@ -100,9 +100,6 @@ void read_simulation(const Reader& rd, const YAML::Node& n, const Model& m, Simu
       case SettingKind::Flag: set_setting(s, info, rd.boolean(v, field)); break;
     }
   }
-  // control ticks over the file's t_end (or the default): bounded as steps and rows are
-  if (const YAML::Node v = n["control_dt"])
-    if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty()) rd.fail(v, "simulation.control_dt", p);
 }
 
 void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0, Inputs& in) {
@@ -208,8 +205,33 @@ bool is_urdf_path(const std::string& path) {
 }  // namespace
 
 std::string read_text_file(const std::string& path) {
-  // a regular file only, never waited on (input_file.hpp)
-  const std::string text = InputFile(path, "a scenario or model file (YAML, URDF or MJCF)", kMaxInputBytes).read();
+  // opened without blocking (a FIFO with no writer would wait forever), then checked for what it is
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+  if (fd < 0) {
+    const int err = errno;
+    throw Error(path + ": cannot open the file for reading (" + std::strerror(err) + ")");
+  }
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0) throw Error(path + ": cannot be read (" + std::strerror(errno) + ")");
+  if (S_ISDIR(st.st_mode)) throw Error(path + ": is a directory, expected a file");
+  if (!S_ISREG(st.st_mode)) throw Error(path + ": not a regular file (a device, FIFO or socket); expected a YAML or URDF file");
+  if (std::uint64_t(st.st_size) > kMaxInputBytes)
+    throw Error(path + ": " + std::to_string(st.st_size >> 20) + " MiB, more than the " + std::to_string(kMaxInputBytes >> 20) +
+                " MiB a model or scenario file may have");
+  std::string text(size_t(st.st_size), '\0');
+  size_t got = 0;
+  while (got < text.size()) {  // a file that shrinks while read ends early; one that grows is cut at its size
+    const ssize_t n = ::pread(fd, text.data() + got, text.size() - got, off_t(got));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) throw Error(path + ": read error (" + std::strerror(errno) + ")");
+    if (n == 0) break;
+    got += size_t(n);
+  }
+  text.resize(got);
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw Error(path + ": the file is empty");
   if (text.find('\0') != std::string::npos) throw Error(path + ": a binary file, expected text (YAML or URDF)");
   return text;
@@ -253,6 +275,22 @@ std::optional<InertiaCheck> parse_inertia_check(const std::string& s) {
 
 namespace {
 
+// A scenario's name: it names the default output, out/<name>.h5, so it must be one plain file-name
+// component (no folder, no '.' or '..', no control characters), short enough for the file system
+// with the output's ".h5", lock and temporary suffixes.
+void check_name(const Reader& rd, const YAML::Node& n, const std::string& name) {
+  std::string why;
+  if (name.empty() || name == "." || name == "..") why = "it cannot be empty, '.' or '..'";
+  else if (name.find_first_of("/\\") != std::string::npos) why = "it cannot hold '/' or '\\' (it would name another folder)";
+  else if (std::any_of(name.begin(), name.end(), [](char c) { return (unsigned char)c < 0x20 || c == 0x7f; }))
+    why = "it cannot hold control characters";
+  else if (name.size() > 200) why = "at most 200 bytes, got " + std::to_string(name.size());
+  if (why.empty()) return;
+  const std::string shown = printable(name.substr(0, 80)) + (name.size() > 80 ? "..." : "");
+  rd.fail(n, "name", "expected a plain file name, as it names the default output out/<name>.h5: " + why + "; got '" +
+                         shown + "'");
+}
+
 // a scenario's inertia_check: warn | balance | strict (Model::build's InertiaCheck)
 InertiaCheck read_inertia_check(const Reader& rd, const YAML::Node& n) {
   const std::string s = rd.string(n, "inertia_check");
@@ -265,7 +303,7 @@ InertiaCheck read_inertia_check(const Reader& rd, const YAML::Node& n) {
 
 Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root,
                         std::optional<InertiaCheck> inertia_check, const std::optional<std::string>& robot_text) {
-  const Reader rd{path};
+  const Reader rd{path, {}};
   YAML::Node root;
   try {
     // a '---' at column 0 after content always starts another document (YAML 1.2, 9.2); yaml-cpp's
@@ -297,6 +335,8 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   sc.path = path;
   sc.text = text;
   sc.name = root["name"] ? rd.string(root["name"], "name") : std::filesystem::path(path).stem().string();
+  if (root["name"]) check_name(rd, root["name"], sc.name);
+  sc.files.push_back(path);
   if (root["description"]) sc.description = root["description"].as<std::string>("");
   // a URDF robot gets the URDF gravity wherever it enters; bodies written here get none by default
   // the robot file: `urdf:` or `model:` (the same key: a URDF or an MJCF file)
@@ -318,6 +358,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     const bool free = free_root || (root["free_root"] && rd.boolean(root["free_root"], "free_root"));
     try {
       // a URDF, or an MJCF file (MuJoCo's <mujoco>: its own gravity unless the scenario says one)
+      sc.files.push_back(p.string());
       const std::string robot = robot_text ? *robot_text : read_text_file(p.string());
       sc.robot_text = robot;
       sc.robot_path = p.string();
@@ -325,6 +366,8 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
         const std::optional<Vec3> g = root["gravity"] ? std::optional<Vec3>(gravity) : std::nullopt;
         const bool from_disk = !robot_text || mjcf_file_unchanged(p.string(), robot);
         mjcf = parse_mjcf(robot, p.string(), from_disk, {free, g, check});
+        if (from_disk)
+          for (std::string& f : mjcf_files(robot, p.string())) sc.files.push_back(std::move(f));
         sc.model = mjcf->model;
       } else {
         sc.model = parse_urdf(robot, p.string(), free, gravity, check);
@@ -352,6 +395,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   if (root["initial"]) read_initial(rd, root["initial"], sc.model, sc.q0, sc.v0);
   if (root["simulation"]) read_simulation(rd, root["simulation"], sc.model, sc.simulation);
   if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.q0, sc.inputs);
+  sc.files.insert(sc.files.end(), rd.files_read.begin(), rd.files_read.end());
   return sc;
 }
 
@@ -363,8 +407,11 @@ Scenario load_scenario(const std::string& path, bool free_root, const std::optio
     sc.path = path;
     sc.text = text;
     sc.name = std::filesystem::path(path).stem().string();
+    sc.files.push_back(path);
     if (is_mjcf_text(text)) {
       MjcfModel mj = parse_mjcf(text, path, true, {free_root, gravity, inertia_check.value_or(InertiaCheck::Warn)});
+      sc.files = mjcf_files(text, path);
+      sc.files.insert(sc.files.begin(), path);
       sc.model = std::move(mj.model);
       sc.q0 = mj.q0;
       sc.inputs.dampers = mj.dampers;

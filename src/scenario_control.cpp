@@ -30,6 +30,7 @@ class Tables {
     auto it = read_.find(path);
     if (it == read_.end()) {
       try {
+        rd_.files_read.push_back(path);  // named before it is read: an output may never be it
         it = read_.emplace(path, read_table(path)).first;
       } catch (const Error& e) {
         rd_.fail(n, field, e.what());

@@ -21,6 +21,8 @@ namespace soadyn::scenario_detail {
 // Reads YAML nodes and reports every mistake as file:line:column: field: message.
 struct Reader {
   std::string file;
+  // the other files read while parsing `file` (target tables), for Scenario::files
+  mutable std::vector<std::string> files_read;
 
   [[noreturn]] void fail(const YAML::Mark& m, const std::string& field, const std::string& msg) const {
     std::string where = file;

@@ -97,6 +97,11 @@ inline constexpr int kLayoutVersion = 4;
 // Bytes one logged row takes (W doubles), for the projected size of a run.
 std::uint64_t row_bytes(const Model& model, const LogGroups& groups = {});
 
+// The groups a run of `sc` with `settings` logs, given the caller's: `groups` completed as H5Log
+// completes them (the limits' impacts, the controllers' τ, the sensitivities, the scenario's log:
+// frames), so row_bytes(sc.model, logged_groups(...)) is the row a run file will hold.
+LogGroups logged_groups(const Scenario& sc, const SimulationSettings& settings, const LogGroups& groups);
+
 class H5Log : public RunObserver {
  public:
   // Builds the whole file under a temporary name next to `path`; throws soadyn::Error (IoError for

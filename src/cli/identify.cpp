@@ -51,14 +51,17 @@ int run_identify(const IdentifyCommand& o) {
   if (o.max_iterations < 1) throw Error("--max-iterations: expected a whole number >= 1, got " + std::to_string(o.max_iterations));
   options.max_iterations = o.max_iterations;
   options.window = o.window;
-  const Measurements data = read_measurements(o.data, sc.model);
-  const IdentifyResult r = identify(sc, data, options);
-  std::string text;
+  // the output first (before the data is read and fitted): never onto a file the fit reads (the
+  // scenario, its robot and includes, the data), forced or not
   OutputTarget target = OutputTarget::New;
   if (!o.output.empty()) {
-    text = fitted_scenario_text(sc, r, o.output);
-    target = check_outputs({{o.output, OutputKind::Scenario}}, {o.scenario, sc.path, o.data}, o.force).at(0);
+    std::vector<std::string> inputs = sc.files;
+    inputs.insert(inputs.end(), {o.scenario, o.data});
+    target = check_outputs({{o.output, OutputKind::Scenario}}, inputs, o.force).at(0);
   }
+  const Measurements data = read_measurements(o.data, sc.model);
+  const IdentifyResult r = identify(sc, data, options);
+  const std::string text = o.output.empty() ? std::string() : fitted_scenario_text(sc, r, o.output);
 
   if (!o.quiet) {
     std::printf("scenario     %s\ndata         %s (%lld samples)\n", sc.path.c_str(), o.data.c_str(),

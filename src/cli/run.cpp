@@ -206,24 +206,24 @@ int run_simulation(const RunOptions& o) {
   }
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
 
-  // controller ticks, named by the option that set them (the scenario's own are checked as it is read)
-  if (given("control_dt") || given("t_end"))
-    if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty())
-      throw Error(std::string(given("control_dt") ? "--control-dt" : "--t-end") + ": " + p);
   for (const auto& w : check_run(sc, s)) warn(w);
   const std::string method(to_string(s.method));
   if (is_fixed_step(s.method) && (given("rtol") || given("atol")))
     warn(std::string(given("rtol") ? "--rtol" : "--atol") + " has no effect with " + method + " (a fixed-step method; see --dt)");
   if (!is_fixed_step(s.method) && given("dt")) warn("--dt has no effect with " + method + " (it chooses its own steps; see --rtol)");
-  const double rows = output_rows(s), bytes = rows * double(row_bytes(sc.model, groups)), limit = parse_size(o.max_output_size);
+  // the row as the file will hold it: the sensitivities, frames, controls and impacts included
+  const std::uint64_t row = row_bytes(sc.model, logged_groups(sc, s, groups));
+  const double rows = output_rows(s), bytes = rows * double(row), limit = parse_size(o.max_output_size);
   if (bytes > limit) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "%.6g rows of %llu bytes", rows,
-                  static_cast<unsigned long long>(row_bytes(sc.model, groups)));
+    std::snprintf(buf, sizeof buf, "%.6g rows of %llu bytes", rows, static_cast<unsigned long long>(row));
     throw Error(out + ": the output would take " + human_size(bytes) + " (" + buf + "), more than --max-output-size " +
                 o.max_output_size + ": raise --output-dt, lower --t-end, or allow it with --max-output-size");
   }
-  check_output_path(out, OutputKind::Run, {o.scenario, sc.path}, o.force);
+  // never onto a file the run reads (the scenario, its robot and includes, its tables), forced or not
+  std::vector<std::string> inputs = sc.files;
+  inputs.push_back(o.scenario);
+  check_output_path(out, OutputKind::Run, inputs, o.force);
   OutputLock lock(out);
   install_signal_handlers(H5Log::temporary_path(out), lock.lock_path());
 

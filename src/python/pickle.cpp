@@ -280,6 +280,7 @@ py::tuple scenario_state(const py::object& self) {
   f["dampers"] = dampers;
   f["controllers"] = sc.inputs.controllers.size();
   f["log_frames"] = sc.log_frames;
+  f["files"] = sc.files;  // the files it was read from: never a run's output
   return py::make_tuple("soadyn.Scenario", kScenarioStateVersion, f);
 }
 
@@ -293,6 +294,7 @@ Scenario scenario_from_state(const py::object& state) {
   sc.robot_path = r.as<std::string>("robot_path");
   sc.name = r.as<std::string>("name");
   sc.description = r.as<std::string>("description");
+  if (r.fields.contains("files")) sc.files = r.as<std::vector<std::string>>("files");  // absent from older states
   const py::object model = r.get("model");
   if (!py::isinstance<Model>(model)) r.refuse("model", "expected a soadyn.Model");
   sc.model = model.cast<const Model&>();

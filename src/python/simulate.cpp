@@ -116,7 +116,9 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   std::unique_ptr<OutputLock> lock;  // declared first: held until the log is closed
   std::unique_ptr<H5Log> log;
   if (output) {
-    check_output_path(*output, OutputKind::Run, {sc.path});
+    std::vector<std::string> inputs = sc.files;  // every file the scenario was read from
+    inputs.push_back(sc.path);
+    check_output_path(*output, OutputKind::Run, inputs);
     lock = std::make_unique<OutputLock>(*output);
     LogGroups groups;
     groups.control = !controller.is_none();

@@ -1,7 +1,7 @@
 """soadyn.sweep: run a sweep file's cases on Dask distributed (or in this process), resumably.
 
 Also the `soadyn sweep` command: python3 -m soadyn sweep SWEEP.yaml [-o DIR] [--scheduler ADDRESS]
-[--workers N] [--batch-size N] [--keep-logs] [--drop-bad-parts] [-q].
+[--workers N] [--batch-size N] [--keep-logs] [--drop-bad-parts] [--force] [-q].
 
 Output directory:
     DIR/sweep.lock       held (flock) by the sweep writing into DIR, its pid and sweep file inside:
@@ -9,7 +9,11 @@ Output directory:
     DIR/sweep.json       the sweep's fingerprint (sweep file, base scenario, soadyn version) and size
     DIR/parts/*.json     one file per finished batch, its rows (written atomically, by the worker
                          on an embedded cluster, else by this process)
-    DIR/results.h5       the table, a row per case in case order (rebuilt at the end of each run)
+    DIR/results.h5       the table, a row per case in case order (rebuilt at the end of each run);
+                         one that is not a soadyn sweep's table is refused before anything is
+                         written, unless --force
+Every file is built under a new NAME.XXXXXXXX.tmp (O_EXCL | O_NOFOLLOW, a random name) and renamed
+into place; the lock's holder removes the ones writers killed before their rename left.
     DIR/logs/case-N.h5   each case's run log, with --keep-logs (written by the worker)
 
 A part this sweep did not write (not a JSON list of rows with exactly the result columns of the
@@ -32,7 +36,7 @@ import numpy as np
 
 from ._soadyn import Error
 from ._cases import run_batch
-from ._sweep_store import _lock, _open_store, _read_parts, _save_part, _table, write_results
+from ._sweep_store import _lock, _open_store, _read_parts, _save_part, _table, check_results_path, write_results
 from ._yaml_doc import printable
 from .ensemble import Sweep
 
@@ -124,7 +128,7 @@ class _Progress:
 
 def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, workers: Optional[int] = None,
           batch_size: Optional[int] = None, keep_logs: bool = False, quiet: bool = False,
-          drop_bad_parts: bool = False) -> SweepResult:
+          drop_bad_parts: bool = False, force: bool = False) -> SweepResult:
     """Run every case of a sweep file and return the table (see soadyn.ensemble for the format).
 
     out: the results directory (default SWEEP_STEM.results beside the current directory); cases
@@ -138,12 +142,15 @@ def sweep(path: str, out: Optional[str] = None, *, scheduler: Any = None, worker
     state, which otherwise run as one library call: soadyn._batched).  drop_bad_parts: set aside (as NAME.bad)
     each part file in out/parts that this sweep did not write, instead of stopping at it.  Results
     are the same, bit for bit (CPU times aside), whichever way the cases run.  Raises soadyn.Error
-    if out is in use by another sweep (out/sweep.lock)."""
+    if out is in use by another sweep (out/sweep.lock), and, before anything is written, if
+    out/results.h5 is not a soadyn sweep's table (unless force: then it is replaced; never an
+    input of the sweep, a directory or a FIFO)."""
     sw = path if isinstance(path, Sweep) else Sweep(path)
     if out is None:
         out = os.path.basename(sw.path).rsplit(".yaml", 1)[0] + ".results"
     out = str(out)
     t0 = time.monotonic()
+    check_results_path(sw, os.path.join(out, "results.h5"), force)  # before anything is touched
     try:
         os.makedirs(out, exist_ok=True)
     except OSError as e:
@@ -326,6 +333,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     p.add_argument("--drop-bad-parts", action="store_true",
                    help="set aside (as NAME.bad) each DIR/parts file this sweep did not write and run its cases again, "
                         "instead of stopping at it")
+    p.add_argument("--force", action="store_true",
+                   help="replace a DIR/results.h5 that is not a soadyn sweep's table (never an input, a directory or a FIFO)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress output")
     a = p.parse_args(argv)
     for name in ("workers", "batch_size"):
@@ -333,7 +342,7 @@ def main(argv: Optional[List[str]] = None) -> int:
             p.error(f"--{name.replace('_', '-')}: expected a positive integer, got {getattr(a, name)}")
     try:
         r = sweep(a.sweep, a.output, scheduler=a.scheduler, workers=a.workers, batch_size=a.batch_size,
-                  keep_logs=a.keep_logs, quiet=a.quiet, drop_bad_parts=a.drop_bad_parts)
+                  keep_logs=a.keep_logs, quiet=a.quiet, drop_bad_parts=a.drop_bad_parts, force=a.force)
     except Error as e:
         print(f"soadyn: error: {printable(str(e))}", file=sys.stderr)
         return 2

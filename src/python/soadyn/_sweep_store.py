@@ -9,6 +9,7 @@ import glob
 import json
 import os
 import stat
+import tempfile
 import time
 from typing import Dict, List, Optional
 
@@ -79,7 +80,71 @@ def _open_store(sw: Sweep, out: str, drop_bad_parts: bool = False, say=None) -> 
                         f"{printable(old['fingerprint'])}; this one is {info['fingerprint']}): give another -o or remove it")
     else:
         _write_atomic(manifest, json.dumps(info, indent=1))
+    _remove_stale_temporaries(out)
     return _read_parts(out, len(sw.cases), drop_bad_parts, say)
+
+
+def _remove_stale_temporaries(out: str):
+    """With DIR's lock held, the temporary files in DIR and DIR/parts (NAME.XXXXXXXX.tmp, see
+    _temporary) are those of writers killed before they renamed theirs: removed (a symlink's target
+    is never touched: the link itself goes)."""
+    for folder in (out, os.path.join(out, "parts")):
+        for name in glob.glob(os.path.join(glob.escape(folder), "*.tmp")):
+            try:
+                if not stat.S_ISDIR(os.lstat(name).st_mode):
+                    os.unlink(name)
+            except OSError:
+                pass
+
+
+def check_results_path(sw: Sweep, path: str, force: bool = False):
+    """Refuse, before any case runs, a DIR/results.h5 that is not a soadyn sweep's table (HDF5 with
+    the attributes soadyn_version and fingerprint and the group /cases) unless force; never an input
+    of the sweep (its sweep or scenario file, under any name), a directory, a FIFO or a device."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return
+    except OSError as e:
+        raise Error(f"{path}: cannot be checked ({e.strerror})") from None
+    for given in (sw.path, sw.scenario_path):
+        try:
+            if os.path.samefile(path, given):
+                raise Error(f"{path}: the output is the input file {given} (the same file, under any name); give another -o")
+        except OSError:
+            pass
+    if stat.S_ISDIR(st.st_mode):
+        raise Error(f"{path}: is a directory, expected the sweep's table (a file): remove it or give another -o")
+    if stat.S_ISLNK(st.st_mode):
+        why = "a symbolic link (replaced by the table, its target left as it is, only with --force)"
+    elif not stat.S_ISREG(st.st_mode):
+        raise Error(f"{path}: not a regular file (a FIFO, device or socket): remove it or give another -o")
+    else:
+        why = _foreign_results(path, st.st_size)
+    if why and not force:
+        raise Error(f"{path}: exists and is {why}, not a soadyn sweep's table; refusing to replace it "
+                    f"(remove it, give another -o, or give --force)")
+
+
+def _foreign_results(path: str, size: int) -> str:
+    """'' for a soadyn sweep's results.h5 (or an empty file), else what it is"""
+    if size == 0:
+        return ""
+    try:
+        with open(path, "rb", opener=lambda p, f: os.open(p, f | os.O_NOFOLLOW | os.O_NONBLOCK)) as f:
+            head = f.read(8)
+    except OSError as e:
+        return f"unreadable ({e.strerror})"
+    if head != b"\x89HDF\r\n\x1a\n":
+        return "not an HDF5 file"
+    import h5py
+    try:
+        with h5py.File(path, "r") as f:
+            if "soadyn_version" in f.attrs and "fingerprint" in f.attrs and isinstance(f.get("cases"), h5py.Group):
+                return ""
+    except Exception:  # noqa: BLE001 - h5py's errors for a damaged file vary
+        return "a damaged HDF5 file"
+    return "an HDF5 file"
 
 
 # a result column's JSON types (the rest: numbers, NaN and infinities included) and their name
@@ -148,13 +213,34 @@ def _read_parts(out: str, ncases: int, drop_bad_parts: bool = False, say=None) -
     return done
 
 
+def _temporary(path: str):
+    """A new file beside `path` to build it under: (descriptor, name).  tempfile.mkstemp opens with
+    O_CREAT | O_EXCL | O_NOFOLLOW under a random name NAME.XXXXXXXX.tmp, so it never writes
+    through a symlink or into another writer's file (a worker's, a second sweep's)."""
+    d, base = os.path.split(path)
+    fd, tmp = tempfile.mkstemp(prefix=base + ".", suffix=".tmp", dir=d or ".")
+    os.fchmod(fd, 0o644)
+    return fd, tmp
+
+
 def _write_atomic(path: str, text: str):
-    tmp = path + ".tmp"
-    with open(tmp, "w", encoding="utf-8") as f:
-        f.write(text)
-        f.flush()
-        os.fsync(f.fileno())
-    os.replace(tmp, path)
+    fd, tmp = _temporary(path)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        _unlink_quietly(tmp)
+        raise
+
+
+def _unlink_quietly(path: str):
+    try:
+        os.unlink(path)
+    except OSError:
+        pass
 
 
 def _save_part(out: str, rows: List[dict]):
@@ -187,21 +273,35 @@ def _objects(col: list) -> np.ndarray:
 def write_results(sw: Sweep, table: Dict[str, np.ndarray], path: str):
     """The table as HDF5: /cases/<column> datasets (strings UTF-8), the sweep and scenario texts."""
     import h5py
-    tmp = path + ".tmp"
-    with h5py.File(tmp, "w") as f:
-        f.attrs["soadyn_version"] = __version__
-        f.attrs["fingerprint"] = sw.fingerprint()
-        f.attrs["sweep"] = sw.text
-        f.attrs["scenario"] = sw.scenario_text
-        f.attrs["varied"] = json.dumps(sw.paths)
-        g = f.create_group("cases")
-        for name, col in table.items():
-            if col.dtype == object:
-                text = [v if isinstance(v, str) else json.dumps(v) for v in col]  # a list as JSON
-                g.create_dataset(name, data=np.array(text, dtype=h5py.string_dtype()))
-            else:
-                g.create_dataset(name, data=col)
-    os.replace(tmp, path)
+    fd, tmp = _temporary(path)
+    try:
+        with os.fdopen(fd, "w+b") as fo:  # HDF5 writes through this file object: no name to follow
+            with h5py.File(fo, "w") as f:
+                _write_table(f, sw, table)
+            fo.flush()
+            os.fsync(fo.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        _unlink_quietly(tmp)
+        raise
+
+
+def _write_table(f, sw: Sweep, table: Dict[str, np.ndarray]):
+    """The table into an open h5py file: /cases/<column> datasets (strings UTF-8), the sweep and
+    scenario texts."""
+    import h5py
+    f.attrs["soadyn_version"] = __version__
+    f.attrs["fingerprint"] = sw.fingerprint()
+    f.attrs["sweep"] = sw.text
+    f.attrs["scenario"] = sw.scenario_text
+    f.attrs["varied"] = json.dumps(sw.paths)
+    g = f.create_group("cases")
+    for name, col in table.items():
+        if col.dtype == object:
+            text = [v if isinstance(v, str) else json.dumps(v) for v in col]  # a list as JSON
+            g.create_dataset(name, data=np.array(text, dtype=h5py.string_dtype()))
+        else:
+            g.create_dataset(name, data=col)
 
 
 def read_results(path: str) -> Dict[str, np.ndarray]:

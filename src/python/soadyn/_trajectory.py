@@ -1,4 +1,5 @@
 """Trajectory and RunSummary: what soadyn.simulate returns and soadyn.read_log reads back."""
+import os
 from dataclasses import dataclass, field, fields
 from typing import Dict, List, Optional
 
@@ -186,7 +187,9 @@ def read_log(path: str) -> Trajectory:
     """
     from . import Error, _soadyn
 
-    try:  # the reason a file cannot be read (missing, a directory, a FIFO, …) is the reader's
+    if not os.path.isfile(path):
+        raise Error(f"{path}: cannot read the run file: " + ("no such file" if not os.path.exists(path) else "not a regular file"))
+    try:
         c = _soadyn._read_run_file(path)
     except Error as e:
         why = str(e)
