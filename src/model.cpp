@@ -270,6 +270,18 @@ void Model::normalize(Eigen::Ref<VecX> q) const {
     if (const int k = joint_traits(joint_type[i]).quaternion; k >= 0) q.segment<4>(idx_q[i] + k).normalize();
 }
 
+void Model::check_unit_quaternions(const VecX& q, const std::string& where) const {
+  if (q.size() != nq) return;  // the size is the caller's check, with its own words
+  for (int i = 0; i < nbodies; ++i)
+    if (const int k = joint_traits(joint_type[i]).quaternion; k >= 0) {
+      const double norm = q.segment<4>(idx_q[i] + k).norm();
+      if (!(std::abs(norm - 1.0) <= kUnitQuaternionTolerance))  // NaN too
+        throw Error(where + ": joint '" + printable(joint_names[size_t(i)]) + "': expected a unit quaternion [w, x, y, z]" +
+                    (k ? " after the position" : "") + " (norm within 1e-6 of 1, then normalized), got norm " +
+                    short_number(norm));
+    }
+}
+
 void Model::qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const {
   for (int i = 0; i < nbodies; ++i)
     joint_qdot(joint_type[i], q.data() + idx_q[i], v.data() + idx_v[i], qd.data() + idx_q[i]);

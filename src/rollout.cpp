@@ -24,6 +24,38 @@ RolloutSettings rollout_settings(const SimulationSettings& s) {
 
 namespace {
 
+// "gravity_compensation, pd on elbow, …": what the scene's controllers are
+std::string controller_list(const Model& m, const Inputs& inputs) {
+  std::string out;
+  for (const ControllerInput& c : inputs.controllers) {
+    out += out.empty() ? "" : ", ";
+    switch (c.kind) {
+      case ControllerInput::Kind::Pd: out += "pd on " + m.v_names()[size_t(c.dofs.at(0))]; break;
+      case ControllerInput::Kind::GravityCompensation: out += "gravity_compensation"; break;
+      case ControllerInput::Kind::ComputedTorque: out += "computed_torque"; break;
+    }
+  }
+  return out;
+}
+
+const char* const kRolloutInstead =
+    "; use soadyn.simulate (one run per initial state; soadyn sweep for many), or a scene without them "
+    "(the controls then carry the torques)";
+
+}  // namespace
+
+void check_rollout_scene(const Scenario& sc) {
+  const bool controllers = !sc.inputs.controllers.empty(), limits = sc.simulation.limits && sc.model.has_limits();
+  if (!controllers && !limits) return;
+  std::string what;
+  if (controllers) what = "built-in controllers (" + controller_list(sc.model, sc.inputs) + ")";
+  if (limits) what += std::string(controllers ? " and its " : "") + "joint limits (simulation: limits: true)";
+  throw Error("rollout: " + sc.path + ": rollout does not apply the scene's " + what + ", so its states would not be " +
+              "the scene's" + kRolloutInstead);
+}
+
+namespace {
+
 SimulationSettings simulation_settings(const RolloutSettings& r) {
   SimulationSettings s;
   static_cast<IntegrationSettings&>(s) = r;
@@ -143,8 +175,14 @@ RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, co
   if (T < 0) throw Error("rollout: steps: expected T ≥ 0, got " + std::to_string(T));
   if (model.nv == 0) throw Error("rollout: the model has no degrees of freedom (every joint is fixed)");
   if (controls && control) throw Error("rollout: controls: give a control matrix or a callback, not both");
+  if (!inputs.controllers.empty())
+    throw Error("rollout: the inputs have built-in controllers (" + controller_list(model, inputs) +
+                "), which rollout does not apply" + kRolloutInstead);
   check_shape("initial_states", Y0.rows(), K, ny, K, "nq + nv rows, one column per rollout");
   check_finite("initial_states", Y0, "rollout");
+  if (model.has_quaternions())
+    for (long k = 0; k < K; ++k)
+      model.check_unit_quaternions(Y0.col(k).head(model.nq), "rollout: initial_states[" + std::to_string(k) + "]");
   if (controls) {
     check_shape("controls", controls->rows(), controls->cols(), model.nv, T * K, "nv rows, column k·T + s");
     check_finite("controls", *controls, "column");

@@ -102,6 +102,8 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
     throw Error("simulation settings: max_steps must be positive, got " + std::to_string(s.max_steps));
   if (sc.model.nv == 0)
     throw Error(sc.path + ": the model has no degrees of freedom (every joint is fixed): nothing to simulate");
+  // q0 as a caller set it (a file's initial: q is checked where it is read)
+  sc.model.check_unit_quaternions(sc.q0, sc.path + ": initial q");
   // the run's nv×nv matrices (Data's 3, the method's), before any is allocated
   const IntegratorInfo& info = find_integrator(s.method);
   try {

@@ -149,6 +149,12 @@ class Model {
   bool has_quaternions() const;              // a free or ball joint
   VecX neutral_configuration() const;
   void normalize(Eigen::Ref<VecX> q) const;  // unit quaternions of free and ball joints
+  // A state given from outside (Python, C++ callers): each free or ball joint's quaternion within
+  // kUnitQuaternionTolerance of unit norm (normalize() then makes it exact), as a scenario's
+  // initial: q and --q require; otherwise (a zero, NaN or far-off quaternion) soadyn::Error
+  // "where: joint 'j': expected a unit quaternion [w, x, y, z] …, got norm …"
+  static constexpr double kUnitQuaternionTolerance = 1e-6;
+  void check_unit_quaternions(const VecX& q, const std::string& where) const;
   // q̇ from (q, v), and q ⊕ h v (see joint.hpp)
   void qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const;
   VecX velocity(const VecX& q, const VecX& qd) const;  // the reverse map: v from q̇

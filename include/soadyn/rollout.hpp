@@ -55,7 +55,8 @@ struct RolloutReport {
 };
 
 // Throws soadyn::Error (naming the argument, what was expected and what was got) for a wrong shape,
-// a non-finite initial state or control, dt not positive and finite, a negative T, a model without
+// a non-finite initial state or control, a free or ball joint's quaternion not of unit norm
+// (Model::check_unit_quaternions), inputs with built-in controllers (check_rollout_scene), dt not positive and finite, a negative T, a model without
 // degrees of freedom or a method that refuses the model, before any rollout starts.  A rollout that
 // fails midway does not throw: its status says why.  `controls` may be null (no control) and so may
 // `control` (no callback); not both given.  `stop` and `poll` as in simulate(): `stop` is read
@@ -67,6 +68,12 @@ RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, co
 
 // A scenario's integration settings (IntegrationSettings: method, dt, rtol, atol, dynamics, …)
 RolloutSettings rollout_settings(const SimulationSettings& s);
+
+// rollout() applies a scene's torques, springs and dampers and the caller's controls, not its
+// built-in controllers (their sampling at control_dt) nor its joint limits (events with impacts):
+// a scene that asks for either is refused (soadyn::Error naming the file and what rollout does not
+// apply) rather than run without them.  rollout() itself refuses inputs with controllers.
+void check_rollout_scene(const Scenario& sc);
 
 // One run of simulate_states: what simulate() gave from that initial state.
 struct StateRun {

@@ -329,6 +329,7 @@ py::tuple run_rollout(py::object scene, py::handle initial_states, py::object co
   }
   if (loaded || py::isinstance<Scenario>(scene)) {
     const Scenario& sc = loaded ? *loaded : scene.cast<const Scenario&>();
+    check_rollout_scene(sc);  // its controllers and limits: not applied, so refused
     model = &sc.model;
     inputs = &sc.inputs;
     rs = rollout_settings(sc.simulation);
@@ -374,6 +375,13 @@ py::tuple run_rollout(py::object scene, py::handle initial_states, py::object co
         throw Error("rollout: controls: the callback must return " + std::to_string(nv) + " numbers (nv,), got " +
                     (u ? shape_of(u) : std::string(py::str(py::type::handle_of(r).attr("__name__")))) +
                     " for rollout " + std::to_string(k) + ", step " + std::to_string(s));
+      for (int i = 0; i < nv; ++i)
+        if (!std::isfinite(u.data()[i])) {
+          char value[32];
+          std::snprintf(value, sizeof value, "%g", u.data()[i]);
+          throw Error("rollout: controls: the callback returned " + std::string(value) + " at entry " + std::to_string(i) +
+                      " for rollout " + std::to_string(k) + ", step " + std::to_string(s) + ": expected finite numbers");
+        }
       std::memcpy(tau, u.data(), sizeof(double) * size_t(nv));
     };
   } else if (!controls.is_none()) {

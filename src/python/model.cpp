@@ -333,9 +333,11 @@ full text).  q0 and v0 may be assigned (size-checked); settings is changed in pl
       .def_property("q0", [](const Scenario& s) { return owned(VecX(s.q0)); },
                     [](Scenario& s, const ArrayIn& q) {
                       VecX v = read_vector("Scenario.q0", "q0", q, s.model.nq);
+                      s.model.check_unit_quaternions(v, "Scenario.q0");
                       s.model.normalize(v);
                       s.q0 = v;
-                    }, "initial configuration, shape (nq,) (quaternions normalized when set)")
+                    }, "initial configuration, shape (nq,) (quaternions within 1e-6 of unit norm, then normalized; others "
+                       "refused)")
       .def_property("v0", [](const Scenario& s) { return owned(VecX(s.v0)); },
                     [](Scenario& s, const ArrayIn& v) { s.v0 = read_vector("Scenario.v0", "v0", v, s.model.nv); },
                     "initial velocity, shape (nv,)")

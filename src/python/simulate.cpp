@@ -8,9 +8,11 @@
 #include "soadyn/h5log.hpp"
 #include "soadyn/sensitivity.hpp"
 #include "soadyn/simulate.hpp"
+#include "soadyn/text.hpp"
 #include "soadyn/version.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <exception>
@@ -72,15 +74,22 @@ py::dict summary_dict(const RunSummary& r) {
 // (arrays, summary, exception raised by a signal handler or None, warnings)
 // A Python controller f(t, q, v) -> tau as a ControlFunction: the GIL taken for the call only.  An
 // exception it raises is kept (`raised`, re-raised by soadyn.simulate once the file is finished)
-// and ends the run; a τ that is not nv numbers is one error naming the time.
-ControlFunction python_controller(const py::object& f, int nv, py::object& raised) {
-  return [&f, &raised, nv](double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) {
+// and ends the run; so does a τ that is not nv finite numbers, kept as a soadyn.Error naming the
+// time and what was wrong.
+ControlFunction python_controller(const py::object& f, const Model& model, py::object& raised) {
+  return [&f, &raised, nv = model.nv, names = model.v_names()](double t, const VecX& q, const VecX& v,
+                                                                 Eigen::Ref<VecX> tau) {
     py::gil_scoped_acquire gil;
     char at[32];
     std::snprintf(at, sizeof at, "%.9g", t);
     py::object out;
     try {
       out = f(t, py::array_t<double>(q.size(), q.data()), py::array_t<double>(v.size(), v.data()));
+    // a τ the run cannot take: soadyn.Error, raised by soadyn.simulate once the file is finished
+    auto fail = [&](const std::string& why) {
+      raised = py::handle(error_type)(why);
+      throw SimulationError(why, t);
+    };
     } catch (py::error_already_set& e) {
       raised = e.value();
       throw SimulationError(std::string("the controller raised at t = ") + at + " s: " + e.what(), t);
@@ -95,13 +104,16 @@ ControlFunction python_controller(const py::object& f, int nv, py::object& raise
       if (a)
         for (py::ssize_t k = 0; k < a.ndim(); ++k) got += (k ? ", " : "") + std::to_string(a.shape(k));
       got = a ? got + (a.ndim() == 1 ? ",)" : ")") : std::string(py::str(py::type::of(out).attr("__name__")));
-      throw SimulationError(std::string("the controller returned ") + got + " at t = " + at + " s; expected " +
-                                std::to_string(nv) + " torques, shape (" + std::to_string(nv) + ",)",
-                            t);
+      fail(std::string("the controller returned ") + got + " at t = " + at + " s; expected " + std::to_string(nv) +
+           " torques, shape (" + std::to_string(nv) + ",)");
     }
     for (int k = 0; k < nv; ++k) tau(k) += a.at(k);
   };
 }
+    for (int k = 0; k < nv; ++k)
+      if (!std::isfinite(a.at(k)))
+        fail(std::string("the controller returned a non-finite torque at t = ") + at + " s (" + printable(names[size_t(k)]) +
+             " = " + short_number(a.at(k)) + ")");
 
 py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output,
               const py::object& controller) {
@@ -132,7 +144,7 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   std::function<void()> poll = signal_poll(stop, pending);
   py::object raised = py::none();  // the controller's exception
   ControlFunction control;
-  if (!controller.is_none()) control = python_controller(controller, sc.model.nv, raised);
+  if (!controller.is_none()) control = python_controller(controller, sc.model, raised);
   {
     py::gil_scoped_release nogil;
     try {

@@ -265,8 +265,10 @@ def test_model_methods():
     assert_close(q1[:7], [1, 0, 0, np.cos(np.pi / 4), 0, 0, np.sin(np.pi / 4)], 1e-15)
     assert_close(model.velocity(q, model.qdot(q, v)), v, 1e-14)
     assert_close(scene.q0, [0, 0, 0, 1, 0, 0, 0, 0.3, -0.2], 0)
-    scene.q0 = [0, 0, 0, 2, 0, 0, 0, 0, 0]  # normalized when set
+    scene.q0 = [0, 0, 0, 1 + 4e-7, 0, 0, 0, 0, 0]  # within 1e-6 of unit norm: normalized when set
     assert_close(scene.q0[3], 1.0, 0)
+    with pytest.raises(soadyn.Error, match="Scenario.q0: joint 'bus': expected a unit quaternion .* got norm 2$"):
+        scene.q0 = [0, 0, 0, 2, 0, 0, 0, 0, 0]  # far from it: refused (test_no_silent_results.py)
     scene.settings.t_end = 3.5
     assert scene.settings.t_end == 3.5
 

@@ -1,6 +1,7 @@
 """Controllers and joint limits from Python: simulate(..., controller=f) against the closed-form PD
 offset, a controller called once per tick when sampled, an exception raised in it (re-raised, the
-run file readable up to then), a wrong shape named with the time, and joint-limit events."""
+run file readable up to then), a wrong shape or NaN raised as soadyn.Error naming the time, and
+joint-limit events."""
 import math
 
 import numpy as np
@@ -70,12 +71,16 @@ def test_controller_exception_is_reraised_and_the_file_stays_readable(tmp_path):
 
 
 def test_wrong_shape_and_nan_are_one_error_naming_the_time():
-    traj = soadyn.simulate(scene("simulation: {t_end: 1, control_dt: 0.1}\n"), controller=lambda t, q, v: np.zeros(2))
-    assert not traj.summary.completed
-    assert "the controller returned shape (2,) at t = 0 s; expected 1 torques, shape (1,)" in traj.summary.status
-    traj = soadyn.simulate(scene("simulation: {t_end: 1, control_dt: 0.1}\n"),
-                           controller=lambda t, q, v: [math.nan if t > 0.15 else 0.0])
-    assert "non-finite torque at t = 0.2 s (arm = nan)" in traj.summary.status
+    # raised as soadyn.Error with the partial Trajectory (test_no_silent_results.py: the file's rows)
+    with pytest.raises(soadyn.Error) as info:
+        soadyn.simulate(scene("simulation: {t_end: 1, control_dt: 0.1}\n"), controller=lambda t, q, v: np.zeros(2))
+    assert "the controller returned shape (2,) at t = 0 s; expected 1 torques, shape (1,)" == str(info.value)
+    assert not info.value.trajectory.summary.completed
+    with pytest.raises(soadyn.Error) as info:
+        soadyn.simulate(scene("simulation: {t_end: 1, control_dt: 0.1}\n"),
+                        controller=lambda t, q, v: [math.nan if t > 0.15 else 0.0])
+    assert "non-finite torque at t = 0.2 s (arm = nan)" in str(info.value)
+    assert "non-finite torque at t = 0.2 s (arm = nan)" in info.value.trajectory.summary.status
 
 
 def test_limit_events_in_the_summary():

@@ -138,8 +138,8 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     controllers): called at every right-hand-side evaluation and sample when continuous, once per
     tick when the scene's simulation has control_dt > 0 (zero-order hold).  The GIL is taken for
     the call only.  An exception it raises ends the run, finishes the file and is re-raised with
-    the partial Trajectory as .trajectory; a tau of the wrong shape or not finite ends the run with
-    one error naming the time (in the summary's status).
+    the partial Trajectory as .trajectory; so does a tau of the wrong shape or not finite, raised
+    as soadyn.Error naming the time and the value (the file keeps the rows logged until then).
     sensitivities: {"initial_state": True, "parameters": ["link2", "link3"] or "all"} (the scenario's
     simulation: sensitivities: otherwise): forward sensitivities by CVODES, in .sensitivities (a
     Sensitivities: initial_state (T, nx, nx), parameters (T, nx, np), their names); CVODE methods only,
@@ -229,8 +229,10 @@ def rollout(scene, initial_states, controls=None, *, steps: Optional[int] = None
     """K simulations of T steps in one call: (states, energies).
 
     scene: a Model (no inputs; rk4 at dt = 1e-3 unless told), a Scenario or a scenario path (its
-    inputs and its settings: method, dt, rtol, atol, dynamics).  initial_states: (K, nq + nv), one
-    [q, v] per rollout (quaternions normalized).  controls: None; an array (K, T, nv), the
+    inputs and its settings: method, dt, rtol, atol, dynamics); a scene with built-in controllers
+    or enforced joint limits (limits: true), which rollout does not apply, is refused (soadyn.Error:
+    simulate runs them).  initial_states: (K, nq + nv), one [q, v] per rollout (quaternions within
+    1e-6 of unit norm, then normalized; others refused).  controls: None; an array (K, T, nv), the
     generalized force u[k, s] added to the inputs' over step s of rollout k; or a callable
     controls(k, s, t, y) -> (nv,) called before each step with the state y (nq + nv,) (then
     steps= is required; it runs with the GIL, so it serializes threads).  dt: the step of fixed-step
