@@ -1,5 +1,6 @@
 #include "h5_util.hpp"
 
+#include "soadyn/input_file.hpp"
 #include "soadyn/text.hpp"
 
 #include <algorithm>
@@ -153,11 +154,14 @@ Scalar string_scalar(hid_t parent, const char* name, size_t size) { return Scala
 
 Id open_run_file(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
-  if (H5Fis_hdf5(path.c_str()) <= 0) throw Error(path + ": not a run file: not an HDF5 file (expected one from soadyn run)");
+  // a regular file (never a FIFO or device: input_file.hpp), and HDF5 opens the very file checked
+  const InputFile in(path, "a run file (HDF5, from soadyn run)", kNoSizeLimit);
+  const std::string name = in.name_for_library();
+  if (H5Fis_hdf5(name.c_str()) <= 0) throw Error(path + ": not a run file: not an HDF5 file (expected one from soadyn run)");
   Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, path + ": file-access properties");
   H5Pset_metadata_read_attempts(fapl, kMetadataReadAttempts);
-  hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl);
-  if (f < 0) f = H5Fopen(path.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
+  hid_t f = H5Fopen(name.c_str(), H5F_ACC_RDONLY, fapl);
+  if (f < 0) f = H5Fopen(name.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
   if (f < 0) throw Error(path + ": cannot open the HDF5 file (corrupt or truncated?)");
   return Id(f, H5Fclose, path);
 }

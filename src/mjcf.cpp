@@ -15,6 +15,8 @@
 
 #include "soadyn/text.hpp"
 
+#include "mjcf_vfs.hpp"
+
 #include <mujoco/mujoco.h>
 
 #include <array>
@@ -73,19 +75,14 @@ std::string name_of(const mjModel* m, int type, int id, const char* kind) {
 
 MjModelPtr compile(const std::string& xml, const std::string& path, bool from_disk) {
   std::array<char, 1000> error{};
-  mjModel* m = nullptr;
-  if (from_disk) {
-    m = mj_loadXML(path.c_str(), nullptr, error.data(), int(error.size()));
-  } else {
-    // the text alone (a run file's stored model): one file in a virtual file system
-    std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
-    mj_defaultVFS(vfs.get());
-    const std::string name = "model.xml";
-    if (mj_makeEmptyFileVFS(vfs.get(), name.c_str(), int(xml.size())) != 0)
-      throw Error(path + ": MJCF: cannot hold the model text in MuJoCo's virtual file system");
-    std::memcpy(vfs->filedata[vfs->nfile - 1], xml.data(), xml.size());
-    m = mj_loadXML(name.c_str(), vfs.get(), error.data(), int(error.size()));
-  }
+  // the text and the files it names (from the model's folder; the working folder for a run
+  // file's stored text), each checked and read by us, handed to MuJoCo in its virtual file
+  // system: it never opens a FIFO or a device (mjcf_vfs.hpp)
+  std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
+  mj_defaultVFS(vfs.get());
+  const std::string name = mjcf_main_name(from_disk ? mjcf_file_dir(path) : "");
+  load_mjcf_files(vfs.get(), name, xml, from_disk ? mjcf_file_dir(path) : "");
+  mjModel* m = mj_loadXML(name.c_str(), vfs.get(), error.data(), int(error.size()));
   if (!m) compile_error(path, error.data());
   return MjModelPtr(m);
 }

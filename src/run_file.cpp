@@ -2,6 +2,8 @@
 // names (kViewPaths, column_stem) and the same HDF5 helpers (h5_util).
 #include "soadyn/run_file.hpp"
 
+#include "soadyn/input_file.hpp"
+
 #include "h5_util.hpp"
 #include "log_layout.hpp"
 
@@ -218,7 +220,8 @@ RunContents read_run_file(const std::string& path) { return RunReader(path).read
 
 bool is_hdf5_file(const std::string& path) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // our messages, not HDF5's stack dumps
-  return H5Fis_hdf5(path.c_str()) > 0;
+  const InputFile in(path, "a file", kNoSizeLimit);  // a regular file: H5Fis_hdf5 would block on a FIFO
+  return H5Fis_hdf5(in.name_for_library().c_str()) > 0;
 }
 
 Eigen::Index RunContents::rows() const {

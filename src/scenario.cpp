@@ -1,5 +1,6 @@
 #include "soadyn/scenario.hpp"
 
+#include "soadyn/input_file.hpp"
 #include "soadyn/integrators.hpp"
 #include "soadyn/mjcf.hpp"
 #include "soadyn/text.hpp"
@@ -100,6 +101,9 @@ void read_simulation(const Reader& rd, const YAML::Node& n, const Model& m, Simu
       case SettingKind::Flag: set_setting(s, info, rd.boolean(v, field)); break;
     }
   }
+  // control ticks over the file's t_end (or the default): bounded as steps and rows are
+  if (const YAML::Node v = n["control_dt"])
+    if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty()) rd.fail(v, "simulation.control_dt", p);
 }
 
 void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0, Inputs& in) {
@@ -205,33 +209,8 @@ bool is_urdf_path(const std::string& path) {
 }  // namespace
 
 std::string read_text_file(const std::string& path) {
-  // opened without blocking (a FIFO with no writer would wait forever), then checked for what it is
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-  if (fd < 0) {
-    const int err = errno;
-    throw Error(path + ": cannot open the file for reading (" + std::strerror(err) + ")");
-  }
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
-  struct stat st {};
-  if (::fstat(fd, &st) != 0) throw Error(path + ": cannot be read (" + std::strerror(errno) + ")");
-  if (S_ISDIR(st.st_mode)) throw Error(path + ": is a directory, expected a file");
-  if (!S_ISREG(st.st_mode)) throw Error(path + ": not a regular file (a device, FIFO or socket); expected a YAML or URDF file");
-  if (std::uint64_t(st.st_size) > kMaxInputBytes)
-    throw Error(path + ": " + std::to_string(st.st_size >> 20) + " MiB, more than the " + std::to_string(kMaxInputBytes >> 20) +
-                " MiB a model or scenario file may have");
-  std::string text(size_t(st.st_size), '\0');
-  size_t got = 0;
-  while (got < text.size()) {  // a file that shrinks while read ends early; one that grows is cut at its size
-    const ssize_t n = ::pread(fd, text.data() + got, text.size() - got, off_t(got));
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) throw Error(path + ": read error (" + std::strerror(errno) + ")");
-    if (n == 0) break;
-    got += size_t(n);
-  }
-  text.resize(got);
+  // a regular file only, never waited on (input_file.hpp)
+  const std::string text = InputFile(path, "a scenario or model file (YAML, URDF or MJCF)", kMaxInputBytes).read();
   if (text.find_first_not_of(" \t\r\n") == std::string::npos) throw Error(path + ": the file is empty");
   if (text.find('\0') != std::string::npos) throw Error(path + ": a binary file, expected text (YAML or URDF)");
   return text;

@@ -205,4 +205,13 @@ double setting_number(const SimulationSettings& s, const SettingInfo& info) {
   throw Error(std::string(info.name) + ": not a number setting");
 }
 
+std::string control_ticks_problem(double t_end, double control_dt) {
+  if (!(control_dt > 0) || !(t_end > 0)) return "";
+  const double ticks = t_end / control_dt;
+  if (ticks <= kMaxControlTicks) return "";
+  return "control_dt " + short_number(control_dt) + " s over t_end " + short_number(t_end) + " s is " + short_number(ticks) +
+         " controller ticks, more than the " + short_number(kMaxControlTicks) +
+         " a run may take (each one restarts the integrator): raise control_dt or lower t_end";
+}
+
 }  // namespace soadyn

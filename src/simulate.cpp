@@ -126,6 +126,7 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   }
   if (!(s.control_dt >= 0) || !std::isfinite(s.control_dt))
     throw Error("simulation settings: control_dt must be 0 (continuous) or a positive finite number, got " + short_number(s.control_dt));
+  if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty()) throw Error("simulation settings: " + p);
   check_sensitivities(sc, s, false);
   std::vector<std::string> warnings;
   if (s.control_dt > 0 && is_fixed_step(s.method) &&

@@ -1,5 +1,6 @@
 #include "soadyn/table.hpp"
 
+#include "soadyn/input_file.hpp"
 #include "soadyn/run_file.hpp"
 #include "soadyn/text.hpp"
 
@@ -8,7 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <fstream>
+#include <limits>
 #include <memory>
 
 namespace soadyn {
@@ -49,17 +50,8 @@ std::vector<std::string> split(const std::string& line) {
   }
 }
 
-// Rows kept in time order, a repeated time replacing the row before it; throws if time decreases.
-Table ordered(Table t, const std::vector<int>& lines) {
-  std::vector<Eigen::Index> keep;
-  for (Eigen::Index k = 0; k < t.time.size(); ++k) {
-    if (k > 0 && t.time(k) < t.time(k - 1))
-      throw Error(t.path + (lines.empty() ? "" : ":" + std::to_string(lines[size_t(k)])) +
-                  ": time decreases (" + short_number(t.time(k - 1)) + " then " + short_number(t.time(k)) + ")");
-    if (k > 0 && t.time(k) == t.time(k - 1)) keep.back() = k;
-    else keep.push_back(k);
-  }
-  if (keep.size() < 2) throw Error(t.path + ": a table needs samples at two times at least, got " + std::to_string(keep.size()));
+// the rows `keep` of t, in that order
+Table rows(Table t, const std::vector<Eigen::Index>& keep) {
   Table r;
   r.path = t.path;
   r.columns = t.columns;
@@ -72,16 +64,80 @@ Table ordered(Table t, const std::vector<int>& lines) {
   return r;
 }
 
-Table read_csv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open the table (" + std::strerror(errno) + ")");
+// Rows kept in time order, a repeated time replacing the row before it (a run's rows at an event);
+// throws if time decreases.
+Table ordered(Table t) {
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index k = 0; k < t.time.size(); ++k) {
+    if (k > 0 && t.time(k) < t.time(k - 1))
+      throw Error(t.path + ": /time decreases at row " + std::to_string(k) + " (" + short_number(t.time(k - 1)) + " then " +
+                  short_number(t.time(k)) + ")");
+    if (k > 0 && t.time(k) == t.time(k - 1)) keep.back() = k;
+    else keep.push_back(k);
+  }
+  return rows(std::move(t), keep);
+}
+
+// A CSV table's times, checked line by line: each sample after the one before by at least the
+// minimum spacing (table.hpp); the message names the file, the line and the time column.
+void check_times(const Table& t, const std::string& field, const std::vector<int>& lines) {
+  const Eigen::Index n = t.time.size();
+  const double spacing = n > 0 ? min_table_spacing(t.time(0), t.time(n - 1)) : 0.0;
+  for (Eigen::Index k = 1; k < n; ++k) {
+    const double a = t.time(k - 1), b = t.time(k);
+    const std::string at = t.path + ":" + std::to_string(lines[size_t(k)]) + ": column '" + field + "': ";
+    const std::string before = "line " + std::to_string(lines[size_t(k - 1)]);
+    if (b < a) throw Error(at + "the time decreases (" + short_number(a) + " at " + before + ", then " + short_number(b) + ")");
+    if (b == a) throw Error(at + "the time " + short_number(b) + " repeats " + before + "'s: each sample needs a time of its own");
+    if (b - a < spacing)
+      throw Error(at + exact_number(b) + " is " + short_number(b - a) + " s after " + before + "'s " + exact_number(a) +
+                  ", closer than the " + short_number(spacing) + " s samples must keep (" + short_number(kMinTableSpacing) +
+                  " of the table's time scale, " + short_number(spacing / kMinTableSpacing) +
+                  " s): the spline's rate and acceleration there would stall a run");
+  }
+}
+
+// Every column's spline within kMaxSplineSwing of its range (table.hpp), or the two samples where
+// it strays, by line (CSV) or row (run file)
+void check_swing(const Table& t) {
+  for (Eigen::Index c = 0; c < t.values.cols(); ++c) {
+    const VecX y = t.values.col(c);
+    const double range = y.maxCoeff() - y.minCoeff(), scale = y.cwiseAbs().maxCoeff();
+    const CubicSpline::Swing w = CubicSpline(t.time, y).swing();
+    if (!(w.beyond > kMaxSplineSwing * range + 8 * std::numeric_limits<double>::epsilon() * scale)) continue;
+    // where it strays, and the narrowest interval (the jump sampled too tightly, as a rule)
+    const Eigen::Index k = w.k, n = t.time.size();
+    Eigen::Index narrow = 1;
+    for (Eigen::Index i = 2; i < n; ++i)
+      if (t.time(i) - t.time(i - 1) < t.time(narrow) - t.time(narrow - 1)) narrow = i;
+    auto at = [&](Eigen::Index i) {
+      return t.lines.empty() ? "row " + std::to_string(i) : "line " + std::to_string(t.lines[size_t(i)]);
+    };
+    throw Error(t.path + (t.lines.empty() ? "" : ":" + std::to_string(t.lines[size_t(k + 1)])) + ": column '" +
+                printable(t.columns[size_t(c)]) + "': the spline through the samples strays " + short_number(w.beyond) +
+                " beyond their range [" + short_number(y.minCoeff()) + ", " + short_number(y.maxCoeff()) + "] at t = " +
+                short_number(w.t) + " s (between " + at(k) + " and " + at(k + 1) + "), more than " + short_number(kMaxSplineSwing) +
+                " times that range: samples spaced this unevenly around a change (" + short_number(t.time(narrow) - t.time(narrow - 1)) +
+                " s before " + at(narrow) + ", " + short_number(t.time(n - 1) - t.time(0)) +
+                " s in all) make a cubic spline ring, and a run following it stall; sample the change as densely as its neighbours");
+  }
+}
+
+Table read_csv(const InputFile& file) {
+  file.check_size(kMaxTableBytes, "a CSV table");
+  const std::string& path = file.path();
+  const std::string text = file.read();
+  if (text.find('\0') != std::string::npos) throw Error(path + ": a binary file, expected a table (CSV or run file)");
   Table t;
   t.path = path;
-  std::vector<std::vector<double>> rows;
+  std::vector<double> flat;  // the samples, row after row
   std::vector<int> lines;
-  std::string line;
-  for (int n = 1; std::getline(in, line); ++n) {
-    const std::string body = trim(line);
+  std::string field;         // the time column's name as the header gives it
+  size_t from = 0;
+  for (int n = 1; from < text.size(); ++n) {
+    const size_t eol = std::min(text.find('\n', from), text.size());
+    const std::string body = trim(text.substr(from, eol - from));
+    from = eol + 1;
     if (body.empty() || body[0] == '#') continue;
     const std::string at = path + ":" + std::to_string(n);
     const std::vector<std::string> fields = split(body);
@@ -91,38 +147,40 @@ Table read_csv(const std::string& path) {
         const std::string name = column_name(f);
         if (name.empty()) throw Error(at + ": a column without a name in the header");
         if (std::find(t.columns.begin(), t.columns.end(), name) != t.columns.end())
-          throw Error(at + ": column '" + name + "' is named twice");
+          throw Error(at + ": column '" + printable(name) + "' is named twice");
         t.columns.push_back(name);
       }
       if (t.columns[0] != "t" && t.columns[0] != "time")
-        throw Error(at + ": the first column must be the time ('t' or 'time [s]'), got '" + t.columns[0] + "'");
+        throw Error(at + ": the first column must be the time ('t' or 'time [s]'), got '" + printable(t.columns[0]) + "'");
       if (t.columns.size() < 2) throw Error(at + ": the header names no column beside the time");
+      field = t.columns[0];
       continue;
     }
     if (fields.size() != t.columns.size())
       throw Error(at + ": expected " + std::to_string(t.columns.size()) + " fields as the header has, got " +
                   std::to_string(fields.size()));
-    std::vector<double> row;
     for (size_t c = 0; c < fields.size(); ++c) {
       const std::string f = trim(fields[c]);
       char* end = nullptr;
       const double x = std::strtod(f.c_str(), &end);
       if (f.empty() || end != f.c_str() + f.size() || !std::isfinite(x))
-        throw Error(at + ": column '" + t.columns[c] + "': expected a finite number, got '" + f + "'");
-      row.push_back(x);
+        throw Error(at + ": column '" + printable(t.columns[c]) + "': expected a finite number, got '" +
+                    printable(f.substr(0, 40)) + (f.size() > 40 ? "..." : "") + "'");
+      flat.push_back(x);
     }
-    rows.push_back(std::move(row));
     lines.push_back(n);
   }
   if (t.columns.empty()) throw Error(path + ": the table is empty (expected a header line, then samples)");
-  t.time.resize(Eigen::Index(rows.size()));
-  t.values.resize(Eigen::Index(rows.size()), Eigen::Index(t.columns.size() - 1));
-  for (size_t k = 0; k < rows.size(); ++k) {
-    t.time(Eigen::Index(k)) = rows[k][0];
-    for (size_t c = 1; c < rows[k].size(); ++c) t.values(Eigen::Index(k), Eigen::Index(c - 1)) = rows[k][c];
-  }
+  const Eigen::Index rows_n = Eigen::Index(lines.size()), cols = Eigen::Index(t.columns.size());
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> all(flat.data(), rows_n, cols);
+  t.time = all.col(0);
+  t.values = all.rightCols(cols - 1);
   t.columns.erase(t.columns.begin());
-  return ordered(std::move(t), lines);
+  check_times(t, field, lines);
+  if (t.time.size() < 2) throw Error(path + ": a table needs samples at two times at least, got " + std::to_string(t.time.size()));
+  t.lines = std::move(lines);
+  check_swing(t);
+  return t;
 }
 
 // a run file's /time and /q (read_run_file), the columns named by /model's q_names
@@ -151,7 +209,7 @@ RunState read_run_state(const std::string& path) {
   const RunContents run = read_run_file(path);
   Table all = run_table(run);
   const VecX times = all.time;
-  const Table t = ordered(std::move(all), {});  // /time and /q, ordered
+  const Table t = ordered(std::move(all));  // /time and /q, ordered
   RunState s;
   s.path = path;
   s.time = t.time;
@@ -162,8 +220,33 @@ RunState read_run_state(const std::string& path) {
   return s;
 }
 
+// A run file's rows as a table: ordered, and a row closer to the next than the minimum spacing
+// dropped (a run's rows at an event, or its last row just before t_end), so the spline never sees
+// two knots closer than a CSV table may have them
+Table spaced_run_table(const std::string& path) {
+  Table t = ordered(run_table(read_run_file(path)));
+  const Eigen::Index n = t.time.size();
+  if (n < 2) throw Error(path + ": a table needs samples at two times at least, got " + std::to_string(n));
+  const double spacing = min_table_spacing(t.time(0), t.time(n - 1));
+  std::vector<Eigen::Index> keep;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    if (!keep.empty() && t.time(k) - t.time(keep.back()) < spacing) keep.back() = k;
+    else keep.push_back(k);
+  }
+  if (keep.size() < 2) throw Error(path + ": a table needs samples at two times at least, got " + std::to_string(keep.size()));
+  Table r = rows(std::move(t), keep);
+  check_swing(r);
+  return r;
+}
+
 Table read_table(const std::string& path) {
-  return is_hdf5_file(path) ? ordered(run_table(read_run_file(path)), {}) : read_csv(path);
+  // one check for both kinds (a regular file: never a FIFO or device), then by HDF5's signature
+  const InputFile file(path, "a table (CSV or run file)", kNoSizeLimit);
+  return is_hdf5_file(file.name_for_library()) ? spaced_run_table(path) : read_csv(file);
+}
+
+double min_table_spacing(double first, double last) {
+  return kMinTableSpacing * std::max({last - first, std::abs(first), std::abs(last)});
 }
 
 CubicSpline::CubicSpline(VecX t, VecX y) : t_(std::move(t)), y_(std::move(y)), m_(VecX::Zero(t_.size())) {
@@ -206,6 +289,30 @@ double CubicSpline::value(double t, Where w) const {
   const int k = w.k;
   const double h = t_(k + 1) - t_(k), A = (t_(k + 1) - t) / h, B = 1 - A;
   return A * y_(k) + B * y_(k + 1) + ((A * A * A - A) * m_(k) + (B * B * B - B) * m_(k + 1)) * h * h / 6;
+}
+
+CubicSpline::Swing CubicSpline::swing() const {
+  const double lo = y_.minCoeff(), hi = y_.maxCoeff();
+  Swing out;
+  for (Eigen::Index k = 0; k + 1 < t_.size(); ++k) {
+    // y(B) on B = (t − t_k)/h in [0, 1]: its extremes where dy/dB = a B² + b B + c = 0
+    const double h = t_(k + 1) - t_(k), m0 = m_(k), m1 = m_(k + 1);
+    const double a = (m1 - m0) / 2 * h * h, b = m0 * h * h, c = (y_(k + 1) - y_(k)) - h * h * (2 * m0 + m1) / 6;
+    std::vector<double> at = {0.5};
+    if (std::abs(a) > 1e-300) {
+      const double d = b * b - 4 * a * c;
+      if (d >= 0) at.insert(at.end(), {(-b + std::sqrt(d)) / (2 * a), (-b - std::sqrt(d)) / (2 * a)});
+    } else if (std::abs(b) > 1e-300) {
+      at.push_back(-c / b);
+    }
+    for (double B : at) {
+      if (!(B > 0 && B < 1)) continue;
+      const double t = t_(k) + B * h, y = value(t, Where{int(k), 0});
+      const double beyond = std::max({y - hi, lo - y, 0.0});
+      if (beyond > out.beyond) out = {beyond, int(k), t};
+    }
+  }
+  return out;
 }
 
 double CubicSpline::rate(double t) const {

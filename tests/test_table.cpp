@@ -8,6 +8,8 @@
 
 #include "test_util.hpp"
 
+#include <gmock/gmock.h>
+
 #include <unistd.h>
 
 #include <cmath>
@@ -79,10 +81,10 @@ TEST(CubicSpline, ALineStaysALineAndTheEndsAreHeld) {
 
 TEST(Table, CsvAsWrittenByHandOrByExport) {
   const std::string p = scratch("hand.csv");
-  write(p, "# a comment\n\ntime [s], q.elbow [rad], shoulder\n0, 1, 2\n0.5, 1.5, 2.5\n0.5, 1.75, 2.75\n1.0, 2, 3\n");
+  write(p, "# a comment\n\ntime [s], q.elbow [rad], shoulder\n0, 1, 2\n0.5, 1.75, 2.75\n1.0, 2, 3\n");
   const Table t = read_table(p);
   ASSERT_EQ(t.columns, (std::vector<std::string>{"elbow", "shoulder"}));
-  ASSERT_EQ(t.time.size(), 3);  // the repeated time keeps its last row
+  ASSERT_EQ(t.time.size(), 3);
   EXPECT_NEAR(t.values(1, 0), 1.75, 0);
   EXPECT_EQ(t.column("shoulder"), 1);
   EXPECT_EQ(t.column("wrist"), -1);
@@ -95,14 +97,37 @@ TEST(Table, CsvErrorsNameFileLineAndColumn) {
   write(p, "t,a\n0,1\n0.1\n");
   EXPECT_EQ(message_of([&] { read_table(p); }), p + ":3: expected 2 fields as the header has, got 1");
   write(p, "t,a\n0,1\n1,2\n0.5,3\n");
-  EXPECT_EQ(message_of([&] { read_table(p); }), p + ":4: time decreases (1 then 0.5)");
+  EXPECT_EQ(message_of([&] { read_table(p); }), p + ":4: column 't': the time decreases (1 at line 3, then 0.5)");
+  // a repeated time, and one closer than 1e-9 of the table's time scale (here 2 s): refused as decreasing ones are
+  write(p, "time [s],a\n0,1\n\n0.5,2\n0.5,3\n2,0\n");
+  EXPECT_EQ(message_of([&] { read_table(p); }), p + ":5: column 'time': the time 0.5 repeats line 4's: each sample needs a time of its own");
+  write(p, "t,a\n0,1\n0.5,2\n0.500000001,3\n2,0\n");
+  EXPECT_EQ(message_of([&] { read_table(p); }),
+            p + ":4: column 't': 0.50000000099999997 is 1e-09 s after line 3's 0.5, closer than the 2e-09 s samples must keep "
+                "(1e-09 of the table's time scale, 2 s): the spline's rate and acceleration there would stall a run");
+  write(p, "t,a\n0,1\n0.5,2\n0.500000002,2\n2,0\n");
+  EXPECT_EQ(read_table(p).time.size(), 4);  // just past the minimum, no jump there
+  // a jump sampled 1 ms wide beside 0.5 s intervals: the spline swings 96 times the range; 10 ms wide, 9.5 times
+  write(p, "t,a\n0,0\n0.5,0\n0.501,1\n1,1\n");
+  EXPECT_EQ(message_of([&] { read_table(p); }).substr(0, p.size() + 80),
+            (p + ":3: column 'a': the spline through the samples strays 96.1291 beyond their range [0, 1] at t = 0.288675 s")
+                .substr(0, p.size() + 80));
+  EXPECT_THAT(message_of([&] { read_table(p); }), testing::HasSubstr("(0.001 s before line 4, 1 s in all)"));
+  write(p, "t,a\n0,0\n0.5,0\n0.51,1\n1,1\n");
+  const Table stepped = read_table(p);
+  const CubicSpline::Swing w = CubicSpline(stepped.time, stepped.values.col(0)).swing();
+  EXPECT_NEAR(w.beyond, 9.53, 0.01);  // against scipy's natural spline sampled at 2001 points per interval
+  EXPECT_LT(CubicSpline(stepped.time, VecX::Constant(4, 0.3)).swing().beyond, 1e-15);
+  EXPECT_DOUBLE_EQ(min_table_spacing(1000.0, 1001.0), 1.001e-6);  // the scale is the largest |t| when it exceeds the span
   write(p, "a,t\n0,1\n");
   EXPECT_EQ(message_of([&] { read_table(p); }), p + ":1: the first column must be the time ('t' or 'time [s]'), got 'a'");
   write(p, "t,a,a\n");
   EXPECT_EQ(message_of([&] { read_table(p); }), p + ":1: column 'a' is named twice");
   write(p, "t,a\n0,1\n");
   EXPECT_EQ(message_of([&] { read_table(p); }), p + ": a table needs samples at two times at least, got 1");
-  EXPECT_NE(message_of([&] { read_table(scratch("missing.csv")); }).find("missing.csv: cannot open the table"), std::string::npos);
+  EXPECT_EQ(message_of([&] { read_table(scratch("missing.csv")); }), scratch("missing.csv") + ": cannot open the file (no such file or directory)");
+  // a directory is said to be one (it read as an empty table before)
+  EXPECT_EQ(message_of([&] { read_table(scratch("")); }), scratch("") + ": is a directory, expected a table (CSV or run file)");
 }
 
 const std::string kArm = R"(gravity: [0, 0, -9.81]

@@ -329,7 +329,8 @@ def check_detectors(b, page, tmp):
 
 def check_cli_errors(tmp):
     p = run("view", os.path.join(tmp, "missing.h5"), expect=2)
-    check("missing.h5: no such run file" in p.stderr and p.stderr.count("\n") == 1, f"missing run file: {p.stderr.strip()}")
+    check("missing.h5: cannot open the file (no such file or directory)" in p.stderr and p.stderr.count("\n") == 1,
+          f"missing run file: {p.stderr.strip()}")
     p = run("view", os.path.join(SOURCE, "scenarios", "double_pendulum.yaml"), "-o", os.path.join(tmp, "x.html"), expect=2)
     check("not an HDF5 file" in p.stderr, f"not a run file: {p.stderr.strip()}")
     # a run whose scenario and URDF have gone: the page from the text stored in the run, visuals included

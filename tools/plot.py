@@ -19,6 +19,7 @@ max_j |q_j − q_j(RUN)| at RUN's sample times (the other run's q linearly inter
 import argparse
 import csv
 import os
+import stat
 import sys
 
 import h5py
@@ -41,9 +42,22 @@ def text(v):
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
+KINDS = ((stat.S_ISFIFO, "a FIFO"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+         (stat.S_ISSOCK, "a socket"))
+
+
 def open_run(path):
-    if not os.path.isfile(path):
-        fail(f"{path}: no such file")
+    # a regular file only, with the reason otherwise, as soadyn's readers say it (HDF5 would wait
+    # for ever on a FIFO)
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as e:
+        fail(f"{path}: cannot open the file ({e.strerror[:1].lower() + e.strerror[1:]})")
+    if stat.S_ISDIR(mode):
+        fail(f"{path}: is a directory, expected a run file (HDF5, from soadyn run)")
+    if not stat.S_ISREG(mode):
+        kind = next((k for test, k in KINDS if test(mode)), "not a regular file")
+        fail(f"{path}: not a regular file ({kind}), expected a run file (HDF5, from soadyn run)")
     try:  # a running or killed run's file opens only in SWMR-read mode
         return h5py.File(path, "r", swmr=True)
     except (OSError, RuntimeError, ValueError):

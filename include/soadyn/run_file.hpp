@@ -71,10 +71,12 @@ struct RunContents {
   const MatX& values(const std::string& path) const;     // throws soadyn::Error naming the file when not logged
 };
 
-// HDF5's signature is in the file (a run file, or another HDF5 file; read_table tells it from CSV)
+// HDF5's signature is in the file (a run file, or another HDF5 file; read_table tells it from CSV).
+// Throws soadyn::Error for a file that cannot be opened or is not a regular file (input_file.hpp).
 bool is_hdf5_file(const std::string& path);
 
-// Reads the whole file.  Throws soadyn::Error (one line naming the file and the object).
+// Reads the whole file.  Throws soadyn::Error (one line naming the file and the object); a FIFO,
+// device or directory is refused with its kind, never waited on (input_file.hpp).
 RunContents read_run_file(const std::string& path);
 
 // The run file open read-only, for readers of /samples in blocks (`soadyn export`): bounded

@@ -6,6 +6,7 @@
 // `file:line:column: field: message` through soadyn::Error.
 #pragma once
 
+#include "soadyn/input_file.hpp"
 #include "soadyn/inputs.hpp"
 #include "soadyn/model.hpp"
 #include "soadyn/settings.hpp"
@@ -67,12 +68,13 @@ Model parse_urdf(const std::string& xml, const std::string& path, bool free_root
 // the integrators' tolerances, and a run would stall rather than fail (1e300 rad did).
 inline constexpr double kMaxStateMagnitude = 1e6;
 
-// The largest model or scenario file read: real robot descriptions are well under a megabyte; the
-// cap keeps /dev/zero or a wrong file from exhausting memory.
-inline constexpr std::uint64_t kMaxInputBytes = std::uint64_t(64) << 20;
+// The largest model or scenario file read (input_file.hpp's kMaxModelBytes, 64 MiB): real robot
+// descriptions are well under a megabyte; the cap keeps a wrong file from exhausting memory.
+inline constexpr std::uint64_t kMaxInputBytes = kMaxModelBytes;
 
-// A model or scenario file's text: a regular file (a FIFO or device is refused without waiting
-// on it), at most kMaxInputBytes, not empty, no NUL bytes.  Throws soadyn::Error naming the file.
+// A model or scenario file's text: a regular file (a FIFO, device or directory is refused with its
+// kind, never waited on: input_file.hpp), at most kMaxInputBytes, not empty, no NUL bytes.  Throws
+// soadyn::Error naming the file.
 std::string read_text_file(const std::string& path);
 
 }  // namespace soadyn

@@ -126,4 +126,14 @@ void set_setting(SimulationSettings& s, const SettingInfo& info, bool flag);
 std::string setting_text(const SimulationSettings& s, const SettingInfo& info);
 double setting_number(const SimulationSettings& s, const SettingInfo& info);
 
+// The most controller ticks a run may take, t_end / control_dt with control_dt > 0: each tick
+// stops the integrator and restarts it there, so ticks cost what steps cost and more; as many as
+// CVODE's default step budget (max_steps, 10⁸).  control_dt 1e-9 over 10 s (10¹⁰ ticks) would run
+// for hours, 1e-300 could not advance time at all.
+inline constexpr double kMaxControlTicks = 1e8;
+
+// What is wrong with control_dt for a run to t_end ("" when nothing): more ticks than
+// kMaxControlTicks, said with the numbers ("control_dt 1e-09 s over t_end 10 s is 1e+10 ticks, …")
+std::string control_ticks_problem(double t_end, double control_dt);
+
 }  // namespace soadyn

@@ -7,7 +7,11 @@
 // the "q." and the unit are dropped, so an exported run is a table of its joints.
 // Run file (HDF5, read by read_run_file: run_file.hpp): /time and /q, the columns named by
 // /model's q_names.
-// Times must increase; a repeated time (a run's rows at an event) keeps the last row.
+// Only a regular file is read (input_file.hpp: a FIFO, device or directory is refused with its
+// kind), a CSV of at most kMaxTableBytes.  A CSV's times must increase, each sample at least
+// min_table_spacing after the one before (a repeated or a closer time is refused with its line:
+// the spline's rate through two samples 1e-16 s apart is 10¹⁶ times their difference, and a run
+// stalls there); a run file's rows at a repeated time (an event) or closer than that keep the last.
 #pragma once
 
 #include "soadyn/types.hpp"
@@ -17,8 +21,20 @@
 
 namespace soadyn {
 
+// The least time between two samples of a table: kMinTableSpacing of its time scale, the larger of
+// its span and its largest |t| (1e-9 s for a table over [0, 1] s; 1e-9 is ~4.5e6 rounding units of
+// the scale, so spacings are exact to ~1e-7 and the spline's derivatives stay finite)
+inline constexpr double kMinTableSpacing = 1e-9;
+double min_table_spacing(double first, double last);
+
+// How far beyond a column's range its spline may stray (CubicSpline::swing), in multiples of that
+// range: a step sampled 0.01 s wide beside 0.5 s intervals swings 9.5 times it; smooth samples, a
+// few percent.  A column past it is refused by read_table, naming the two lines.
+inline constexpr double kMaxSplineSwing = 10.0;
+
 struct Table {
   std::string path;
+  std::vector<int> lines;            // a CSV's line of each sample (empty for a run file)
   VecX time;                         // T, s, increasing
   MatX values;                       // T × columns
   std::vector<std::string> columns;  // names, without "q." and unit
@@ -57,6 +73,16 @@ class CubicSpline {
   };
   Where where(double t) const;
   double value(double t, Where w) const;
+  // How far the spline strays beyond its samples' range [min y, max y]: the largest distance over
+  // every interval (0 when it stays inside), the interval and the time where it is largest.  Two
+  // samples much closer than their neighbours with a step between them make the natural spline
+  // ring over the whole table (1e-9 s beside 0.5 s: 5e7 times the step), and a run following it stalls.
+  struct Swing {
+    double beyond = 0.0;
+    int k = 0;
+    double t = 0.0;
+  };
+  Swing swing() const;
 
  private:
   // k of the interval [t_k, t_{k+1}] holding t

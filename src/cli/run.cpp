@@ -206,6 +206,10 @@ int run_simulation(const RunOptions& o) {
   }
   const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
 
+  // controller ticks, named by the option that set them (the scenario's own are checked as it is read)
+  if (given("control_dt") || given("t_end"))
+    if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty())
+      throw Error(std::string(given("control_dt") ? "--control-dt" : "--t-end") + ": " + p);
   for (const auto& w : check_run(sc, s)) warn(w);
   const std::string method(to_string(s.method));
   if (is_fixed_step(s.method) && (given("rtol") || given("atol")))

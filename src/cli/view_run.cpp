@@ -16,9 +16,7 @@
 namespace soadyn::cli::view {
 
 RunFile read_run(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw Error(path + ": no such run file");
-  const RunContents c = read_run_file(path);
+  const RunContents c = read_run_file(path);  // a regular file, or the reason it is not (input_file.hpp)
   RunFile r;
   r.path = path;
   r.scenario_text = c.scenario_text;

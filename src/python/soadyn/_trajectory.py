@@ -187,9 +187,7 @@ def read_log(path: str) -> Trajectory:
     """
     from . import Error, _soadyn
 
-    if not os.path.isfile(path):
-        raise Error(f"{path}: cannot read the run file: " + ("no such file" if not os.path.exists(path) else "not a regular file"))
-    try:
+    try:  # the reason a file cannot be read (missing, a directory, a FIFO, …) is the reader's
         c = _soadyn._read_run_file(path)
     except Error as e:
         why = str(e)
