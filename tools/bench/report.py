@@ -19,13 +19,17 @@ def load(path):
         data = json.load(f)
     series = collections.defaultdict(dict)  # "chain/bias" -> {N: ns}
     counters = collections.defaultdict(dict)  # "peer/chain/mass/rbdl" -> {N: {"dM": ..}}
-    skipped = []  # error messages (a peer that disagreed or could not load a model)
+    skipped = []  # error messages (a peer that disagreed or could not load a model, a step that failed)
+    failed = collections.defaultdict(set)  # "chain/step_symplectic_euler" -> {N}: cases that could not run
     fastest = {}  # benchmark name -> its fastest repetition's entry
     scale = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
     repetitions = 1
     for b in data["benchmarks"]:
         if b.get("error_occurred"):
             skipped.append(b.get("error_message", b["name"]))
+            name, _, n = b["name"].partition("/repeats")[0].rpartition("/")
+            if n.isdigit():
+                failed[name].add(int(n))
             continue
         if b.get("run_type", "iteration") != "iteration":
             continue
@@ -41,7 +45,7 @@ def load(path):
     context = dict(data.get("context", {}), repetitions=repetitions)
     kept = {"context": context, "benchmarks": list(fastest.values()) +
             [b for b in data["benchmarks"] if b.get("error_occurred")]}
-    return series, counters, skipped, context, kept
+    return series, counters, skipped, dict(context, failed=failed), kept
 
 
 def exponent(points, lo=16, hi=256):
@@ -142,15 +146,17 @@ def main():
              "benchmark of the run." if reps > 1 else "One run, one repetition of each benchmark.", "",
              "## Time per call [ns] and growth exponent over N = 16..256", ""]
     for group in ("chain", "tree"):
-        names = sorted(n for n in series if n.startswith(group + "/") and n.count("/") == group.count("/") + 1)
+        failed = ctx["failed"]  # a case that could not run: "failed" in its cell, the reason under Peers
+        names = sorted(n for n in set(series) | set(failed) if n.startswith(group + "/") and n.count("/") == group.count("/") + 1)
         if not names:
             continue
-        ns = sorted(set().union(*(series[n].keys() for n in names)))
+        ns = sorted(set().union(*(set(series.get(n, {})) | failed.get(n, set()) for n in names)))
         lines.append("| " + group + " | " + " | ".join(f"N={n}" for n in ns) + " | exponent |")
         lines.append("|---" * (len(ns) + 2) + "|")
         for name in names:
-            row = [f"{series[name][n]:.0f}" if n in series[name] else "" for n in ns]
-            lines.append(f"| {name.split('/')[-1]} | " + " | ".join(row) + f" | {exponent(series[name], 15, 256):.2f} |")
+            s = series.get(name, {})
+            row = [f"{s[n]:.0f}" if n in s else "failed" if n in failed.get(name, ()) else "" for n in ns]
+            lines.append(f"| {name.split('/')[-1]} | " + " | ".join(row) + f" | {exponent(s, 15, 256):.2f} |")
         lines.append("")
 
     lines += peer_lines(series, counters, skipped, ctx)
