@@ -195,7 +195,7 @@ class MjcfFiles(Base):
 
 
 class RunFiles(Base):
-    """view, export, identify --data and Python's read_log on files that are not run files"""
+    """view, export, identify --data, tools/plot.py and Python's read_log on files that are not run files"""
 
     def test_every_run_file_reader(self):
         env = dict(os.environ, PYTHONPATH=PYTHONPATH)
@@ -207,13 +207,20 @@ class RunFiles(Base):
                         ["identify", PENDULUM, "--data", target, "--parameters", "upper"]):
                 with self.subTest(cmd=cmd):
                     self.refused(run(*cmd), re.escape(target) + ": " + why)
+            with self.subTest(plot=target):  # tools/plot.py (h5py would wait on a FIFO)
+                t0 = time.monotonic()
+                r = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "plot.py"), target, "-o", self.path("x.png")],
+                                   capture_output=True, text=True, timeout=LIMIT_S, env=dict(os.environ, MPLBACKEND="Agg"))
+                r.seconds = time.monotonic() - t0
+                self.refused(r, "^plot.py: error: " + re.escape(target) + ": " + why)
             with self.subTest(read_log=target):
                 t0 = time.monotonic()
                 r = subprocess.run([sys.executable, "-c", reader, target], capture_output=True, text=True,
                                    timeout=LIMIT_S, env=env)
                 r.seconds = time.monotonic() - t0
                 self.refused(r, re.escape(target) + ": cannot read the run file: .*" + why.split(r" \(")[0])
-        self.assertFalse(os.path.exists(self.path("x.html")) or os.path.exists(self.path("x.csv")))
+        self.assertFalse(os.path.exists(self.path("x.html")) or os.path.exists(self.path("x.csv")) or
+                         os.path.exists(self.path("x.png")))
         self.assertEqual(len(cases), 7)
 
 
