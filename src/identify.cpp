@@ -210,8 +210,23 @@ IdentifyResult identify(const Scenario& sc, const Measurements& d, const Identif
   if (!sc.inputs.controllers.empty() && !d.tau.size())
     throw Error("identify: " + sc.path + ": the scene has controllers, whose torques the run file does not give; remove "
                 "them (the torques then come from the inputs) or give the measured torques");
+  // a massless body (an MJCF body's frame for each joint but its last, a massless URDF link) has no
+  // parameters of its own to fit: named, it is refused; `all` is every body with a mass
+  std::vector<std::string> bodies;
+  for (const std::string& name : o.bodies) {
+    if (name == "all") {
+      for (int b = 0; b < m.nbodies; ++b)
+        if (m.mass[size_t(b)] > 0.0) bodies.push_back(m.body_names[size_t(b)]);
+      continue;
+    }
+    if (const int b = m.body_index(name); !(m.mass[size_t(b)] > 0.0))
+      throw Error("identify: parameters: body '" + excerpt(name) + "' is massless in the scene (a frame between joints: an MJCF "
+                  "body with several joints has one per joint but its last, which carries the mass); fit the body that has the mass");
+  }
+  if (std::find(o.bodies.begin(), o.bodies.end(), "all") == o.bodies.end() || o.bodies.size() > 1)
+    bodies = o.bodies;  // names, or `all` with names (refused by the plan)
   check_measurements(m, d);
-  const SensitivityPlan plan = plan_sensitivities(m, {false, o.bodies});
+  const SensitivityPlan plan = plan_sensitivities(m, {false, bodies});
 
   IdentifyResult res;
   res.bodies = plan.bodies;

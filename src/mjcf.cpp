@@ -15,6 +15,7 @@
 
 #include "soadyn/text.hpp"
 
+#include "mjcf_values.hpp"
 #include "mjcf_vfs.hpp"
 
 #include <mujoco/mujoco.h>
@@ -23,6 +24,7 @@
 #include <cstring>
 #include <memory>
 #include <regex>
+#include <set>
 #include <string>
 
 namespace soadyn {
@@ -49,6 +51,54 @@ Vec3 vec3(const mjtNum* x) { return Vec3(x[0], x[1], x[2]); }
 std::string name_of(const mjModel* m, int type, int id, const char* kind) {
   const char* n = mj_id2name(m, type, id);
   return n && *n ? std::string(n) : std::string(kind) + std::to_string(id);
+}
+
+// Every name soadyn gives: the file's own first (bodies and sites share the frames' names, joints
+// have theirs), then the generated ones: an unnamed body "body<id>", an unnamed joint
+// "joint<id>", a root's free joint "<body>_free", the frame of each joint of a body but its last
+// "<body>.<joint>".  A generated name the file (or an earlier generated one) already has becomes
+// "<name>~2" (~3, …: the first free one), and a warning says so, so that no name means two things.
+struct Names {
+  std::vector<std::string> body, joint, frame, free;  // frame[j]: joint j's frame; free[b]: b's free joint
+  std::vector<std::string> renamed;
+};
+
+Names unique_names(const mjModel* m, bool free_root) {
+  Names n;
+  std::set<std::string> frames, joints;
+  auto own = [&](int type, int id) {
+    const char* s = mj_id2name(m, type, id);
+    return s && *s ? std::string(s) : std::string();
+  };
+  for (int b = 0; b < m->nbody; ++b) frames.insert(own(mjOBJ_BODY, b));
+  for (int s = 0; s < m->nsite; ++s) frames.insert(own(mjOBJ_SITE, s));
+  for (int j = 0; j < m->njnt; ++j) joints.insert(own(mjOBJ_JOINT, j));
+  auto fresh = [&](std::set<std::string>& taken, const std::string& base) {
+    std::string name = base;
+    for (int k = 2; !taken.insert(name).second; ++k) name = base + "~" + std::to_string(k);
+    if (name != base) n.renamed.push_back(printable(base) + " -> " + printable(name));
+    return name;
+  };
+  n.body.resize(size_t(m->nbody));
+  n.free.resize(size_t(m->nbody));
+  for (int b = 0; b < m->nbody; ++b) {
+    n.body[size_t(b)] = own(mjOBJ_BODY, b);
+    if (n.body[size_t(b)].empty()) n.body[size_t(b)] = fresh(frames, "body" + std::to_string(b));
+  }
+  n.joint.resize(size_t(m->njnt));
+  for (int j = 0; j < m->njnt; ++j) {
+    n.joint[size_t(j)] = own(mjOBJ_JOINT, j);
+    if (n.joint[size_t(j)].empty()) n.joint[size_t(j)] = fresh(joints, "joint" + std::to_string(j));
+  }
+  n.frame.resize(size_t(m->njnt));
+  for (int b = 1; b < m->nbody; ++b) {
+    for (int k = 0; k + 1 < m->body_jntnum[b]; ++k) {
+      const int j = m->body_jntadr[b] + k;
+      n.frame[size_t(j)] = fresh(frames, n.body[size_t(b)] + "." + n.joint[size_t(j)]);
+    }
+    if (free_root && m->body_jntnum[b] == 0 && m->body_parentid[b] == 0) n.free[size_t(b)] = fresh(joints, n.body[size_t(b)] + "_free");
+  }
+  return n;
 }
 
 // "Error: ... \nElement 'joint', line 7" → "path:7: joint: ..."
@@ -105,6 +155,7 @@ std::string ignored(const mjModel* m) {
   count(cones, "ball-joint range (a cone)", "ball-joint ranges (cones)");
   count(armature, "DOF armature (rotor inertia, not in 𝓜)", "DOF armatures (rotor inertia, not in 𝓜)");
   count(m->nsensor, "sensor", "sensors");
+  for (std::string& k : mjcf_detail::unmodelled_values(m)) kinds.push_back(std::move(k));
   std::string out;
   for (const std::string& k : kinds) out += (out.empty() ? "" : ", ") + k;
   return out;
@@ -115,8 +166,26 @@ std::string ignored(const mjModel* m) {
 bool mjcf_available() { return true; }
 
 MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_disk, const MjcfOptions& o) {
-  const MjModelPtr mp = compile(xml, path, from_disk);
+  mjcf_detail::check_file_values(xml, path, from_disk);  // NaN, infinities, negative damping: located
+  std::vector<std::string> notes;
+  MjModelPtr mp;
+  {
+    // MuJoCo's warnings and errors come to us: nothing on stdout, nothing in ./MUJOCO_LOG.TXT
+    const mjcf_detail::MujocoMessages messages;
+    try {
+      mp = compile(xml, path, from_disk);
+    } catch (const mjcf_detail::MujocoError& e) {
+      throw Error(path + ": MJCF: MuJoCo: " + excerpt(e.message, 300));
+    }
+    for (const std::string& w : messages.warnings()) {
+      if (w.find("NaN") != std::string::npos)
+        throw Error(path + ": MJCF: MuJoCo: " + excerpt(w, 300) + " (a NaN in the file or an <include>)");
+      notes.push_back("MuJoCo: " + excerpt(w, 300));
+    }
+  }
   const mjModel* m = mp.get();
+  mjcf_detail::check_compiled_values(m, path);
+  const Names names = unique_names(m, o.free_root);
 
   std::vector<BodySpec> specs;
   std::vector<int> last_spec(size_t(m->nbody), -1);  // each MuJoCo body's last spec (-1: the world)
@@ -124,7 +193,7 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
   std::vector<std::pair<int, int>> coords;  // (MuJoCo joint, soadyn spec) of each joint, in order
   for (int b = 1; b < m->nbody; ++b) {
     const int parent = m->body_parentid[b];
-    const std::string name = name_of(m, mjOBJ_BODY, b, "body");
+    const std::string& name = names.body[size_t(b)];
     // b's frame in the parent's last spec frame
     Placement X{rotation(m->body_quat + 4 * b), vec3(m->body_pos + 3 * b) - anchor[size_t(parent)]};
     const int nj = m->body_jntnum[b];
@@ -139,14 +208,14 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
       BodySpec& s = spec(name);
       s.parent = last_spec[size_t(parent)];
       s.joint = free ? JointType::Free : JointType::Fixed;
-      s.joint_name = free ? name + "_free" : name;
+      s.joint_name = free ? names.free[size_t(b)] : name;
       s.placement = free ? Placement{} : X;  // a free joint's q is the pose: the file's goes into q0
     }
     for (int k = 0; k < nj; ++k) {
       const int j = m->body_jntadr[b] + k;
-      const std::string jname = name_of(m, mjOBJ_JOINT, j, "joint");
+      const std::string& jname = names.joint[size_t(j)];
       const Vec3 pos = m->jnt_type[j] == mjJNT_FREE ? Vec3::Zero() : vec3(m->jnt_pos + 3 * j);
-      BodySpec& s = spec(k + 1 == nj ? name : name + "." + jname);
+      BodySpec& s = spec(k + 1 == nj ? name : names.frame[size_t(j)]);
       s.joint_name = jname;
       s.parent = k == 0 ? last_spec[size_t(parent)] : int(specs.size()) - 2;
       s.placement = k == 0 ? Placement{X.R, X.p + X.R * pos} : Placement{Mat3::Identity(), pos - at};
@@ -186,7 +255,9 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
   }
   if (specs.empty()) throw Error(path + ": MJCF: the worldbody has no bodies");
 
-  const Vec3 gravity = o.gravity.value_or(vec3(m->opt.gravity));
+  // <flag gravity="disable"/>: no gravity, as MuJoCo runs it
+  const Vec3 gravity = o.gravity.value_or((m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3::Zero() : vec3(m->opt.gravity));
+  const bool passive = !(m->opt.disableflags & mjDSBL_PASSIVE);  // <flag passive="disable"/>: no dampers, no springs
   MjcfModel out;
   try {
     out.model = Model::build(specs, gravity, o.inertia_check);
@@ -195,13 +266,19 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
   }
   Model& model = out.model;
   if (const std::string what = ignored(m); !what.empty()) model.warnings.push_back("ignored: " + what);
+  for (const std::string& note : notes) model.warnings.push_back(note);
+  if (!names.renamed.empty()) {
+    std::string list;
+    for (const std::string& r : names.renamed) list += (list.empty() ? "" : ", ") + r;
+    model.warnings.push_back("generated names renamed (the file already has the name): " + list);
+  }
 
   // X given in MuJoCo body b's frame, as (model body, placement in its frame; −1: the world): b's
   // last spec sits at its anchor, and that spec is a frame of the body it moves with
   auto in_model = [&](int b, Placement X, int& body) -> Placement {
     body = -1;
     if (b == 0) return X;
-    const int f = model.frame_index(name_of(m, mjOBJ_BODY, b, "body"));
+    const int f = model.frame_index(names.body[size_t(b)]);
     X.p -= anchor[size_t(b)];
     body = model.frame_body[size_t(f)];
     return compose(model.frame_placement[size_t(f)], X);
@@ -250,9 +327,9 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
     if (type == mjJNT_HINGE || type == mjJNT_SLIDE) {
       out.qpos0.emplace_back(iq, qpos0[0]);
       const int dof = m->jnt_dofadr[j];
-      if (m->dof_damping[dof] > 0.0)
+      if (passive && m->dof_damping[dof] > 0.0)
         out.dampers.push_back({model.joint_names[size_t(body)], iv, m->dof_damping[dof]});
-      if (m->jnt_stiffness[j] > 0.0)
+      if (passive && m->jnt_stiffness[j] > 0.0)
         out.springs.push_back({model.joint_names[size_t(body)], iv, iq, m->jnt_stiffness[j],
                                m->qpos_spring[m->jnt_qposadr[j]] - qpos0[0]});
     }
@@ -260,7 +337,7 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
   // a body freed by free_root starts where the file draws it
   for (int b = 1; b < m->nbody; ++b)
     if (o.free_root && m->body_parentid[b] == 0 && m->body_jntnum[b] == 0) {
-      const int body = model.body_index(name_of(m, mjOBJ_BODY, b, "body"));
+      const int body = model.body_index(names.body[size_t(b)]);
       if (body < 0) continue;
       const int iq = model.idx_q[size_t(body)];
       out.q0.segment<3>(iq) = vec3(m->body_pos + 3 * b);

@@ -62,6 +62,13 @@ Model with_parameters(const Model& model, const VecX& pi) {
   for (int i = 0; i < model.nbodies; ++i) {
     const auto p = pi.segment<kParametersPerBody>(kParametersPerBody * i);
     if (!p.allFinite()) throw Error("with_parameters: " + body_label(model, i) + ": expected finite parameters");
+    if ((p.array() == 0.0).all()) {  // all ten zero: a massless body (a frame between joints), as Model has them
+      out.mass[i] = 0.0;
+      out.com[i].setZero();
+      out.inertia[i].setZero();
+      out.inertia_origin[i].setZero();
+      continue;
+    }
     const double m = p(0);
     if (!(m > 0.0)) throw Error("with_parameters: " + body_label(model, i) + ": mass: expected > 0, got " + std::to_string(m));
     const Vec3 c = Vec3(p(1), p(2), p(3)) / m;

@@ -121,7 +121,7 @@ void read_inputs(const Reader& rd, const YAML::Node& n, const Model& m, const Ve
       const YAML::Node jn = rd.require(e, "joint", fk);
       const int i = find_joint(rd, m, jn, fk + ".joint");
       if (m.nv_i[i] != 1)
-        rd.fail(jn, fk + ".joint", "inputs act on revolute or prismatic joints; '" + jn.Scalar() + "' is " +
+        rd.fail(jn, fk + ".joint", "inputs act on revolute or prismatic joints; '" + excerpt(jn.Scalar()) + "' is " +
                                        std::string(to_string(m.joint_type[i])));
       read_one(e, fk, i);
     }
@@ -169,7 +169,7 @@ void read_frames(const Reader& rd, const YAML::Node& n, Model& m) {
       if (at < 0) {
         std::vector<std::string> names = m.frame_names;
         names.push_back("world");
-        rd.fail(body, f + ".body", "no body or frame named '" + printable(on) + "'" + did_you_mean(on, names));
+        rd.fail(body, f + ".body", "no body or frame named '" + excerpt(on) + "'" + did_you_mean(on, names));
       }
       b = m.frame_body[at];
       X = m.frame_placement[at];
@@ -177,7 +177,7 @@ void read_frames(const Reader& rd, const YAML::Node& n, Model& m) {
     Placement local;
     if (it->second["position"]) local.p = rd.vec3(it->second["position"], f + ".position");
     if (it->second["rpy"]) local.R = Reader::rpy(rd.vec3(it->second["rpy"], f + ".rpy"));
-    if (m.frame_index(name) >= 0) rd.fail(it->first, f, "the model already has a frame named '" + printable(name) + "' (a body or a merged link)");
+    if (m.frame_index(name) >= 0) rd.fail(it->first, f, "the model already has a frame named '" + excerpt(name) + "' (a body or a merged link)");
     try {
       m.add_frame(name, b, compose(X, local));
     } catch (const Error& e) {
@@ -195,8 +195,8 @@ void read_log_section(const Reader& rd, const YAML::Node& n, const Model& m, std
   for (size_t k = 0; k < list.size(); ++k) {
     const std::string f = "log.frames[" + std::to_string(k) + "]";
     const std::string name = rd.string(list[k], f);
-    if (m.frame_index(name) < 0) rd.fail(list[k], f, "no frame named '" + printable(name) + "'" + did_you_mean(name, m.frame_names));
-    if (std::find(out.begin(), out.end(), name) != out.end()) rd.fail(list[k], f, "frame '" + printable(name) + "' listed twice");
+    if (m.frame_index(name) < 0) rd.fail(list[k], f, "no frame named '" + excerpt(name) + "'" + did_you_mean(name, m.frame_names));
+    if (std::find(out.begin(), out.end(), name) != out.end()) rd.fail(list[k], f, "frame '" + excerpt(name) + "' listed twice");
     out.push_back(name);
   }
 }
@@ -274,7 +274,7 @@ void check_name(const Reader& rd, const YAML::Node& n, const std::string& name) 
 InertiaCheck read_inertia_check(const Reader& rd, const YAML::Node& n) {
   const std::string s = rd.string(n, "inertia_check");
   if (const auto c = parse_inertia_check(s)) return *c;
-  rd.fail(n, "inertia_check", "expected warn, balance or strict, got '" + printable(s) + "'" +
+  rd.fail(n, "inertia_check", "expected warn, balance or strict, got '" + excerpt(s) + "'" +
                                   did_you_mean(s, {"warn", "balance", "strict"}));
 }
 
@@ -308,6 +308,11 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     rd.fail(e.mark, "YAML syntax", e.msg);
   }
   if (!root || root.IsNull()) throw Error(path + ": the file is empty");
+  // a file that is no mapping (another kind of file, named by mistake) is not quoted back
+  if (!root.IsMap())
+    rd.fail(root, "scenario", "expected a mapping of a scenario's sections (bodies or model, simulation, …), got " +
+                                  (root.IsScalar() ? "plain text (" + std::to_string(text.size()) + " bytes): is this a scenario file?"
+                                                   : Reader::show(root)));
   rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "model", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits", "inertial"});
 
   Scenario sc;
@@ -375,6 +380,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   if (root["simulation"]) read_simulation(rd, root["simulation"], sc.model, sc.simulation);
   if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.q0, sc.inputs);
   sc.files.insert(sc.files.end(), rd.files_read.begin(), rd.files_read.end());
+  scenario_detail::check_combinations(rd, root, sc);
   return sc;
 }
 

@@ -19,7 +19,7 @@ JointType joint_type(const Reader& rd, const YAML::Node& n, const std::string& f
     if (tr.name == t) return tr.type;
     names.emplace_back(tr.name);
   }
-  rd.fail(n, field, "unknown joint type '" + t + "'" + did_you_mean(t, names));
+  rd.fail(n, field, "unknown joint type '" + excerpt(t) + "'" + did_you_mean(t, names));
 }
 
 // Every body's declared parent, to tell a cycle from a parent listed too late.
@@ -55,11 +55,11 @@ int read_parent(const Reader& rd, const YAML::Node& b, const std::string& name, 
     }
     if (cycle || parent == name) rd.fail(b["parent"], fb + ".parent", "cycle in the tree: " + chain);
     rd.fail(b["parent"], fb + ".parent",
-            "parent '" + parent + "' is listed after '" + name + "'; list every parent before its children");
+            "parent '" + excerpt(parent) + "' is listed after '" + excerpt(name) + "'; list every parent before its children");
   }
   std::vector<std::string> names{"world"};
   for (auto& [n, i] : index) names.push_back(n);
-  rd.fail(b["parent"], fb + ".parent", "no body named '" + parent + "'" + did_you_mean(parent, names));
+  rd.fail(b["parent"], fb + ".parent", "no body named '" + excerpt(parent) + "'" + did_you_mean(parent, names));
 }
 
 // body.joint {type, name, axis} and body.origin {xyz, rpy}
@@ -71,7 +71,7 @@ void read_joint(const Reader& rd, const YAML::Node& b, const std::string& fb, st
   const JointTraits& tr = joint_traits(s.joint);
   s.joint_name = j["name"] ? rd.string(j["name"], fb + ".joint.name") : s.name;
   if (s.joint != JointType::Fixed && !joint_names.insert(s.joint_name).second)
-    rd.fail(j["name"] ? j["name"] : b["name"], fb + ".joint.name", "duplicate joint name '" + s.joint_name + "'");
+    rd.fail(j["name"] ? j["name"] : b["name"], fb + ".joint.name", "duplicate joint name '" + excerpt(s.joint_name) + "'");
   if (tr.has_axis) {
     s.axis = rd.vec3(rd.require(j, "axis", fb + ".joint"), fb + ".joint.axis");
     if (!(s.axis.norm() > 1e-12) || !std::isfinite(s.axis.squaredNorm())) {
@@ -122,7 +122,7 @@ BodyNodes read_bodies(const Reader& rd, const YAML::Node& list) {
     BodySpec s;
     s.name = rd.string(rd.require(b, "name", f), f + ".name");
     const std::string fb = "body '" + printable(s.name) + "'";
-    if (index.count(s.name) || s.name == "world") rd.fail(b["name"], fb + ".name", "duplicate body name '" + s.name + "'");
+    if (index.count(s.name) || s.name == "world") rd.fail(b["name"], fb + ".name", "duplicate body name '" + excerpt(s.name) + "'");
     s.parent = read_parent(rd, b, s.name, fb, index, declared);
     read_joint(rd, b, fb, joint_names, s);
     read_mass_properties(rd, b, fb, s);

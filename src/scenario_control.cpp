@@ -15,7 +15,7 @@ namespace {
 int one_dof_joint(const Reader& rd, const Model& m, const YAML::Node& key, const std::string& field) {
   const int i = find_joint(rd, m, key, field);
   if (m.nv_i[i] != 1 || m.nq_i[i] != 1)
-    rd.fail(key, field, "acts on revolute or prismatic joints; '" + key.Scalar() + "' is " + std::string(to_string(m.joint_type[i])));
+    rd.fail(key, field, "acts on revolute or prismatic joints; '" + excerpt(key.Scalar()) + "' is " + std::string(to_string(m.joint_type[i])));
   return i;
 }
 
@@ -44,15 +44,17 @@ class Tables {
     const Table& t = get(n, field);
     const int c = t.column(column);
     if (c < 0)
-      rd_.fail(column_node ? *column_node : n, field, t.path + " has no column '" + column + "' (it has " +
+      rd_.fail(column_node ? *column_node : n, field, t.path + " has no column '" + excerpt(column) + "' (it has " +
                    join(t.columns) + ")" + did_you_mean(column, t.columns));
     return std::make_shared<const CubicSpline>(t.time, t.values.col(c));
   }
 
  private:
+  // the first 20 names, each cut at 60 bytes and shown as text (a CSV header's names are the user's)
   static std::string join(const std::vector<std::string>& v) {
     std::string s;
-    for (const std::string& x : v) s += (s.empty() ? "" : ", ") + x;
+    for (size_t k = 0; k < v.size() && k < 20; ++k) s += (s.empty() ? "" : ", ") + excerpt(v[k]);
+    if (v.size() > 20) s += ", … (" + std::to_string(v.size()) + " in all)";
     return s;
   }
   const Reader& rd_;
@@ -176,7 +178,7 @@ void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, 
       }
     } else {
       rd.fail(type, f + ".type",
-              "unknown controller '" + kind + "'" + did_you_mean(kind, {"pd", "gravity_compensation", "computed_torque"}));
+              "unknown controller '" + excerpt(kind) + "'" + did_you_mean(kind, {"pd", "gravity_compensation", "computed_torque"}));
     }
     out.push_back(std::move(c));
   }

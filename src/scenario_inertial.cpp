@@ -14,7 +14,7 @@ void read_inertial(const Reader& rd, const YAML::Node& n, Model& m) {
     const std::string fb = f + "." + name;
     const int i = m.body_index(name);
     if (i < 0)
-      rd.fail(it->first, f, "no body named '" + printable(name) + "'" + did_you_mean(name, m.body_names) +
+      rd.fail(it->first, f, "no body named '" + excerpt(name) + "'" + did_you_mean(name, m.body_names) +
                                 " (the bodies after fixed joints are merged)");
     const YAML::Node b = it->second;
     rd.keys(b, fb, {"mass", "com", "inertia"});

@@ -16,6 +16,10 @@
 #include <string>
 #include <vector>
 
+namespace soadyn {
+struct Scenario;
+}
+
 namespace soadyn::scenario_detail {
 
 // Reads YAML nodes and reports every mistake as file:line:column: field: message.
@@ -24,10 +28,14 @@ struct Reader {
   // the other files read while parsing `file` (target tables), for Scenario::files
   mutable std::vector<std::string> files_read;
 
+  // the field and the message shown as text (control characters as \xHH: a key or value from the
+  // file never reaches the terminal raw); a field longer than 80 bytes keeps its ends
   [[noreturn]] void fail(const YAML::Mark& m, const std::string& field, const std::string& msg) const {
     std::string where = file;
     if (m.line >= 0) where += ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
-    throw Error(where + ": " + field + ": " + msg);
+    const std::string f = printable(field);
+    const std::string shown_field = f.size() <= 80 ? f : excerpt(field, 45) + " … " + printable(field.substr(field.size() - 30));
+    throw Error(where + ": " + shown_field + ": " + printable(msg));
   }
   [[noreturn]] void fail(const YAML::Node& n, const std::string& field, const std::string& msg) const {
     fail(n.Mark(), field, msg);
@@ -36,7 +44,7 @@ struct Reader {
   static std::string show_number(double x) { return short_number(x); }
 
   static std::string show(const YAML::Node& n) {
-    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsScalar()) return "'" + excerpt(n.Scalar()) + "'";  // at most 60 bytes of it
     if (n.IsSequence()) return "a list";
     if (n.IsMap()) return "a map";
     return "nothing";
@@ -48,8 +56,8 @@ struct Reader {
     for (auto it = map.begin(); it != map.end(); ++it) {
       const std::string k = it->first.Scalar();
       if (std::find(allowed.begin(), allowed.end(), k) == allowed.end())
-        fail(it->first, field, "unknown key '" + k + "'" + did_you_mean(k, allowed));
-      if (!seen.insert(k).second) fail(it->first, field, "duplicate key '" + k + "'");
+        fail(it->first, field, "unknown key '" + excerpt(k) + "'" + did_you_mean(k, allowed));
+      if (!seen.insert(k).second) fail(it->first, field, "duplicate key '" + excerpt(k) + "'");
     }
   }
 
@@ -138,7 +146,7 @@ struct Reader {
 inline int find_joint(const Reader& rd, const Model& m, const YAML::Node& key, const std::string& field) {
   const std::string name = rd.string(key, field);
   const int i = m.joint_index(name);
-  if (i < 0) rd.fail(key, field, "no joint named '" + name + "'" + did_you_mean(name, m.joint_names));
+  if (i < 0) rd.fail(key, field, "no joint named '" + excerpt(name) + "'" + did_you_mean(name, m.joint_names));
   return i;
 }
 
@@ -159,6 +167,10 @@ void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, con
 // scenario_sensitivity.cpp: `simulation: sensitivities: {initial_state, parameters}`, the bodies
 // checked against the model's
 void read_sensitivities(const Reader& rd, const YAML::Node& n, const Model& m, SensitivitySettings& out);
+
+// scenario_checks.cpp: the sections' combinations a run refuses (limits with a fixed-step method, a
+// start beyond a limit, sensitivities a run cannot differentiate), located in the file
+void check_combinations(const Reader& rd, const YAML::Node& root, const Scenario& sc);
 
 // scenario_inertial.cpp: `inertial: {body: {mass, com, inertia}}` over the model's mass properties
 void read_inertial(const Reader& rd, const YAML::Node& n, Model& m);

@@ -16,7 +16,7 @@ void read_sensitivities(const Reader& rd, const YAML::Node& n, const Model& m, S
   const std::string fp = f + ".parameters";
   if (p.IsScalar()) {
     const std::string word = rd.string(p, fp);
-    if (word != "all") rd.fail(p, fp, "expected a list of body names or 'all', got '" + printable(word) + "'");
+    if (word != "all") rd.fail(p, fp, "expected a list of body names or 'all', got '" + excerpt(word) + "'");
     out.parameters = {"all"};
     return;
   }
@@ -25,10 +25,10 @@ void read_sensitivities(const Reader& rd, const YAML::Node& n, const Model& m, S
     const std::string fk = fp + "[" + std::to_string(k) + "]";
     const std::string name = rd.string(p[k], fk);
     if (std::find(m.body_names.begin(), m.body_names.end(), name) == m.body_names.end())
-      rd.fail(p[k], fk, "no body named '" + printable(name) + "'" + did_you_mean(name, m.body_names) +
+      rd.fail(p[k], fk, "no body named '" + excerpt(name) + "'" + did_you_mean(name, m.body_names) +
                             " (the bodies after fixed joints are merged)");
     if (std::find(out.parameters.begin(), out.parameters.end(), name) != out.parameters.end())
-      rd.fail(p[k], fk, "body '" + printable(name) + "' listed twice");
+      rd.fail(p[k], fk, "body '" + excerpt(name) + "' listed twice");
     out.parameters.push_back(name);
   }
 }

@@ -217,11 +217,11 @@ SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s)
     if (all) break;
     const auto it = std::find(m.body_names.begin(), m.body_names.end(), name);
     if (it == m.body_names.end())
-      throw Error("sensitivities: parameters: unknown body '" + name + "'" + did_you_mean(name, m.body_names) +
+      throw Error("sensitivities: parameters: unknown body '" + excerpt(name) + "'" + did_you_mean(name, m.body_names) +
                   " (bodies after fixed joints are merged)");
     const int b = int(it - m.body_names.begin());
     if (std::find(plan.bodies.begin(), plan.bodies.end(), b) != plan.bodies.end())
-      throw Error("sensitivities: parameters: body '" + name + "' is listed twice");
+      throw Error("sensitivities: parameters: body '" + excerpt(name) + "' is listed twice");
     plan.bodies.push_back(b);
   }
   if (all)
@@ -243,7 +243,7 @@ SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s)
 
 void check_sensitivities(const Scenario& sc, const SimulationSettings& s, bool has_controller) {
   if (!s.sensitivities.any()) return;
-  const std::string why = "sensitivities: ";
+  const std::string why = (sc.path.empty() ? "" : sc.path + ": ") + "sensitivities: ";
   if (is_fixed_step(s.method))
     throw Error(why + "need a CVODE method (cvode-adams or cvode-bdf): " + std::string(to_string(s.method)) +
                 " takes fixed steps and its variational equation is not stepped");

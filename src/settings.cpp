@@ -153,10 +153,10 @@ std::string setting_problem(const SettingInfo& info, const std::string& word) {
   if (!info.old_word.empty() && word == info.old_word) return "";
   const std::vector<std::string> words = info.words();
   if (std::find(words.begin(), words.end(), word) != words.end()) return "";
-  if (!info.noun.empty()) return "unknown " + std::string(info.noun) + " '" + word + "'" + did_you_mean(word, words);
+  if (!info.noun.empty()) return "unknown " + std::string(info.noun) + " '" + excerpt(word) + "'" + did_you_mean(word, words);
   std::string alternatives;
   for (size_t k = 0; k < words.size(); ++k) alternatives += (k == 0 ? "" : k + 1 == words.size() ? " or " : ", ") + words[k];
-  return "expected " + alternatives + ", got '" + word + "'" + did_you_mean(word, words);
+  return "expected " + alternatives + ", got '" + excerpt(word) + "'" + did_you_mean(word, words);
 }
 
 namespace {
@@ -176,7 +176,7 @@ void set_setting(SimulationSettings& s, const SettingInfo& info, double x) {
 void set_setting(SimulationSettings& s, const SettingInfo& info, const std::string& word) {
   if (const std::string p = setting_problem(info, word); !p.empty()) refuse(info, p);
   const std::string_view w = !info.old_word.empty() && word == info.old_word ? info.new_word : std::string_view(word);
-  if (!std::get<WordField>(info.field).set(s, w)) refuse(info, "'" + std::string(w) + "' names none of its values");
+  if (!std::get<WordField>(info.field).set(s, w)) refuse(info, "'" + excerpt(std::string(w)) + "' names none of its values");
 }
 
 void set_setting(SimulationSettings& s, const SettingInfo& info, bool flag) {

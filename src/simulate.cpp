@@ -118,11 +118,17 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   // joint limits: root finding (CVODE), e in [0, 1], a start inside the limits
   if (!(s.restitution >= 0 && s.restitution <= 1))
     throw Error("simulation settings: restitution must lie in [0, 1], got " + short_number(s.restitution));
+  // named with the scenario (a file's own sections are refused at their line as it is read)
+  const std::string scene = sc.path.empty() ? "" : sc.path + ": ";
   if (s.limits && sc.model.has_limits()) {
     if (is_fixed_step(s.method))
-      throw Error("simulation settings: limits: true needs an integrator that locates events (cvode-adams or "
+      throw Error(scene + "simulation settings: limits: true needs an integrator that locates events (cvode-adams or "
                   "cvode-bdf); " + std::string(to_string(s.method)) + " takes fixed steps");
-    JointLimits(sc.model, s.restitution).check_inside(sc.q0);
+    try {
+      JointLimits(sc.model, s.restitution).check_inside(sc.q0);
+    } catch (const Error& e) {
+      throw Error(scene + e.what());
+    }
   }
   if (!(s.control_dt >= 0) || !std::isfinite(s.control_dt))
     throw Error("simulation settings: control_dt must be 0 (continuous) or a positive finite number, got " + short_number(s.control_dt));

@@ -41,6 +41,13 @@ std::string printable(const std::string& text) {
   return shown;
 }
 
+std::string excerpt(const std::string& text, size_t max_chars) {
+  if (text.size() <= max_chars) return printable(text);
+  size_t cut = max_chars;
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;  // not inside a character
+  return printable(text.substr(0, cut)) + "… (" + std::to_string(text.size()) + " bytes)";
+}
+
 namespace {
 size_t edit_distance(const std::string& a, const std::string& b) {
   std::vector<size_t> row(b.size() + 1);
@@ -62,13 +69,19 @@ size_t edit_distance(const std::string& a, const std::string& b) {
 std::string did_you_mean(const std::string& got, const std::vector<std::string>& choices) {
   std::string best;
   size_t best_d = std::string::npos;
+  const size_t near = std::max<size_t>(2, got.size() / 3);
   for (const auto& c : choices) {
+    // the distance is at least the lengths' difference: a choice that far off is never suggested
+    // (and a 5 MB value costs no 5 MB × |choice| table)
+    if ((got.size() > c.size() ? got.size() - c.size() : c.size() - got.size()) > near) continue;
     const size_t d = edit_distance(got, c);
     if (d < best_d) best_d = d, best = c;
   }
-  if (!best.empty() && best_d <= std::max<size_t>(2, got.size() / 3)) return "; did you mean '" + best + "'?";
+  if (!best.empty() && best_d <= near) return "; did you mean '" + excerpt(best) + "'?";
+  // at most 20 choices, each shown as text and cut at 60 bytes
   std::string all;
-  for (const auto& c : choices) all += (all.empty() ? "" : ", ") + c;
+  for (size_t k = 0; k < choices.size() && k < 20; ++k) all += (all.empty() ? "" : ", ") + excerpt(choices[k]);
+  if (choices.size() > 20) all += ", … (" + std::to_string(choices.size()) + " in all)";
   return choices.empty() ? "" : " (expected one of: " + all + ")";
 }
 

@@ -13,6 +13,10 @@ bool is_valid_utf8(const std::string& text);
 // control characters, else every byte outside printable ASCII written as \xHH.
 std::string printable(const std::string& text);
 
+// A user's value for a message: printable(text), cut after its first `max_chars` bytes (at a
+// UTF-8 character's start) with "… (N bytes)" when longer, so no message holds a whole file.
+std::string excerpt(const std::string& text, size_t max_chars = 60);
+
 // "; did you mean 'x'?" for the choice nearest `got` (Levenshtein distance at most max(2, |got|/3)),
 // else " (expected one of: a, b, …)"; "" when there are no choices
 std::string did_you_mean(const std::string& got, const std::vector<std::string>& choices);

@@ -8,6 +8,7 @@
 //   soadyn sweep SWEEP ...     an ensemble of runs on Dask (python3 -m soadyn sweep)
 #include "cli.hpp"
 
+#include "soadyn/text.hpp"
 #include "soadyn/version.hpp"
 
 #include <CLI/CLI.hpp>
@@ -74,10 +75,11 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("export")) return soadyn::cli::run_export(export_options);
     if (app.got_subcommand("identify")) return soadyn::cli::run_identify(identify);
   } catch (const soadyn::Error& e) {
-    std::cerr << "soadyn: error: " << e.what() << "\n";
+    // one line of text, whatever a message quotes (every echo site cuts its values already)
+    std::cerr << "soadyn: error: " << soadyn::excerpt(e.what(), 4000) << "\n";
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << "soadyn: error: " << e.what() << "\n";
+    std::cerr << "soadyn: error: " << soadyn::excerpt(e.what(), 4000) << "\n";
     return 2;
   }
   return 0;

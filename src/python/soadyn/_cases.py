@@ -37,7 +37,7 @@ def parse_path(path: str) -> List[Any]:
         for i in re.findall(r"\[(-?\d+)\]", m.group(2)):
             # Python's count from the end would silently pick the last coordinate or entry
             if i.startswith("-"):
-                raise ValueError(f"{m.group(1)}[{i}]: a negative index; entries count from 0 (write the index itself)")
+                raise ValueError(f"{_clip(m.group(1))}[{i}]: a negative index; entries count from 0 (write the index itself)")
             tokens.append(int(i))
     return tokens
 
@@ -121,7 +121,7 @@ def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
             where = ".".join(str(t) for t in tokens[:i + 1])
             if isinstance(tok, int):
                 if not isinstance(node, list) or not 0 <= tok < len(node):
-                    raise ValueError(f"{where}: no entry [{tok}] (the scenario has "
+                    raise ValueError(f"{_clip(where, 80)}: no entry [{tok}] (the scenario has "
                                      f"{len(node) if isinstance(node, list) else 'no list'} here)")
                 if last:
                     node[tok] = value
@@ -130,11 +130,12 @@ def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
             elif isinstance(node, list):  # a list entry by its name (bodies) or joint (inputs)
                 match = [k for k, e in enumerate(node) if isinstance(e, dict) and tok in (e.get("name"), e.get("joint"))]
                 if len(match) != 1:
-                    names = [str(e.get("name", e.get("joint"))) for e in node if isinstance(e, dict)]
-                    raise ValueError(f"{'no' if not match else 'more than one'} entry named '{tok}' "
-                                     f"(the scenario has {', '.join(names)})")
+                    names = [_clip(str(e.get("name", e.get("joint")))) for e in node if isinstance(e, dict)]
+                    shown = ", ".join(names[:20]) + (f", … ({len(names)} in all)" if len(names) > 20 else "")
+                    raise ValueError(f"{'no' if not match else 'more than one'} entry named '{_clip(tok)}' "
+                                     f"(the scenario has {shown})")
                 if last:
-                    raise ValueError(f"{where} names a whole entry; name a field of it")
+                    raise ValueError(f"{_clip(where, 80)} names a whole entry; name a field of it")
                 node = out.child(node, match[0])
             elif isinstance(node, dict):
                 if last:
@@ -144,10 +145,10 @@ def apply(tree: dict, model, values: Dict[str, Any]) -> dict:
                         if tok in ("initial", "simulation", "q", "qd"):
                             node = out.child(node, tok, {})
                             continue
-                        raise ValueError(f"the scenario has no '{where}'")
+                        raise ValueError(f"the scenario has no '{_clip(where, 80)}'")
                     node = out.child(node, tok)
             else:
-                raise ValueError(f"'{'.'.join(str(t) for t in tokens[:i])}' is a value, not a mapping or list")
+                raise ValueError(f"'{_clip('.'.join(str(t) for t in tokens[:i]), 80)}' is a value, not a mapping or list")
     return out.root
 
 

@@ -219,7 +219,9 @@ class _Doc:
 
     def mapping(self, node, field: str, allowed: Sequence[str]) -> Dict[str, Any]:
         if not isinstance(node, yaml.MappingNode):
-            self.fail(node, field, f"expected a mapping, got {_show(node)}")
+            # the whole file not a mapping (another kind of file, named by mistake): not quoted back
+            got = "plain text: is this the right file?" if node is self.root and isinstance(node, yaml.ScalarNode) and node.value else _show(node)
+            self.fail(node, field, f"expected a mapping, got {got}")
         out = {}
         for k, v in node.value:
             key = self.value(k, field)

@@ -1,0 +1,144 @@
+#!/usr/bin/python3
+"""What a refusal shows, through the soadyn executable on real files: a user's value is cut to its
+first 60 bytes with its length (a 5 MB field, a sweep whose scenario is a file that is not one: the
+file never printed back), control characters in YAML keys and values and in a CSV table's column
+names shown as \\xHH (never raw to the terminal), and the refusals of a run's combinations (a start
+beyond a joint limit, limits with a fixed-step method, sensitivities a run cannot differentiate,
+an MJCF gravity of NaN) each naming the file, its line and the field.  Every refusal: exit 2, one
+line on stderr, nothing on stdout."""
+import os
+import subprocess
+import tempfile
+import unittest
+
+SOADYN = os.environ.get("SOADYN", "build/soadyn")
+PYTHONPATH = os.environ.get("SOADYN_PYTHONPATH", os.path.join(os.path.dirname(os.path.abspath(SOADYN)), "python"))
+
+ARM = """name: arm
+gravity: [0, 0, -9.81]
+bodies:
+  - name: upper
+    joint: {type: revolute, name: shoulder, axis: [0, 1, 0]}
+    mass: 1.0
+    com: [0, 0, 0.3]
+    inertia: [0.01, 0.01, 0.001]
+  - name: fore
+    parent: upper
+    joint: {type: revolute, name: elbow, axis: [0, 1, 0]}
+    origin: {xyz: [0, 0, 0.6]}
+    mass: 1.0
+    com: [0, 0, 0.3]
+    inertia: [0.01, 0.01, 0.001]
+"""
+
+
+class Messages(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.dir = self.tmp.name
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def write(self, name, text, mode="w"):
+        path = os.path.join(self.dir, name)
+        with open(path, mode) as f:
+            f.write(text)
+        return path
+
+    def refused(self, *args, env=None):
+        """stderr's one line of a refused command (exit 2, nothing on stdout)"""
+        p = subprocess.run([SOADYN, *args], capture_output=True, timeout=120, cwd=self.dir, env=env)
+        self.assertEqual(p.returncode, 2, (args, p.stderr[:500]))
+        self.assertEqual(p.stdout, b"", args)
+        err = p.stderr.decode("utf-8")
+        self.assertEqual(err.count("\n"), 1, err[:500])
+        for c in range(32):
+            if c != 10:
+                self.assertNotIn(chr(c), err, f"control character {c:#x} in {err[:300]!r}")
+        self.assertNotIn("\x7f", err)
+        return err.strip()
+
+    def test_a_long_value_is_cut_with_its_length(self):
+        big = "x" * 5_000_000
+        self.write("big.yaml", ARM + f"simulation: {{method: {big}}}\n")
+        err = self.refused("inspect", "big.yaml")
+        self.assertIn("big.yaml:16:", err)
+        self.assertIn("… (5000000 bytes)", err)
+        self.assertLess(len(err), 600)
+        # an unknown key of 1000 bytes (YAML's longest implicit key)
+        self.write("key.yaml", ARM + "k" * 1000 + ": 1\n")
+        err = self.refused("inspect", "key.yaml")
+        self.assertIn("unknown key 'kkkk", err)
+        self.assertIn("… (1000 bytes)", err)
+        self.assertLess(len(err), 800)
+
+    def test_a_file_that_is_no_scenario_is_not_printed_back(self):
+        secret = "root:x:0:0:" + "secret-content-" * 400 + "\nuser:x:1000:1000::/home/user:/bin/sh\n"
+        self.write("passwd", secret)
+        self.write("scene.yaml", secret)
+        err = self.refused("inspect", "scene.yaml")
+        self.assertIn("got plain text (", err)
+        self.assertNotIn("secret-content", err)
+        self.assertLess(len(err), 400)
+        self.write("s.sweep.yaml", "scenario: passwd\nvary:\n  - {path: simulation.t_end, values: [1, 2]}\n")
+        env = dict(os.environ, PYTHONPATH=PYTHONPATH)
+        err = self.refused("sweep", "s.sweep.yaml", "-o", "out", "--scheduler", "serial", env=env)
+        self.assertIn("s.sweep.yaml:1:11: scenario: ", err)
+        self.assertNotIn("secret-content", err)
+        self.assertLess(len(err), 600)
+        self.assertFalse(os.path.exists(os.path.join(self.dir, "out", "results.h5")))
+
+    def test_control_characters_are_escaped(self):
+        self.write("key.yaml", ARM + "simulation: {\"t_\\e[31mend\\r\": 1}\n")
+        err = self.refused("inspect", "key.yaml")
+        self.assertIn("unknown key 't_\\x1b[31mend\\x0d'", err)
+        self.write("value.yaml", ARM + "simulation: {method: \"rk\\e]0;title\\a4\"}\n")
+        err = self.refused("inspect", "value.yaml")
+        self.assertIn("\\x1b]0;title\\x074", err)
+        # a CSV table's column names, listed when the asked column is not there
+        self.write("t.csv", "t,sh\x1b[2Joulder,el\rbow\n0,0,0\n1,1,1\n")
+        self.write("pd.yaml", ARM + "inputs:\n  controllers:\n    - {type: pd, joint: shoulder, kp: 1, kd: 1, "
+                               "target: {table: t.csv, column: nope}}\n")
+        err = self.refused("inspect", "pd.yaml")
+        self.assertIn("pd.yaml:18:", err)
+        self.assertIn("(it has sh\\x1b[2Joulder, el\\x0dbow)", err)
+
+    def test_each_refused_combination_names_its_file_line_and_field(self):
+        cases = [
+            # a start beyond a joint's limit: at initial.q.J
+            ("start.yaml", "limits: {elbow: [-1, 1]}\ninitial: {q: {elbow: 2}}\nsimulation: {limits: true}\n",
+             "start.yaml:17:22: initial.q.elbow: initial state: joint 'elbow' starts at 2, beyond its upper limit 1"),
+            # … at limits.J when the start is the default
+            ("start0.yaml", "limits: {elbow: [0.5, 1]}\nsimulation: {limits: true}\n",
+             "start0.yaml:16:17: limits.elbow: initial state: joint 'elbow' starts at 0, beyond its lower limit 0.5"),
+            ("fixed.yaml", "limits: {elbow: [-1, 1]}\nsimulation: {method: rk4, limits: true}\n",
+             "fixed.yaml:17:35: simulation.limits: true needs an integrator that locates events"),
+            ("sens_fixed.yaml", "simulation: {method: rk4, sensitivities: {initial_state: true}}\n",
+             "sens_fixed.yaml:16:42: simulation.sensitivities: need a CVODE method"),
+            ("sens_pd.yaml", "simulation: {sensitivities: {parameters: all}}\ninputs:\n  controllers:\n"
+                             "    - {type: pd, joint: elbow, kp: 1, kd: 1, target: 0}\n",
+             "sens_pd.yaml:16:29: simulation.sensitivities: a run with a controller (inputs.controllers)"),
+            ("sens_limits.yaml", "limits: {elbow: [-1, 1]}\nsimulation: {limits: true, sensitivities: {initial_state: true}}\n",
+             "sens_limits.yaml:17:43: simulation.sensitivities: enforced joint limits"),
+        ]
+        for name, tail, expect in cases:
+            self.write(name, ARM + tail)
+            for command in (["inspect", name], ["run", name, "-o", "out.h5"]):
+                err = self.refused(*command)
+                self.assertIn(expect, err, (name, command))
+            self.assertFalse(os.path.exists(os.path.join(self.dir, "out.h5")))
+        # an MJCF file's gravity of NaN: the file, its line, the attribute
+        if os.environ.get("SOADYN_MJCF", "ON") != "ON":
+            return
+        self.write("g.xml", '<mujoco>\n  <option gravity="0 0 nan"/>\n  <worldbody><body><joint/>'
+                            '<geom type="sphere" size="0.1" contype="0" conaffinity="0"/></body></worldbody>\n</mujoco>\n')
+        self.write("g.yaml", "model: g.xml\n")
+        self.assertIn("g.xml:2: option: attribute 'gravity': expected finite numbers", self.refused("inspect", "g.xml"))
+        err = self.refused("inspect", "g.yaml")
+        self.assertIn("g.yaml:1:8: model: ", err)
+        self.assertIn("g.xml:2: option: attribute 'gravity'", err)
+
+
+if __name__ == "__main__":
+    unittest.main()
