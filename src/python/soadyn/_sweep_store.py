@@ -103,10 +103,8 @@ def check_results_path(sw: Sweep, path: str, force: bool = False):
     of the sweep (its sweep or scenario file, under any name), a directory, a FIFO or a device."""
     try:
         st = os.lstat(path)
-    except FileNotFoundError:
+    except OSError:  # nothing there, or DIR is no folder (the results directory's own check says so)
         return
-    except OSError as e:
-        raise Error(f"{path}: cannot be checked ({e.strerror})") from None
     for given in (sw.path, sw.scenario_path):
         try:
             if os.path.samefile(path, given):
