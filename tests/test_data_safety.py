@@ -209,7 +209,7 @@ class OneFile(Base):
             self.assertEqual(p.returncode, 2, p.stderr)
             self.assertIn("the output is the input file", p.stderr)
         self.assertEqual(digest(scenario), h)
-        # a URDF the scenario names, or any other file that is not HDF5, is not replaced either
+        # a URDF the scenario names is an input too: never replaced, --force or not
         urdf = self.path("robot.urdf")
         with open(urdf, "w") as f:
             f.write('<robot name="r"><link name="a"/><link name="b"><inertial><mass value="1"/>'
@@ -218,10 +218,11 @@ class OneFile(Base):
         with open(self.path("urdf_scene.yaml"), "w") as f:
             f.write("urdf: robot.urdf\nsimulation: {t_end: 0.1}\n")
         hu = digest(urdf)
-        p = run("run", self.path("urdf_scene.yaml"), "-o", urdf)
-        self.assertEqual(p.returncode, 2, p.stderr)
-        self.assertIn("exists and is not a soadyn run file; refusing to replace it", p.stderr)
-        self.assertEqual(digest(urdf), hu)
+        for force in ([], ["--force"]):
+            p = run("run", self.path("urdf_scene.yaml"), "-o", urdf, *force)
+            self.assertEqual(p.returncode, 2, p.stderr)
+            self.assertIn("the output is the input file", p.stderr)
+            self.assertEqual(digest(urdf), hu)
         self.assertNoLitter(urdf)
 
     def test_a_refused_run_leaves_an_existing_file_unchanged(self):
