@@ -243,6 +243,10 @@ IdentifyResult identify(const Scenario& sc, const Measurements& d, const Identif
   if (least_squares) {
     if (!d.qdd.size())
       throw Error("identify: " + d.path + ": least squares needs the accelerations (/qdd), which the data does not have");
+    // a joint held at its limit takes a constraint force that τ = Y π does not have: a biased fit
+    if (sc.simulation.limits && m.has_limits())
+      throw Error("identify: least-squares: " + sc.path + ": the scene enforces joint limits (simulation: limits: true), "
+                  "whose impacts and holding forces the regressor does not model (the fit would be biased): set limits: false");
     res.method = "least-squares";
     MatX A;
     VecX b;
@@ -258,10 +262,6 @@ IdentifyResult identify(const Scenario& sc, const Measurements& d, const Identif
       throw Error("identify: gauss-newton: the model has free or ball joints, whose residual identify does not form yet; "
                   "use least squares (a run file with /qdd)");
     const Eigen::Index T = d.t.size();
-    // a joint held at its limit takes a constraint force that τ = Y π does not have: a biased fit
-    if (sc.simulation.limits && m.has_limits())
-      throw Error("identify: least-squares: " + sc.path + ": the scene enforces joint limits (simulation: limits: true), "
-                  "whose impacts and holding forces the regressor does not model (the fit would be biased): set limits: false");
     const double dt = d.t(1) - d.t(0);
     for (Eigen::Index k = 0; k < T; ++k)
       if (!(dt > 0) || std::abs(d.t(k) - d.t(0) - double(k) * dt) > 1e-9 * std::max(1.0, std::abs(d.t(k))))

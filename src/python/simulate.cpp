@@ -82,14 +82,14 @@ ControlFunction python_controller(const py::object& f, const Model& model, py::o
     py::gil_scoped_acquire gil;
     char at[32];
     std::snprintf(at, sizeof at, "%.9g", t);
-    py::object out;
-    try {
-      out = f(t, py::array_t<double>(q.size(), q.data()), py::array_t<double>(v.size(), v.data()));
     // a τ the run cannot take: soadyn.Error, raised by soadyn.simulate once the file is finished
     auto fail = [&](const std::string& why) {
       raised = py::handle(error_type)(why);
       throw SimulationError(why, t);
     };
+    py::object out;
+    try {
+      out = f(t, py::array_t<double>(q.size(), q.data()), py::array_t<double>(v.size(), v.data()));
     } catch (py::error_already_set& e) {
       raised = e.value();
       throw SimulationError(std::string("the controller raised at t = ") + at + " s: " + e.what(), t);
@@ -107,13 +107,13 @@ ControlFunction python_controller(const py::object& f, const Model& model, py::o
       fail(std::string("the controller returned ") + got + " at t = " + at + " s; expected " + std::to_string(nv) +
            " torques, shape (" + std::to_string(nv) + ",)");
     }
-    for (int k = 0; k < nv; ++k) tau(k) += a.at(k);
-  };
-}
     for (int k = 0; k < nv; ++k)
       if (!std::isfinite(a.at(k)))
         fail(std::string("the controller returned a non-finite torque at t = ") + at + " s (" + printable(names[size_t(k)]) +
              " = " + short_number(a.at(k)) + ")");
+    for (int k = 0; k < nv; ++k) tau(k) += a.at(k);
+  };
+}
 
 py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output,
               const py::object& controller) {
