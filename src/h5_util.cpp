@@ -20,22 +20,18 @@ herr_t find_errno(unsigned, const H5E_error2_t* e, void* found) {
   return 0;
 }
 
-// a variable-length string type: UTF-8, or ASCII when some text is not valid UTF-8
-Id vlen_string_type(bool utf8) {
-  Id type(H5Tcopy(H5T_C_S1), H5Tclose, "H5Tcopy");
-  check(H5Tset_size(type, H5T_VARIABLE), "H5Tset_size");
-  check(H5Tset_cset(type, utf8 ? H5T_CSET_UTF8 : H5T_CSET_ASCII), "H5Tset_cset");
-  return type;
-}
-
 bool all_utf8(const std::vector<std::string>& values) {
   return std::all_of(values.begin(), values.end(), [](const std::string& s) { return is_valid_utf8(s); });
 }
 
-std::vector<const char*> pointers(const std::vector<std::string>& values) {
-  std::vector<const char*> p;
-  for (const auto& s : values) p.push_back(s.c_str());
-  return p;
+// the strings side by side, each null-padded to the longest (at least one byte): a fixed-length
+// string array's bytes
+std::string packed(const std::vector<std::string>& values, size_t& width) {
+  width = 1;
+  for (const auto& s : values) width = std::max(width, s.size());
+  std::string out;
+  for (const auto& s : values) out += s + std::string(width - s.size(), '\0');
+  return out;
 }
 
 }  // namespace
@@ -77,18 +73,21 @@ void attribute(hid_t obj, const char* name, double value) { scalar_attribute(obj
 void attribute(hid_t obj, const char* name, long value) { scalar_attribute(obj, name, H5T_NATIVE_LONG, value); }
 
 void attribute(hid_t obj, const char* name, const std::string& value) {
-  Id type = vlen_string_type(is_valid_utf8(value));
-  const char* p = value.c_str();
-  scalar_attribute(obj, name, type, p);
+  Id type = string_type(value.size(), is_valid_utf8(value));
+  Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
+  Id attr(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
+  const std::string padded = value.empty() ? std::string(1, '\0') : value;
+  check(H5Awrite(attr, type, padded.data()), std::string("writing attribute ") + name);
 }
 
 void attribute(hid_t obj, const char* name, const std::vector<std::string>& values) {
-  Id type = vlen_string_type(all_utf8(values));
+  size_t width = 1;
+  const std::string bytes = packed(values, width);
+  Id type = string_type(width, all_utf8(values));
   const hsize_t n = values.size();
   Id space(H5Screate_simple(1, &n, nullptr), H5Sclose, "H5Screate_simple");
   Id attr(H5Acreate2(obj, name, type, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose, std::string("attribute ") + name);
-  const std::vector<const char*> p = pointers(values);
-  if (n > 0) check(H5Awrite(attr, type, p.data()), std::string("writing attribute ") + name);
+  if (n > 0) check(H5Awrite(attr, type, bytes.data()), std::string("writing attribute ") + name);
 }
 
 void attribute(hid_t obj, const char* name, const std::vector<double>& values) {
@@ -118,13 +117,14 @@ void int_dataset(hid_t parent, const char* name, const std::vector<int>& values,
 }
 
 void string_dataset(hid_t parent, const char* name, const std::vector<std::string>& values) {
-  Id type = vlen_string_type(all_utf8(values));
+  size_t width = 1;
+  const std::string bytes = packed(values, width);
+  Id type = string_type(width, all_utf8(values));
   const hsize_t n = values.size();
   Id space(H5Screate_simple(1, &n, nullptr), H5Sclose, "H5Screate_simple");
   Id d(H5Dcreate2(parent, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
        std::string("creating ") + name);
-  const std::vector<const char*> p = pointers(values);
-  if (n > 0) check(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), std::string("writing ") + name);
+  if (n > 0) check(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()), std::string("writing ") + name);
 }
 
 Scalar::Scalar(hid_t parent, const char* name, hid_t mem_type, Id file_type) {
@@ -203,12 +203,30 @@ struct Readable {
 
 }  // namespace
 
-std::vector<std::string> strings(hid_t obj, const char* name, bool attribute, const std::string& where) {
+namespace {
+// text tagged UTF-8 that is not: a changed byte (the writer tags text that is not UTF-8 as ASCII)
+void check_utf8(const Readable& r, const std::vector<std::string>& out) {
+  if (H5Tget_cset(r.type) != H5T_CSET_UTF8) return;
+  for (size_t k = 0; k < out.size(); ++k)
+    if (!is_valid_utf8(out[k]))
+      throw Error(r.where + (out.size() > 1 ? " [" + std::to_string(k) + "]" : std::string()) +
+                  ": tagged UTF-8 but not valid UTF-8 (a corrupt file?)");
+}
+}  // namespace
+
+std::vector<std::string> strings(hid_t obj, const char* name, bool attribute, const std::string& where, bool variable) {
   const Readable r(obj, name, attribute, where);
   if (H5Tget_class(r.type) != H5T_STRING) throw Error(r.where + ": expected strings");
+  // variable-length strings live in the global heap, which HDF5 reads unchecked: never followed in
+  // a file whose layout has none
+  if (H5Tis_variable_str(r.type) > 0 && !variable)
+    throw Error(r.where + ": variable-length strings, which this file's layout never writes (a corrupt or crafted file)");
+  const size_t width = H5Tget_size(r.type);
   const hssize_t n = H5Sget_simple_extent_npoints(r.space);
   std::vector<std::string> out;
   if (n <= 0) return out;
+  if (H5Tis_variable_str(r.type) <= 0 && (width == 0 || size_t(n) > (std::size_t(1) << 31) / width))
+    throw Error(r.where + ": " + std::to_string(n) + " strings of " + std::to_string(width) + " bytes (a corrupt file?)");
   if (H5Tis_variable_str(r.type) > 0) {
     Id mem(H5Tcopy(H5T_C_S1), H5Tclose, "H5Tcopy");
     check(H5Tset_size(mem, H5T_VARIABLE), "H5Tset_size");
@@ -219,21 +237,22 @@ std::vector<std::string> strings(hid_t obj, const char* name, bool attribute, co
       out.emplace_back(s ? s : "");
       H5free_memory(s);
     }
+    check_utf8(r, out);
     return out;
   }
   // fixed-length: n × width bytes, each null-padded or null-terminated
-  const size_t width = H5Tget_size(r.type);
   std::vector<char> buf(width * size_t(n));
   r.read(r.type, buf.data());
   for (hssize_t i = 0; i < n; ++i) {
     const char* s = buf.data() + size_t(i) * width;
     out.emplace_back(s, std::find(s, s + width, '\0'));
   }
+  check_utf8(r, out);
   return out;
 }
 
-std::string one_string(hid_t obj, const char* name, bool attribute, const std::string& where) {
-  std::vector<std::string> s = strings(obj, name, attribute, where);
+std::string one_string(hid_t obj, const char* name, bool attribute, const std::string& where, bool variable) {
+  std::vector<std::string> s = strings(obj, name, attribute, where, variable);
   if (s.size() != 1) throw Error(where + ": " + name + ": expected one string, got " + std::to_string(s.size()));
   return std::move(s[0]);
 }

@@ -72,8 +72,10 @@ Id group(hid_t parent, const char* name);
 // a fixed-length string type of `size` bytes, UTF-8 when the text is valid UTF-8
 Id string_type(size_t size, bool utf8);
 
-// Attributes, written once before SWMR writing starts.  Strings are variable-length UTF-8 (h5py
-// reads them as str), ASCII-tagged if the text is not valid UTF-8.
+// Attributes, written once before SWMR writing starts.  Strings are fixed-length (the longest
+// string's bytes, null-padded), UTF-8, ASCII-tagged if the text is not valid UTF-8: nothing in the
+// global heap, which HDF5 reads without checks (one changed byte there crashes the reader), so all
+// a reader follows is in checksummed metadata.  h5py reads them as bytes (.decode()).
 void attribute(hid_t obj, const char* name, double value);
 void attribute(hid_t obj, const char* name, long value);
 void attribute(hid_t obj, const char* name, const std::string& value);
@@ -82,7 +84,7 @@ void attribute(hid_t obj, const char* name, const std::vector<double>& values);
 
 // a scalar dataset of one fixed-length string of any size (a file's text), UTF-8 when it is valid UTF-8
 Id text_dataset(hid_t parent, const char* name, const std::string& text);
-// a 1-D dataset of ints, and of variable-length UTF-8 strings (h5py: .asstr()[...] gives str)
+// a 1-D dataset of ints, and of fixed-length UTF-8 strings (h5py: .asstr()[...] gives str)
 void int_dataset(hid_t parent, const char* name, const std::vector<int>& values, const std::string& units);
 void string_dataset(hid_t parent, const char* name, const std::vector<std::string>& values);
 
@@ -115,9 +117,10 @@ Id open_run_file(const std::string& path);
 using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 bool exists(hid_t file, const std::string& path);  // every link of an absolute path
 bool has_attribute(hid_t obj, const char* name);
-// the strings of an attribute or a dataset (variable- or fixed-length, scalar or 1-D)
-std::vector<std::string> strings(hid_t obj, const char* name, bool attribute, const std::string& where);
-std::string one_string(hid_t obj, const char* name, bool attribute, const std::string& where);  // exactly one
+// the strings of an attribute or a dataset (fixed-length, or variable-length when `variable`:
+// otherwise those are refused before HDF5 follows them into the global heap; scalar or 1-D)
+std::vector<std::string> strings(hid_t obj, const char* name, bool attribute, const std::string& where, bool variable);
+std::string one_string(hid_t obj, const char* name, bool attribute, const std::string& where, bool variable);  // exactly one
 // the numbers of an attribute or a dataset, as a row-major matrix: its first dimension the rows,
 // the others the columns (a scalar or 1-D object: one column); `shape` gets its dimensions
 RowMatrix numbers(hid_t obj, const char* name, bool attribute, const std::string& where,

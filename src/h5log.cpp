@@ -127,9 +127,9 @@ struct H5Log::Impl {
   LogGroups groups;
   std::unique_ptr<Model> model;  // for the frames' poses (groups.frames)
   std::unique_ptr<Data> data;
-  Scalar status, quaternion, t_reached, cpu, steps, rhs, jac, etf, nli, max_balance, final_balance;
+  Scalar status, quaternion, t_reached, cpu, steps, rhs, jac, etf, nli, max_balance, final_balance, ticks;
   std::vector<Scalar*> scalars() {
-    return {&status, &quaternion, &t_reached, &cpu, &steps, &rhs, &jac, &etf, &nli, &max_balance, &final_balance};
+    return {&status, &quaternion, &t_reached, &cpu, &steps, &rhs, &jac, &etf, &nli, &max_balance, &final_balance, &ticks};
   }
   std::chrono::steady_clock::time_point last_flush;
   std::chrono::duration<double> flush_interval{0.5};
@@ -270,13 +270,14 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
     im.nli = Scalar(g_solver, "nonlinear_iterations", H5T_NATIVE_LONG);
     im.max_balance = Scalar(g_solver, "max_energy_balance_error", H5T_NATIVE_DOUBLE);
     im.final_balance = Scalar(g_solver, "final_energy_balance_error", H5T_NATIVE_DOUBLE);
+    im.ticks = Scalar(g_solver, "control_ticks", H5T_NATIVE_LONG);
     for (Scalar* s : {&im.t_reached, &im.cpu}) attribute(s->dset, "units", std::string("s"));
-    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.max_balance, &im.final_balance})
+    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.max_balance, &im.final_balance, &im.ticks})
       attribute(s->dset, "units", std::string("1"));
     im.status.write(std::string("running"));
     im.quaternion.write(std::string());
     for (Scalar* s : {&im.t_reached, &im.cpu, &im.max_balance, &im.final_balance}) s->write(0.0);
-    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli}) s->write(0L);
+    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.ticks}) s->write(0L);
 
     {
       // the table every series is a view of: chunks of about 64 KiB
@@ -407,6 +408,7 @@ void H5Log::flush(const RunSummary* summary) {
       im.nli.write(summary->stats.nonlinear_iterations);
       im.max_balance.write(summary->max_energy_balance_error);
       im.final_balance.write(summary->final_energy_balance_error);
+      im.ticks.write(summary->control_ticks);
     }
     check(H5Fflush(im.file, H5F_SCOPE_LOCAL), "H5Fflush");
     im.rows += n;

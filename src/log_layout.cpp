@@ -92,18 +92,6 @@ Layout layout(const Model& m, const LogGroups& g) {
     for (int k = 0; k < m.nv; ++k) c.push_back({"control." + vn[size_t(k)], vu[size_t(k)] == "rad/s" ? "N m" : "N"});
     b.view("/control", c, m.nv);
   }
-  if (!g.frames.empty()) {
-    b.out.groups.push_back("/frames");
-    const std::pair<const char*, std::vector<const char*>> series[] = {{"position", {"x", "y", "z"}},
-                                                                        {"orientation", {"w", "x", "y", "z"}}};
-    for (const auto& [kind, parts] : series) {
-      const std::string unit = std::string(kind) == "orientation" ? "1" : "m";
-      std::vector<Column> c;
-      for (const int f : g.frames)
-        for (const char* x : parts) c.push_back({std::string("frames.") + kind + "." + m.frame_names[size_t(f)] + "." + x, unit});
-      b.view(std::string("/frames/") + kind, c, int(parts.size()), int(g.frames.size()));
-    }
-  }
   if (g.sensitivities) {
     // ∂x_i/∂p_j, row-major (i, j): a T × nx × (nx | np) view; its units x_i's over p_j's
     const SensitivityPlan& p = *g.sensitivities;
@@ -128,6 +116,18 @@ Layout layout(const Model& m, const LogGroups& g) {
         }
       b.view(std::string("/sensitivities/") + kind, c, int(names->size()), p.nx);
       b.out.views.back().units = std::move(all_units);
+    }
+  }
+  if (!g.frames.empty()) {  // last, as append_row writes them
+    b.out.groups.push_back("/frames");
+    const std::pair<const char*, std::vector<const char*>> series[] = {{"position", {"x", "y", "z"}},
+                                                                        {"orientation", {"w", "x", "y", "z"}}};
+    for (const auto& [kind, parts] : series) {
+      const std::string unit = std::string(kind) == "orientation" ? "1" : "m";
+      std::vector<Column> c;
+      for (const int f : g.frames)
+        for (const char* x : parts) c.push_back({std::string("frames.") + kind + "." + m.frame_names[size_t(f)] + "." + x, unit});
+      b.view(std::string("/frames/") + kind, c, int(parts.size()), int(g.frames.size()));
     }
   }
   return std::move(b.out);

@@ -55,6 +55,22 @@ inline bool column_of(const std::string& column, const std::string& stem) {
   return column.compare(0, stem.size(), stem) == 0 && (column.size() == stem.size() || column[stem.size()] == '.');
 }
 
+// The shape layout() gives a view of rank 3 (T × items × per) with n columns, so a reader need not
+// open the view: /bodies and /frames position and com 3 a row per item, orientation 4; /sensitivities
+// nx items (x's dimension).  False for a view of rank 1 or 2, or n that does not divide.
+inline bool rank3_shape(const std::string& view, long n, long nx, long& items, long& per) {
+  const std::string v = view;
+  if (v.rfind("/sensitivities/", 0) == 0) {
+    items = nx, per = nx > 0 ? n / nx : 0;
+  } else if (v.rfind("/bodies/", 0) == 0 || v.rfind("/frames/", 0) == 0) {
+    per = v.size() >= 12 && v.compare(v.size() - 12, 12, "/orientation") == 0 ? 4 : 3;
+    items = n / per;
+  } else {
+    return false;
+  }
+  return items > 0 && per > 0 && items * per == n;
+}
+
 // SI units of q and v, one per column (joint_traits)
 std::vector<std::string> q_units(const Model& model);
 std::vector<std::string> v_units(const Model& model);

@@ -54,16 +54,17 @@ def check_plot(run_file, exact_csv, binned_csv, joints_csv, joint, svg):
     c = curves(exact_csv)
     with h5py.File(run_file, "r") as f:
         t, q = f["time"][:], f["q"][:]
-        q_names = [str(n) for n in f["model"].attrs["q_names"]]
+        q_names = [n.decode() for n in f["model"].attrs["q_names"]]
         E, T = f["energy/total"][:], f["energy/kinetic"][:]
         W = f["energy/work_inputs"][:] if "work_inputs" in f["energy"] else None
         L = f["energy/impact_loss"][:] if "impact_loss" in f["energy"] else None
         control = f["control"][:] if "control" in f else None
-        v_names = [str(n) for n in f["model"].attrs["v_names"]]
+        v_names = [n.decode() for n in f["model"].attrs["v_names"]]
         events = f["events"][:, 0] if "events" in f else np.empty(0)
         lin, ang = f["momentum/linear"][:], f["momentum/angular"][:]
-        scenario = str(f.attrs["scenario_path"])
-        units = dict(zip(f["samples"].attrs["column_names"], f["samples"].attrs["column_units"]))
+        scenario = f.attrs["scenario_path"].decode()
+        units = dict(zip((n.decode() for n in f["samples"].attrs["column_names"]),
+                         (u.decode() for u in f["samples"].attrs["column_units"])))
     name = os.path.basename(scenario).split(".")[0]
     expect(np.array_equal(c["t"], t), f"plot {name}: the time axis is not the file's /time")
     quats = {}

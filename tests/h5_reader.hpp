@@ -8,6 +8,7 @@
 
 #include <hdf5.h>
 
+#include <algorithm>
 #include <limits>
 #include <set>
 #include <string>
@@ -75,13 +76,24 @@ inline std::vector<std::string> read_strings(hid_t file, const std::string& path
   return out;
 }
 
-// a one-dimensional dataset or attribute of variable-length strings; {"(missing)"} if absent
-inline std::vector<std::string> read_vlen_strings(hid_t obj, bool attribute) {
+// a one-dimensional dataset or attribute of fixed-length strings (layout 5: nothing in the
+// global heap; older layouts' variable-length ones read too, only when `variable`); {"(missing)"}
+// if absent
+inline std::vector<std::string> read_vlen_strings(hid_t obj, bool attribute, bool variable = false) {
   const h5::Id type = own(attribute ? H5Aget_type(obj) : H5Dget_type(obj), H5Tclose);
   const h5::Id space = own(attribute ? H5Aget_space(obj) : H5Dget_space(obj), H5Sclose);
   std::vector<std::string> out;
   const hssize_t n = H5Sget_simple_extent_npoints(space);
-  if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0 && H5Sget_simple_extent_ndims(space) == 1) {
+  if (H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) <= 0 && H5Sget_simple_extent_ndims(space) == 1) {
+    const size_t width = H5Tget_size(type);
+    std::vector<char> buf(width * size_t(n));
+    const herr_t ok = n == 0 ? 0 : attribute ? H5Aread(obj, type, buf.data()) : H5Dread(obj, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data());
+    for (hssize_t i = 0; i < n && ok >= 0; ++i) {
+      const char* s = buf.data() + size_t(i) * width;
+      out.emplace_back(s, std::find(s, s + width, '\0'));
+    }
+  } else if (variable && H5Tget_class(type) == H5T_STRING && H5Tis_variable_str(type) > 0 &&
+             H5Sget_simple_extent_ndims(space) == 1) {
     const h5::Id mem = own(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Tset_size(mem, H5T_VARIABLE);
     H5Tset_cset(mem, H5Tget_cset(type));
@@ -92,7 +104,7 @@ inline std::vector<std::string> read_vlen_strings(hid_t obj, bool attribute) {
       H5free_memory(c);
     }
   } else {
-    out.push_back("(not a list of variable-length strings)");
+    out.push_back("(not a list of fixed-length strings)");
   }
   return out;
 }

@@ -335,7 +335,7 @@ class RunLog(unittest.TestCase):
             self.run_ok(f"{SCENARIOS}/{scene}.yaml", "--t-end", "1", "-q", "-o", out)
             with h5py.File(out, "r") as f:
                 q, qd = f["q"][:], f["qd"][:]
-                names = list(f["model"].attrs["body_names"])
+                names = [n.decode() for n in f["model"].attrs["body_names"]]  # fixed-length: bytes
                 self.assertEqual(list(f["bodies/names"].asstr()[:]), names)
                 poses = {k: f["bodies/" + k][:] for k in ("position", "orientation", "com")}
             self.assertEqual(poses["position"].shape, (len(q), len(names), 3))
@@ -373,7 +373,7 @@ class RunLog(unittest.TestCase):
         out = os.path.join(self.dir.name, "lean.h5")
         self.run_ok(f"{SCENARIOS}/three_link_arm.yaml", "--log", "energy,state", "--t-end", "0.1", "-q", "-o", out)
         with h5py.File(out, "r") as f:
-            self.assertEqual(f.attrs["log_groups"], "state,energy")
+            self.assertEqual(f.attrs["log_groups"].decode(), "state,energy")
             self.assertEqual(f["samples"].shape[1], 1 + 3 + 3 + 3 + 5)
             self.assertEqual(sorted(f), ["energy", "model", "q", "qd", "qdd", "samples", "scenario", "solver", "time"])
         out = os.path.join(self.dir.name, "bodies.h5")

@@ -197,7 +197,7 @@ class OneFile(Base):
         self.assertWhole(out, status="^completed$")
         with h5py.File(out, "r") as f:
             self.assertEqual(len(f["time"]), 2001)
-            self.assertEqual(list(f["model"].attrs["joint_names"]), ["theta1", "theta2"])
+            self.assertEqual([n.decode() for n in f["model"].attrs["joint_names"]], ["theta1", "theta2"])
         self.assertNoLitter(out)
 
     def test_output_equal_to_an_input_is_refused(self):
@@ -378,7 +378,7 @@ class Settings(Base):
         self.assertEqual(p.returncode, 0, p.stderr)
         with h5py.File(self.path("lean.h5"), "r") as f:
             self.assertEqual(f["samples"].shape, (100001, 12))
-            self.assertEqual(f.attrs["log_groups"], "state,energy")
+            self.assertEqual(f.attrs["log_groups"].decode(), "state,energy")
             self.assertNotIn("bodies", f)
             self.assertNotIn("momentum", f)
         p = run("run", PENDULUM, "--output-dt", "1e-4", "--t-end", "0.01", "--max-output-size", "10M", "-q",

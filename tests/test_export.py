@@ -38,7 +38,8 @@ def read_csv(path):
 def samples(path):
     with h5py.File(path, "r", swmr=True) as f:
         d = f["samples"]
-        return list(d.attrs["column_names"]), list(d.attrs["column_units"]), d[:]
+        text = lambda v: v.decode() if isinstance(v, bytes) else v  # noqa: E731 (fixed-length: bytes)
+        return [text(n) for n in d.attrs["column_names"]], [text(u) for u in d.attrs["column_units"]], d[:]
 
 
 def same(a, b):
@@ -297,7 +298,7 @@ class RealRun(Base):
         col = {h.rsplit(" [", 1)[0]: data[:, k] for k, h in enumerate(header)}
         with h5py.File(run, "r") as f:
             self.assertTrue(same(col["time"], f["time"][:]))
-            q_names = [str(n) for n in f["model"].attrs["q_names"]]
+            q_names = [n.decode() for n in f["model"].attrs["q_names"]]
             q = f["q"][:]
             for k, n in enumerate(q_names):
                 self.assertTrue(same(col["q." + n], q[:, k]), n)

@@ -60,12 +60,12 @@ class FileCheck {
     series(path, rows, bodies * cols, value);
   }
 
-  // a dataset of variable-length strings
+  // a dataset of fixed-length strings (layout 5: no variable-length data)
   void strings(const std::string& path, const std::vector<std::string>& expected) {
     seen_.insert(path);
     EXPECT_EQ(string_list_dataset(f_, path), expected) << path;
   }
-  // an attribute: a list of variable-length strings, or numbers
+  // an attribute: a list of fixed-length strings, or numbers
   void texts(const std::string& path, const std::string& name, const std::vector<std::string>& expected) {
     seen_.insert(path + "@" + name);
     EXPECT_EQ(string_list_attribute(f_, path, name), expected) << path << "@" << name;
@@ -156,7 +156,7 @@ void joint_units(const Model& m, std::vector<std::string>& qu, std::vector<std::
   }
 }
 
-// the whole layout of a run file (h5log.hpp, layout_version 4) against the run's samples, summary
+// the whole layout of a run file (h5log.hpp, layout_version 5) against the run's samples, summary
 // and settings
 void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& s, const std::vector<Sample>& x,
                     const RunSummary& r, const std::string& version, bool same_process, const LogGroups& g = {}) {
@@ -224,12 +224,13 @@ void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& 
   c.scalar("/solver/nonlinear_iterations", double(r.stats.nonlinear_iterations), H5T_INTEGER);
   c.scalar("/solver/max_energy_balance_error", r.max_energy_balance_error, H5T_FLOAT);
   c.scalar("/solver/final_energy_balance_error", r.final_energy_balance_error, H5T_FLOAT);
+  c.scalar("/solver/control_ticks", double(r.control_ticks), H5T_INTEGER);
   // CPU time: exact when this process wrote the file; from another process, only plausible
   c.scalar("/solver/cpu_seconds", same_process ? r.cpu_seconds : 30.0, H5T_FLOAT, same_process ? 0.0 : 1.0);
   c.text("/solver/t_reached", "units", "s");
   c.text("/solver/cpu_seconds", "units", "s");
   for (const char* n : {"steps", "rhs_evals", "jac_evals", "error_test_failures", "nonlinear_iterations",
-                        "max_energy_balance_error", "final_energy_balance_error"})
+                        "max_energy_balance_error", "final_energy_balance_error", "control_ticks"})
     c.text(std::string("/solver/") + n, "units", "1");
 
   // /samples holds every number of the chosen groups, named and with units; the series are views

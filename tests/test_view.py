@@ -347,18 +347,18 @@ def check_cli_errors(tmp):
     with open(os.path.join(d, "run.html"), encoding="utf-8") as f:
         page = f.read()
     check(p.stderr == "" and '"kind":"cylinder"' in page, f"URDF gone: the page from the stored URDF ({p.stderr.strip()})")
-    # a file from before /robot (layout 3): the URDF read from disk with a note, refused in one line once gone
+    # a file from before /robot (layout 3): view reads nothing but the run file, so it is refused in
+    # one line, whether the URDF is on disk or not
     with h5py.File(os.path.join(d, "old.h5"), "r+") as f:
         del f["robot"]
-    p = run("view", os.path.join(d, "old.h5"), expect=2)
-    check("view_visuals.urdf" in p.stderr and "cannot rebuild the run's model" in p.stderr and p.stderr.count("soadyn: error") == 1,
-          f"old file, missing URDF: {p.stderr.strip()}")
-    check(not os.path.exists(os.path.join(d, "old.html")), "old file, missing URDF: no page written")
-    for f in ("view_visuals.yaml", "view_visuals.urdf"):
-        os.rename(os.path.join(d, f + ".gone"), os.path.join(d, f))
-    p = run("view", os.path.join(d, "old.h5"))
-    check("holds no robot file" in p.stderr and os.path.exists(os.path.join(d, "old.html")),
-          f"old file: the URDF read from disk, with a note ({p.stderr.strip()})")
+    for state in ("gone", "back"):
+        p = run("view", os.path.join(d, "old.h5"), expect=2)
+        check("holds no robot file" in p.stderr and "cannot rebuild the run's model" in p.stderr and
+              p.stderr.count("\n") == 1, f"old file, URDF {state}: {p.stderr.strip()}")
+        check(not os.path.exists(os.path.join(d, "old.html")), f"old file, URDF {state}: no page written")
+        for f in ("view_visuals.yaml", "view_visuals.urdf"):
+            if state == "gone":
+                os.rename(os.path.join(d, f + ".gone"), os.path.join(d, f))
     # a run that went unstable: shown up to its last finite row, with a note
     src = os.path.join(tmp, "double_pendulum.h5")
     bad = os.path.join(tmp, "unstable.h5")
@@ -373,7 +373,8 @@ def check_cli_errors(tmp):
     p = run("view", bad, "-q")
     check(f"not finite from t = {t_bad:g} s on" in p.stderr and os.path.exists(bad[:-3] + ".html"),
           f"non-finite rows at the end: page up to them ({p.stderr.strip()})")
-    # the scenario's text as a variable-length UTF-8 dataset, and (older files) as a root attribute
+    # the scenario's text as a variable-length UTF-8 dataset, and (older files) as a root attribute:
+    # layout 4 and before (layout 5 writes no variable-length string, and refuses one)
     with h5py.File(src, "r") as f:
         text = f["scenario"][()] if "scenario" in f else f.attrs["scenario"]
     text = text.decode() if isinstance(text, bytes) else text
@@ -389,6 +390,7 @@ def check_cli_errors(tmp):
                 f["scenario"] = text
             else:
                 f.attrs["scenario"] = text
+            f.attrs["layout_version"] = 4
         p = subprocess.run([SOADYN, "view", moved, "-q"], capture_output=True, text=True)
         check(p.returncode == 0 and os.path.getsize(moved[:-3] + ".html") > 0,
               f"scenario stored as a variable-length {where}: read as well ({p.stderr.strip()})")

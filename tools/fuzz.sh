@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Build the libFuzzer targets with Debian clang (address + undefined sanitizers) in build-fuzz/,
-# or run one of them for a bounded time on a seed corpus made from scenarios/ (scenario) or
-# tests/fuzz/seeds/ and tests/data/urdf/ (urdf).
+# or run one of them for a bounded time on a seed corpus made from scenarios/ (scenario),
+# tests/fuzz/seeds/ and tests/data/urdf/ (urdf), or the real run files in tests/fuzz/seeds/*.h5
+# (run_file: the run-file reader, inputs up to 256 KiB).
 #   tools/fuzz.sh build
-#   tools/fuzz.sh run scenario|urdf SECONDS
+#   tools/fuzz.sh run scenario|urdf|run_file SECONDS
 # Exits 77 (skipped) only when clang with libFuzzer is not installed; a finding exits 1.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,18 +24,23 @@ case "${1:-}" in
       -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only -DNDEBUG" \
       -DSOADYN_BUILD_TESTS=OFF -DSOADYN_BUILD_BENCH=OFF -DSOADYN_PYTHON=OFF -DSOADYN_NATIVE=OFF \
       -DCMAKE_UNITY_BUILD=ON -DCMAKE_UNITY_BUILD_BATCH_SIZE=4 >/dev/null
-    cmake --build build-fuzz -j "$(nproc)" --target fuzz_scenario fuzz_urdf
+    cmake --build build-fuzz -j "$(nproc)" --target fuzz_scenario fuzz_urdf fuzz_run_file
     ;;
   run)
     target=$2 seconds=$3
     corpus=build-fuzz/corpus_$target
     rm -rf "$corpus" && mkdir -p "$corpus"
-    if [[ $target == scenario ]]; then cp scenarios/*.yaml "$corpus/"; else cp tests/fuzz/seeds/*.urdf tests/data/urdf/*.urdf "$corpus/"; fi
+    max_len=8192
+    case $target in
+      scenario) cp scenarios/*.yaml "$corpus/" ;;
+      run_file) cp tests/fuzz/seeds/*.h5 "$corpus/"; max_len=262144 ;;
+      *) cp tests/fuzz/seeds/*.urdf tests/data/urdf/*.urdf "$corpus/" ;;
+    esac
     mkdir -p build-fuzz/findings_$target
     log=build-fuzz/fuzz_$target.log
     status=0
     ASAN_OPTIONS=detect_leaks=1 ./build-fuzz/fuzz_$target "$corpus" -max_total_time="$seconds" -timeout=10 \
-      -rss_limit_mb=2048 -max_len=8192 -print_final_stats=1 -artifact_prefix=build-fuzz/findings_$target/ \
+      -rss_limit_mb=2048 -max_len="$max_len" -print_final_stats=1 -artifact_prefix=build-fuzz/findings_$target/ \
       >"$log" 2>&1 || status=$?
     grep -E "^(INFO: seed corpus|stat::number_of_executed_units|stat::peak_rss)" "$log" || true
     if ((status != 0)); then
@@ -44,5 +50,5 @@ case "${1:-}" in
     # libFuzzer exits 77 on a finding, which ctest would read as "skipped": any failure is 1 here
     ((status == 0)) || exit 1
     ;;
-  *) echo "usage: tools/fuzz.sh build | run scenario|urdf SECONDS" >&2; exit 2 ;;
+  *) echo "usage: tools/fuzz.sh build | run scenario|urdf|run_file SECONDS" >&2; exit 2 ;;
 esac

@@ -1,4 +1,4 @@
-// HDF5 run files.  Layout (one file per run, layout_version 4; run_file.hpp reads it back):
+// HDF5 run files.  Layout (one file per run, layout_version 5; run_file.hpp reads it back):
 //   /samples (T×W)   every logged number, one row per output time; attributes column_names and
 //                    column_units (W strings each: "time", "q.bus.x", "qd.left", "energy.total",
 //                    "momentum.linear.x", "bodies.position.bus.x", …; "s", "m", "rad", "1", …)
@@ -31,10 +31,11 @@
 //            at the start);
 //            scalar datasets status, t_reached, steps, rhs_evals, jac_evals, error_test_failures,
 //            nonlinear_iterations, cpu_seconds, quaternion_handling, max_energy_balance_error,
-//            final_energy_balance_error (rewritten at every flush)
+//            final_energy_balance_error, control_ticks (layout 5; rewritten at every flush)
 //   root attributes: scenario_path, soadyn_version, layout_version, log_groups
-// Strings: every attribute string is variable-length UTF-8 (h5py returns str); string datasets
-// (/scenario, /bodies/names, /solver/status, …) read as str with h5py's .asstr().
+// Strings: every string is fixed-length UTF-8, null-padded (layout 5; earlier layouts wrote
+// attributes and /bodies/names, /frames/names variable-length): h5py returns attributes as bytes
+// (.decode()), datasets (/scenario, /bodies/names, /solver/status, …) as str with .asstr().
 //
 // Consistency: the file uses HDF5's single-writer/multiple-reader mode (SWMR, latest format).
 // Everything is created before SWMR writing starts; afterwards the writer only appends rows to
@@ -91,8 +92,10 @@ struct LogGroups {
   std::string str() const;  // "state,energy,momentum,bodies"
 };
 
-// The layout's version, the root attribute layout_version: 4 added /robot.
-inline constexpr int kLayoutVersion = 4;
+// The layout's version, the root attribute layout_version: 4 added /robot; 5 writes every string
+// fixed-length (no variable-length data, nothing in HDF5's unchecksummed global heap but the views'
+// mappings, which soadyn's reader never opens).
+inline constexpr int kLayoutVersion = 5;
 
 // Bytes one logged row takes (W doubles), for the projected size of a run.
 std::uint64_t row_bytes(const Model& model, const LogGroups& groups = {});

@@ -11,6 +11,14 @@
 // Every failure is one soadyn::Error naming the file and the object: "run.h5: /q: expected 3
 // columns (/model nq), /samples has 2 named q.*", "run.h5: cannot open the HDF5 file (corrupt or
 // truncated?)".
+//
+// A corrupt file is refused, never a crash: HDF5 checksums these files' metadata but not the raw
+// data nor its global heap, which libhdf5 1.10 follows without bounds checks.  Layout 5 keeps
+// nothing there but the views' mappings: the reader refuses variable-length data before HDF5 can
+// follow it and never opens a view (each series' shape comes from its columns).  A file of layout
+// 4 or earlier (variable-length strings) is first read in a forked child, and refused when the
+// child dies or takes more than 5 s ("run.h5: corrupt run file: the HDF5 library faults reading
+// it (…)"); only then does this process read it.
 #pragma once
 
 #include "soadyn/types.hpp"
@@ -50,13 +58,14 @@ struct RunContents {
   // /model (empty lists in files without them)
   long nq = 0, nv = 0;
   std::vector<std::string> q_names, v_names, joint_names, joint_types, body_names;
-  std::vector<int> parents;
+  std::vector<int> parents, joint_v_index;  // per body: its parent (−1 world), its joint's first index into v
   // /solver: fixed at the start, then as the last flush left them
   struct Solver {
     std::string method, dynamics, status, quaternion_handling;
     double rtol = 0, atol = 0, output_dt = 0, t_end = 0, t_reached = 0, cpu_seconds = 0;
     double max_energy_balance_error = 0, final_energy_balance_error = 0;
     long steps = 0, rhs_evals = 0, jac_evals = 0, error_test_failures = 0, nonlinear_iterations = 0;
+    long control_ticks = 0;  // layout 5 on (0 before)
   } solver;
   // /samples' columns, and the series logged (kViewPaths order), each with the same rows
   std::vector<std::string> column_names, column_units;

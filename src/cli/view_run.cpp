@@ -80,25 +80,39 @@ RunModel rebuild_model(const RunFile& run) {
       out.urdf_text = run.scenario_text;
       out.urdf_path = label;
     } else {
-      // the robot file the scenario names: its text stored in the run (layout 4); a file from
-      // before read it from disk, relative to the scenario, saying so
-      std::optional<std::string> robot;
-      if (!run.robot_text.empty()) robot = run.robot_text;
-      else if (const YAML::Node root = YAML::Load(run.scenario_text); root["model"] || root["urdf"])
-        std::fprintf(stderr, "soadyn: note: %s holds no robot file (written before soadyn stored it); reading %s\n",
-                     run.path.c_str(), (root["model"] ? root["model"] : root["urdf"]).as<std::string>("?").c_str());
-      const Scenario sc = parse_scenario(run.scenario_text, label, false, InertiaCheck::Balance, robot);
+      // only what the run file holds, never a file on disk: the robot file the scenario names as
+      // stored (/robot, layout 4 on), and the scenario without its inputs: (their target tables
+      // are files the page does not need; the inputs' kinds are read from the text)
+      YAML::Node root;
+      try {
+        root = YAML::Load(run.scenario_text);
+      } catch (const YAML::Exception& e) {
+        throw Error(std::string("the stored scenario is not YAML (") + e.what() + ")");
+      }
+      if (!root.IsMap()) throw Error("the stored scenario is not a YAML mapping");
+      if ((root["model"] || root["urdf"]) && run.robot_text.empty())
+        throw Error("the file holds no robot file (written before layout 4 stored it), and soadyn view reads nothing "
+                    "but the run file");
+      bool work_inputs = false;
+      if (const YAML::Node in = root["inputs"]; in && in.IsMap()) {
+        work_inputs = in["torques"] || in["dampers"] || in["controllers"];
+        root.remove("inputs");
+      }
+      YAML::Emitter text;
+      text << root;
+      const std::optional<std::string> robot =
+          run.robot_text.empty() ? std::nullopt : std::optional<std::string>(run.robot_text);
+      const Scenario sc = parse_scenario(root.size() ? std::string(text.c_str()) : std::string("{}"), label, false,
+                                         InertiaCheck::Balance, robot);
       out.model = sc.model;
       out.name = sc.name;
       out.description = sc.description;
-      out.has_work_inputs = !sc.inputs.torques.empty() || !sc.inputs.dampers.empty();
+      out.has_work_inputs = work_inputs || !sc.inputs.dampers.empty();
       out.urdf_text = sc.robot_text;
       out.urdf_path = sc.robot_path;
     }
   } catch (const Error& e) {
-    throw Error(run.path + ": cannot rebuild the run's model from the scenario stored in it (" + e.what() + ")" +
-                (run.robot_text.empty() ? "; run soadyn view from the directory the run was made in, with the scenario's files in place"
-                                        : ""));
+    throw Error(run.path + ": cannot rebuild the run's model from the scenario stored in it (" + e.what() + ")");
   }
   const Model& m = out.model;
   if (run.q.cols() != m.nq)

@@ -19,6 +19,19 @@ py::array series_array(const RunSeries& s) {
   return owned(std::move(flat), std::move(shape));
 }
 
+// text as str: a file's string that is not UTF-8 (the writer tags such text ASCII) has U+FFFD in
+// place of its bad bytes, never a UnicodeDecodeError
+py::str text(const std::string& s) {
+  PyObject* o = PyUnicode_DecodeUTF8(s.data(), Py_ssize_t(s.size()), "replace");
+  if (!o) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(o);
+}
+py::list texts(const std::vector<std::string>& v) {
+  py::list out;
+  for (const std::string& s : v) out.append(text(s));
+  return out;
+}
+
 py::dict read(const std::string& path) {
   RunContents c;
   {
@@ -26,27 +39,29 @@ py::dict read(const std::string& path) {
     c = read_run_file(path);
   }
   const RunContents::Solver& s = c.solver;
-  py::dict solver("method"_a = s.method, "dynamics"_a = s.dynamics, "status"_a = s.status,
-                  "quaternion_handling"_a = s.quaternion_handling, "rtol"_a = s.rtol, "atol"_a = s.atol,
+  py::dict solver("method"_a = text(s.method), "dynamics"_a = text(s.dynamics), "status"_a = text(s.status),
+                  "quaternion_handling"_a = text(s.quaternion_handling), "rtol"_a = s.rtol, "atol"_a = s.atol,
                   "output_dt"_a = s.output_dt, "t_end"_a = s.t_end, "t_reached"_a = s.t_reached,
                   "cpu_seconds"_a = s.cpu_seconds, "max_energy_balance_error"_a = s.max_energy_balance_error,
                   "final_energy_balance_error"_a = s.final_energy_balance_error, "steps"_a = s.steps,
                   "rhs_evals"_a = s.rhs_evals, "jac_evals"_a = s.jac_evals, "error_test_failures"_a = s.error_test_failures,
-                  "nonlinear_iterations"_a = s.nonlinear_iterations);
+                  "nonlinear_iterations"_a = s.nonlinear_iterations, "control_ticks"_a = s.control_ticks);
   py::dict series;
-  for (const RunSeries& r : c.series) series[py::str(r.path)] = series_array(r);
+  for (const RunSeries& r : c.series) series[text(r.path)] = series_array(r);
   py::list events;
   for (const RunEvent& e : c.events)
     events.append(py::make_tuple(e.t, e.dof, e.side, e.kind, e.v_before, e.v_after, e.energy_lost));
-  return py::dict("path"_a = c.path, "soadyn_version"_a = c.soadyn_version, "scenario_path"_a = c.scenario_path,
-                  "log_groups"_a = c.log_groups, "layout_version"_a = c.layout_version, "scenario"_a = c.scenario_text,
-                  "robot"_a = c.robot_text, "robot_path"_a = c.robot_path, "nq"_a = c.nq, "nv"_a = c.nv,
-                  "q_names"_a = c.q_names, "v_names"_a = c.v_names, "joint_names"_a = c.joint_names,
-                  "joint_types"_a = c.joint_types, "body_names"_a = c.body_names, "parents"_a = c.parents,
-                  "solver"_a = solver, "column_names"_a = c.column_names, "column_units"_a = c.column_units,
-                  "series"_a = series, "frame_names"_a = c.frame_names, "state_names"_a = c.state_names,
-                  "state_units"_a = c.state_units, "parameter_names"_a = c.parameter_names,
-                  "parameter_units"_a = c.parameter_units, "events"_a = events);
+  return py::dict("path"_a = text(c.path), "soadyn_version"_a = text(c.soadyn_version),
+                  "scenario_path"_a = text(c.scenario_path), "log_groups"_a = text(c.log_groups),
+                  "layout_version"_a = c.layout_version, "scenario"_a = text(c.scenario_text), "robot"_a = text(c.robot_text),
+                  "robot_path"_a = text(c.robot_path), "nq"_a = c.nq, "nv"_a = c.nv, "q_names"_a = texts(c.q_names),
+                  "v_names"_a = texts(c.v_names), "joint_names"_a = texts(c.joint_names),
+                  "joint_types"_a = texts(c.joint_types), "body_names"_a = texts(c.body_names), "parents"_a = c.parents,
+                  "joint_v_index"_a = c.joint_v_index, "solver"_a = solver, "column_names"_a = texts(c.column_names),
+                  "column_units"_a = texts(c.column_units), "series"_a = series, "frame_names"_a = texts(c.frame_names),
+                  "state_names"_a = texts(c.state_names), "state_units"_a = texts(c.state_units),
+                  "parameter_names"_a = texts(c.parameter_names), "parameter_units"_a = texts(c.parameter_units),
+                  "events"_a = events);
 }
 
 }  // namespace

@@ -48,6 +48,9 @@ class Recorder : public RunObserver {
     dx_dpi.insert(dx_dpi.end(), pi.data(), pi.data() + pi.size());
     if (next_) next_->on_sample(s);
   }
+  void on_event(const LimitEvent& e) override {  // the joint limits' events reach the file's /events
+    if (next_) next_->on_event(e);
+  }
   void on_progress(const RunSummary& r) override {
     if (next_) next_->on_progress(r);
   }

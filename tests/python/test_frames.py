@@ -147,8 +147,8 @@ def test_log_frames_puts_their_poses_in_the_run_file(tmp_path):
         assert [n.decode() if isinstance(n, bytes) else n for n in f["frames/names"][:]] == ["tip", "upper"]
         pos, att, q = f["frames/position"][:], f["frames/orientation"][:], f["q"][:]
         assert pos.shape == (len(q), 2, 3) and att.shape == (len(q), 2, 4)
-        assert f["frames/position"].attrs["units"] == "m"
-        names = list(f["samples"].attrs["column_names"])
+        assert f["frames/position"].attrs["units"] == b"m"  # fixed-length strings: bytes
+        names = [n.decode() for n in f["samples"].attrs["column_names"]]
         assert "frames.position.tip.x" in names and "frames.orientation.upper.w" in names
     model, data = scene.model, scene.model.create_data()
     for k in range(len(q)):

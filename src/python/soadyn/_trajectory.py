@@ -1,5 +1,4 @@
 """Trajectory and RunSummary: what soadyn.simulate returns and soadyn.read_log reads back."""
-import os
 from dataclasses import dataclass, field, fields
 from typing import Dict, List, Optional
 
@@ -31,7 +30,7 @@ class RunSummary:
     final_energy_balance_error: float
     # joint-limit events (simulation: limits: true), each a dict t, joint, side ("lower" | "upper"),
     # kind ("impact" | "hold" | "release"), v_before, v_after, energy_lost; and a sampled
-    # controller's evaluations (soadyn.simulate only; read_log gives none)
+    # controller's evaluations (read_log: from the file's /events and /solver, as the run returned them)
     events: List[dict] = field(default_factory=list)
     control_ticks: int = 0
 
@@ -118,9 +117,10 @@ class Trajectory:
     parents: List[int] = field(default_factory=list)
     scenario: str = ""
     frames: Dict[str, FramePoses] = field(default_factory=dict)
-    # soadyn.simulate only (None from read_log): impact_loss (T,), L(t), the kinetic energy
-    # joint-limit impacts took since t = 0 (E(t) − E(0) = W(t) − L(t)); control (T, nv), the
-    # controllers' torque at each sample (the held value when sampled)
+    # impact_loss (T,), L(t), the kinetic energy joint-limit impacts took since t = 0
+    # (E(t) − E(0) = W(t) − L(t)), zeros without limits; control (T, nv), the controllers' torque
+    # at each sample (the held value when sampled), zeros without controllers.  read_log: the file's
+    # /energy/impact_loss and /control (None from a file written before layout 5 that lacks them)
     impact_loss: Optional[np.ndarray] = None
     control: Optional[np.ndarray] = None
     # simulation: sensitivities (simulate and read_log): a Sensitivities, None without them
@@ -164,25 +164,42 @@ def summary_from_dict(d: dict) -> RunSummary:
     return RunSummary(**{f.name: d[f.name] for f in fields(RunSummary)})
 
 
-def balance_errors(total: np.ndarray, kinetic: np.ndarray, work: np.ndarray):
-    """(max, final) relative energy-balance error, as simulate() accumulates them sample by sample"""
+def balance_errors(total: np.ndarray, kinetic: np.ndarray, work: np.ndarray, lost: np.ndarray):
+    """(max, final) relative energy-balance error, as simulate() accumulates them sample by sample
+    (only for files from before /solver kept them)"""
     if len(total) == 0:
         return 0.0, 0.0
     E0, peak, worst, last = float(total[0]), 0.0, 0.0, 0.0
-    for E, T, W in zip(total.tolist(), kinetic.tolist(), work.tolist()):
+    for E, T, W, L in zip(total.tolist(), kinetic.tolist(), work.tolist(), lost.tolist()):
         peak = max(peak, T)
-        last = abs(E - E0 - W) / max(abs(E0), peak, 1e-300)
+        last = abs(E - E0 - W + L) / max(abs(E0), peak, 1e-300)
         worst = max(worst, last)
     return worst, last
+
+
+def _events(c: dict) -> List[dict]:
+    """/events (E × 7: t, dof, side, kind, v_before, v_after, energy_lost) as simulate() gives them"""
+    kinds, idx, names = ("impact", "hold", "release"), c["joint_v_index"], c["joint_names"]
+    out = []
+    for t, dof, side, kind, before, after, lost in c["events"]:
+        # the joint whose DOFs hold `dof` (/model joint_v_index), or the DOF's own name in older files
+        owner = [k for k, first in enumerate(idx) if 0 <= first <= dof]
+        joint = (names[max(owner, key=lambda k: idx[k])] if owner and len(names) == len(idx)
+                 else c["v_names"][dof] if dof < len(c["v_names"]) else str(dof))
+        out.append(dict(t=t, joint=joint, side="lower" if side < 0 else "upper",
+                        kind=kinds[kind] if 0 <= kind < 3 else "unknown", v_before=before, v_after=after,
+                        energy_lost=lost))
+    return out
 
 
 def read_log(path: str) -> Trajectory:
     """The Trajectory of a soadyn HDF5 run file (soadyn.simulate(output=…) or `soadyn run`).
 
-    The same arrays as the run returned (float64 round-trips exactly); a run still being written
-    or cut short gives what was flushed.  The energy-balance errors are recomputed from the logged
-    energies the way simulate() computes them.  Read by the library's reader (run_file.hpp), as
-    `soadyn export` and `soadyn view` read it.
+    The same arrays as the run returned (float64 round-trips exactly), impact_loss and control
+    included, and its summary as the file's /solver and /events keep it (the run's own figures:
+    energy-balance errors, events, control ticks); a run still being written or cut short gives
+    what was flushed.  Read by the library's reader (run_file.hpp), as `soadyn export` and
+    `soadyn view` read it.
     Raises soadyn.Error when the file is missing or is not a soadyn run.
     """
     from . import Error, _soadyn
@@ -213,14 +230,25 @@ def read_log(path: str) -> Trajectory:
                   linear_momentum=series("/momentum/linear", 3), angular_momentum=series("/momentum/angular", 3),
                   body_position=series("/bodies/position", nb, 3), body_orientation=series("/bodies/orientation", nb, 4),
                   body_com=series("/bodies/com", nb, 3))
+    # L(t) and τ: the file's, zeros where the run had no limits or controllers (as simulate gives
+    # them); None in a file from before layout 5 that lacks them
+    logged_energy, new = "/energy/total" in logged, c["layout_version"] >= 5
+    impact_loss = logged.get("/energy/impact_loss", np.zeros(T) if logged_energy and new else None)
+    control = logged.get("/control", np.zeros((T, nv)) if new else None)
     status = solver["status"] or "unknown"
-    worst, last = balance_errors(arrays["total_energy"], arrays["kinetic_energy"], arrays["work_inputs"])
+    # the run's own figures (/solver, layout 3 on); files from before: recomputed from the energies
+    if c["layout_version"] >= 3:
+        worst, last = solver["max_energy_balance_error"], solver["final_energy_balance_error"]
+    else:
+        worst, last = balance_errors(arrays["total_energy"], arrays["kinetic_energy"], arrays["work_inputs"],
+                                     np.zeros(T) if impact_loss is None else impact_loss)
     summary = RunSummary(
         method=solver["method"], status=status, completed=status == "completed", t_reached=solver["t_reached"],
         steps=solver["steps"], rhs_evals=solver["rhs_evals"], jac_evals=solver["jac_evals"],
         error_test_failures=solver["error_test_failures"], nonlinear_iterations=solver["nonlinear_iterations"],
         cpu_seconds=solver["cpu_seconds"], quaternion_handling=solver["quaternion_handling"],
-        output_dt=solver["output_dt"], max_energy_balance_error=worst, final_energy_balance_error=last)
+        output_dt=solver["output_dt"], max_energy_balance_error=worst, final_energy_balance_error=last,
+        events=_events(c), control_ticks=solver["control_ticks"])
     # /frames: names (F), position (T, F, 3), orientation (T, F, 4)
     fnames = c["frame_names"]
     pos, att = series("/frames/position", len(fnames), 3), series("/frames/orientation", len(fnames), 4)
@@ -233,4 +261,5 @@ def read_log(path: str) -> Trajectory:
             state_names=c["state_names"], state_units=c["state_units"],
             parameter_names=c["parameter_names"], parameter_units=c["parameter_units"])
     return Trajectory(**arrays, summary=summary, joint_names=c["joint_names"], parents=c["parents"],
-                      scenario=c["scenario"], frames=frames, sensitivities=sensitivities)
+                      scenario=c["scenario"], frames=frames, impact_loss=impact_loss, control=control,
+                      sensitivities=sensitivities)
