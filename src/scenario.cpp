@@ -380,7 +380,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   if (root["simulation"]) read_simulation(rd, root["simulation"], sc.model, sc.simulation);
   if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.q0, sc.inputs);
   sc.files.insert(sc.files.end(), rd.files_read.begin(), rd.files_read.end());
-  scenario_detail::check_combinations(rd, root, sc);
+  scenario_detail::record_locations(rd, root, sc);
   return sc;
 }
 

@@ -1,12 +1,9 @@
-// The combinations of a scenario's sections a run refuses, refused where the file says them
-// (file:line:column: field): limits: true with a fixed-step method, a start beyond a joint's
-// limit, sensitivities with a fixed-step method, a controller or enforced limits.  check_run
-// (simulate.cpp) checks the same again before any run, for settings given elsewhere (the command
-// line, Python).
+// Where a scenario file gives the fields a run may refuse in combination (limits: true with a
+// fixed-step method, a start beyond a joint's limit, sensitivities a run cannot differentiate):
+// Scenario::locations, so that check_run (simulate.cpp) refuses them naming the file, the line and
+// the field, whatever gave the other half (the file, --method on the command line, Python).
 #include "scenario_reader.hpp"
 
-#include "soadyn/integrators.hpp"
-#include "soadyn/limits.hpp"
 #include "soadyn/scenario.hpp"
 
 namespace soadyn::scenario_detail {
@@ -27,56 +24,19 @@ YAML::Node find(const YAML::Node& root, std::initializer_list<std::string> keys)
   return n;
 }
 
-// where a joint's start is given: initial.q.J, else limits.J, else simulation.limits
-std::pair<YAML::Node, std::string> start_of(const YAML::Node& root, const std::string& joint) {
-  if (const YAML::Node n = find(root, {"initial", "q", joint}); n.IsDefined()) return {n, "initial.q." + joint};
-  if (const YAML::Node n = find(root, {"limits", joint}); n.IsDefined()) return {n, "limits." + joint};
-  const YAML::Node n = find(root, {"simulation", "limits"});
-  return {n.IsDefined() ? n : root, "simulation.limits"};
-}
-
 }  // namespace
 
-void check_combinations(const Reader& rd, const YAML::Node& root, const Scenario& sc) {
-  const YAML::Node sim = find(root, {"simulation"});
-  if (!sim.IsDefined()) return;  // the defaults: no limits enforced, no sensitivities
-  const SimulationSettings& s = sc.simulation;
-  const Model& m = sc.model;
-  const bool fixed = find_integrator(s.method).fixed_step;
-  const std::string method(to_string(s.method));
-  if (s.limits && m.has_limits()) {
-    YAML::Node at = find(sim, {"limits"});
-    if (!at.IsDefined()) at = sim;
-    if (fixed)
-      rd.fail(at, "simulation.limits", "true needs an integrator that locates events (cvode-adams or cvode-bdf); " +
-                                           method + " (simulation.method) takes fixed steps");
-    try {
-      JointLimits(m, s.restitution).check_inside(sc.q0);
-    } catch (const Error& e) {
-      // the first 1-DOF joint outside its range (the one check_inside names, past its rounding)
-      for (int i = 0; i < m.nbodies; ++i) {
-        if (m.nv_i[size_t(i)] != 1 || m.nq_i[size_t(i)] != 1) continue;
-        const double q = sc.q0(m.idx_q[size_t(i)]);
-        const int k = m.idx_v[size_t(i)];
-        if (q >= m.lower[size_t(k)] && q <= m.upper[size_t(k)]) continue;
-        const auto [node, field] = start_of(root, m.joint_names[size_t(i)]);
-        rd.fail(node, field, e.what());
-      }
-      rd.fail(at, "simulation.limits", e.what());
-    }
-  }
-  if (s.sensitivities.any()) {
-    YAML::Node at = find(sim, {"sensitivities"});
-    if (!at.IsDefined()) at = sim;
-    const std::string f = "simulation.sensitivities";
-    if (fixed)
-      rd.fail(at, f, "need a CVODE method (cvode-adams or cvode-bdf): " + method +
-                         " (simulation.method) takes fixed steps and its variational equation is not stepped");
-    if (!sc.inputs.controllers.empty())
-      rd.fail(at, f, "a run with a controller (inputs.controllers) is not differentiated (its dtau/dx is not): remove the controller");
-    if (s.limits && m.has_limits())
-      rd.fail(at, f, "enforced joint limits (simulation.limits: true) are events where the state jumps, not differentiated: "
-                     "set limits: false");
+void record_locations(const Reader& rd, const YAML::Node& root, Scenario& sc) {
+  auto put = [&](const std::string& field, const YAML::Node& n) {
+    const YAML::Mark m = n.Mark();
+    if (n.IsDefined() && m.line >= 0)
+      sc.locations[field] = rd.file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
+  };
+  put("simulation.limits", find(root, {"simulation", "limits"}));
+  put("simulation.sensitivities", find(root, {"simulation", "sensitivities"}));
+  for (const std::string& joint : sc.model.joint_names) {
+    put("initial.q." + joint, find(root, {"initial", "q", joint}));
+    put("limits." + joint, find(root, {"limits", joint}));
   }
 }
 

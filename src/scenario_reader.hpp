@@ -168,9 +168,9 @@ void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, con
 // checked against the model's
 void read_sensitivities(const Reader& rd, const YAML::Node& n, const Model& m, SensitivitySettings& out);
 
-// scenario_checks.cpp: the sections' combinations a run refuses (limits with a fixed-step method, a
-// start beyond a limit, sensitivities a run cannot differentiate), located in the file
-void check_combinations(const Reader& rd, const YAML::Node& root, const Scenario& sc);
+// scenario_checks.cpp: where the file gives the fields a run may refuse in combination (limits, a
+// joint's start or range, sensitivities), into Scenario::locations
+void record_locations(const Reader& rd, const YAML::Node& root, Scenario& sc);
 
 // scenario_inertial.cpp: `inertial: {body: {mass, com, inertia}}` over the model's mass properties
 void read_inertial(const Reader& rd, const YAML::Node& n, Model& m);

@@ -243,14 +243,18 @@ SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s)
 
 void check_sensitivities(const Scenario& sc, const SimulationSettings& s, bool has_controller) {
   if (!s.sensitivities.any()) return;
-  const std::string why = (sc.path.empty() ? "" : sc.path + ": ") + "sensitivities: ";
+  // at the file's line where the scenario file asks for them, else named with the scenario
+  const auto it = sc.locations.find("simulation.sensitivities");
+  const std::string why = it != sc.locations.end() ? it->second + ": simulation.sensitivities: "
+                          : (sc.path.empty() ? "" : sc.path + ": ") + "sensitivities: ";
   if (is_fixed_step(s.method))
     throw Error(why + "need a CVODE method (cvode-adams or cvode-bdf): " + std::string(to_string(s.method)) +
                 " takes fixed steps and its variational equation is not stepped");
   if (has_controller || !sc.inputs.controllers.empty())
-    throw Error(why + "a run with a controller is not differentiated (its dtau/dx is not): remove the controller");
+    throw Error(why + "a run with a controller (inputs.controllers) is not differentiated (its dtau/dx is not): remove the controller");
   if (s.limits && sc.model.has_limits())
-    throw Error(why + "enforced joint limits are events where the state jumps, not differentiated: set limits: false");
+    throw Error(why + "enforced joint limits (simulation.limits: true) are events where the state jumps, not differentiated: "
+                "set limits: false");
   plan_sensitivities(sc.model, s.sensitivities);
 }
 

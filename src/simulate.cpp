@@ -118,16 +118,37 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   // joint limits: root finding (CVODE), e in [0, 1], a start inside the limits
   if (!(s.restitution >= 0 && s.restitution <= 1))
     throw Error("simulation settings: restitution must lie in [0, 1], got " + short_number(s.restitution));
-  // named with the scenario (a file's own sections are refused at their line as it is read)
+  // named at the file's line where the scenario file gives the field (Scenario::locations), else
+  // with the scenario
   const std::string scene = sc.path.empty() ? "" : sc.path + ": ";
+  auto at = [&](const std::string& field) {
+    const auto it = sc.locations.find(field);
+    return it == sc.locations.end() ? std::string() : it->second + ": " + field + ": ";
+  };
   if (s.limits && sc.model.has_limits()) {
-    if (is_fixed_step(s.method))
-      throw Error(scene + "simulation settings: limits: true needs an integrator that locates events (cvode-adams or "
-                  "cvode-bdf); " + std::string(to_string(s.method)) + " takes fixed steps");
+    if (is_fixed_step(s.method)) {
+      const std::string where = at("simulation.limits");
+      throw Error((where.empty() ? scene + "simulation settings: limits: " : where) +
+                  "true needs an integrator that locates events (cvode-adams or cvode-bdf); " +
+                  std::string(to_string(s.method)) + " takes fixed steps");
+    }
     try {
       JointLimits(sc.model, s.restitution).check_inside(sc.q0);
     } catch (const Error& e) {
-      throw Error(scene + e.what());
+      // the first 1-DOF joint outside its range (the one check_inside names), where the file
+      // gives its start, else its range, else limits: true
+      std::string where;
+      for (int i = 0; i < sc.model.nbodies && where.empty(); ++i) {
+        if (sc.model.nv_i[size_t(i)] != 1 || sc.model.nq_i[size_t(i)] != 1) continue;
+        const double q = sc.q0(sc.model.idx_q[size_t(i)]);
+        const int k = sc.model.idx_v[size_t(i)];
+        if (q >= sc.model.lower[size_t(k)] && q <= sc.model.upper[size_t(k)]) continue;
+        const std::string& joint = sc.model.joint_names[size_t(i)];
+        where = at("initial.q." + joint);
+        if (where.empty()) where = at("limits." + joint);
+      }
+      if (where.empty()) where = at("simulation.limits");
+      throw Error((where.empty() ? scene : where) + e.what());
     }
   }
   if (!(s.control_dt >= 0) || !std::isfinite(s.control_dt))

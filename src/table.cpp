@@ -114,7 +114,7 @@ void check_swing(const Table& t) {
       return t.lines.empty() ? "row " + std::to_string(i) : "line " + std::to_string(t.lines[size_t(i)]);
     };
     throw Error(t.path + (t.lines.empty() ? "" : ":" + std::to_string(t.lines[size_t(k + 1)])) + ": column '" +
-                printable(t.columns[size_t(c)]) + "': the spline through the samples strays " + short_number(w.beyond) +
+                excerpt(t.columns[size_t(c)]) + "': the spline through the samples strays " + short_number(w.beyond) +
                 " beyond their range [" + short_number(y.minCoeff()) + ", " + short_number(y.maxCoeff()) + "] at t = " +
                 short_number(w.t) + " s (between " + at(k) + " and " + at(k + 1) + "), more than " + short_number(kMaxSplineSwing) +
                 " times that range: samples spaced this unevenly around a change (" + short_number(t.time(narrow) - t.time(narrow - 1)) +
@@ -147,11 +147,11 @@ Table read_csv(const InputFile& file) {
         const std::string name = column_name(f);
         if (name.empty()) throw Error(at + ": a column without a name in the header");
         if (std::find(t.columns.begin(), t.columns.end(), name) != t.columns.end())
-          throw Error(at + ": column '" + printable(name) + "' is named twice");
+          throw Error(at + ": column '" + excerpt(name) + "' is named twice");
         t.columns.push_back(name);
       }
       if (t.columns[0] != "t" && t.columns[0] != "time")
-        throw Error(at + ": the first column must be the time ('t' or 'time [s]'), got '" + printable(t.columns[0]) + "'");
+        throw Error(at + ": the first column must be the time ('t' or 'time [s]'), got '" + excerpt(t.columns[0]) + "'");
       if (t.columns.size() < 2) throw Error(at + ": the header names no column beside the time");
       field = t.columns[0];
       continue;
@@ -164,8 +164,7 @@ Table read_csv(const InputFile& file) {
       char* end = nullptr;
       const double x = std::strtod(f.c_str(), &end);
       if (f.empty() || end != f.c_str() + f.size() || !std::isfinite(x))
-        throw Error(at + ": column '" + printable(t.columns[c]) + "': expected a finite number, got '" +
-                    printable(f.substr(0, 40)) + (f.size() > 40 ? "..." : "") + "'");
+        throw Error(at + ": column '" + excerpt(t.columns[c]) + "': expected a finite number, got '" + excerpt(f, 40) + "'");
       flat.push_back(x);
     }
     lines.push_back(n);

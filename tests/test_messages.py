@@ -4,7 +4,8 @@ first 60 bytes with its length (a 5 MB field, a sweep whose scenario is a file t
 file never printed back), control characters in YAML keys and values and in a CSV table's column
 names shown as \\xHH (never raw to the terminal), and the refusals of a run's combinations (a start
 beyond a joint limit, limits with a fixed-step method, sensitivities a run cannot differentiate,
-an MJCF gravity of NaN) each naming the file, its line and the field.  Every refusal: exit 2, one
+an MJCF gravity of NaN) each naming the file, its line and the field, the other half given in the
+file or on the command line.  Every refusal: exit 2, one
 line on stderr, nothing on stdout."""
 import os
 import subprocess
@@ -103,6 +104,13 @@ class Messages(unittest.TestCase):
         err = self.refused("inspect", "pd.yaml")
         self.assertIn("pd.yaml:18:", err)
         self.assertIn("(it has sh\\x1b[2Joulder, el\\x0dbow)", err)
+        # a 100 kB column name with an escape, named twice: cut and escaped
+        name = "\x1b[5m" + "c" * 100_000
+        self.write("t.csv", f"t,{name},{name}\n0,0,0\n1,1,1\n")
+        err = self.refused("inspect", "pd.yaml")
+        self.assertIn("t.csv:1: column '\\x1b[5mccc", err)
+        self.assertIn("… (100004 bytes)' is named twice", err)
+        self.assertLess(len(err), 600)
 
     def test_each_refused_combination_names_its_file_line_and_field(self):
         cases = [
@@ -124,10 +132,17 @@ class Messages(unittest.TestCase):
         ]
         for name, tail, expect in cases:
             self.write(name, ARM + tail)
-            for command in (["inspect", name], ["run", name, "-o", "out.h5"]):
-                err = self.refused(*command)
-                self.assertIn(expect, err, (name, command))
+            err = self.refused("run", name, "-o", "out.h5")
+            self.assertIn(expect, err, name)
             self.assertFalse(os.path.exists(os.path.join(self.dir, "out.h5")))
+        # the other half given on the command line: refused at the file's line all the same, and a
+        # command line that mends the combination runs
+        self.write("cvode.yaml", ARM + "limits: {elbow: [-1, 1]}\nsimulation: {limits: true, t_end: 0.01}\n")
+        err = self.refused("run", "cvode.yaml", "--method", "rk4", "-o", "out.h5")
+        self.assertIn("cvode.yaml:17:22: simulation.limits: true needs an integrator that locates events", err)
+        p = subprocess.run([SOADYN, "run", "fixed.yaml", "--method", "cvode-bdf", "--t-end", "0.01", "-o", "out.h5", "-q"],
+                           capture_output=True, timeout=120, cwd=self.dir)
+        self.assertEqual(p.returncode, 0, p.stderr)
         # an MJCF file's gravity of NaN: the file, its line, the attribute
         if os.environ.get("SOADYN_MJCF", "ON") != "ON":
             return

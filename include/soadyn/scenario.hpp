@@ -12,6 +12,7 @@
 #include "soadyn/settings.hpp"
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,10 @@ struct Scenario {
   // every file the scenario was read from: itself, its robot file, the robot's MJCF <include>s and
   // assets, its target tables; no command writes its output onto one (output_file.hpp)
   std::vector<std::string> files;
+  // where the file gives a field a run may refuse later, as "file:line:column" by the field's name
+  // (simulation.limits, simulation.sensitivities, initial.q.J, limits.J): check_run names it when
+  // a setting, however it was given (the file, --method, Python), makes the run refuse
+  std::map<std::string, std::string> locations;
 };
 
 // Loads a .yaml scenario or a .urdf (then: zero initial state, default settings, no inputs).
