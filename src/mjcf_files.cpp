@@ -75,7 +75,9 @@ std::vector<std::string> mjcf_files(const std::string& xml, const std::string& p
       w.add(file);
       continue;
     }
-    for (const std::string& d : w.dirs) w.add((w.base / d / file).lexically_normal().string());
+    // and the name without its folders, as <compiler strippath="true"> has MuJoCo read it
+    for (const std::string& d : w.dirs)
+      for (const fs::path& f : {fs::path(file), fs::path(file).filename()}) w.add((w.base / d / f).lexically_normal().string());
   }
   return w.files;
 }

@@ -187,10 +187,15 @@ class InputsAsOutputs(Base):
         self.write("robot.xml", '<mujoco model="m"><compiler meshdir="meshes"/><asset><mesh name="tet" file="tet.stl"/>'
                    '</asset><worldbody><include file="body.xml"/></worldbody></mujoco>\n')
         self.write("mj.yaml", "model: robot.xml\nsimulation: {t_end: 0.05}\n")
-        return {"arm.yaml": ["arm.urdf", "table.csv", "own.h5"], "mj.yaml": ["robot.xml", "body.xml", "meshes/tet.stl"]}
+        # strippath: MuJoCo reads meshes/tet.stl for the file named elsewhere/tet.stl
+        self.write("robot2.xml", '<mujoco model="m2"><compiler meshdir="meshes" strippath="true"/><asset>'
+                   '<mesh name="tet" file="elsewhere/tet.stl"/></asset><worldbody><include file="body.xml"/></worldbody></mujoco>\n')
+        self.write("mj2.yaml", "model: robot2.xml\nsimulation: {t_end: 0.05}\n")
+        return {"arm.yaml": ["arm.urdf", "table.csv", "own.h5"], "mj.yaml": ["robot.xml", "body.xml", "meshes/tet.stl"],
+                "mj2.yaml": ["robot2.xml", "meshes/tet.stl"]}
 
     def test_run_and_simulate_never_write_onto_what_the_scenario_read(self):
-        """6 inputs x (their name, a symlink to them) x (run -o --force, simulate(output=)): 24 cases"""
+        """8 inputs of 3 scenes x (their name, a symlink to them) x (run -o --force, simulate(output=)): 32 cases"""
         for scene, inputs in self.scene_with_everything().items():
             for name in inputs:
                 for alias in (name, "alias"):
@@ -206,7 +211,7 @@ class InputsAsOutputs(Base):
                         os.unlink(self.path("alias"))
 
     def test_identify_never_writes_onto_what_the_scenario_read(self):
-        """identify -o --force onto the scene's URDF, CSV and run-file tables, the data, the MJCF file, include, mesh: 7 cases"""
+        """identify -o --force onto the scene's URDF, CSV and run-file tables, the data, the MJCF files, include, mesh: 9 cases"""
         scenes = self.scene_with_everything()
         data = self.make_run("data.h5", self.path("arm.yaml"))
         for scene, inputs in scenes.items():
@@ -217,6 +222,20 @@ class InputsAsOutputs(Base):
                             "-q", "--force")
                     self.assertRefused(r, r"the output is the input file .*" + name.split("/")[-1])
                     self.assertEqual(digest(self.path(name)), before)
+
+    def test_a_pickled_scenario_keeps_its_files(self):
+        """a Scenario through pickle still knows its URDF and tables: simulate(output=) onto each refused (3 cases)"""
+        self.scene_with_everything()
+        code = ("import pickle, sys, soadyn\nsc = pickle.loads(pickle.dumps(soadyn.load_scenario(sys.argv[1])))\n"
+                "try:\n    soadyn.simulate(sc, output=sys.argv[2], t_end=0.05)\n"
+                "except soadyn.Error as e:\n    print(e, file=sys.stderr); sys.exit(2)\n")
+        for name in ("arm.urdf", "table.csv", "own.h5"):
+            with self.subTest(name):
+                before = digest(self.path(name))
+                r = subprocess.run([sys.executable, "-c", code, self.path("arm.yaml"), self.path(name)], capture_output=True,
+                                   text=True, timeout=60, env=ENV)
+                self.assertRefused(r, r"the output is the input file .*" + name)
+                self.assertEqual(digest(self.path(name)), before)
 
     def test_a_pd_target_run_file_is_not_replaced_by_the_run(self):
         """{table: own.h5} with -o own.h5 and no --force: own.h5 is a soadyn run, and still never replaced"""
