@@ -26,6 +26,7 @@ if ((!demo)); then
     googletest libgtest-dev libgmock-dev libbenchmark-dev
     chromium python3-pil                            # soadyn view's browser tests
     pybind11-dev python3-pybind11 python3-pytest    # the Python module and its tests
+    python3-venv python3-pip python3-setuptools python3-wheel python3-build  # pip install . and the wheel (ctest install_pip)
     python3-yaml python3-distributed                # soadyn sweep: sweep files, Dask
     clang libclang-rt-14-dev                        # the libFuzzer targets (tools/fuzz.sh)
     ccache                                          # tools/mutation_check.py's scratch build reuses these objects

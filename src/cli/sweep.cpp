@@ -2,7 +2,8 @@
 // this subcommand replaces the process with `python3 -m soadyn sweep …`, the package beside this
 // executable first on PYTHONPATH: build/python beside build/soadyn in the build tree, the install's
 // site-packages beside <prefix>/bin/soadyn once installed (paths from CMakeLists.txt, relative to
-// the executable, so a moved install finds its own); without either, python3's own site-packages.
+// the executable, so a moved install finds its own), or the site-packages holding soadyn/_bin/soadyn
+// (pip's install); without any, python3's own site-packages.
 #include "cli.hpp"
 
 #include <cerrno>
@@ -31,7 +32,7 @@ void put_package_on_path() {
   std::error_code ec;
   const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
   if (ec) return;
-  for (const char* relative : {SOADYN_PYTHON_BUILD_FROM_EXE, SOADYN_PYTHON_SITE_FROM_EXE}) {
+  for (const char* relative : {SOADYN_PYTHON_BUILD_FROM_EXE, SOADYN_PYTHON_SITE_FROM_EXE, "../.."}) {
     const std::string dir = (exe.parent_path() / relative).lexically_normal().string();
     if (fs::exists(dir + "/soadyn/__init__.py", ec)) {
       const char* old = std::getenv("PYTHONPATH");

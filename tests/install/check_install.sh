@@ -58,19 +58,21 @@ pkg-config --static --libs soadyn >/dev/null || fail "pkg-config --static --libs
 "$cxx" -std=c++20 "$source/tests/install/consumer.cpp" $cflags $libs -o "$scratch/consumer_pc"
 # ldd's whole output first: `ldd | grep -q` under pipefail fails whenever grep stops reading
 # before ldd has written its last line (ldd then dies of SIGPIPE)
-loaded=$(LD_LIBRARY_PATH=$prefix/$libdir ldd "$scratch/consumer_pc")
+# no LD_LIBRARY_PATH: the .pc's -Wl,-rpath finds the library in the scratch prefix
+loaded=$(env -u LD_LIBRARY_PATH ldd "$scratch/consumer_pc")
 grep -q "$prefix/$libdir/libsoadyn.so" <<<"$loaded" ||
   fail "the pkg-config consumer does not load the installed libsoadyn.so"
-LD_LIBRARY_PATH=$prefix/$libdir "$scratch/consumer_pc"
+env -u LD_LIBRARY_PATH "$scratch/consumer_pc"
 
 echo "== README's C++ block, with pkg-config, on tests/data/arm7.urdf"
 # shellcheck disable=SC2086
 "$cxx" -std=c++20 "$scratch/readme_example.cpp" $cflags $libs -o "$scratch/readme_example"
-LD_LIBRARY_PATH=$prefix/$libdir "$scratch/readme_example" "$source/tests/data/arm7.urdf" | tee "$scratch/readme_example.out"
+env -u LD_LIBRARY_PATH "$scratch/readme_example" "$source/tests/data/arm7.urdf" | tee "$scratch/readme_example.out"
 grep -q '^qdd = ' "$scratch/readme_example.out" || fail "README's C++ block printed no qdd"
 
 echo "== the installed soadyn executable"
-"$prefix/$bindir/soadyn" --version | tee "$scratch/version.txt"
+env -u LD_LIBRARY_PATH "$prefix/$bindir/soadyn" --version | tee "$scratch/version.txt"
+readelf -d "$prefix/$bindir/soadyn" | grep -q 'RUNPATH.*\$ORIGIN/\.\./lib' || fail "the installed soadyn has no RUNPATH \$ORIGIN/../lib"
 grep -q '^soadyn [0-9]\+\.[0-9]\+\.[0-9]\+$' "$scratch/version.txt" || fail "soadyn --version"
 
 if [[ $pydir == - ]]; then
