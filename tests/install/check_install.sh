@@ -60,8 +60,10 @@ pkg-config --static --libs soadyn >/dev/null || fail "pkg-config --static --libs
 # before ldd has written its last line (ldd then dies of SIGPIPE)
 # no LD_LIBRARY_PATH: the .pc's -Wl,-rpath finds the library in the scratch prefix
 loaded=$(env -u LD_LIBRARY_PATH ldd "$scratch/consumer_pc")
-grep -q "$prefix/$libdir/libsoadyn.so" <<<"$loaded" ||
-  fail "the pkg-config consumer does not load the installed libsoadyn.so"
+# (the path as the rpath spells it, prefix/lib/pkgconfig/../../lib: compared once resolved)
+used=$(awk '/libsoadyn\.so/ && $2 == "=>" {print $3}' <<<"$loaded")
+[[ -n $used && $(realpath "$used") == $(realpath "$prefix/$libdir/libsoadyn.so") ]] ||
+  fail "the pkg-config consumer does not load the installed libsoadyn.so (ldd: ${used:-not found})"
 env -u LD_LIBRARY_PATH "$scratch/consumer_pc"
 
 echo "== README's C++ block, with pkg-config, on tests/data/arm7.urdf"
