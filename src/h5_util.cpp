@@ -127,6 +127,15 @@ void string_dataset(hid_t parent, const char* name, const std::vector<std::strin
   if (n > 0) check(H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()), std::string("writing ") + name);
 }
 
+Id byte_dataset(hid_t parent, const char* name, const std::string& bytes) {
+  const hsize_t n = bytes.size();
+  Id space(H5Screate_simple(1, &n, nullptr), H5Sclose, "H5Screate_simple");
+  Id d(H5Dcreate2(parent, name, H5T_STD_U8LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Dclose,
+       std::string("creating ") + name);
+  if (n > 0) check(H5Dwrite(d, H5T_NATIVE_UCHAR, H5S_ALL, H5S_ALL, H5P_DEFAULT, bytes.data()), std::string("writing ") + name);
+  return d;
+}
+
 Scalar::Scalar(hid_t parent, const char* name, hid_t mem_type, Id file_type) {
   Id space(H5Screate(H5S_SCALAR), H5Sclose, "H5Screate");
   Id props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "H5Pcreate");
@@ -292,6 +301,22 @@ void read_rows(hid_t dset, hsize_t first, hsize_t count, hsize_t width, double* 
       H5Dread(dset, H5T_NATIVE_DOUBLE, mem_space, file_space, H5P_DEFAULT, out) < 0)
     throw Error(where + ": rows " + std::to_string(first) + " to " + std::to_string(first + count - 1) +
                 " cannot be read (corrupt or truncated file?)");
+}
+
+std::string bytes(hid_t obj, const char* name, std::uint64_t max_bytes, const std::string& where) {
+  const std::string at = where + ": " + name;
+  if (H5Lexists(obj, name, H5P_DEFAULT) <= 0) throw Error(at + ": missing");
+  const Id d(H5Dopen2(obj, name, H5P_DEFAULT), H5Dclose, at + ": cannot be opened");
+  const Id type(H5Dget_type(d), H5Tclose, at + ": its type cannot be read");
+  if (H5Tget_class(type) != H5T_INTEGER || H5Tget_size(type) != 1) throw Error(at + ": expected bytes (1-byte integers)");
+  const Id space(H5Dget_space(d), H5Sclose, at + ": its shape cannot be read");
+  if (H5Sget_simple_extent_ndims(space) != 1) throw Error(at + ": expected a 1-D dataset of bytes");
+  hsize_t n = 0;
+  H5Sget_simple_extent_dims(space, &n, nullptr);
+  if (n > max_bytes) throw Error(at + ": " + std::to_string(n) + " bytes, more than the " + std::to_string(max_bytes) + " allowed");
+  std::string out(size_t(n), '\0');
+  if (n > 0) check(H5Dread(d, H5T_NATIVE_UCHAR, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), at + ": reading");
+  return out;
 }
 
 }  // namespace soadyn::h5

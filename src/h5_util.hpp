@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -87,6 +88,10 @@ Id text_dataset(hid_t parent, const char* name, const std::string& text);
 // a 1-D dataset of ints, and of fixed-length UTF-8 strings (h5py: .asstr()[...] gives str)
 void int_dataset(hid_t parent, const char* name, const std::vector<int>& values, const std::string& units);
 void string_dataset(hid_t parent, const char* name, const std::vector<std::string>& values);
+// a 1-D dataset of unsigned bytes (a file's bytes, as they are)
+Id byte_dataset(hid_t parent, const char* name, const std::string& bytes);
+// its bytes back: a 1-D dataset of 1-byte integers of at most `max_bytes`, else soadyn::Error
+std::string bytes(hid_t obj, const char* name, std::uint64_t max_bytes, const std::string& where);
 
 // A scalar dataset whose storage is allocated at creation: later writes overwrite its bytes in
 // place and change no metadata, which SWMR allows at any time.

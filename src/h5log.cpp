@@ -44,6 +44,10 @@ const char* kPlanarJoint =
     "q = [x y theta]: translation along e1 and e2 spanning the plane normal to the axis n, then rotation theta "
     "about n (e1: the coordinate axis least aligned with n, made orthogonal to it; e2 = n x e1); v = their rates";
 const char* kUnits = "SI: s, m, kg, rad, J; quaternion components are dimensionless (1)";
+const char* kModelFiles =
+    "the MJCF model's files as MuJoCo's compiler was handed them at run time (the main text, its includes, "
+    "mesh, skin, height-field and texture files): dataset k (0 .. count-1) holds one file's bytes, its "
+    "attribute name the name given to MuJoCo's virtual file system; soadyn view compiles the model from these alone";
 const char* kBodies =
     "N bodies, those of the model after fixed joints are merged (a body welded by a fixed joint moves with the one "
     "it is welded to); position: each body frame's origin (its joint point), orientation: the unit quaternion "
@@ -222,6 +226,17 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
       // the robot file the scenario named, so the run can be shown without it (soadyn view)
       Id d = h5::text_dataset(im.file, "robot", sc.robot_text);
       attribute(d, "path", sc.robot_path);
+    }
+    if (!sc.model_files.empty()) {
+      // every file MuJoCo's compiler was handed for an MJCF model, as handed: soadyn view compiles
+      // the run's model from these alone, never from the files on disk (which may have changed)
+      Id g = h5::group(im.file, "model_files");
+      attribute(g, "count", long(sc.model_files.size()));
+      attribute(g, "description", std::string(kModelFiles));
+      for (size_t k = 0; k < sc.model_files.size(); ++k) {
+        Id d = h5::byte_dataset(g, std::to_string(k).c_str(), sc.model_files[k].data);
+        attribute(d, "name", sc.model_files[k].name);
+      }
     }
 
     {

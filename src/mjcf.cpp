@@ -123,15 +123,24 @@ Names unique_names(const mjModel* m, bool free_root) {
   throw Error(path + (line.empty() ? "" : ":" + line) + ": " + (elem.empty() ? "" : elem + ": ") + printable(what));
 }
 
-MjModelPtr compile(const std::string& xml, const std::string& path, bool from_disk) {
+// `stored`: a run's files, compiled from those alone (load_stored_mjcf_files); `handed`: the files
+// given to MuJoCo
+MjModelPtr compile(const std::string& xml, const std::string& path, bool from_disk, const std::vector<ModelFile>* stored,
+                   std::vector<ModelFile>& handed) {
   std::array<char, 1000> error{};
   // the text and the files it names (from the model's folder; the working folder for a run
   // file's stored text), each checked and read by us, handed to MuJoCo in its virtual file
   // system: it never opens a FIFO or a device (mjcf_vfs.hpp)
   std::unique_ptr<mjVFS, VfsDeleter> vfs(new mjVFS);
   mj_defaultVFS(vfs.get());
-  const std::string name = mjcf_main_name(from_disk ? mjcf_file_dir(path) : "");
-  load_mjcf_files(vfs.get(), name, xml, from_disk ? mjcf_file_dir(path) : "");
+  std::string name;
+  if (stored) {
+    name = load_stored_mjcf_files(vfs.get(), *stored, path);
+    handed = *stored;
+  } else {
+    name = mjcf_main_name(from_disk ? mjcf_file_dir(path) : "");
+    handed = load_mjcf_files(vfs.get(), name, xml, from_disk ? mjcf_file_dir(path) : "");
+  }
   mjModel* m = mj_loadXML(name.c_str(), vfs.get(), error.data(), int(error.size()));
   if (!m) compile_error(path, error.data());
   return MjModelPtr(m);
@@ -163,17 +172,35 @@ std::string ignored(const mjModel* m) {
 
 }  // namespace
 
+static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path, bool from_disk,
+                          const std::vector<ModelFile>* stored, const MjcfOptions& o);
+
 bool mjcf_available() { return true; }
 
+bool mjcf_names_files(const std::string& xml) { return mjcf_text_names_files(xml); }
+
 MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_disk, const MjcfOptions& o) {
-  mjcf_detail::check_file_values(xml, path, from_disk);  // NaN, infinities, negative damping: located
+  return parse_mjcf_impl(xml, path, from_disk, nullptr, o);
+}
+
+MjcfModel parse_mjcf_files(const std::vector<ModelFile>& files, const std::string& path, const MjcfOptions& o) {
+  if (files.empty()) throw Error(path + ": MJCF: the run file holds no model text");
+  return parse_mjcf_impl(files[0].data, path, false, &files, o);
+}
+
+static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path, bool from_disk,
+                          const std::vector<ModelFile>* stored, const MjcfOptions& o) {
+  // NaN, infinities, negative damping: located (a run's stored files: the main text's, the
+  // <include>s' are in the compiled values checked below)
+  mjcf_detail::check_file_values(xml, path, from_disk);
   std::vector<std::string> notes;
+  std::vector<ModelFile> handed;
   MjModelPtr mp;
   {
     // MuJoCo's warnings and errors come to us: nothing on stdout, nothing in ./MUJOCO_LOG.TXT
     const mjcf_detail::MujocoMessages messages;
     try {
-      mp = compile(xml, path, from_disk);
+      mp = compile(xml, path, from_disk, stored, handed);
     } catch (const mjcf_detail::MujocoError& e) {
       throw Error(path + ": MJCF: MuJoCo: " + excerpt(e.message, 300));
     }
@@ -259,6 +286,7 @@ MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_
   const Vec3 gravity = o.gravity.value_or((m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3::Zero() : vec3(m->opt.gravity));
   const bool passive = !(m->opt.disableflags & mjDSBL_PASSIVE);  // <flag passive="disable"/>: no dampers, no springs
   MjcfModel out;
+  out.files = std::move(handed);
   try {
     out.model = Model::build(specs, gravity, o.inertia_check);
   } catch (const ModelError& e) {

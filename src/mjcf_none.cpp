@@ -10,4 +10,10 @@ MjcfModel parse_mjcf(const std::string&, const std::string& path, bool, const Mj
                      "libmujoco-dev and rebuild (tools/setup.sh does both)");
 }
 
+MjcfModel parse_mjcf_files(const std::vector<ModelFile>& files, const std::string& path, const MjcfOptions& o) {
+  return parse_mjcf(files.empty() ? std::string() : files[0].data, path, false, o);
+}
+
+bool mjcf_names_files(const std::string&) { return false; }
+
 }  // namespace soadyn

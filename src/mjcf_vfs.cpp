@@ -11,6 +11,7 @@
 
 #include <cctype>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <strings.h>
 #include <vector>
@@ -57,9 +58,17 @@ struct File {
   ino_t ino = 0;
 };
 
+// a file the model names that a run file does not hold (load_stored_mjcf_files)
+struct NotStored {
+  std::string name;
+};
+
+// the bytes a run stored for a resolved path (nullptr: none): the Collector reads those, never the disk
+using StoredLookup = std::function<const std::string*(const std::string& path)>;
+
 class Collector {
  public:
-  explicit Collector(std::string dir) : dir_(std::move(dir)) {}
+  explicit Collector(std::string dir, StoredLookup stored = nullptr) : dir_(std::move(dir)), stored_(std::move(stored)) {}
 
   // the model: its includes expanded as MuJoCo expands them, then its assets
   void model(tx::XMLDocument& doc, const std::string& main_name) {
@@ -77,6 +86,12 @@ class Collector {
   const File& read(const std::string& path, std::string_view what, std::uint64_t limit) {
     for (const File& f : files)
       if (f.path == path) return f;
+    if (stored_) {
+      const std::string* data = stored_(path);
+      if (!data) throw NotStored{path};
+      files.push_back(File{path, *data});
+      return files.back();
+    }
     const InputFile in(path, what, limit);
     File f;
     f.path = path;
@@ -160,6 +175,7 @@ class Collector {
   }
 
   std::string dir_;
+  StoredLookup stored_;
   std::vector<std::string> included_;
 };
 
@@ -176,11 +192,13 @@ std::string mjcf_file_dir(const std::string& path) {
   return at == std::string::npos ? std::string() : path.substr(0, at + 1);
 }
 
-void load_mjcf_files(mjVFS* vfs, const std::string& main_name, const std::string& xml, const std::string& dir) {
+std::vector<ModelFile> load_mjcf_files(mjVFS* vfs, const std::string& main_name, const std::string& xml,
+                                       const std::string& dir) {
   if (xml.empty()) throw Error(printable(main_name) + ": MJCF: the model text is empty");
   add(vfs, main_name, xml);
+  std::vector<ModelFile> handed{{main_name, xml}};
   tx::XMLDocument doc;
-  if (doc.Parse(xml.data(), xml.size()) != tx::XML_SUCCESS) return;  // MuJoCo says where
+  if (doc.Parse(xml.data(), xml.size()) != tx::XML_SUCCESS) return handed;  // MuJoCo says where
   Collector c(dir);
   c.model(doc, main_name);
   // into the VFS under its name without folders, unless another file (not the same one by
@@ -190,8 +208,51 @@ void load_mjcf_files(mjVFS* vfs, const std::string& main_name, const std::string
   for (const auto& [key, same] : by_key) {
     bool one = key != vfs_key(main_name);
     for (const File* f : same) one = one && f->dev == same[0]->dev && f->ino == same[0]->ino;
-    if (one && !key.empty() && key.size() < mjMAXVFSNAME) add(vfs, same[0]->path, same[0]->data);
+    if (one && !key.empty() && key.size() < mjMAXVFSNAME) {
+      add(vfs, same[0]->path, same[0]->data);
+      handed.push_back({same[0]->path, same[0]->data});
+    }
   }
+  return handed;
+}
+
+std::string load_stored_mjcf_files(mjVFS* vfs, const std::vector<ModelFile>& files, const std::string& path) {
+  if (files.empty() || files[0].data.empty()) throw Error(path + ": MJCF: the run file holds no model text");
+  std::map<std::string, const ModelFile*> by_key;
+  for (const ModelFile& f : files) {
+    const std::string key = vfs_key(f.name);
+    if (key.empty() || key.size() >= mjMAXVFSNAME || !by_key.emplace(key, &f).second)
+      throw Error(path + ": MJCF: " + printable(f.name) +
+                  ": a stored model file's name MuJoCo's virtual file system cannot hold, or holds twice");
+  }
+  tx::XMLDocument doc;
+  if (doc.Parse(files[0].data.data(), files[0].data.size()) == tx::XML_SUCCESS) {
+    // every file MuJoCo would look for, as load_mjcf_files resolved it at run time: stored, or refused
+    Collector c(mjcf_file_dir(files[0].name), [&](const std::string& p) -> const std::string* {
+      const auto it = by_key.find(vfs_key(p));
+      return it == by_key.end() ? nullptr : &it->second->data;
+    });
+    try {
+      c.model(doc, files[0].name);
+    } catch (const NotStored& n) {
+      throw Error(path + ": MJCF: " + printable(n.name) +
+                  ": not among the model's files the run file holds; soadyn view reads nothing but the run file");
+    }
+  }
+  for (const ModelFile& f : files) add(vfs, f.name, f.data);
+  return files[0].name;
+}
+
+bool mjcf_text_names_files(const std::string& xml) {
+  tx::XMLDocument doc;
+  if (doc.Parse(xml.data(), xml.size()) != tx::XML_SUCCESS) return false;
+  Collector c("", [](const std::string&) -> const std::string* { return nullptr; });
+  try {
+    c.model(doc, mjcf_main_name(""));
+  } catch (const NotStored&) {
+    return true;
+  }
+  return false;
 }
 
 }  // namespace soadyn

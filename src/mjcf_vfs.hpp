@@ -14,7 +14,10 @@
 
 #include <mujoco/mujoco.h>
 
+#include "soadyn/types.hpp"
+
 #include <string>
+#include <vector>
 
 namespace soadyn {
 
@@ -23,7 +26,22 @@ namespace soadyn {
 // everything up to its last '/', or "" for the working folder).  Throws soadyn::Error naming the
 // file for one that cannot be read or is not a regular file.  A model that does not parse is left
 // for MuJoCo to refuse with its own message.
-void load_mjcf_files(mjVFS* vfs, const std::string& main_name, const std::string& xml, const std::string& dir);
+// Returns every file put into `vfs`, as put there (the name given, the bytes; `xml` first): what a run
+// stores (h5log.hpp /model_files).
+std::vector<ModelFile> load_mjcf_files(mjVFS* vfs, const std::string& main_name, const std::string& xml,
+                                       const std::string& dir);
+
+// Fills `vfs` (empty) with files a run stored (load_mjcf_files' list: the main text first, under its
+// name) and nothing else; returns the main file's name for mj_loadXML.  Every file the main text
+// names (its <include>s followed, its assets, resolved as load_mjcf_files resolves them against the
+// main name's folder) must be among them, found by MuJoCo's VFS name, so that MuJoCo never opens a
+// file on disk: one that is not throws soadyn::Error "`path`: MJCF: NAME: not among the model's
+// files the run file holds; soadyn view reads nothing but the run file".
+std::string load_stored_mjcf_files(mjVFS* vfs, const std::vector<ModelFile>& files, const std::string& path);
+
+// Whether `xml` names files of its own MuJoCo reads (<include>s, mesh, skin, height-field or
+// texture files), none of them read.
+bool mjcf_text_names_files(const std::string& xml);
 
 // The folder MuJoCo 2.2 resolves a model's files against: `path` up to and with its last '/' or '\'
 std::string mjcf_file_dir(const std::string& path);

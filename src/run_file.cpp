@@ -74,6 +74,8 @@ void RunReader::Impl::open_samples() {
 
 namespace {
 constexpr double kProbeSeconds = 5.0;
+constexpr double kMaxModelFiles = 1999;  // MuJoCo 2.2's virtual file system holds mjMAXVFS − 1 (1999) files
+constexpr std::uint64_t kMaxModelFilesBytes = 4 * kMaxAssetBytes;  // 1 GiB: a corrupt file claims no more
 // a count read from the file (raw data, not checksummed): −1 when it is not one
 long to_count(double x) { return x >= 0 && x < 9e15 ? long(x) : -1; }
 }  // namespace
@@ -171,6 +173,24 @@ void RunReader::Impl::read_metadata(RunContents& r) const {
     r.robot_text = one_string(file, "robot", false, root);
     const Id d(H5Dopen2(file, "robot", H5P_DEFAULT), H5Dclose, path + ": opening /robot");
     r.robot_path = one_string(d, "path", true, path + ": /robot");
+  }
+  if (h5::exists(file, "/model_files")) {  // an MJCF model's files: count datasets "0" .. "count-1"
+    const Id g = group("/model_files");
+    const std::string at = path + ": /model_files";
+    const h5::RowMatrix n = h5::numbers(g, "count", true, at);
+    if (n.size() != 1 || !(n(0, 0) >= 1 && n(0, 0) <= kMaxModelFiles && n(0, 0) == std::floor(n(0, 0))))
+      throw Error(at + ": count: expected a number of files from 1 to " + std::to_string(kMaxModelFiles));
+    std::uint64_t total = 0;
+    for (long k = 0; k < long(n(0, 0)); ++k) {
+      const std::string name = std::to_string(k);
+      ModelFile f;
+      f.data = h5::bytes(g, name.c_str(), kMaxAssetBytes, at);
+      if ((total += f.data.size()) > kMaxModelFilesBytes)
+        throw Error(at + ": more than the " + std::to_string(kMaxModelFilesBytes) + " bytes a model's files may hold together");
+      const Id d(H5Dopen2(g, name.c_str(), H5P_DEFAULT), H5Dclose, at + "/" + name + ": opening");
+      f.name = one_string(d, "name", true, at + "/" + name);
+      r.model_files.push_back(std::move(f));
+    }
   }
   if (h5::exists(file, "/model")) {
     const Id g = group("/model");

@@ -281,7 +281,8 @@ InertiaCheck read_inertia_check(const Reader& rd, const YAML::Node& n) {
 }  // namespace
 
 Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root,
-                        std::optional<InertiaCheck> inertia_check, const std::optional<std::string>& robot_text) {
+                        std::optional<InertiaCheck> inertia_check, const std::optional<std::string>& robot_text,
+                        const std::vector<ModelFile>* model_files) {
   const Reader rd{path, {}};
   YAML::Node root;
   try {
@@ -348,8 +349,11 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
       sc.robot_path = p.string();
       if (is_mjcf_text(robot)) {
         const std::optional<Vec3> g = root["gravity"] ? std::optional<Vec3>(gravity) : std::nullopt;
-        const bool from_disk = !robot_text || mjcf_file_unchanged(p.string(), robot);
-        mjcf = parse_mjcf(robot, p.string(), from_disk, {free, g, check});
+        const bool stored = robot_text && model_files && !model_files->empty();
+        const bool from_disk = !stored && (!robot_text || mjcf_file_unchanged(p.string(), robot));
+        mjcf = stored ? parse_mjcf_files(*model_files, p.string(), {free, g, check})
+                      : parse_mjcf(robot, p.string(), from_disk, {free, g, check});
+        sc.model_files = mjcf->files;
         if (from_disk)
           for (std::string& f : mjcf_files(robot, p.string())) sc.files.push_back(std::move(f));
         sc.model = mjcf->model;
@@ -397,6 +401,7 @@ Scenario load_scenario(const std::string& path, bool free_root, const std::optio
       MjcfModel mj = parse_mjcf(text, path, true, {free_root, gravity, inertia_check.value_or(InertiaCheck::Warn)});
       sc.files = mjcf_files(text, path);
       sc.files.insert(sc.files.begin(), path);
+      sc.model_files = std::move(mj.files);
       sc.model = std::move(mj.model);
       sc.q0 = mj.q0;
       sc.inputs.dampers = mj.dampers;

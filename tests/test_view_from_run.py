@@ -2,9 +2,14 @@
 """soadyn view reads nothing but the run file: a run whose target table moved, changed or became a
 FIFO is viewed as it ran; a crafted run file whose scenario names /etc/passwd as its robot or its
 table shows nothing of it (refused in one line, or drawn from what the file holds).  Real runs,
-real files, the real command."""
+real files, the real command.  An MJCF model's <include>s and meshes are stored in the run file
+(/model_files): a run viewed after its include changed and its mesh was deleted draws the run's
+model, and a run file written before they were stored is refused in one line."""
+import json
 import os
+import re
 import shutil
+import struct
 import subprocess
 import tempfile
 import unittest
@@ -108,6 +113,147 @@ class ViewFromRun(unittest.TestCase):
             self.assertNothingOf(what, r)
             if os.path.exists(self.path("v.html")):
                 os.remove(self.path("v.html"))
+
+
+# an MJCF model: the main file, an <include> with the bodies and a mesh asset (a binary STL tetrahedron)
+MJCF_MAIN = ('<mujoco model="m"><compiler meshdir="meshes"/><asset><mesh name="tet" file="tet.stl"/></asset>'
+             '<worldbody><include file="body.xml"/></worldbody></mujoco>\n')
+MJCF_BODY = ('<mujoco><body name="upper" pos="0 0 1"><joint name="shoulder" axis="0 1 0"/>'
+             '<geom type="capsule" size="0.02" fromto="0 0 0 0 0 -0.3" contype="0" conaffinity="0"/>'
+             '<body name="lower" pos="0 0 -0.3"><joint name="elbow" axis="0 1 0"/>'
+             '<geom type="mesh" mesh="tet" contype="0" conaffinity="0"/></body></body></mujoco>\n')
+# the include changed after the run: another body position, another axis, a third joint
+MJCF_BODY_CHANGED = ('<mujoco><body name="upper" pos="0 0 2"><joint name="shoulder" axis="1 0 0"/>'
+                     '<geom type="capsule" size="0.02" fromto="0 0 0 0 0 -0.3" contype="0" conaffinity="0"/>'
+                     '<body name="lower" pos="0 0 -0.7"><joint name="elbow" axis="1 0 0"/>'
+                     '<geom type="sphere" size="0.1" contype="0" conaffinity="0"/>'
+                     '<body name="extra" pos="0 0 -0.2"><joint name="wrist" axis="1 0 0"/>'
+                     '<geom type="sphere" size="0.05" contype="0" conaffinity="0"/></body></body></body></mujoco>\n')
+
+
+def tetrahedron_stl():
+    tris = [((0, 0, 0), (1, 0, 0), (0, 1, 0)), ((0, 0, 0), (0, 0, 1), (1, 0, 0)),
+            ((0, 0, 0), (0, 1, 0), (0, 0, 1)), ((1, 0, 0), (0, 0, 1), (0, 1, 0))]
+    stl = b"\0" * 80 + struct.pack("<I", len(tris))
+    for t in tris:
+        stl += struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *[0.1 * c for c in v]) for v in t) + b"\0\0"
+    return stl
+
+
+def page_data(path):
+    """the JSON block the page embeds (view.cpp): the model as the page draws it"""
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    m = re.search(r'<script type="application/json" id="soadyn-run">(.*?)</script>', text, re.S)
+    return json.loads(m.group(1))
+
+
+class MjcfViewFromRun(unittest.TestCase):
+    """`soadyn run model.xml` and a scenario whose model: is that file: the MJCF's files stored,
+    the view compiled from them alone"""
+
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="soadyn_view_mjcf_")
+        os.mkdir(self.path("meshes"))
+        with open(self.path("meshes/tet.stl"), "wb") as f:
+            f.write(tetrahedron_stl())
+        self.write("model.xml", MJCF_MAIN)
+        self.write("body.xml", MJCF_BODY)
+        self.write("scene.yaml", "model: model.xml\nsimulation: {t_end: 0.2, output_dt: 0.01}\n")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def path(self, name):
+        return os.path.join(self.dir, name)
+
+    def write(self, name, text):
+        with open(self.path(name), "w") as f:
+            f.write(text)
+
+    def soadyn(self, *args):
+        return subprocess.run([SOADYN, *args], capture_output=True, text=True, timeout=120)
+
+    def run_and_view(self, source, run, page):
+        r = self.soadyn("run", self.path(source), "-o", self.path(run), "-q", "--t-end", "0.2")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        r = self.soadyn("view", self.path(run), "-o", self.path(page), "-q")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        return page_data(self.path(page))
+
+    def test_the_run_s_model_files_are_viewed_after_the_include_changed_and_the_mesh_went(self):
+        for source in ("model.xml", "scene.yaml"):
+            with self.subTest(source=source):
+                self.write("body.xml", MJCF_BODY)
+                with open(self.path("meshes/tet.stl"), "wb") as f:
+                    f.write(tetrahedron_stl())
+                run, before_page, after_page = f"{source}.h5", f"{source}.before.html", f"{source}.after.html"
+                before = self.run_and_view(source, run, before_page)
+                # the file holds every file MuJoCo was handed: the main text, the include, the mesh
+                with h5py.File(self.path(run), "r") as f:
+                    g = f["model_files"]
+                    stored = {os.path.basename(g[str(k)].attrs["name"].decode()): bytes(g[str(k)][()])
+                              for k in range(int(g.attrs["count"]))}
+                    self.assertEqual(g[str(0)].dtype, np.uint8)
+                self.assertEqual(stored["body.xml"], MJCF_BODY.encode())
+                self.assertEqual(stored["tet.stl"], tetrahedron_stl())
+                self.assertEqual(len(stored), 3, list(stored))
+                self.assertEqual([b["joint"] for b in before["bodies"]], ["shoulder", "elbow"])
+                # the include changed (a body moved, the axes turned, a third joint), the mesh deleted
+                self.write("body.xml", MJCF_BODY_CHANGED)
+                os.remove(self.path("meshes/tet.stl"))
+                trace = self.path("view.strace")
+                strace = ["strace", "-f", "-qq", "-e", "trace=%file", "-o", trace] if shutil.which("strace") else []
+                r = subprocess.run([*strace, SOADYN, "view", self.path(run), "-o", self.path(after_page), "-q"],
+                                   capture_output=True, text=True, timeout=120)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                if strace:  # no model file is opened, nor even looked at, by name
+                    with open(trace) as f:
+                        calls = f.read()
+                    for name in ("model.xml", "body.xml", "meshes/tet.stl", "meshes", "scene.yaml"):
+                        self.assertNotIn('"' + self.path(name) + '"', calls, name)
+                    self.assertNotIn("body.xml", calls)
+                    self.assertNotIn("tet.stl", calls)
+                after = page_data(self.path(after_page))
+                # the run's model, drawn as before: the same bodies, axes, placements, shapes
+                self.assertEqual(after["nq"], 2)
+                self.assertEqual(after["bodies"], before["bodies"])
+                self.assertEqual([b["axis"] for b in after["bodies"]], [[0, 1, 0], [0, 1, 0]])
+                self.assertEqual(after["frames"]["pose"], before["frames"]["pose"])
+                self.assertEqual(after["world_visuals"], before["world_visuals"])
+                self.assertEqual(sum(b["meshes"] for b in after["bodies"]), 1)  # the mesh geom, still the run's
+                # nothing of the disk's files: the changed include would have given three joints
+                self.assertNotIn("wrist", json.dumps(after))
+
+    def test_a_run_file_from_before_the_files_were_stored_is_refused_in_one_line(self):
+        for source in ("model.xml", "scene.yaml"):
+            with self.subTest(source=source):
+                run = f"old_{source}.h5"
+                r = self.soadyn("run", self.path(source), "-o", self.path(run), "-q", "--t-end", "0.1")
+                self.assertEqual(r.returncode, 0, r.stderr)
+                with h5py.File(self.path(run), "r+") as f:
+                    del f["model_files"]
+                r = self.soadyn("view", self.path(run), "-o", self.path("old.html"), "-q", "--force")
+                self.assertEqual(r.returncode, 2, r.stderr)
+                self.assertEqual(len(r.stderr.strip().splitlines()), 1, r.stderr)
+                self.assertIn("written before the run file stored the MJCF's files; soadyn view reads nothing but the "
+                              "run file", r.stderr)
+                self.assertFalse(os.path.exists(self.path("old.html")))
+
+    def test_an_old_run_of_an_mjcf_without_includes_or_assets_views_from_its_text(self):
+        self.write("plain.xml", '<mujoco model="p"><worldbody><body name="b" pos="0 0 1"><joint name="j" axis="0 1 0"/>'
+                   '<geom type="sphere" size="0.1" pos="0 0 -0.5" contype="0" conaffinity="0"/></body></worldbody>'
+                   '</mujoco>\n')
+        r = self.soadyn("run", self.path("plain.xml"), "-o", self.path("plain.h5"), "-q", "--t-end", "0.1")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        with h5py.File(self.path("plain.h5"), "r+") as f:
+            del f["model_files"]
+        # the file on disk changed too: the page is the stored text's (one joint), not the disk's
+        self.write("plain.xml", MJCF_MAIN)
+        r = self.soadyn("view", self.path("plain.h5"), "-o", self.path("plain.html"), "-q")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        data = page_data(self.path("plain.html"))
+        self.assertEqual([b["joint"] for b in data["bodies"]], ["j"])
 
 
 if __name__ == "__main__":

@@ -24,6 +24,11 @@
 //   /robot           the URDF or MJCF text the scenario's urdf: or model: key named, as the run read
 //                    it (attribute path: where it was); absent when it names none, and in files
 //                    before layout 4 (a run of a .urdf or .xml file itself: /scenario holds it)
+//   /model_files     an MJCF model's files as MuJoCo's compiler was handed them (the main text, its
+//                    <include>s and assets): attributes count, description; datasets 0..count-1, one
+//                    file's bytes each (uint8, 1-D) with a fixed-length string attribute name (its
+//                    name in MuJoCo's VFS); soadyn view compiles the model from these alone.  Absent
+//                    without an MJCF model and in files written before it was added
 //   /model: attributes nq, nv, q_names, v_names, q_units, v_units, joint_names, joint_types,
 //           body_names, gravity, units, free_joint, ball_joint, planar_joint (conventions);
 //           datasets parents, joint_q_index, joint_v_index (ints, −1 = world)

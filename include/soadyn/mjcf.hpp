@@ -39,6 +39,10 @@ struct MjcfModel {
   std::vector<DamperInput> dampers;           // the joints' damping
   std::vector<SpringInput> springs;           // the joints' stiffness about springref
   std::vector<MjcfGeom> geoms;                // every geom, for soadyn view
+  // every file handed to MuJoCo's compiler, as handed (the name given to its virtual file system,
+  // the bytes): the main text first, then the <include>s and mesh, skin, height-field and texture
+  // files it read.  A run stores them (h5log.hpp /model_files) for parse_mjcf_files.
+  std::vector<ModelFile> files;
 };
 
 // Whether this build reads MJCF (MuJoCo found at build time).
@@ -49,6 +53,14 @@ bool is_mjcf_text(const std::string& text);
 // else the text alone) and builds the model.  Throws soadyn::Error as "path:line: element: what"
 // where MuJoCo's compiler gives a line.
 MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_disk, const MjcfOptions& options = {});
+// Compiles a model from the files a run stored (MjcfModel::files, the main text first) and nothing
+// else: MuJoCo is handed those bytes only, and a file the model names that is not among them is
+// refused ("path: MJCF: NAME: not among the model's files the run file holds; …"), never read from
+// disk.  `path` names the model in messages.
+MjcfModel parse_mjcf_files(const std::vector<ModelFile>& files, const std::string& path, const MjcfOptions& options = {});
+// Whether an MJCF text names files of its own (<include>s, mesh, skin, height-field or texture
+// files): none of them is read.
+bool mjcf_names_files(const std::string& xml);
 // A run stores an MJCF file's own text, not the files it <include>s: compiled again from `path`
 // when that file still holds the stored text (so its <include>s resolve), else from the text.
 bool mjcf_file_unchanged(const std::string& path, const std::string& stored_text);

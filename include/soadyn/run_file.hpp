@@ -55,6 +55,10 @@ struct RunContents {
   // the robot file its urdf: or model: key named, as the run read it, and that path (empty when
   // the scenario names none, or the file is from before layout 4 kept it)
   std::string scenario_text, robot_text, robot_path;
+  // /model_files: every file MuJoCo's compiler was handed for an MJCF model, as handed (the main
+  // text first, then its <include>s and assets; ModelFile::name as given to MuJoCo's virtual file
+  // system); empty without an MJCF model and in files written before the run file stored them
+  std::vector<ModelFile> model_files;
   // /model (empty lists in files without them)
   long nq = 0, nv = 0;
   std::vector<std::string> q_names, v_names, joint_names, joint_types, body_names;

@@ -25,6 +25,10 @@ struct Scenario {
   // the robot file its urdf: or model: key names, as read, and that file's path (empty without
   // one; a .urdf or .xml loaded itself is `text`), stored with every run too (h5log.hpp /robot)
   std::string robot_text, robot_path;
+  // an MJCF model's (a .xml loaded itself, or the one model: names): every file handed to MuJoCo's
+  // compiler, as handed (MjcfModel::files: the main text, its <include>s and assets), stored with
+  // every run (h5log.hpp /model_files) so that soadyn view needs no file on disk; empty otherwise
+  std::vector<ModelFile> model_files;
   std::string name;
   std::string description;
   Model model;
@@ -50,9 +54,12 @@ Scenario load_scenario(const std::string& path, bool free_root = false,
 
 // Parses scenario text; `path` names it in messages and anchors a relative `urdf:`.  `robot_text`:
 // the robot file's text as a run stored it (soadyn view), read instead of the file urdf: names.
+// `model_files`: an MJCF robot's files as a run stored them (Scenario::model_files), compiled from
+// those alone (parse_mjcf_files), never from the disk.
 Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root = false,
                         std::optional<InertiaCheck> inertia_check = std::nullopt,
-                        const std::optional<std::string>& robot_text = std::nullopt);
+                        const std::optional<std::string>& robot_text = std::nullopt,
+                        const std::vector<ModelFile>* model_files = nullptr);
 
 // "warn", "balance", "strict" (the scenario's and the command line's words); nullopt otherwise.
 std::optional<InertiaCheck> parse_inertia_check(const std::string& s);

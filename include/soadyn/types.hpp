@@ -32,6 +32,14 @@ inline Mat3 skew(const Vec3& a) {
   return m;
 }
 
+// A file a model was compiled from, as it was handed to the compiler: the name it was given and its
+// bytes (an MJCF model's main text, <include>s and assets, mjcf.hpp; stored with a run, h5log.hpp
+// /model_files, so that soadyn view compiles the model from them and never from the disk).
+struct ModelFile {
+  std::string name, data;
+  bool operator==(const ModelFile&) const = default;
+};
+
 // Every error soadyn reports: what went wrong, where, what was expected and what was got.
 class Error : public std::runtime_error {
  public:

@@ -216,11 +216,17 @@ int run_simulation(const RunOptions& o) {
     warn(std::string(given("rtol") ? "--rtol" : "--atol") + " has no effect with " + method + " (a fixed-step method; see --dt)");
   if (!is_fixed_step(s.method) && given("dt")) warn("--dt has no effect with " + method + " (it chooses its own steps; see --rtol)");
   // the row as the file will hold it: the sensitivities, frames, controls and impacts included
+  // and the MJCF model's files the file stores (/model_files)
   const std::uint64_t row = row_bytes(sc.model, logged_groups(sc, s, groups));
-  const double rows = output_rows(s), bytes = rows * double(row), limit = parse_size(o.max_output_size);
+  std::uint64_t stored = 0;
+  for (const ModelFile& f : sc.model_files) stored += f.data.size();
+  const double rows = output_rows(s), bytes = rows * double(row) + double(stored), limit = parse_size(o.max_output_size);
   if (bytes > limit) {
-    char buf[160];
+    char buf[200];
     std::snprintf(buf, sizeof buf, "%.6g rows of %llu bytes", rows, static_cast<unsigned long long>(row));
+    if (stored > 0)
+      std::snprintf(buf + std::strlen(buf), sizeof buf - std::strlen(buf), " and %llu bytes of the MJCF model's files",
+                    static_cast<unsigned long long>(stored));
     throw Error(out + ": the output would take " + human_size(bytes) + " (" + buf + "), more than --max-output-size " +
                 o.max_output_size + ": raise --output-dt, lower --t-end, or allow it with --max-output-size");
   }

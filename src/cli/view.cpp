@@ -205,7 +205,7 @@ int run_view(const ViewOptions& o) {
   }
   const view::RunModel rm = view::rebuild_model(run);
   const Model& m = rm.model;
-  const view::Look look = view::make_look(m, rm.urdf_text, rm.urdf_path);
+  const view::Look look = view::make_look(m, rm.urdf_text, rm.urdf_path, rm.mjcf_files);
 
   double h = 0.0;
   const std::vector<Eigen::Index> keep = decimate(run.time, o.fps, o.max_frames, h);

@@ -18,6 +18,7 @@ struct RunFile {
   std::string path;
   std::string scenario_text, scenario_path, version;
   std::string robot_text, robot_path;    // the robot file the scenario named, as stored (layout 4)
+  std::vector<ModelFile> model_files;    // an MJCF model's files as the run handed them to MuJoCo (/model_files)
   std::string method, status;
   std::vector<std::string> joint_names;  // as logged (empty if the file has none)
   VecX time;                             // T
@@ -44,6 +45,7 @@ struct RunModel {
   Model model;
   std::string name, description;
   std::string urdf_text, urdf_path;  // the URDF the model came from, if any
+  std::vector<ModelFile> mjcf_files;  // an MJCF model's files (the main text first), from the run file only
   bool has_work_inputs = false;      // torques or dampers: E is not expected to stay constant
 };
 RunModel rebuild_model(const RunFile& run);
@@ -71,6 +73,8 @@ struct Look {
 };
 
 // Skeleton and inertia box from the model; visuals from the URDF text when there is one.
-Look make_look(const Model& model, const std::string& urdf_text, const std::string& urdf_path);
+// An MJCF model's geoms are compiled from `mjcf_files` (RunModel::mjcf_files) alone.
+Look make_look(const Model& model, const std::string& urdf_text, const std::string& urdf_path,
+               const std::vector<ModelFile>& mjcf_files = {});
 
 }  // namespace soadyn::cli::view

@@ -23,6 +23,7 @@ RunFile read_run(const std::string& path) {
   if (r.scenario_text.empty()) throw Error(path + ": no scenario stored in the file (not a run file from soadyn run?)");
   r.scenario_path = c.scenario_path;
   r.robot_text = c.robot_text, r.robot_path = c.robot_path;
+  r.model_files = c.model_files;
   r.version = c.soadyn_version;
   r.method = c.solver.method, r.status = c.solver.status;
   for (const char* name : {"/time", "/q"})
@@ -50,21 +51,36 @@ void keep_rows(RunFile& run, Eigen::Index rows) {
     if (s->size()) s->conservativeResize(rows);
 }
 
+namespace {
+
+// An MJCF model's files, from the run file only: /model_files, or (a file written before the run
+// file stored them) the main text alone when it names no file of its own; else refused, since
+// soadyn view never opens a model file on disk (which may have changed since the run).
+std::vector<ModelFile> stored_mjcf_files(const RunFile& run, const std::string& text) {
+  if (!run.model_files.empty()) return run.model_files;
+  if (mjcf_names_files(text))
+    throw Error("the MJCF <include>s or names asset files, and the run file was written before the run file stored "
+                "the MJCF's files; soadyn view reads nothing but the run file");
+  return {ModelFile{"soadyn-model.in-memory.xml", text}};
+}
+
+}  // namespace
+
 RunModel rebuild_model(const RunFile& run) {
   const std::string label = run.scenario_path.empty() ? run.path + ":scenario" : run.scenario_path;
   RunModel out;
   try {
     const std::string ext = std::filesystem::path(label).extension().string();
     if (ext == ".xml" && is_mjcf_text(run.scenario_text)) {
-      // `soadyn run robot.xml`: an MJCF model, compiled from the stored text, or from its file
-      // when that is still the text the run stored (an <include>d file is not stored)
-      const bool same = mjcf_file_unchanged(label, run.scenario_text);
+      // `soadyn run robot.xml`: an MJCF model, compiled from the files the run handed MuJoCo, as
+      // stored (/model_files), never from the disk
+      out.mjcf_files = stored_mjcf_files(run, run.scenario_text);
       MjcfOptions mo;
       mo.inertia_check = InertiaCheck::Balance;
-      out.model = parse_mjcf(run.scenario_text, label, same, mo).model;
+      out.model = parse_mjcf_files(out.mjcf_files, label, mo).model;
       if (run.q.cols() == out.model.nq + 7) {  // run with --free-root
         mo.free_root = true;
-        out.model = parse_mjcf(run.scenario_text, label, same, mo).model;
+        out.model = parse_mjcf_files(out.mjcf_files, label, mo).model;
       }
       out.name = std::filesystem::path(label).stem().string();
       out.urdf_text = run.scenario_text;  // its geoms are drawn (view_scene.cpp)
@@ -102,8 +118,10 @@ RunModel rebuild_model(const RunFile& run) {
       text << root;
       const std::optional<std::string> robot =
           run.robot_text.empty() ? std::nullopt : std::optional<std::string>(run.robot_text);
+      // an MJCF robot: compiled from the files the run stored (/model_files), never from the disk
+      if (robot && is_mjcf_text(*robot)) out.mjcf_files = stored_mjcf_files(run, *robot);
       const Scenario sc = parse_scenario(root.size() ? std::string(text.c_str()) : std::string("{}"), label, false,
-                                         InertiaCheck::Balance, robot);
+                                         InertiaCheck::Balance, robot, out.mjcf_files.empty() ? nullptr : &out.mjcf_files);
       out.model = sc.model;
       out.name = sc.name;
       out.description = sc.description;

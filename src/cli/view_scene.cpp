@@ -12,7 +12,6 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include <cmath>
-#include <filesystem>
 #include <cstdio>
 #include <map>
 
@@ -119,12 +118,11 @@ void add_urdf_visuals(const Model& model, const std::string& urdf_text, const st
 
 // an MJCF file's geoms (MuJoCo's compiler placed them): boxes, spheres, cylinders; a capsule as
 // its cylinder, an ellipsoid as its box; planes and height fields (the floor) are not drawn
-void add_mjcf_visuals(const std::string& text, const std::string& path, Look& look) {
-  std::error_code ec;
-  const bool same = std::filesystem::is_regular_file(path, ec) && read_text_file(path) == text;
+// (compiled from the run's stored files alone, never from the disk)
+void add_mjcf_visuals(const std::vector<ModelFile>& files, const std::string& path, Look& look) {
   MjcfOptions o;
   o.inertia_check = InertiaCheck::Balance;
-  for (const MjcfGeom& g : parse_mjcf(text, path, same, o).geoms) {
+  for (const MjcfGeom& g : parse_mjcf_files(files, path, o).geoms) {
     Shape s;
     s.p = g.X.p;
     s.R = Eigen::Quaterniond(g.X.R).normalized();
@@ -152,7 +150,8 @@ void add_mjcf_visuals(const std::string& text, const std::string& path, Look& lo
 
 }  // namespace
 
-Look make_look(const Model& model, const std::string& urdf_text, const std::string& urdf_path) {
+Look make_look(const Model& model, const std::string& urdf_text, const std::string& urdf_path,
+               const std::vector<ModelFile>& mjcf_files) {
   Look look;
   look.bodies.resize(model.nbodies);
   for (int i = 0; i < model.nbodies; ++i) {
@@ -172,7 +171,7 @@ Look make_look(const Model& model, const std::string& urdf_text, const std::stri
       b.segments.push_back(s + reach * u);
     }
   }
-  if (!urdf_text.empty() && is_mjcf_text(urdf_text)) add_mjcf_visuals(urdf_text, urdf_path, look);
+  if (!urdf_text.empty() && is_mjcf_text(urdf_text)) add_mjcf_visuals(mjcf_files, urdf_path, look);
   else if (!urdf_text.empty()) add_urdf_visuals(model, urdf_text, urdf_path, look);
   return look;
 }

@@ -281,6 +281,9 @@ py::tuple scenario_state(const py::object& self) {
   f["controllers"] = sc.inputs.controllers.size();
   f["log_frames"] = sc.log_frames;
   f["files"] = sc.files;  // the files it was read from: never a run's output
+  py::list model_files;  // an MJCF model's files as handed to MuJoCo: stored in its runs' files (/model_files)
+  for (const ModelFile& mf : sc.model_files) model_files.append(py::make_tuple(mf.name, py::bytes(mf.data)));
+  f["model_files"] = model_files;
   return py::make_tuple("soadyn.Scenario", kScenarioStateVersion, f);
 }
 
@@ -295,6 +298,9 @@ Scenario scenario_from_state(const py::object& state) {
   sc.name = r.as<std::string>("name");
   sc.description = r.as<std::string>("description");
   if (r.fields.contains("files")) sc.files = r.as<std::vector<std::string>>("files");  // absent from older states
+  if (r.fields.contains("model_files"))  // absent from older states
+    for (const auto& [name, data] : r.as<std::vector<std::pair<std::string, py::bytes>>>("model_files"))
+      sc.model_files.push_back({name, std::string(data)});
   const py::object model = r.get("model");
   if (!py::isinstance<Model>(model)) r.refuse("model", "expected a soadyn.Model");
   sc.model = model.cast<const Model&>();

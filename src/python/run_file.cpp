@@ -32,6 +32,13 @@ py::list texts(const std::vector<std::string>& v) {
   return out;
 }
 
+// /model_files: (name, bytes) of each file the run handed MuJoCo
+py::list model_files(const RunContents& c) {
+  py::list out;
+  for (const ModelFile& f : c.model_files) out.append(py::make_tuple(text(f.name), py::bytes(f.data)));
+  return out;
+}
+
 py::dict read(const std::string& path) {
   RunContents c;
   {
@@ -54,7 +61,7 @@ py::dict read(const std::string& path) {
   return py::dict("path"_a = text(c.path), "soadyn_version"_a = text(c.soadyn_version),
                   "scenario_path"_a = text(c.scenario_path), "log_groups"_a = text(c.log_groups),
                   "layout_version"_a = c.layout_version, "scenario"_a = text(c.scenario_text), "robot"_a = text(c.robot_text),
-                  "robot_path"_a = text(c.robot_path), "nq"_a = c.nq, "nv"_a = c.nv, "q_names"_a = texts(c.q_names),
+                  "robot_path"_a = text(c.robot_path), "model_files"_a = model_files(c), "nq"_a = c.nq, "nv"_a = c.nv, "q_names"_a = texts(c.q_names),
                   "v_names"_a = texts(c.v_names), "joint_names"_a = texts(c.joint_names),
                   "joint_types"_a = texts(c.joint_types), "body_names"_a = texts(c.body_names), "parents"_a = c.parents,
                   "joint_v_index"_a = c.joint_v_index, "solver"_a = solver, "column_names"_a = texts(c.column_names),

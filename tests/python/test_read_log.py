@@ -4,6 +4,7 @@ frames and sensitivities; a Python controller) against read_log of their files, 
 Every dataset the file holds is enumerated with h5py and must be accounted for below: a dataset
 the writer gains without read_log reading it back fails the test."""
 import os
+import struct
 
 import h5py
 import numpy as np
@@ -45,7 +46,8 @@ def same_array(a, b, what):
 
 def compare(run, back, path, scene):
     names = datasets(path)
-    unknown = [n for n in names if n not in TRAJECTORY_FIELDS and n not in OTHER and not n.startswith("/solver/")]
+    unknown = [n for n in names if n not in TRAJECTORY_FIELDS and n not in OTHER and not n.startswith("/solver/")
+               and not n.startswith("/model_files/")]
     assert unknown == [], f"datasets read_log does not account for: {unknown}"
     assert {n[len("/solver/"):] for n in names if n.startswith("/solver/")} <= SOLVER
     for field in Trajectory_arrays():
@@ -71,6 +73,16 @@ def compare(run, back, path, scene):
             for k, name in enumerate(back.frames):
                 same_array(back.frames[name].position, f["frames/position"][:, k], name)
                 same_array(back.frames[name].orientation, f["frames/orientation"][:, k], name)
+    # /model_files/0 .. count-1: an MJCF model's files (name attribute, bytes), read back by the
+    # library's reader as soadyn view takes them, the Scenario's model_files as the run stored them
+    stored = [n for n in names if n.startswith("/model_files/")]
+    read = soadyn._soadyn._read_run_file(path)["model_files"]
+    with h5py.File(path, "r") as f:
+        assert len(stored) == (int(f["model_files"].attrs["count"]) if stored else 0) == len(read)
+        for k, (name, data) in enumerate(read):
+            d = f[f"model_files/{k}"]
+            assert d.dtype == np.uint8 and bytes(d[()]) == data
+            assert d.attrs["name"].decode() == name
     if run.sensitivities is not None:
         for field in ("initial_state", "parameters", "state_names", "state_units", "parameter_names", "parameter_units"):
             a, b = getattr(run.sensitivities, field), getattr(back.sensitivities, field)
@@ -138,3 +150,26 @@ def test_variable_length_strings_in_a_layout_5_file_are_refused(tmp_path, kind):
             f["model"].attrs["q_names"] = ["theta1", "theta2"]
     with pytest.raises(soadyn.Error, match="variable-length strings, which this file's layout never writes"):
         soadyn.read_log(out)
+
+
+def test_an_mjcf_model_s_files_are_stored_and_read_back(tmp_path):
+    # a scenario whose model: is an MJCF file with an <include> and a mesh: every file MuJoCo was handed
+    tris = [((0, 0, 0), (1, 0, 0), (0, 1, 0)), ((0, 0, 0), (0, 0, 1), (1, 0, 0)),
+            ((0, 0, 0), (0, 1, 0), (0, 0, 1)), ((1, 0, 0), (0, 0, 1), (0, 1, 0))]
+    stl = b"\0" * 80 + struct.pack("<I", len(tris))
+    for t in tris:
+        stl += struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *[0.1 * c for c in v]) for v in t) + b"\0\0"
+    (tmp_path / "tet.stl").write_bytes(stl)
+    body = ('<mujoco><body name="link" pos="0 0 1"><joint name="hinge" axis="0 1 0"/>'
+            '<geom type="mesh" mesh="tet" contype="0" conaffinity="0"/></body></mujoco>\n')
+    (tmp_path / "body.xml").write_text(body)
+    (tmp_path / "robot.xml").write_text('<mujoco model="m"><asset><mesh name="tet" file="tet.stl"/></asset>'
+                                        '<worldbody><include file="body.xml"/></worldbody></mujoco>\n')
+    (tmp_path / "scene.yaml").write_text("model: robot.xml\n")
+    scene = soadyn.load_scenario(str(tmp_path / "scene.yaml"))
+    out = str(tmp_path / "mj.h5")
+    run = soadyn.simulate(scene, t_end=0.1, output=out)
+    back = soadyn.read_log(out)
+    compare(run, back, out, scene)
+    files = {os.path.basename(name): data for name, data in soadyn._soadyn._read_run_file(out)["model_files"]}
+    assert files["body.xml"] == body.encode() and files["tet.stl"] == stl and len(files) == 3
