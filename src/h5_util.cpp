@@ -167,9 +167,14 @@ Id open_run_file(const std::string& path) {
   const InputFile in(path, "a run file (HDF5, from soadyn run)", kNoSizeLimit);
   const std::string name = in.name_for_library();
   if (H5Fis_hdf5(name.c_str()) <= 0) throw Error(path + ": not a run file: not an HDF5 file (expected one from soadyn run)");
+  // a closed file has no writer to wait for: one read of each piece of metadata, so a checksum that
+  // fails (a changed byte) refuses at once instead of after retries; a file still open for writing
+  // (a running or killed run) opens SWMR-read, whose retries ride out a write in progress
+  Id plain(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, path + ": file-access properties");
+  H5Pset_metadata_read_attempts(plain, 1);
+  hid_t f = H5Fopen(name.c_str(), H5F_ACC_RDONLY, plain);
   Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, path + ": file-access properties");
   H5Pset_metadata_read_attempts(fapl, kMetadataReadAttempts);
-  hid_t f = H5Fopen(name.c_str(), H5F_ACC_RDONLY, fapl);
   if (f < 0) f = H5Fopen(name.c_str(), H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
   if (f < 0) throw Error(path + ": cannot open the HDF5 file (corrupt or truncated?)");
   return Id(f, H5Fclose, path);

@@ -109,11 +109,11 @@ struct Scalar {
 
 Scalar string_scalar(hid_t parent, const char* name, size_t size);
 
-// Opens a run file read-only: plainly when it was closed, in single-writer/multiple-reader mode
-// when a run is writing it or was killed.  HDF5 retries a metadata read that fails its checksum,
-// sleeping twice as long each time (100 attempts by default: a corrupt file would hang the reader
-// for ever); kMetadataReadAttempts bounds that, so a corrupt or truncated file fails within
-// milliseconds.  Throws soadyn::Error naming the path.
+// Opens a run file read-only: plainly when it was closed (one attempt per metadata read: no writer
+// to wait for), in single-writer/multiple-reader mode when a run is writing it or was killed.  There
+// HDF5 retries a metadata read that fails its checksum, sleeping longer each time (100 attempts by
+// default: a corrupt file would hang the reader for ever); kMetadataReadAttempts bounds that.
+// Throws soadyn::Error naming the path.
 inline constexpr unsigned kMetadataReadAttempts = 20;
 Id open_run_file(const std::string& path);
 
