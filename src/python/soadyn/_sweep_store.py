@@ -4,6 +4,7 @@ atomically and checked row by row when read back, MAX_PART_BYTES at most), and r
 table rebuilt from them."""
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import glob
 import json
@@ -221,17 +222,25 @@ def _temporary(path: str):
     return fd, tmp
 
 
-def _write_atomic(path: str, text: str):
+@contextlib.contextmanager
+def _replaced(path: str, mode: str):
+    """An open file object that becomes `path` whole: written under a _temporary() name, synced and
+    renamed onto path when the block ends; removed, path untouched, when the block raises."""
     fd, tmp = _temporary(path)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
+        with os.fdopen(fd, mode, **({} if "b" in mode else {"encoding": "utf-8"})) as f:
+            yield f
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
     except BaseException:
         _unlink_quietly(tmp)
         raise
+
+
+def _write_atomic(path: str, text: str):
+    with _replaced(path, "w") as f:
+        f.write(text)
 
 
 def _unlink_quietly(path: str):
@@ -271,17 +280,9 @@ def _objects(col: list) -> np.ndarray:
 def write_results(sw: Sweep, table: Dict[str, np.ndarray], path: str):
     """The table as HDF5: /cases/<column> datasets (strings UTF-8), the sweep and scenario texts."""
     import h5py
-    fd, tmp = _temporary(path)
-    try:
-        with os.fdopen(fd, "w+b") as fo:  # HDF5 writes through this file object: no name to follow
-            with h5py.File(fo, "w") as f:
-                _write_table(f, sw, table)
-            fo.flush()
-            os.fsync(fo.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        _unlink_quietly(tmp)
-        raise
+    with _replaced(path, "w+b") as fo:  # HDF5 writes through this file object: no name to follow
+        with h5py.File(fo, "w") as f:
+            _write_table(f, sw, table)
 
 
 def _write_table(f, sw: Sweep, table: Dict[str, np.ndarray]):
