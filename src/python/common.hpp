@@ -2,6 +2,7 @@
 // arrays built without a copy, and the Data wrapper that the views keep alive.
 #pragma once
 
+#include "soadyn/trajectory.hpp"
 #include "soadyn/algorithms.hpp"
 #include "soadyn/data.hpp"
 #include "soadyn/derivatives.hpp"
@@ -42,6 +43,7 @@ MatX read_matrix(const char* where, const char* what, const ArrayIn& a);
 py::array owned(std::vector<double>&& values, std::vector<py::ssize_t> shape);
 py::array owned(VecX&& v);
 py::array owned(MatX&& m);  // column-major, shape (rows, cols)
+py::array owned(SampleRows&& m, std::vector<py::ssize_t> shape);  // C order, rows × cols numbers in `shape`
 
 // The Python-side Data: the library's Data (shared with every view's base, so a view outlives
 // the Data object safely), scratch vectors for the arguments, and the cached read-only views.

@@ -108,6 +108,12 @@ py::array owned(MatX&& m) {
   return py::array(py::dtype::of<double>(), {keep->rows(), keep->cols()}, {s, s * keep->rows()}, keep->data(), base);
 }
 
+py::array owned(SampleRows&& m, std::vector<py::ssize_t> shape) {
+  auto* keep = new SampleRows(std::move(m));
+  py::capsule base(keep, [](void* p) { delete static_cast<SampleRows*>(p); });
+  return py::array(py::dtype::of<double>(), std::move(shape), {}, keep->data(), base);
+}
+
 void set_python_error() {
   try {
     throw;

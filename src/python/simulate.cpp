@@ -5,7 +5,7 @@
 // No thread of its own: a short run in a loop or a sweep pays no thread start and no hand-over.
 #include "common.hpp"
 
-#include "soadyn/h5log.hpp"
+#include "soadyn/run.hpp"
 #include "soadyn/sensitivity.hpp"
 #include "soadyn/simulate.hpp"
 #include "soadyn/text.hpp"
@@ -20,48 +20,6 @@
 namespace soadyn::python {
 
 namespace {
-
-// Every sample into contiguous rows (handed to numpy without a copy), then on to the log if any.
-class Recorder : public RunObserver {
- public:
-  explicit Recorder(RunObserver* next) : next_(next) {}
-  void on_sample(const Sample& s) override {
-    t.push_back(s.t);
-    q.insert(q.end(), s.q.data(), s.q.data() + s.q.size());
-    v.insert(v.end(), s.qd.data(), s.qd.data() + s.qd.size());
-    qdd.insert(qdd.end(), s.qdd.data(), s.qdd.data() + s.qdd.size());
-    kinetic.push_back(s.kinetic);
-    potential.push_back(s.potential);
-    total.push_back(s.total);
-    work.push_back(s.work_inputs);
-    dissipated.push_back(s.dissipated);
-    impact_loss.push_back(s.impact_loss);
-    control.insert(control.end(), s.control.data(), s.control.data() + s.control.size());
-    position.insert(position.end(), s.body_position.data(), s.body_position.data() + s.body_position.size());
-    orientation.insert(orientation.end(), s.body_orientation.data(), s.body_orientation.data() + s.body_orientation.size());
-    com.insert(com.end(), s.body_com.data(), s.body_com.data() + s.body_com.size());
-    linear.insert(linear.end(), s.linear.data(), s.linear.data() + 3);
-    angular.insert(angular.end(), s.angular.data(), s.angular.data() + 3);
-    // sensitivities: each sample's matrix row-major, (T, nx, ·) arrays
-    const MatX x0 = s.sensitivity_initial_state.transpose(), pi = s.sensitivity_parameters.transpose();
-    dx_dx0.insert(dx_dx0.end(), x0.data(), x0.data() + x0.size());
-    dx_dpi.insert(dx_dpi.end(), pi.data(), pi.data() + pi.size());
-    if (next_) next_->on_sample(s);
-  }
-  void on_event(const LimitEvent& e) override {  // the joint limits' events reach the file's /events
-    if (next_) next_->on_event(e);
-  }
-  void on_progress(const RunSummary& r) override {
-    if (next_) next_->on_progress(r);
-  }
-  void on_finish(const RunSummary& r) override {
-    if (next_) next_->on_finish(r);
-  }
-  std::vector<double> t, q, v, qdd, kinetic, potential, total, work, dissipated, impact_loss, control, linear, angular, position, orientation, com, dx_dx0, dx_dpi;
-
- private:
-  RunObserver* next_;
-};
 
 py::dict summary_dict(const RunSummary& r) {
   return py::dict("method"_a = r.method, "status"_a = r.status, "completed"_a = r.completed, "t_reached"_a = r.t_reached,
@@ -120,67 +78,45 @@ ControlFunction python_controller(const py::object& f, const Model& model, py::o
 
 py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output,
               const py::object& controller) {
-  // everything is checked before any file is touched, as `soadyn run` does
-  const std::vector<std::string> warnings = check_run(sc, settings);
-  check_sensitivities(sc, settings, !controller.is_none());
-  {
-    System probe(sc.model, sc.inputs, settings.dynamics);
-    const VecX y0 = probe.state(sc.q0, sc.v0);
-    make_integrator(settings.method, probe, settings, 0.0, y0);
-  }
-  std::unique_ptr<OutputLock> lock;  // declared first: held until the log is closed
-  std::unique_ptr<H5Log> log;
-  if (output) {
-    std::vector<std::string> inputs = sc.files;  // every file the scenario was read from
-    inputs.push_back(sc.path);
-    check_output_path(*output, OutputKind::Run, inputs);
-    lock = std::make_unique<OutputLock>(*output);
-    LogGroups groups;
-    groups.control = !controller.is_none();
-    log = std::make_unique<H5Log>(*output, sc, settings, version(), groups);
-  }
-  Recorder rec(log.get());
+  // the run as C++'s simulate(sc, options) does it: everything checked before any file is touched
+  SimulateOptions o;
+  o.settings = settings;
+  o.output = output.value_or("");
   std::atomic<int> stop{0};
-  RunSummary summary;
-  std::exception_ptr failure;
+  o.stop = &stop;
   py::object pending = py::none();
-  std::function<void()> poll = signal_poll(stop, pending);
+  o.poll = signal_poll(stop, pending);
   py::object raised = py::none();  // the controller's exception
-  ControlFunction control;
-  if (!controller.is_none()) control = python_controller(controller, sc.model, raised);
+  if (!controller.is_none()) o.controller = python_controller(controller, sc.model, raised);
+  Trajectory tr;
   {
     py::gil_scoped_release nogil;
-    try {
-      summary = simulate(sc, settings, &rec, nullptr, &stop, std::move(poll), std::move(control));
-    } catch (...) {
-      failure = std::current_exception();
-    }
+    tr = simulate(sc, o);
   }
-  if (failure) std::rethrow_exception(failure);
-  log.reset();  // closes the file before Python may read it
-  lock.reset();
+  const RunSummary& summary = tr.summary;
 
-  const py::ssize_t T = py::ssize_t(rec.t.size()), nq = sc.model.nq, nv = sc.model.nv, nb = sc.model.nbodies;
-  py::dict arrays("t"_a = owned(std::move(rec.t), {T}), "q"_a = owned(std::move(rec.q), {T, nq}),
-                  "v"_a = owned(std::move(rec.v), {T, nv}), "qdd"_a = owned(std::move(rec.qdd), {T, nv}),
-                  "kinetic_energy"_a = owned(std::move(rec.kinetic), {T}),
-                  "potential_energy"_a = owned(std::move(rec.potential), {T}),
-                  "total_energy"_a = owned(std::move(rec.total), {T}),
-                  "work_inputs"_a = owned(std::move(rec.work), {T}), "dissipated"_a = owned(std::move(rec.dissipated), {T}),
-                  "impact_loss"_a = owned(std::move(rec.impact_loss), {T}), "control"_a = owned(std::move(rec.control), {T, nv}),
-                  "body_position"_a = owned(std::move(rec.position), {T, nb, 3}),
-                  "body_orientation"_a = owned(std::move(rec.orientation), {T, nb, 4}),
-                  "body_com"_a = owned(std::move(rec.com), {T, nb, 3}),
-                  "linear_momentum"_a = owned(std::move(rec.linear), {T, 3}),
-                  "angular_momentum"_a = owned(std::move(rec.angular), {T, 3}));
+  const py::ssize_t T = py::ssize_t(tr.size()), nq = sc.model.nq, nv = sc.model.nv, nb = sc.model.nbodies;
+  py::dict arrays("t"_a = owned(std::move(tr.t)), "q"_a = owned(std::move(tr.q), {T, nq}),
+                  "v"_a = owned(std::move(tr.v), {T, nv}), "qdd"_a = owned(std::move(tr.qdd), {T, nv}),
+                  "kinetic_energy"_a = owned(std::move(tr.kinetic_energy)),
+                  "potential_energy"_a = owned(std::move(tr.potential_energy)),
+                  "total_energy"_a = owned(std::move(tr.total_energy)), "work_inputs"_a = owned(std::move(tr.work_inputs)),
+                  "dissipated"_a = owned(std::move(tr.dissipated)), "impact_loss"_a = owned(std::move(tr.impact_loss)),
+                  "control"_a = owned(std::move(tr.control), {T, nv}),
+                  "body_position"_a = owned(std::move(tr.body_position), {T, nb, 3}),
+                  "body_orientation"_a = owned(std::move(tr.body_orientation), {T, nb, 4}),
+                  "body_com"_a = owned(std::move(tr.body_com), {T, nb, 3}),
+                  "linear_momentum"_a = owned(std::move(tr.linear_momentum), {T, 3}),
+                  "angular_momentum"_a = owned(std::move(tr.angular_momentum), {T, 3}));
   if (settings.sensitivities.any()) {
     // (T, nx, nx) and (T, nx, np), with the names of x and π (sensitivity.hpp)
     const SensitivityPlan plan = plan_sensitivities(sc.model, settings.sensitivities);
     const py::ssize_t nx = plan.nx;
     arrays["sensitivity_initial_state"] =
-        plan.initial_state ? py::object(owned(std::move(rec.dx_dx0), {T, nx, nx})) : py::object(py::none());
-    arrays["sensitivity_parameters"] = plan.np() > 0 ? py::object(owned(std::move(rec.dx_dpi), {T, nx, py::ssize_t(plan.np())}))
-                                                     : py::object(py::none());
+        plan.initial_state ? py::object(owned(std::move(tr.sensitivity_initial_state), {T, nx, nx})) : py::object(py::none());
+    arrays["sensitivity_parameters"] =
+        plan.np() > 0 ? py::object(owned(std::move(tr.sensitivity_parameters), {T, nx, py::ssize_t(plan.np())}))
+                      : py::object(py::none());
     arrays["sensitivity_names"] = py::dict("state"_a = plan.state_names, "state_units"_a = plan.state_units,
                                            "parameters"_a = plan.parameter_names, "parameter_units"_a = plan.parameter_units);
   }
@@ -188,12 +124,10 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   for (const LimitEvent& e : summary.events)
     events.append(py::dict("t"_a = e.t, "joint"_a = e.joint, "side"_a = e.side < 0 ? "lower" : "upper", "kind"_a = e.kind,
                            "v_before"_a = e.v_before, "v_after"_a = e.v_after, "energy_lost"_a = e.energy_lost));
-  std::vector<std::string> said = warnings;  // the settings', then the run's
-  said.insert(said.end(), summary.warnings.begin(), summary.warnings.end());
   py::dict sd = summary_dict(summary);
   sd["events"] = events;
   sd["control_ticks"] = summary.control_ticks;
-  return py::make_tuple(arrays, sd, pending.is_none() ? raised : pending, said);
+  return py::make_tuple(arrays, sd, pending.is_none() ? raised : pending, tr.warnings);
 }
 
 }  // namespace

@@ -27,6 +27,9 @@ diff -u "$scratch/library_example.cpp" "$source/tests/install/consumer.cpp" ||
   fail "the first C++ block of include/soadyn/README.md differs from tests/install/consumer.cpp"
 first_cpp "$source/README.md" >"$scratch/readme_example.cpp"
 [[ -s $scratch/readme_example.cpp ]] || fail "README.md has no C++ block"
+second_cpp() { awk '/^```cpp$/ {n++; if (n == 2) {c = 1; next}} c && /^```$/ {exit} c' "$1"; }
+second_cpp "$source/README.md" >"$scratch/readme_run.cpp"
+grep -q 'soadyn::simulate(' "$scratch/readme_run.cpp" || fail "README.md's second C++ block does not call simulate"
 
 echo "== cmake --install $build --prefix $prefix"
 "$cmake" --install "$build" --prefix "$prefix" >"$scratch/install.log"
@@ -71,6 +74,14 @@ echo "== README's C++ block, with pkg-config, on tests/data/arm7.urdf"
 "$cxx" -std=c++20 "$scratch/readme_example.cpp" $cflags $libs -o "$scratch/readme_example"
 env -u LD_LIBRARY_PATH "$scratch/readme_example" "$source/tests/data/arm7.urdf" | tee "$scratch/readme_example.out"
 grep -q '^qdd = ' "$scratch/readme_example.out" || fail "README's C++ block printed no qdd"
+
+echo "== README's second C++ block (simulate(scenario, options)), with pkg-config, on scenarios/three_link_arm.yaml"
+# shellcheck disable=SC2086
+"$cxx" -std=c++20 "$scratch/readme_run.cpp" $cflags $libs -o "$scratch/readme_run"
+env -u LD_LIBRARY_PATH "$scratch/readme_run" "$source/scenarios/three_link_arm.yaml" "$scratch/readme_run.h5" |
+  tee "$scratch/readme_run.out"
+grep -q '^completed: [0-9]* samples' "$scratch/readme_run.out" || fail "README's simulate block did not complete"
+[[ -s $scratch/readme_run.h5 ]] || fail "README's simulate block wrote no run file"
 
 echo "== the installed soadyn executable"
 env -u LD_LIBRARY_PATH "$prefix/$bindir/soadyn" --version | tee "$scratch/version.txt"
