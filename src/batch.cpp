@@ -143,12 +143,12 @@ void mass_matrix(Pool& pool, In Q, Out M) {
   });
 }
 
-void bias(Pool& pool, In Q, In V, Out B) {
+void bias_forces(Pool& pool, In Q, In V, Out B) {
   const Model& m = pool.model();
   const Eigen::Index K = Q.cols();
-  check("bias", "Q", Q.rows(), K, m.nq, K);
-  check("bias", "V", V.rows(), V.cols(), m.nv, K);
-  check("bias", "B", B.rows(), B.cols(), m.nv, K);
+  check("bias_forces", "Q", Q.rows(), K, m.nq, K);
+  check("bias_forces", "V", V.rows(), V.cols(), m.nv, K);
+  check("bias_forces", "B", B.rows(), B.cols(), m.nv, K);
   pool.run(K, [&](Pool::Worker& w, long begin, long end) {
     for (long k = begin; k < end; ++k) {
       load(w, Q, V, k);
@@ -253,9 +253,9 @@ void mass_matrix(const Model& model, In Q, Out M, int threads) {
   Pool pool(model, threads);
   mass_matrix(pool, Q, M);
 }
-void bias(const Model& model, In Q, In V, Out B, int threads) {
+void bias_forces(const Model& model, In Q, In V, Out B, int threads) {
   Pool pool(model, threads);
-  bias(pool, Q, V, B);
+  bias_forces(pool, Q, V, B);
 }
 void inverse_dynamics(const Model& model, In Q, In V, In QDD, Out TAU, int threads) {
   Pool pool(model, threads);

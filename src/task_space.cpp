@@ -13,9 +13,12 @@ void operational_space_inertia(const Model& model, Data& data, const MatX& J, Ma
   if (J.cols() != model.nv || J.rows() < 1 || J.rows() > 6 * model.nbodies + 6)
     throw Error("operational_space_inertia: J: expected k×" + std::to_string(model.nv) + " (k >= 1), got " +
                 std::to_string(J.rows()) + "×" + std::to_string(J.cols()));
-  // 𝓜 = L Lᵀ; Y = L⁻¹ Jᵀ; J 𝓜⁻¹ Jᵀ = Yᵀ Y
+  // 𝓜 = L Lᵀ; Y = L⁻¹ Jᵀ; J 𝓜⁻¹ Jᵀ = Yᵀ Y.  𝓜 is formed in data.M, then data.M gets back what
+  // mass_matrix left there (each result its own function's: data.hpp)
+  const MatX kept = data.M;
   mass_matrix(model, data);
   data.work.factor.llt.compute(data.M);
+  data.M = kept;
   if (data.work.factor.llt.info() != Eigen::Success) throw Error("operational_space_inertia: the mass matrix is not positive definite");
   MatX Y = J.transpose();
   data.work.factor.llt.matrixL().solveInPlace(Y);

@@ -99,7 +99,7 @@ TEST(Batch, MassMatrixBiasInverseDynamicsEqualLoop) {
     EveryThread pool(m, threads);  // one pool for the three calls: its Data carry over between them
     MatX M(nv, nv * kStates), b(nv, kStates), tau(nv, kStates);
     batch::mass_matrix(pool, s.Q, M);
-    batch::bias(pool, s.Q, s.V, b);
+    batch::bias_forces(pool, s.Q, s.V, b);
     batch::inverse_dynamics(pool, s.Q, s.V, s.X, tau);
     EXPECT_TRUE(M == M_ref) << threads << " threads";
     EXPECT_TRUE(b == b_ref) << threads << " threads";

@@ -88,8 +88,13 @@ void mass_matrix(Pool& pool, In Q, Out M);
 void mass_matrix(const Model& model, In Q, Out M, int threads);
 
 // bias(q, q̇) (bias_forces(model, data, q, v)): Q nq×K, V nv×K → B nv×K
-void bias(Pool& pool, In Q, In V, Out B);
-void bias(const Model& model, In Q, In V, Out B, int threads);
+void bias_forces(Pool& pool, In Q, In V, Out B);
+void bias_forces(const Model& model, In Q, In V, Out B, int threads);
+// the old name, kept one release
+[[deprecated("use batch::bias_forces")]] inline void bias(Pool& pool, In Q, In V, Out B) { bias_forces(pool, Q, V, B); }
+[[deprecated("use batch::bias_forces")]] inline void bias(const Model& model, In Q, In V, Out B, int threads) {
+  bias_forces(model, Q, V, B, threads);
+}
 
 // τ = 𝓜 q̈ + bias: Q nq×K, V and QDD nv×K → TAU nv×K
 void inverse_dynamics(Pool& pool, In Q, In V, In QDD, Out TAU);

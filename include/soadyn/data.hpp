@@ -3,9 +3,15 @@
 //   [kin]  update_kinematics(q)      [vel] update_velocities(v)
 //   [crb]  mass_matrix               [rne] bias_forces / inverse_dynamics
 //   [fd]   forward_dynamics
-// Every entry point says which results it fills; it leaves every other result as it was.  The
-// workspace (Data::work) holds no result: what a route leaves there is unspecified and not part
-// of the API.  No algorithm allocates once a Data exists.
+// Every entry point says which results it fills; it leaves every other result as it was.  Each
+// result has one owner (M: mass_matrix, bias: bias_forces, tau: inverse_dynamics, qdd:
+// forward_dynamics); the few calls that are their owner at the same state as well say so where
+// they are declared (the composite forward-dynamics routes fill M and bias, forward_dynamics_derivatives
+// and forward_dynamics_parameter_derivative q̈, regressor τ), and no other call writes a result:
+// operational_space_inertia forms 𝓜 in M and puts mass_matrix's back.  (Python, where calls
+// return views, holds every call to its own results: src/python/README.md.)  The workspace
+// (Data::work) holds no result: what a route leaves there is unspecified and not part of the API.
+// No algorithm allocates once a Data exists.
 #pragma once
 
 #include "soadyn/inertia.hpp"

@@ -103,7 +103,8 @@ SpatialInertia centroidal_inertia(const Model& model, Data& data);
 
 // [kin] Λ = (J 𝓜⁻¹ Jᵀ)⁻¹ for a task Jacobian J (k×nv, e.g. frame_jacobian's or its 3 linear
 // rows), by 𝓜 = L Lᵀ (data.work.factor.llt) and Y = L⁻¹ Jᵀ, J 𝓜⁻¹ Jᵀ = Yᵀ Y: 𝓜⁻¹ is never formed.  Fills
-// data.M and data.work.factor.llt; allocates Y (nv×k).  Throws soadyn::Error when J 𝓜⁻¹ Jᵀ is singular
+// data.work.factor.llt; leaves data.M as mass_matrix left it (𝓜 is formed there and put back);
+// allocates Y (nv×k) and a copy of 𝓜.  Throws soadyn::Error when J 𝓜⁻¹ Jᵀ is singular
 // (a smallest eigenvalue below 1e-10 of the largest): more rows than the joints can move
 // independently at this configuration.
 void operational_space_inertia(const Model& model, Data& data, const MatX& J, MatX& Lambda);

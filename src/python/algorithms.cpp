@@ -122,20 +122,21 @@ struct Minverse {
 
 𝓜(q)⁻¹ without forming 𝓜: the articulated-body recursion for every unit force at once, O(N²) on a
 chain (C++ minverse, as Pinocchio's computeMinverse).  q: (nq,).  Returns data.Minv, shape (nv, nv),
-a read-only view (fd_derivatives's third result shares it).)";
+a read-only view (this function's own; forward_dynamics_derivatives returns its 𝓜⁻¹ as data.dqdd_dtau).)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
     DerivativeData& dd = d.derivative_data(m);
     kin(m, d, name, a[0]);
-    minverse(m, *d.data, dd.Minv);
+    (void)dd;  // made with its views, minverse's own array among them
+    minverse(m, *d.data, *d.minverse_result);
     return d.Minv;
   }
 };
 
 struct Bias {
-  static constexpr const char* name = "bias";
+  static constexpr const char* name = "bias_forces";
   static constexpr std::array<const char*, 3> params{"q", "v", "kinematics"};
   static constexpr int optional = 1;  // kinematics
-  static constexpr const char* doc = R"(bias(model, data, q, v, kinematics=True)
+  static constexpr const char* doc = R"(bias_forces(model, data, q, v, kinematics=True)
 --
 
 bias(q, q̇) = Gᵀ Ψ_Dᵀ (M Ψ_D a + b): Coriolis, centrifugal, gyroscopic and gravity forces.
@@ -184,7 +185,8 @@ struct ForwardDynamics {
 q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)).
 
 method: 'aba' (articulated-body recursion, O(N), 𝓜 never formed; 'on', its old word, is taken too), 'dense' (composite 𝓜 and
-Cholesky; also fills data.M and data.bias) or 'sparse' (𝓜 factored as LᵀDL along the tree).
+Cholesky) or 'sparse' (𝓜 factored as LᵀDL along the tree); data.M and data.bias keep what
+mass_matrix and bias_forces left there.
 q: (nq,), v: (nv,), tau: (nv,).  Returns data.qdd, shape (nv,), a read-only view.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
     FdMethod fd = FdMethod::ArticulatedBody;
@@ -196,15 +198,25 @@ q: (nq,), v: (nv,), tau: (nv,).  Returns data.qdd, shape (nv,), a read-only view
     }
     read_vector(m, *d.data, name, "tau", a[2], m.nv, d.x);
     kin_vel(m, d, name, a[0], a[1]);
+    if (fd == FdMethod::ArticulatedBody) {
+      forward_dynamics(m, *d.data, d.x, fd);
+      return d.qdd;
+    }
+    // the composite routes form 𝓜 and bias in data.M and data.bias: mass_matrix's and
+    // bias_forces' results, which stay as those calls left them
+    d.kept_M = d.data->M;
+    d.kept_bias = d.data->bias;
     forward_dynamics(m, *d.data, d.x, fd);
+    d.data->M = d.kept_M;
+    d.data->bias = d.kept_bias;
     return d.qdd;
   }
 };
 
 struct IdDerivatives {
-  static constexpr const char* name = "id_derivatives";
+  static constexpr const char* name = "inverse_dynamics_derivatives";
   static constexpr std::array<const char*, 3> params{"q", "v", "qdd"};
-  static constexpr const char* doc = R"(id_derivatives(model, data, q, v, qdd)
+  static constexpr const char* doc = R"(inverse_dynamics_derivatives(model, data, q, v, qdd)
 --
 
 (∂τ/∂q, ∂τ/∂v) of τ = 𝓜(q) q̈ + bias(q, q̇), analytic, O(N·depth).
@@ -212,7 +224,7 @@ struct IdDerivatives {
 ∂/∂q is along the tangent increment δ (nv,) with q ⊕ δ = joint_integrate(q, δ, 1): a free joint's
 δ = [δθ (inertial axes); δp], a ball's δθ in the child's frame.  q: (nq,), v: (nv,), qdd: (nv,).
 Returns (data.dtau_dq, data.dtau_dv), shape (nv, nv) each: read-only views, not copies (the next
-derivative call on this Data overwrites them, fd_derivatives too; .copy() to keep them).)";
+call of this function on this Data overwrites them; .copy() to keep them).)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
     DerivativeData& dd = d.derivative_data(m);
     read_vector(m, *d.data, name, "qdd", a[2], m.nv, d.x);
@@ -223,22 +235,25 @@ derivative call on this Data overwrites them, fd_derivatives too; .copy() to kee
 };
 
 struct FdDerivatives {
-  static constexpr const char* name = "fd_derivatives";
+  static constexpr const char* name = "forward_dynamics_derivatives";
   static constexpr std::array<const char*, 3> params{"q", "v", "tau"};
-  static constexpr const char* doc = R"(fd_derivatives(model, data, q, v, tau)
+  static constexpr const char* doc = R"(forward_dynamics_derivatives(model, data, q, v, tau)
 --
 
 (∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = 𝓜⁻¹) of q̈ = 𝓜(q)⁻¹ (τ − bias(q, q̇)), τ held fixed; ∂/∂q along the
-tangent as in id_derivatives.  q: (nq,), v: (nv,), tau: (nv,).  Returns (data.dqdd_dq,
-data.dqdd_dv, data.Minv), shape (nv, nv) each: read-only views, not copies (the next derivative
-call on this Data overwrites them; .copy() to keep them).  Also fills data.qdd.  𝓜⁻¹ by the
+tangent as in inverse_dynamics_derivatives.  q: (nq,), v: (nv,), tau: (nv,).  Returns (data.dqdd_dq,
+data.dqdd_dv, data.dqdd_dtau), shape (nv, nv) each: read-only views, not copies (the next call of
+this function on this Data overwrites them; .copy() to keep them).  Leaves data.qdd (forward_dynamics')
+and data.Minv (minverse's) as they were.  𝓜⁻¹ by the
 articulated-body recursion, then its products with the inverse-dynamics derivatives' columns
 without forming them: O(N²) on every tree.)";
   static py::object run(const Model& m, PyData& d, PyObject** a) {
     DerivativeData& dd = d.derivative_data(m);
     read_vector(m, *d.data, name, "tau", a[2], m.nv, d.x);
     kin_vel(m, d, name, a[0], a[1]);
+    d.kept_qdd = d.data->qdd;  // forward_dynamics' result, which this call's q̈ passes through
     forward_dynamics_derivatives(m, *d.data, d.v, d.x, dd, nullptr, true);
+    d.data->qdd = d.kept_qdd;
     return d.fd_result;
   }
 };

@@ -132,14 +132,14 @@ py::object mass_matrix(PyPool& p, py::handle q) {
   return out;  // symmetric: each block reads the same either way
 }
 
-py::object bias(PyPool& p, py::handle q, py::handle v) {
+py::object bias_forces(PyPool& p, py::handle q, py::handle v) {
   const Model& m = p.pool.model();
   py::ssize_t K = -1;
-  const Arg Q = read_states("batch.bias", "q", q, m.nq, "nq", K, "q");
-  const Arg V = read_states("batch.bias", "v", v, m.nv, "nv", K, "q");
+  const Arg Q = read_states("batch.bias_forces", "q", q, m.nq, "nq", K, "q");
+  const Arg V = read_states("batch.bias_forces", "v", v, m.nv, "nv", K, "q");
   py::array out = new_array({K, m.nv});
   MapOut B(ptr(out), m.nv, K);
-  on(p, [&](batch::Pool& pool) { batch::bias(pool, Q.map, V.map, B); });
+  on(p, [&](batch::Pool& pool) { batch::bias_forces(pool, Q.map, V.map, B); });
   return out;
 }
 
@@ -156,9 +156,9 @@ py::object inverse_dynamics(PyPool& p, py::handle q, py::handle v, py::handle qd
   return out;
 }
 
-py::object id_derivatives(PyPool& p, py::handle q, py::handle v, py::handle qdd) {
+py::object inverse_dynamics_derivatives(PyPool& p, py::handle q, py::handle v, py::handle qdd) {
   const Model& m = p.pool.model();
-  const char* where = "batch.id_derivatives";
+  const char* where = "batch.inverse_dynamics_derivatives";
   py::ssize_t K = -1;
   const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
   const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
@@ -169,9 +169,10 @@ py::object id_derivatives(PyPool& p, py::handle q, py::handle v, py::handle qdd)
   return py::make_tuple(blocks(dq), blocks(dv));
 }
 
-py::object fd_derivatives(PyPool& p, py::handle q, py::handle v, py::handle tau, bool minv) {
+// (∂q̈/∂q, ∂q̈/∂v, 𝓜⁻¹ or None): always three, the last None with minv=False
+py::object forward_dynamics_derivatives(PyPool& p, py::handle q, py::handle v, py::handle tau, bool minv) {
   const Model& m = p.pool.model();
-  const char* where = "batch.fd_derivatives";
+  const char* where = "batch.forward_dynamics_derivatives";
   py::ssize_t K = -1;
   const Arg Q = read_states(where, "q", q, m.nq, "nq", K, "q");
   const Arg V = read_states(where, "v", v, m.nv, "nv", K, "q");
@@ -183,8 +184,27 @@ py::object fd_derivatives(PyPool& p, py::handle q, py::handle v, py::handle tau,
     batch::Out mi_out(MI);
     batch::forward_dynamics_derivatives(pool, Q.map, V.map, T.map, DQ, DV, minv ? &mi_out : nullptr);
   });
-  if (!minv) return py::make_tuple(blocks(dq), blocks(dv));
-  return py::make_tuple(blocks(dq), blocks(dv), blocks(mi));
+  return py::make_tuple(blocks(dq), blocks(dv), minv ? py::object(blocks(mi)) : py::object(py::none()));
+}
+
+// The old names, kept one release: a DeprecationWarning naming the new one, then the same call
+// (fd_derivatives with its old shapes: two arrays with minv=False)
+void deprecated(const char* old, const char* now) {
+  const std::string what = std::string("soadyn.batch: ") + old + " is deprecated and goes in the next release: use " + now;
+  if (PyErr_WarnEx(PyExc_DeprecationWarning, what.c_str(), 1) < 0) throw py::error_already_set();
+}
+py::object bias_old(PyPool& p, py::handle q, py::handle v) {
+  deprecated("bias", "bias_forces");
+  return bias_forces(p, q, v);
+}
+py::object id_derivatives_old(PyPool& p, py::handle q, py::handle v, py::handle qdd) {
+  deprecated("id_derivatives", "inverse_dynamics_derivatives");
+  return inverse_dynamics_derivatives(p, q, v, qdd);
+}
+py::object fd_derivatives_old(PyPool& p, py::handle q, py::handle v, py::handle tau, bool minv) {
+  deprecated("fd_derivatives", "forward_dynamics_derivatives");
+  py::tuple r = forward_dynamics_derivatives(p, q, v, tau, minv);
+  return minv ? py::object(r) : py::object(py::make_tuple(r[0], r[1]));
 }
 
 // a frame by name (KeyError with the nearest one) or by index
@@ -219,13 +239,19 @@ struct Doc {
   const char* forward_dynamics = "q̈ = 𝓜⁻¹ (τ − bias) of each state: q (K, nq), v and tau (K, nv) → (K, nv).";
   const char* mass_matrix =
       "𝓜(q) of each state, as mass_matrix(…, kinematics=False) (body axes): q (K, nq) → (K, nv, nv).";
-  const char* bias = "bias(q, q̇) of each state, as bias(…, kinematics=False) (body axes): q (K, nq), v (K, nv) → (K, nv).";
+  const char* bias_forces =
+      "bias(q, q̇) of each state, as bias_forces(…, kinematics=False) (body axes): q (K, nq), v (K, nv) → (K, nv).";
   const char* inverse_dynamics = "τ = 𝓜 q̈ + bias of each state: q (K, nq), v and qdd (K, nv) → (K, nv).";
-  const char* id_derivatives =
-      "(∂τ/∂q, ∂τ/∂v) of each state, as id_derivatives: q (K, nq), v and qdd (K, nv) → two (K, nv, nv).";
-  const char* fd_derivatives =
-      "(∂q̈/∂q, ∂q̈/∂v, 𝓜⁻¹) of each state, as fd_derivatives: q (K, nq), v and tau (K, nv) → three (K, nv, nv)\n"
-      "(two with minv=False: ∂q̈/∂τ = 𝓜⁻¹ is then not computed).";
+  const char* inverse_dynamics_derivatives =
+      "(∂τ/∂q, ∂τ/∂v) of each state, as inverse_dynamics_derivatives: q (K, nq), v and qdd (K, nv) → two (K, nv, nv).";
+  const char* forward_dynamics_derivatives =
+      "(∂q̈/∂q, ∂q̈/∂v, 𝓜⁻¹) of each state, as forward_dynamics_derivatives: q (K, nq), v and tau (K, nv) → three\n"
+      "(K, nv, nv), always three: with minv=False the last is None (∂q̈/∂τ = 𝓜⁻¹ is then not copied out).";
+  const char* bias_old = "Deprecated: bias_forces (the same arguments and results).";
+  const char* id_derivatives_old = "Deprecated: inverse_dynamics_derivatives (the same arguments and results).";
+  const char* fd_derivatives_old =
+      "Deprecated: forward_dynamics_derivatives (the same arguments; two arrays with minv=False, where the new name "
+      "returns three, the last None).";
   const char* frame_jacobian =
       "J of the frame (a name or index of model.frame_names) at each state, as frame_jacobian: q (K, nq) → (K, 6, nv)\n"
       "(reference: world, local or local_world_aligned).";
@@ -245,17 +271,27 @@ between calls, for small batches called often: pool.forward_dynamics(q, v, tau),
         "model"_a, "q"_a, "v"_a, "tau"_a, "method"_a = "aba", "threads"_a = 1, doc.forward_dynamics);
   b.def("mass_matrix", [pool](const Model& m, py::handle q, int threads) { return mass_matrix(*pool(m, threads), q); },
         "model"_a, "q"_a, "threads"_a = 1, doc.mass_matrix);
-  b.def("bias", [pool](const Model& m, py::handle q, py::handle v, int threads) { return bias(*pool(m, threads), q, v); },
-        "model"_a, "q"_a, "v"_a, "threads"_a = 1, doc.bias);
+  b.def("bias_forces", [pool](const Model& m, py::handle q, py::handle v, int threads) {
+        return bias_forces(*pool(m, threads), q, v);
+      }, "model"_a, "q"_a, "v"_a, "threads"_a = 1, doc.bias_forces);
   b.def("inverse_dynamics", [pool](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
         return inverse_dynamics(*pool(m, threads), q, v, qdd);
       }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1, doc.inverse_dynamics);
+  b.def("inverse_dynamics_derivatives", [pool](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
+        return inverse_dynamics_derivatives(*pool(m, threads), q, v, qdd);
+      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1, doc.inverse_dynamics_derivatives);
+  b.def("forward_dynamics_derivatives", [pool](const Model& m, py::handle q, py::handle v, py::handle tau, bool minv,
+                                               int threads) {
+        return forward_dynamics_derivatives(*pool(m, threads), q, v, tau, minv);
+      }, "model"_a, "q"_a, "v"_a, "tau"_a, "minv"_a = true, "threads"_a = 1, doc.forward_dynamics_derivatives);
+  b.def("bias", [pool](const Model& m, py::handle q, py::handle v, int threads) { return bias_old(*pool(m, threads), q, v); },
+        "model"_a, "q"_a, "v"_a, "threads"_a = 1, doc.bias_old);
   b.def("id_derivatives", [pool](const Model& m, py::handle q, py::handle v, py::handle qdd, int threads) {
-        return id_derivatives(*pool(m, threads), q, v, qdd);
-      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1, doc.id_derivatives);
+        return id_derivatives_old(*pool(m, threads), q, v, qdd);
+      }, "model"_a, "q"_a, "v"_a, "qdd"_a, "threads"_a = 1, doc.id_derivatives_old);
   b.def("fd_derivatives", [pool](const Model& m, py::handle q, py::handle v, py::handle tau, bool minv, int threads) {
-        return fd_derivatives(*pool(m, threads), q, v, tau, minv);
-      }, "model"_a, "q"_a, "v"_a, "tau"_a, "minv"_a = true, "threads"_a = 1, doc.fd_derivatives);
+        return fd_derivatives_old(*pool(m, threads), q, v, tau, minv);
+      }, "model"_a, "q"_a, "v"_a, "tau"_a, "minv"_a = true, "threads"_a = 1, doc.fd_derivatives_old);
   b.def("frame_jacobian", [pool](const Model& m, py::handle q, const py::object& frame, const std::string& reference,
                                  int threads) { return frame_jacobian(*pool(m, threads), q, frame, reference); },
         "model"_a, "q"_a, "frame"_a, "reference"_a = "local_world_aligned", "threads"_a = 1, doc.frame_jacobian);
@@ -266,10 +302,15 @@ between calls, for small batches called often: pool.forward_dynamics(q, v, tau),
       .def_property_readonly("threads", [](const PyPool& p) { return p.pool.threads(); })
       .def("forward_dynamics", &forward_dynamics, "q"_a, "v"_a, "tau"_a, "method"_a = "aba", doc.forward_dynamics)
       .def("mass_matrix", &mass_matrix, "q"_a, doc.mass_matrix)
-      .def("bias", &bias, "q"_a, "v"_a, doc.bias)
+      .def("bias_forces", &bias_forces, "q"_a, "v"_a, doc.bias_forces)
       .def("inverse_dynamics", &inverse_dynamics, "q"_a, "v"_a, "qdd"_a, doc.inverse_dynamics)
-      .def("id_derivatives", &id_derivatives, "q"_a, "v"_a, "qdd"_a, doc.id_derivatives)
-      .def("fd_derivatives", &fd_derivatives, "q"_a, "v"_a, "tau"_a, "minv"_a = true, doc.fd_derivatives)
+      .def("inverse_dynamics_derivatives", &inverse_dynamics_derivatives, "q"_a, "v"_a, "qdd"_a,
+           doc.inverse_dynamics_derivatives)
+      .def("forward_dynamics_derivatives", &forward_dynamics_derivatives, "q"_a, "v"_a, "tau"_a, "minv"_a = true,
+           doc.forward_dynamics_derivatives)
+      .def("bias", &bias_old, "q"_a, "v"_a, doc.bias_old)
+      .def("id_derivatives", &id_derivatives_old, "q"_a, "v"_a, "qdd"_a, doc.id_derivatives_old)
+      .def("fd_derivatives", &fd_derivatives_old, "q"_a, "v"_a, "tau"_a, "minv"_a = true, doc.fd_derivatives_old)
       .def("frame_jacobian", &frame_jacobian, "q"_a, "frame"_a, "reference"_a = "local_world_aligned", doc.frame_jacobian);
 }
 

@@ -54,12 +54,22 @@ struct PyData {
   py::object model;  // the Python Model it was made for (pickle and deepcopy carry it)
   int nq, nv, nbodies;
   VecX q, v, x;  // arguments copied here: the library takes VecX, this copy does not allocate
+  // another function's results kept across a call whose C++ counterpart fills them as a by-product
+  // (forward_dynamics 'dense'/'sparse': data.M and data.bias; forward_dynamics_derivatives: data.qdd;
+  // forward_dynamics_parameter_derivative: all four; regressor: data.tau)
+  MatX kept_M;
+  VecX kept_bias, kept_qdd, kept_tau;
   py::array M, bias, tau, qdd;          // the results the algorithms fill
   py::array R, eta, d, s, r, G, V, Vbar;  // kinematics
   // the derivative algorithms' arrays (nv×nv each: made by the first call that needs them) and
-  // their views; id_result and fd_result are the tuples id_derivatives and fd_derivatives return
+  // their views; id_result and fd_result are the tuples inverse_dynamics_derivatives and
+  // forward_dynamics_derivatives return
+  // Each returned array belongs to one function, the only one that writes it (src/python/README.md,
+  // "What a call overwrites"): minverse's 𝓜⁻¹ (Minv) is its own, apart from the 𝓜⁻¹ =
+  // ∂q̈/∂τ forward_dynamics_derivatives returns (dqdd_dtau, the DerivativeData's)
   std::shared_ptr<DerivativeData> derivatives;
-  py::array dtau_dq, dtau_dv, dqdd_dq, dqdd_dv, Minv;
+  std::shared_ptr<MatX> minverse_result;
+  py::array dtau_dq, dtau_dv, dqdd_dq, dqdd_dv, dqdd_dtau, Minv;
   py::tuple id_result, fd_result;
   DerivativeData& derivative_data(const Model& model);
 

@@ -59,7 +59,24 @@ Mat3 rpy(const Vec3& a) {
 #define SOADYN_REFERENCES \
     "reference: 'world' ([ω; v_O], the body's point at the inertial origin, inertial axes), 'local'\n" \
     "(the frame's axes, about its origin) or 'local_world_aligned' ([ω; ṗ], inertial axes, about the\n" \
-    "frame's origin; the default).  Angular rows first."
+    "frame's origin; the default).\n" \
+    "Rows are [angular; linear], [ω; v] as in the note: rows 0-2 angular, 3-5 linear (Pinocchio puts\n" \
+    "linear first, so its habit J[:3] takes the angular rows here).  part: 'all' (the default, 6 rows),\n" \
+    "'linear' (rows 3-5) or 'angular' (rows 0-2)."
+
+// part="all" | "angular" | "linear" → (first row, rows) of a spatial quantity [ω; v]
+std::pair<int, int> part_rows(const std::string& part, const char* where) {
+  if (part == "all") return {0, 6};
+  if (part == "angular") return {0, 3};
+  if (part == "linear") return {3, 3};
+  throw py::value_error(std::string(where) + ": part: expected 'all', 'angular' or 'linear', got '" + printable(part) + "'" +
+                        did_you_mean(part, {"all", "angular", "linear"}));
+}
+
+py::array rows(const Vec6& x, const std::string& part, const char* where) {
+  const auto [first, n] = part_rows(part, where);
+  return vec(x.segment(first, n));
+}
 
 }  // namespace
 
@@ -103,44 +120,51 @@ void bind_frames(py::module_& m) {
       }, "model"_a, "data"_a, "q"_a, "frame"_a,
       "(R, p) of the frame at q: R (3, 3) frame → inertial, p (3,) its origin.  frame: name or index.");
   m.def("frame_velocity", [](const Model& mo, PyData& d, const py::object& q, const py::object& v, const py::object& frame,
-                             const std::string& reference) {
+                             const std::string& reference, const std::string& part) {
         const int f = frame_arg(mo, frame, "frame_velocity");
         const Reference r = reference_arg(reference);
+        part_rows(part, "frame_velocity");
         kin_vel(mo, d, "frame_velocity", q, v);
-        return vec(frame_velocity(mo, *d.data, f, r));
-      }, "model"_a, "data"_a, "q"_a, "v"_a, "frame"_a, "reference"_a = "local_world_aligned",
-      "The frame's velocity (6,) = frame_jacobian(…) @ v.\n" SOADYN_REFERENCES);
+        return rows(frame_velocity(mo, *d.data, f, r), part, "frame_velocity");
+      }, "model"_a, "data"_a, "q"_a, "v"_a, "frame"_a, "reference"_a = "local_world_aligned", "part"_a = "all",
+      "The frame's velocity (6,) = frame_jacobian(…) @ v ((3,) with part).\n" SOADYN_REFERENCES);
   m.def("frame_acceleration", [](const Model& mo, PyData& d, const py::object& q, const py::object& v, const py::object& qdd,
-                                 const py::object& frame, const std::string& reference, bool classical) {
+                                 const py::object& frame, const std::string& reference, bool classical, const std::string& part) {
         const int f = frame_arg(mo, frame, "frame_acceleration");
         const Reference r = reference_arg(reference);
+        part_rows(part, "frame_acceleration");
         read_vector(mo, *d.data, "frame_acceleration", "qdd", qdd, mo.nv, d.x);
         kin_vel(mo, d, "frame_acceleration", q, v);
-        return vec(frame_acceleration(mo, *d.data, f, d.x, r, classical));
+        return rows(frame_acceleration(mo, *d.data, f, d.x, r, classical), part, "frame_acceleration");
       }, "model"_a, "data"_a, "q"_a, "v"_a, "qdd"_a, "frame"_a, "reference"_a = "local_world_aligned", "classical"_a = false,
+      "part"_a = "all",
       "The frame's acceleration (6,) for joint accelerations qdd: spatial (the time derivative of the\n"
                    "world or local velocity; local_world_aligned: local's in inertial axes, [α; p̈ − ω × ṗ]) or, with\n"
                    "classical=True, [α; the acceleration of the body's point at the reference point].\n" SOADYN_REFERENCES);
   m.def("frame_jacobian", [](const Model& mo, PyData& d, const py::object& q, const py::object& frame,
-                             const std::string& reference) {
+                             const std::string& reference, const std::string& part) {
         const int f = frame_arg(mo, frame, "frame_jacobian");
         const Reference r = reference_arg(reference);
+        const auto [first, n] = part_rows(part, "frame_jacobian");
         kin(mo, d, "frame_jacobian", q);
         MatX J;
         frame_jacobian(mo, *d.data, f, r, J);
-        return owned(std::move(J));
-      }, "model"_a, "data"_a, "q"_a, "frame"_a, "reference"_a = "local_world_aligned",
-      "J (6, nv): the frame's velocity is J @ v; body b's rows of Ψ_D G (eq. 7) moved to the frame.\n" SOADYN_REFERENCES);
+        if (n == 6) return owned(std::move(J));
+        return owned(MatX(J.middleRows(first, n)));
+      }, "model"_a, "data"_a, "q"_a, "frame"_a, "reference"_a = "local_world_aligned", "part"_a = "all",
+      "J (6, nv) ((3, nv) with part): the frame's velocity is J @ v; body b's rows of Ψ_D G (eq. 7) moved to\n"
+      "the frame.\n" SOADYN_REFERENCES);
   m.def("frame_jacobian_dot_times_v", [](const Model& mo, PyData& d, const py::object& q, const py::object& v,
-                                         const py::object& frame, const std::string& reference) {
+                                         const py::object& frame, const std::string& reference, const std::string& part) {
         const int f = frame_arg(mo, frame, "frame_jacobian_dot_times_v");
         const Reference r = reference_arg(reference);
+        part_rows(part, "frame_jacobian_dot_times_v");
         kin_vel(mo, d, "frame_jacobian_dot_times_v", q, v);
         Vec6 out;
         frame_jacobian_dot_times_v(mo, *d.data, f, r, out);
-        return vec(out);
-      }, "model"_a, "data"_a, "q"_a, "v"_a, "frame"_a, "reference"_a = "local_world_aligned",
-      "J̇ v (6,) = d/dt (J(q) v) at fixed v: the task acceleration is J q̈ + J̇ v.\n" SOADYN_REFERENCES);
+        return rows(out, part, "frame_jacobian_dot_times_v");
+      }, "model"_a, "data"_a, "q"_a, "v"_a, "frame"_a, "reference"_a = "local_world_aligned", "part"_a = "all",
+      "J̇ v (6,) ((3,) with part) = d/dt (J(q) v) at fixed v: the task acceleration is J q̈ + J̇ v.\n" SOADYN_REFERENCES);
   m.def("point_jacobian", [](const Model& mo, PyData& d, const py::object& q, const py::object& body, const ArrayIn& point) {
         int b;
         if (py::isinstance<py::str>(body)) {

@@ -175,12 +175,13 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
 
   py::class_<PyData>(m, "Data", R"(The per-state arrays of one Model, allocated once (model.create_data()).
 
-The algorithms fill it and return read-only views of it (no copy): mass_matrix → data.M,
-bias → data.bias, inverse_dynamics → data.tau, forward_dynamics → data.qdd, id_derivatives →
-(data.dtau_dq, data.dtau_dv), fd_derivatives → (data.dqdd_dq, data.dqdd_dv, data.Minv),
-minverse → data.Minv (the derivative arrays, nv×nv each, made by the first call that needs them).  A view is
-overwritten by the next call on the same Data (copy it to keep it) and keeps the memory alive
-after the Data object is gone.  Kinematics (filled by every algorithm that takes q), one row per
+The algorithms fill it and return read-only views of it (no copy), each array one function's
+own: mass_matrix → data.M, bias_forces → data.bias, inverse_dynamics → data.tau, forward_dynamics →
+data.qdd, inverse_dynamics_derivatives → (data.dtau_dq, data.dtau_dv), forward_dynamics_derivatives
+→ (data.dqdd_dq, data.dqdd_dv, data.dqdd_dtau), minverse → data.Minv (the derivative arrays, nv×nv
+each, made by the first call that needs them).  A returned view changes only when its own function
+is called again on the same Data (copy it to keep it); it keeps the memory alive after the Data
+object is gone.  Kinematics (filled by every algorithm that takes q), one row per
 body, inertial coordinates: R (N, 3, 3) body → inertial, eta (N, 3) joint points η_i,
 d (N, 3) d_i = η_i − η_parent(i), s (N, 3) s_i = r_i − η_i, r (N, 3) centres of mass,
 G (6, nv) the columns of the joint maps G_i; V (N, 6) v_i = [ω_i; η̇_i] and Vbar (N, 6)
@@ -190,8 +191,8 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
              d.model = model;
              return d;
            }), "model"_a)
-      .def_readonly("M", &PyData::M, "𝓜(q), shape (nv, nv): filled by mass_matrix (and forward_dynamics 'dense'/'sparse')")
-      .def_readonly("bias", &PyData::bias, "bias(q, q̇), shape (nv,)")
+      .def_readonly("M", &PyData::M, "𝓜(q), shape (nv, nv): filled by mass_matrix")
+      .def_readonly("bias", &PyData::bias, "bias(q, q̇), shape (nv,): filled by bias_forces")
       .def_readonly("tau", &PyData::tau, "inverse-dynamics result τ, shape (nv,)")
       .def_readonly("qdd", &PyData::qdd, "forward-dynamics result q̈, shape (nv,)")
       .def_readonly("R", &PyData::R, "C_i^in, body i frame → inertial, shape (N, 3, 3)")
@@ -202,15 +203,17 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
       .def_readonly("G", &PyData::G, "column k: the motion vector of DOF k, [g; 0] or [0; g], shape (6, nv)")
       .def_readonly("V", &PyData::V, "v_i = [ω_i; η̇_i] (eq. 4), shape (N, 6)")
       .def_property_readonly("dtau_dq", [](PyData& self) { return derivative_view(self, &PyData::dtau_dq); },
-                             "∂τ/∂q (tangent) of inverse dynamics, shape (nv, nv): filled by id_derivatives and fd_derivatives")
+                             "∂τ/∂q (tangent) of inverse dynamics, shape (nv, nv): filled by inverse_dynamics_derivatives")
       .def_property_readonly("dtau_dv", [](PyData& self) { return derivative_view(self, &PyData::dtau_dv); },
-                             "∂τ/∂v of inverse dynamics, shape (nv, nv): filled by id_derivatives and fd_derivatives")
+                             "∂τ/∂v of inverse dynamics, shape (nv, nv): filled by inverse_dynamics_derivatives")
       .def_property_readonly("dqdd_dq", [](PyData& self) { return derivative_view(self, &PyData::dqdd_dq); },
-                             "∂q̈/∂q (tangent) of forward dynamics, shape (nv, nv): filled by fd_derivatives")
+                             "∂q̈/∂q (tangent) of forward dynamics, shape (nv, nv): filled by forward_dynamics_derivatives")
       .def_property_readonly("dqdd_dv", [](PyData& self) { return derivative_view(self, &PyData::dqdd_dv); },
-                             "∂q̈/∂v of forward dynamics, shape (nv, nv): filled by fd_derivatives")
+                             "∂q̈/∂v of forward dynamics, shape (nv, nv): filled by forward_dynamics_derivatives")
+      .def_property_readonly("dqdd_dtau", [](PyData& self) { return derivative_view(self, &PyData::dqdd_dtau); },
+                             "∂q̈/∂τ = 𝓜⁻¹, shape (nv, nv): filled by forward_dynamics_derivatives")
       .def_property_readonly("Minv", [](PyData& self) { return derivative_view(self, &PyData::Minv); },
-                             "𝓜⁻¹ = ∂q̈/∂τ, shape (nv, nv): filled by fd_derivatives and minverse")
+                             "𝓜⁻¹, shape (nv, nv): filled by minverse")
       .def_readonly("Vbar", &PyData::Vbar, "v̄_i = [ω_i; ṙ_i] (eq. 5), shape (N, 6)")
       .def("__repr__", [](const PyData& self) {
         return "<soadyn.Data: " + std::to_string(self.nbodies) + " bodies, nq = " + std::to_string(self.nq) +

@@ -143,7 +143,8 @@ py::array view(const py::capsule& base, double* ptr, std::vector<py::ssize_t> sh
 }  // namespace
 
 PyData::PyData(const Model& model)
-    : data(std::make_shared<Data>(model)), nq(model.nq), nv(model.nv), nbodies(model.nbodies), q(nq), v(nv), x(nv) {
+    : data(std::make_shared<Data>(model)), nq(model.nq), nv(model.nv), nbodies(model.nbodies), q(nq), v(nv), x(nv),
+      kept_M(nv, nv), kept_bias(nv), kept_qdd(nv), kept_tau(nv) {
   auto* keep = new std::shared_ptr<Data>(data);
   py::capsule base(keep, [](void* p) { delete static_cast<std::shared_ptr<Data>*>(p); });
   Data& D = *data;
@@ -176,9 +177,14 @@ DerivativeData& PyData::derivative_data(const Model& model) {
   dtau_dv = view(base, dd->dtau_dv.data(), {nv, nv}, {1, nv});
   dqdd_dq = view(base, dd->dqdd_dq.data(), {nv, nv}, {1, nv});
   dqdd_dv = view(base, dd->dqdd_dv.data(), {nv, nv}, {1, nv});
-  Minv = view(base, dd->Minv.data(), {nv, nv}, {1, nv});
+  dqdd_dtau = view(base, dd->Minv.data(), {nv, nv}, {1, nv});
   id_result = py::make_tuple(dtau_dq, dtau_dv);
-  fd_result = py::make_tuple(dqdd_dq, dqdd_dv, Minv);
+  fd_result = py::make_tuple(dqdd_dq, dqdd_dv, dqdd_dtau);
+  // minverse's own nv×nv
+  minverse_result = std::make_shared<MatX>(MatX::Zero(nv, nv));
+  auto* own = new std::shared_ptr<MatX>(minverse_result);
+  py::capsule own_base(own, [](void* p) { delete static_cast<std::shared_ptr<MatX>*>(p); });
+  Minv = view(own_base, minverse_result->data(), {nv, nv}, {1, nv});
   derivatives = std::move(dd);
   return *derivatives;
 }

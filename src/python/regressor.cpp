@@ -35,7 +35,9 @@ inertia about the body frame's origin (its joint point), in the body's axes (Pin
         at_state(model, d, "regressor", q, v);
         read_vector(model, *d.data, "regressor", "qdd", qdd, model.nv, d.x);
         MatX Y;
+        d.kept_tau = d.data->tau;  // its inverse dynamics passes through data.tau: inverse_dynamics' result stays
         regressor(model, *d.data, d.x, Y);
+        d.data->tau = d.kept_tau;
         return owned(std::move(Y));
       }, "model"_a, "data"_a, "q"_a, "v"_a, "qdd"_a,
       "The joint-torque regressor Y, shape (nv, 10 N): inverse dynamics tau = Y @ parameters(model),\n"
@@ -45,7 +47,17 @@ inertia about the body frame's origin (its joint point), in the body's axes (Pin
           at_state(model, d, "forward_dynamics_parameter_derivative", q, v);
           read_vector(model, *d.data, "forward_dynamics_parameter_derivative", "tau", tau, model.nv, d.x);
           MatX out;
+          // it forms 𝓜, bias, q̈ and τ in data.M, data.bias, data.qdd and data.tau on its way: the
+          // results mass_matrix, bias_forces, forward_dynamics and inverse_dynamics returned stay
+          d.kept_M = d.data->M;
+          d.kept_bias = d.data->bias;
+          d.kept_qdd = d.data->qdd;
+          d.kept_tau = d.data->tau;
           forward_dynamics_parameter_derivative(model, *d.data, d.x, out);
+          d.data->M = d.kept_M;
+          d.data->bias = d.kept_bias;
+          d.data->qdd = d.kept_qdd;
+          d.data->tau = d.kept_tau;
           return owned(std::move(out));
         }, "model"_a, "data"_a, "q"_a, "v"_a, "tau"_a,
         "dqdd/dpi, shape (nv, 10 N): -M^-1 Y(q, v, qdd) at the forward-dynamics qdd for tau, M^-1\n"

@@ -45,7 +45,7 @@ def test_random_trees_equal_the_cpp_library(tmp_path, rng, free_root):
             assert ref["joints"] == model.joint_names
             assert (ref["nq"], ref["nv"]) == (model.nq, model.nv)
             assert_close(soadyn.mass_matrix(model, data, q), ref["M"], 1e-14)
-            assert_close(soadyn.bias(model, data, q, v), ref["bias"], 1e-14)
+            assert_close(soadyn.bias_forces(model, data, q, v), ref["bias"], 1e-14)
             assert_close(soadyn.forward_dynamics(model, data, q, v, tau, method=method), ref["qdd"], 1e-14)
             assert_close(soadyn.kinetic_energy(model, data, q, v), ref["kinetic_energy"], 1e-14)
             assert_close(soadyn.potential_energy(model, data, q), ref["potential_energy"], 1e-14)
@@ -68,7 +68,7 @@ def test_independent_routes_agree(tmp_path, rng):
         assert_close(soadyn.minverse(model, data, q) @ M, np.eye(model.nv), 1e-10)  # the articulated-body 𝓜⁻¹
         qdd = soadyn.forward_dynamics(model, data, q, v, tau).copy()
         assert_close(soadyn.inverse_dynamics(model, data, q, v, qdd), tau, 1e-10)
-        assert_close(M @ qdd + soadyn.bias(model, data, q, v), tau, 1e-10)
+        assert_close(M @ qdd + soadyn.bias_forces(model, data, q, v), tau, 1e-10)
         # 𝓜 = Jᵀ diag(M̄_i) J with M̄_i = [R I_cm Rᵀ, 0; 0, m e], from the model's and data's arrays
         J = soadyn.jacobian(model, data, q)
         assert J.shape == (6 * model.nbodies, model.nv)
@@ -117,9 +117,9 @@ def test_state_only_routes_equal_the_staged_ones(tmp_path, rng):
         for _ in range(3):
             q, v, _tau = random_state(rng, model)
             M = soadyn.mass_matrix(model, data, q).copy()
-            b = soadyn.bias(model, data, q, v).copy()
+            b = soadyn.bias_forces(model, data, q, v).copy()
             assert_close(soadyn.mass_matrix(model, data, q, kinematics=False), M, 1e-12)
-            assert_close(soadyn.bias(model, data, q, v, kinematics=False), b, 1e-12)
+            assert_close(soadyn.bias_forces(model, data, q, v, kinematics=False), b, 1e-12)
             assert_close(soadyn.mass_matrix(model, data, q, kinematics=True), M, 0)
     # the route taken is the state-only one: on the arm (depth 7) it forms no inertial frame, so
     # data.R still holds what update_kinematics left (unspecified by the API, but a staged call
@@ -130,16 +130,16 @@ def test_state_only_routes_equal_the_staged_ones(tmp_path, rng):
     R0 = data.R.copy()
     q1, v1, _ = random_state(rng, models[0])
     soadyn.mass_matrix(models[0], data, q1, kinematics=False)
-    soadyn.bias(models[0], data, q1, v1, kinematics=False)
+    soadyn.bias_forces(models[0], data, q1, v1, kinematics=False)
     assert_close(data.R, R0, 0)
     soadyn.mass_matrix(models[0], data, q1)
     assert np.abs(data.R - R0).max() > 1e-3
     with pytest.raises(TypeError, match="kinematics: expected True or False, got int"):
         soadyn.mass_matrix(models[0], data, q, kinematics=0)
     with pytest.raises(TypeError, match="missing required argument 'v'"):
-        soadyn.bias(models[0], data, q, kinematics=False)
+        soadyn.bias_forces(models[0], data, q, kinematics=False)
     with pytest.raises(soadyn.Error, match="v"):  # sizes checked as the staged call does
-        soadyn.bias(models[0], data, q, np.zeros(3), kinematics=False)
+        soadyn.bias_forces(models[0], data, q, np.zeros(3), kinematics=False)
 
 
 # ---- the note's examples in closed form ------------------------------------------------------
@@ -279,7 +279,7 @@ def test_results_are_read_only_views_of_data(rng):
     model = soadyn.load(f"{SCENARIOS}/three_link_arm.yaml")
     data = model.create_data()
     q, v, tau = random_state(rng, model)
-    views = {"M": soadyn.mass_matrix(model, data, q), "bias": soadyn.bias(model, data, q, v),
+    views = {"M": soadyn.mass_matrix(model, data, q), "bias": soadyn.bias_forces(model, data, q, v),
              "tau": soadyn.inverse_dynamics(model, data, q, v, tau),
              "qdd": soadyn.forward_dynamics(model, data, q, v, tau)}
     for name, x in views.items():
@@ -308,29 +308,33 @@ def test_derivatives_are_read_only_views_of_data(rng):
     model = soadyn.load(f"{SCENARIOS}/three_link_arm.yaml")
     data = model.create_data()
     q, v, tau = random_state(rng, model)
-    fd = soadyn.fd_derivatives(model, data, q, v, tau)
+    fd = soadyn.forward_dynamics_derivatives(model, data, q, v, tau)
     kept = [x.copy() for x in fd]
-    idd = soadyn.id_derivatives(model, data, q, v, tau)
-    views = dict(zip(("dqdd_dq", "dqdd_dv", "Minv", "dtau_dq", "dtau_dv"), (*fd, *idd)))
+    idd = soadyn.inverse_dynamics_derivatives(model, data, q, v, tau)
+    views = dict(zip(("dqdd_dq", "dqdd_dv", "dqdd_dtau", "dtau_dq", "dtau_dv"), (*fd, *idd)))
     for name, x in views.items():
         assert np.shares_memory(x, getattr(data, name)) and x.shape == (model.nv, model.nv), name
         assert not x.flags.writeable, name
         with pytest.raises(ValueError):
             x[0, 0] = 1.0
-    # id_derivatives leaves fd_derivatives' results alone; minverse writes data.Minv, the same 𝓜⁻¹
+    # inverse_dynamics_derivatives leaves forward_dynamics_derivatives' results alone; minverse
+    # returns its own 𝓜⁻¹ (data.Minv), the same numbers, and leaves data.dqdd_dtau alone
     for x, k in zip(fd, kept):
         assert np.array_equal(x, k)
-    assert soadyn.minverse(model, data, q) is fd[2]
-    assert_close(fd[2], kept[2], 1e-12)
+    Minv = soadyn.minverse(model, data, q)
+    assert Minv is data.Minv and not np.shares_memory(Minv, fd[2])
+    assert_close(Minv, kept[2], 1e-12)
+    soadyn.minverse(model, data, q + 0.3)
+    assert np.array_equal(fd[2], kept[2])
     # the next call overwrites them; a view outlives its Data
     q2 = q + 0.5
-    again = soadyn.fd_derivatives(model, data, q2, v, tau)
+    again = soadyn.forward_dynamics_derivatives(model, data, q2, v, tau)
     assert all(a is b for a, b in zip(again, fd)) and not np.allclose(fd[0], kept[0])
     expected = [x.copy() for x in again]
     del data, again
     gc.collect()
     for d in [model.create_data() for _ in range(20)]:
-        soadyn.fd_derivatives(model, d, q, v, tau)
+        soadyn.forward_dynamics_derivatives(model, d, q, v, tau)
     assert all(np.array_equal(x, e) for x, e in zip(fd, expected))
 
 
@@ -412,7 +416,7 @@ def test_stub_names_every_public_object_with_its_parameters():
 
 
 def test_docstrings_give_equations_and_shapes():
-    for name in ("mass_matrix", "bias", "inverse_dynamics", "forward_dynamics", "jacobian", "mass_matrix_literal"):
+    for name in ("mass_matrix", "bias_forces", "inverse_dynamics", "forward_dynamics", "jacobian", "mass_matrix_literal"):
         doc = getattr(soadyn, name).__doc__
         assert "(nv" in doc or "(6N" in doc, name
         assert any(s in doc for s in ("=", "eq.")), name
@@ -470,9 +474,9 @@ def test_derivatives_against_differences_and_each_other(rng):
     model = soadyn.load(f"{SCENARIOS}/satellite_two_arrays.yaml")
     data = model.create_data()
     q, v, tau = random_state(rng, model)
-    dqdd_dq, dqdd_dv, Minv = soadyn.fd_derivatives(model, data, q, v, tau)
+    dqdd_dq, dqdd_dv, Minv = soadyn.forward_dynamics_derivatives(model, data, q, v, tau)
     qdd = soadyn.forward_dynamics(model, data, q, v, tau).copy()
-    dtau_dq, dtau_dv = soadyn.id_derivatives(model, data, q, v, qdd)
+    dtau_dq, dtau_dv = soadyn.inverse_dynamics_derivatives(model, data, q, v, qdd)
     assert_close(Minv, np.linalg.inv(soadyn.mass_matrix(model, data, q)), 1e-10)
     assert_close(dqdd_dq, -Minv @ dtau_dq, 1e-9)
     assert_close(dqdd_dv, -Minv @ dtau_dv, 1e-9)

@@ -56,15 +56,17 @@ def test_batched_equals_looped_to_the_bit(tree, threads):
                 == looped(soadyn.forward_dynamics, model, q, v, x, method=method)).all(), method
     # the batched 𝓜 and bias take the body-axes routes: the single calls' kinematics=False
     assert (b.mass_matrix(model, q, threads=threads) == looped(soadyn.mass_matrix, model, q, kinematics=False)).all()
-    assert (b.bias(model, q, v, threads=threads) == looped(soadyn.bias, model, q, v, kinematics=False)).all()
+    assert (b.bias_forces(model, q, v, threads=threads) == looped(soadyn.bias_forces, model, q, v, kinematics=False)).all()
     assert (b.inverse_dynamics(model, q, v, x, threads=threads) == looped(soadyn.inverse_dynamics, model, q, v, x)).all()
-    for got, ref in zip(b.id_derivatives(model, q, v, x, threads=threads), looped(soadyn.id_derivatives, model, q, v, x)):
+    for got, ref in zip(b.inverse_dynamics_derivatives(model, q, v, x, threads=threads), looped(soadyn.inverse_dynamics_derivatives, model, q, v, x)):
         assert got.shape == ref.shape and (got == ref).all()
-    fd = b.fd_derivatives(model, q, v, x, threads=threads)
+    fd = b.forward_dynamics_derivatives(model, q, v, x, threads=threads)
     assert len(fd) == 3
-    for got, ref in zip(fd, looped(soadyn.fd_derivatives, model, q, v, x)):
+    for got, ref in zip(fd, looped(soadyn.forward_dynamics_derivatives, model, q, v, x)):
         assert got.shape == ref.shape and (got == ref).all()
-    assert len(b.fd_derivatives(model, q, v, x, minv=False, threads=threads)) == 2
+    # always three results: 𝓜⁻¹ None when not asked for
+    dq, dv, none = b.forward_dynamics_derivatives(model, q, v, x, minv=False, threads=threads)
+    assert none is None and (dq == fd[0]).all() and (dv == fd[1]).all()
 
 
 @pytest.mark.parametrize("threads", THREADS)
@@ -91,11 +93,11 @@ def test_pool_kept_between_calls_gives_the_same_bits(tree, threads):
     for _ in range(2):  # its Data carry over from call to call
         assert (pool.forward_dynamics(q, v, x) == soadyn.batch.forward_dynamics(model, q, v, x)).all()
         assert (pool.mass_matrix(q[:3]) == soadyn.batch.mass_matrix(model, q[:3])).all()
-        assert (pool.bias(q, v) == soadyn.batch.bias(model, q, v)).all()
+        assert (pool.bias_forces(q, v) == soadyn.batch.bias_forces(model, q, v)).all()
         assert (pool.inverse_dynamics(q, v, x) == soadyn.batch.inverse_dynamics(model, q, v, x)).all()
-        for a, b in zip(pool.fd_derivatives(q[:50], v[:50], x[:50]), soadyn.batch.fd_derivatives(model, q[:50], v[:50], x[:50])):
+        for a, b in zip(pool.forward_dynamics_derivatives(q[:50], v[:50], x[:50]), soadyn.batch.forward_dynamics_derivatives(model, q[:50], v[:50], x[:50])):
             assert (a == b).all()
-        for a, b in zip(pool.id_derivatives(q[:50], v[:50], x[:50]), soadyn.batch.id_derivatives(model, q[:50], v[:50], x[:50])):
+        for a, b in zip(pool.inverse_dynamics_derivatives(q[:50], v[:50], x[:50]), soadyn.batch.inverse_dynamics_derivatives(model, q[:50], v[:50], x[:50])):
             assert (a == b).all()
     with pytest.raises(ValueError, match="batch.forward_dynamics: tau"):
         pool.forward_dynamics(q, v, x[:, :2])
@@ -105,12 +107,12 @@ def test_pool_keeps_its_model_alive():
     scene = soadyn.load_scenario(f"{SCENARIOS}/double_pendulum.yaml")
     model = soadyn.load(f"{SCENARIOS}/double_pendulum.yaml")
     q, v = np.tile(scene.q0, (4, 1)), np.tile(scene.v0, (4, 1))
-    ref = soadyn.batch.bias(model, q, v)
+    ref = soadyn.batch.bias_forces(model, q, v)
     pool = soadyn.batch.Pool(model)
     del model
     import gc
     gc.collect()
-    assert (pool.bias(q, v) == ref).all()
+    assert (pool.bias_forces(q, v) == ref).all()
 
 
 def test_any_layout_and_lists_read(tree):
@@ -128,8 +130,8 @@ def test_bad_shapes_and_values_refused_naming_the_argument(tree):
     b = soadyn.batch
     with pytest.raises(soadyn.Error, match=rf"batch.forward_dynamics: q: expected shape \(K, {nq}\).*got \({K}, {nq - 1}\)"):
         b.forward_dynamics(model, q[:, 1:], v, x)
-    with pytest.raises(ValueError, match=rf"batch.bias: v: expected shape \({K}, {nv}\) .*K from q.*got \(3, {nv}\)"):
-        b.bias(model, q, v[:3])
+    with pytest.raises(ValueError, match=rf"batch.bias_forces: v: expected shape \({K}, {nv}\) .*K from q.*got \(3, {nv}\)"):
+        b.bias_forces(model, q, v[:3])
     with pytest.raises(ValueError, match=rf"batch.mass_matrix: q: expected shape \(K, {nq}\).*got \({nq},\)"):
         b.mass_matrix(model, q[0])
     bad = x.copy()
@@ -137,7 +139,7 @@ def test_bad_shapes_and_values_refused_naming_the_argument(tree):
     with pytest.raises(ValueError, match=r"batch.inverse_dynamics: qdd\[4, 2\] = inf: expected a finite number"):
         b.inverse_dynamics(model, q, v, bad)
     with pytest.raises(ValueError, match="threads"):
-        b.fd_derivatives(model, q, v, x, threads=-1)
+        b.forward_dynamics_derivatives(model, q, v, x, threads=-1)
     with pytest.raises(TypeError, match="batch.forward_dynamics: tau: expected an array of numbers"):
         b.forward_dynamics(model, q, v, object())
 
@@ -248,3 +250,37 @@ def test_ctrl_c_ends_a_long_rollout(threads):
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
     assert took < 5.0, took  # the rollouts alone would take several seconds
+
+
+def test_old_names_warn_and_give_the_same_results(rng):
+    """bias, id_derivatives and fd_derivatives (module, batch and Pool) are kept one release: each
+    warns DeprecationWarning naming the new name and returns what it did (fd_derivatives: two
+    arrays with minv=False)"""
+    model = soadyn.load(f"{SCENARIOS}/three_link_arm.yaml")
+    data = model.create_data()
+    K = 4
+    q = rng.uniform(-1, 1, (K, model.nq))
+    v, x = rng.uniform(-1, 1, (K, model.nv)), rng.uniform(-1, 1, (K, model.nv))
+    pool = soadyn.batch.Pool(model)
+    cases = [
+        (lambda: soadyn.bias(model, data, q[0], v[0]), lambda: soadyn.bias_forces(model, data, q[0], v[0]), "bias_forces"),
+        (lambda: soadyn.id_derivatives(model, data, q[0], v[0], x[0]),
+         lambda: soadyn.inverse_dynamics_derivatives(model, data, q[0], v[0], x[0]), "inverse_dynamics_derivatives"),
+        (lambda: soadyn.fd_derivatives(model, data, q[0], v[0], x[0]),
+         lambda: soadyn.forward_dynamics_derivatives(model, data, q[0], v[0], x[0]), "forward_dynamics_derivatives"),
+        (lambda: soadyn.batch.bias(model, q, v), lambda: soadyn.batch.bias_forces(model, q, v), "bias_forces"),
+        (lambda: pool.id_derivatives(q, v, x), lambda: pool.inverse_dynamics_derivatives(q, v, x),
+         "inverse_dynamics_derivatives"),
+        (lambda: soadyn.batch.fd_derivatives(model, q, v, x), lambda: soadyn.batch.forward_dynamics_derivatives(model, q, v, x),
+         "forward_dynamics_derivatives"),
+        (lambda: pool.fd_derivatives(q, v, x, minv=False),
+         lambda: pool.forward_dynamics_derivatives(q, v, x, minv=False)[:2], "forward_dynamics_derivatives"),
+    ]
+    for old, new, name in cases:
+        with pytest.warns(DeprecationWarning, match=name):
+            got = old()
+        got = [np.array(a) for a in (got if isinstance(got, tuple) else (got,))]
+        ref = new()
+        ref = [np.array(a) for a in (ref if isinstance(ref, tuple) else (ref,))]
+        assert len(got) == len(ref), name
+        assert all(np.array_equal(a, b) for a, b in zip(got, ref)), name

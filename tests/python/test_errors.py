@@ -69,7 +69,7 @@ def test_vector_sizes_shapes_and_models():
     other = soadyn.load(f"{SCENARIOS}/three_link_arm.yaml")
     data = model.create_data()
     assert raised(soadyn.mass_matrix, model, data, [1.0, 2.0, 3.0]) == "mass_matrix: q: expected 2 entries, got 3"
-    assert raised(soadyn.bias, model, data, [0, 0], [1.0]) == "bias: v: expected 2 entries, got 1"
+    assert raised(soadyn.bias_forces, model, data, [0, 0], [1.0]) == "bias_forces: v: expected 2 entries, got 1"
     assert raised(soadyn.inverse_dynamics, model, data, [0, 0], [0, 0], [1]) == \
         "inverse_dynamics: qdd: expected 2 entries, got 1"
     assert raised(soadyn.forward_dynamics, model, data, [0, 0], [0, 0], np.zeros(5)) == \
@@ -148,7 +148,7 @@ def test_arguments_by_position_and_name():
             (lambda: soadyn.mass_matrix(model, data, q=[0, 0], x=1), "unexpected keyword argument 'x'"),
             (lambda: soadyn.mass_matrix(model, data, [0, 0], q=[1, 1]), "multiple values for argument 'q'"),
             (lambda: soadyn.mass_matrix(data, model, [0, 0]), "mass_matrix: model: expected a soadyn.Model, got Data"),
-            (lambda: soadyn.bias(model, None, [0, 0], [0, 0]), "bias: data: expected a soadyn.Data, got NoneType"),
+            (lambda: soadyn.bias_forces(model, None, [0, 0], [0, 0]), "bias_forces: data: expected a soadyn.Data, got NoneType"),
             (lambda: soadyn.forward_dynamics(model, data, [0, 0], [0, 0], [0, 0], 3), "method: expected a string")]:
         with pytest.raises(TypeError) as e:
             call()
@@ -156,7 +156,7 @@ def test_arguments_by_position_and_name():
     import inspect
     assert str(inspect.signature(soadyn.forward_dynamics)) == "(model, data, q, v, tau, method='aba')"
     assert str(inspect.signature(soadyn.mass_matrix)) == "(model, data, q, kinematics=True)"
-    assert str(inspect.signature(soadyn.bias)) == "(model, data, q, v, kinematics=True)"
+    assert str(inspect.signature(soadyn.bias_forces)) == "(model, data, q, v, kinematics=True)"
 
 
 def test_unknown_names_raise_key_error_with_the_nearest_name():

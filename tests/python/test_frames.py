@@ -124,8 +124,8 @@ def test_operational_space_inertia_and_coriolis(rng):
     Lambda = soadyn.operational_space_inertia(model, data, q, J)
     assert_close(Lambda, np.linalg.inv(J @ np.linalg.solve(M, J.T)), 1e-8)
     C = soadyn.coriolis_matrix(model, data, q, v)
-    gravity = soadyn.bias(model, data, q, np.zeros(model.nv)).copy()
-    assert_close(C @ v, soadyn.bias(model, data, q, v) - gravity, 1e-11)
+    gravity = soadyn.bias_forces(model, data, q, np.zeros(model.nv)).copy()
+    assert_close(C @ v, soadyn.bias_forces(model, data, q, v) - gravity, 1e-11)
     # a 6-row task on two joints
     pend = soadyn.load(f"{SCENARIOS}/double_pendulum.yaml")
     d2 = pend.create_data()
@@ -209,3 +209,30 @@ def test_inspect_frame_prints_pose_and_jacobian():
     tables = cli("inspect", ARM, "--frame", "flange")
     assert tables.returncode == 0 and "frame      flange on link3: origin [" in tables.stdout, tables.stdout
     assert cli_error("inspect", ARM, "--frame", "tol") == "--frame: no frame named 'tol'; did you mean 'tool'?"
+
+
+def test_part_gives_the_rows_of_the_spatial_quantity(rng):
+    """Spatial quantities are [ω; v]: part="angular" is rows 0-2 of the 6-row result, part="linear"
+    rows 3-5, for the four frame functions; a bad part names the choices.  The linear rows are the
+    tool point's velocity by central differences of frame_placement (the angular rows are not)."""
+    model = soadyn.load(os.path.join(ROOT, "tests", "data", "frames", "arm_fixed.urdf"))
+    data = model.create_data()
+    q, v, a = rng.uniform(-1, 1, model.nq), rng.uniform(-1, 1, model.nv), rng.uniform(-1, 1, model.nv)
+    calls = {
+        "frame_jacobian": lambda part: soadyn.frame_jacobian(model, data, q, "tool", part=part),
+        "frame_velocity": lambda part: soadyn.frame_velocity(model, data, q, v, "tool", part=part),
+        "frame_acceleration": lambda part: soadyn.frame_acceleration(model, data, q, v, a, "tool", part=part),
+        "frame_jacobian_dot_times_v": lambda part: soadyn.frame_jacobian_dot_times_v(model, data, q, v, "tool", part=part),
+    }
+    for name, f in calls.items():
+        full = np.array(f("all"))
+        assert full.shape[0] == 6, name
+        assert np.array_equal(np.array(f("angular")), full[:3]), name
+        assert np.array_equal(np.array(f("linear")), full[3:]), name
+        with pytest.raises(ValueError, match=rf"{name}: part: expected 'all', 'angular' or 'linear', got 'lin'"):
+            f("lin")
+    h = 1e-6
+    p = lambda x: soadyn.frame_placement(model, data, x, "tool")[1].copy()
+    pdot = (p(q + h * v) - p(q - h * v)) / (2 * h)
+    assert np.abs(soadyn.frame_velocity(model, data, q, v, "tool", part="linear") - pdot).max() < 1e-8
+    assert np.abs(soadyn.frame_velocity(model, data, q, v, "tool", part="angular") - pdot).max() > 1e-3

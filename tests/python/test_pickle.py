@@ -54,7 +54,7 @@ def same_numbers(a, b, rng):
         q = a.normalize(rng.uniform(-1.5, 1.5, a.nq))
         v = rng.uniform(-2, 2, a.nv)
         assert np.array_equal(soadyn.mass_matrix(a, da, q), soadyn.mass_matrix(b, db, q))
-        assert np.array_equal(soadyn.bias(a, da, q, v), soadyn.bias(b, db, q, v))
+        assert np.array_equal(soadyn.bias_forces(a, da, q, v), soadyn.bias_forces(b, db, q, v))
         assert soadyn.potential_energy(a, da, q) == soadyn.potential_energy(b, db, q)
         for f in a.frame_names:
             for x, y in zip(soadyn.frame_placement(a, da, q, f), soadyn.frame_placement(b, db, q, f)):
@@ -86,7 +86,7 @@ def test_data_round_trip_keeps_model_and_results(rng):
     data = model.create_data()
     q, v = rng.uniform(-1, 1, model.nq), rng.uniform(-1, 1, model.nv)
     soadyn.mass_matrix(model, data, q)
-    soadyn.bias(model, data, q, v)
+    soadyn.bias_forces(model, data, q, v)
     soadyn.forward_dynamics(model, data, q, v, rng.uniform(-1, 1, model.nv))
     for clone in (pickle.loads(pickle.dumps(data)), copy.deepcopy(data), copy.copy(data)):
         for name in ("M", "bias", "qdd", "R", "eta", "d", "s", "r", "G", "V", "Vbar"):

@@ -87,7 +87,7 @@ def main():
                 how = f"Python batch, {threads} thread" + ("s" if threads > 1 else "")
                 pool = soadyn.batch.Pool(model, threads=threads)
                 rows[(key, "qdd", K)][how] = rate(K, args.min_seconds, lambda: pool.forward_dynamics(q, v, tau))
-                rows[(key, "dqdd", K)][how] = rate(K, args.min_seconds, lambda: pool.fd_derivatives(q, v, tau, minv=False))
+                rows[(key, "dqdd", K)][how] = rate(K, args.min_seconds, lambda: pool.forward_dynamics_derivatives(q, v, tau, minv=False))
     hows = ["C++ loop", "C++ batch, 1 thread", "C++ batch, 2 threads", "Python batch, 1 thread", "Python batch, 2 threads"]
     print(f"load average at the end: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     print("| model | | K | " + " | ".join(hows) + " | Python 1 t / C++ loop | 2 t / 1 t (C++) | 2 t / 1 t (control) | "

@@ -60,9 +60,9 @@ def main():
              ("forward_dynamics(…, method='aba')", "forward_dynamics",
               "soadyn.forward_dynamics(model, data, q, v, tau, method='aba')"),
              ("fd_derivatives(model, data, q, v, tau)", "fd_derivatives",
-              "soadyn.fd_derivatives(model, data, q, v, tau)"),
+              "soadyn.forward_dynamics_derivatives(model, data, q, v, tau)"),
              ("id_derivatives(model, data, q, v, qdd)", "id_derivatives",
-              "soadyn.id_derivatives(model, data, q, v, tau)"),
+              "soadyn.inverse_dynamics_derivatives(model, data, q, v, tau)"),
              ("minverse(model, data, q)", "minverse", "soadyn.minverse(model, data, q)"),
              ("mass_matrix, q strided (q[::2] of a copy)", "mass_matrix", "soadyn.mass_matrix(model, data, qs)"),
              ("mass_matrix, q a Python list", "mass_matrix", "soadyn.mass_matrix(model, data, ql)")]

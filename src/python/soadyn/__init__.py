@@ -26,11 +26,13 @@ Model
 Algorithms (model, data, …), each first updating the kinematics at q (and velocities at v)
     mass_matrix(q)            𝓜 = Gᵀ Ψ_Dᵀ M Ψ_D G (eq. 14)      -> view of data.M      (nv, nv)
     mass_matrix_literal(q)    J = Ψ_D G, Q = M J, 𝓜 = Jᵀ Q       -> new array            (nv, nv)
-    minverse(q)               𝓜⁻¹ by the articulated-body recursion -> new array        (nv, nv)
-    bias(q, v)                Gᵀ Ψ_Dᵀ (M Ψ_D a + b)              -> view of data.bias   (nv,)
+    minverse(q)               𝓜⁻¹ by the articulated-body recursion -> view of data.Minv (nv, nv)
+    bias_forces(q, v)         Gᵀ Ψ_Dᵀ (M Ψ_D a + b)              -> view of data.bias   (nv,)
     inverse_dynamics(q, v, qdd)   τ = 𝓜 q̈ + bias                 -> view of data.tau    (nv,)
     forward_dynamics(q, v, tau, method="aba") q̈ = 𝓜⁻¹(τ − bias) -> view of data.qdd    (nv,)
     jacobian(q)               J = S Ψ_D G (eq. 7)                -> new array            (6N, nv)
+    inverse_dynamics_derivatives(q, v, qdd) -> views (data.dtau_dq, data.dtau_dv)
+    forward_dynamics_derivatives(q, v, tau) -> views (data.dqdd_dq, data.dqdd_dv, data.dqdd_dtau = 𝓜⁻¹)
     kinetic_energy(q, v), potential_energy(q) -> float;  momentum(q, v) -> (linear, angular)
     update_kinematics(q), update_velocities(q, v): fill data.R, eta, d, s, r, G, V, Vbar
 Frames and task space (model, data, q, …, frame, reference="local_world_aligned"), new arrays
@@ -47,7 +49,8 @@ Simulation
     rollout(scene, initial_states, controls=None, steps=None, dt=…, method=…, threads=1)
         -> (states (K, T, nq + nv), energies (K, T))      K runs of T steps in one call, no GIL
 Many states per call (soadyn.batch: (K, nq), (K, nv) in, (K, nv) or (K, nv, nv) out, threads=)
-    batch.forward_dynamics, mass_matrix, bias, inverse_dynamics, id_derivatives, fd_derivatives;
+    batch.forward_dynamics, mass_matrix, bias_forces, inverse_dynamics, inverse_dynamics_derivatives,
+    forward_dynamics_derivatives;
     batch.Pool(model, threads) keeps one Data per thread between calls: pool.forward_dynamics(q, v, tau), …
     read_log(path) -> Trajectory
 Gradients of a whole run (adjoint, CVODES)
@@ -61,9 +64,15 @@ Ensembles (soadyn.ensemble: the sweep file's format)
     load_sweep(path) -> Sweep;  read_results(path) -> {column: array}
 
 Arrays in: any float64 array is read in place whatever its strides; lists and other dtypes are
-converted once.  Arrays out: data.M, data.bias, data.tau and data.qdd are read-only views into the
-Data (no copy; the next call on the same Data overwrites them; each keeps the memory alive after
-the Data is gone); everything else is a new array.
+converted once.  Arrays out: data.M, data.bias, data.tau, data.qdd and the derivatives' arrays are
+read-only views into the Data (no copy; each keeps the memory alive after the Data is gone), each
+one function's own: a view changes only when its own function is called again on that Data (copy it
+to keep it); everything else is a new array.  Spatial vectors are [angular; linear] ([ω; v]): a
+frame Jacobian's rows 0–2 are angular, 3–5 linear (Pinocchio puts linear first).
+
+Names are C++'s.  Deprecated, kept one release with a DeprecationWarning: bias (bias_forces),
+id_derivatives (inverse_dynamics_derivatives), fd_derivatives (forward_dynamics_derivatives), and the
+same in soadyn.batch.
 
 Errors: soadyn.Error (a ValueError) with the command line's message: file:line:column: field:
 expected …, got ….
@@ -72,8 +81,8 @@ import warnings as _warnings
 from typing import Callable, Optional, Union
 
 from ._soadyn import (DYNAMICS, JOINT_TYPES, METHODS, Data, Error, Inputs, Model, Scenario, SimulationSettings,
-                      __version__, bias, body_poses, fd_derivatives, forward_dynamics, id_derivatives, inverse_dynamics,
-                      jacobian, kinetic_energy, load,
+                      __version__, bias_forces, body_poses, forward_dynamics, forward_dynamics_derivatives,
+                      inverse_dynamics, inverse_dynamics_derivatives, jacobian, kinetic_energy, load,
                       load_scenario, mass_matrix, mass_matrix_literal, minverse, momentum, parse_scenario, potential_energy,
                       update_kinematics, update_velocities)
 from ._soadyn import (centroidal_inertia, centroidal_momentum, centroidal_momentum_matrix,  # frames.hpp
@@ -97,13 +106,32 @@ __all__ = [
     "forward_dynamics_parameter_derivative", "parameters", "regressor", "with_parameters",
     "Cost", "Gradient", "gradient", "tracking_cost",
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "FramePoses", "Inputs", "Model", "RunSummary", "Scenario", "Sensitivities", "SimulationSettings", "Trajectory", "__version__",
-    "bias", "body_poses", "fd_derivatives", "forward_dynamics", "id_derivatives", "inverse_dynamics", "jacobian",
+    "bias", "id_derivatives", "fd_derivatives",  # deprecated: bias_forces, inverse_/forward_dynamics_derivatives
+    "bias_forces", "body_poses", "forward_dynamics", "forward_dynamics_derivatives", "inverse_dynamics",
+    "inverse_dynamics_derivatives", "jacobian",
     "kinetic_energy", "load", "load_scenario", "mass_matrix", "mass_matrix_literal", "minverse", "momentum", "parse_scenario",
     "potential_energy", "read_log", "Identification", "identify", "rollout", "simulate", "Sweep", "SweepResult", "load_sweep", "read_results", "sweep", "update_kinematics", "update_velocities",
 ]
 
 for _cls in (Cost, Data, Error, FramePoses, Inputs, Model, Scenario, Sensitivities, SimulationSettings, RunSummary, Trajectory):
     _cls.__module__ = __name__  # soadyn.Model, not soadyn._soadyn.Model, in messages and help
+
+
+def _deprecated(old: str, new: Callable, where: str = "soadyn") -> Callable:
+    """`old`, kept one release: warns (DeprecationWarning, at the caller) and calls `new`."""
+    def alias(*args, **kwargs):
+        _warnings.warn(f"{where}.{old} is deprecated and goes in the next release: use {where}.{new.__name__}",
+                       DeprecationWarning, stacklevel=2)
+        return new(*args, **kwargs)
+    alias.__name__ = alias.__qualname__ = old
+    alias.__doc__ = f"Deprecated: {where}.{new.__name__} (the same arguments and results)."
+    alias.__wrapped__ = new  # inspect.signature: the new function's parameters
+    return alias
+
+
+bias = _deprecated("bias", bias_forces)
+id_derivatives = _deprecated("id_derivatives", inverse_dynamics_derivatives)
+fd_derivatives = _deprecated("fd_derivatives", forward_dynamics_derivatives)
 
 
 def _settings(scene: Scenario, overrides: dict) -> SimulationSettings:
