@@ -326,7 +326,8 @@ static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path
   }
   if (!taken.empty()) model.warnings.push_back("sites not kept as frames (a body has the name): " + taken);
 
-  // geoms, placed as sites are
+  // geoms, placed as sites are; the colour by MuJoCo's rule: the geom's rgba unless it is the
+  // default and the geom has a material
   static const char* const kinds[] = {"plane", "hfield", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh"};
   for (int g = 0; g < m->ngeom; ++g) {
     const int type = m->geom_type[g];
@@ -334,9 +335,23 @@ static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path
     MjcfGeom geom;
     geom.kind = kinds[type];
     geom.size = vec3(m->geom_size + 3 * g);
-    geom.rgb = Vec3(m->geom_rgba[4 * g], m->geom_rgba[4 * g + 1], m->geom_rgba[4 * g + 2]);
+    const float* rgba = m->geom_rgba + 4 * g;
+    const bool default_rgba = rgba[0] == 0.5f && rgba[1] == 0.5f && rgba[2] == 0.5f && rgba[3] == 1.0f;
+    if (default_rgba && m->geom_matid[g] >= 0 && m->geom_matid[g] < m->nmat) rgba = m->mat_rgba + 4 * m->geom_matid[g];
+    geom.rgb = Vec3(rgba[0], rgba[1], rgba[2]);
+    if (type == mjGEOM_MESH && m->geom_dataid[g] >= 0 && m->geom_dataid[g] < m->nmesh) geom.mesh = m->geom_dataid[g];
     geom.X = in_model(m->geom_bodyid[g], {rotation(m->geom_quat + 4 * g), vec3(m->geom_pos + 3 * g)}, geom.body);
     out.geoms.push_back(geom);
+  }
+  // the meshes as compiled: vertices and triangles in the frame of the geoms that use them
+  for (int k = 0; k < m->nmesh; ++k) {
+    MjcfMesh mesh;
+    mesh.name = name_of(m, mjOBJ_MESH, k, "mesh");
+    const float* v = m->mesh_vert + 3 * size_t(m->mesh_vertadr[k]);
+    mesh.vertices.assign(v, v + 3 * size_t(m->mesh_vertnum[k]));
+    const int* f = m->mesh_face + 3 * size_t(m->mesh_faceadr[k]);
+    mesh.faces.assign(f, f + 3 * size_t(m->mesh_facenum[k]));
+    out.meshes.push_back(std::move(mesh));
   }
 
   // the pose the file draws (q = 0 for hinges and slides), the free joints' poses, the dampers

@@ -346,7 +346,10 @@ def check_cli_errors(tmp):
     p = run("view", os.path.join(d, "run.h5"))
     with open(os.path.join(d, "run.html"), encoding="utf-8") as f:
         page = f.read()
-    check(p.stderr == "" and '"kind":"cylinder"' in page, f"URDF gone: the page from the stored URDF ({p.stderr.strip()})")
+    # (its mesh, package://none/link2.stl, is nowhere: one note says so, and nothing else is said)
+    notes = p.stderr.splitlines()
+    check(len(notes) == 1 and "package://none/link2.stl drawn as its body's default shape" in notes[0] and
+          '"kind":"cylinder"' in page, f"URDF gone: the page from the stored URDF ({p.stderr.strip()})")
     # a file from before /robot (layout 3): view reads nothing but the run file, so it is refused in
     # one line, whether the URDF is on disk or not
     with h5py.File(os.path.join(d, "old.h5"), "r+") as f:
@@ -428,8 +431,12 @@ def main():
             b.navigate("file://" + os.path.abspath(pages["view_visuals"]))
             b.wait_for("window.soadynView && soadynView.ready", timeout=60)
             counts = b.evaluate("soadynView.counts()")
-            # box on the world-welded base, cylinder on link1, sphere on the welded tool; the mesh is not a primitive
+            # box on the world-welded base, cylinder on link1, sphere on the welded tool; link2's mesh file
+            # does not exist: link2 is drawn in its default shape, and the page's note says why
             check(counts["visuals"] == 3, f"view_visuals: 3 URDF primitives drawn (got {counts['visuals']})")
+            check(counts["meshes"] == 0 and counts["fellBack"] == [1] and len(counts["meshErrors"]) == 1 and
+                  "package://none/link2.stl: not found" in counts["meshErrors"][0],
+                  f"view_visuals: link2's missing mesh named, link2 in its default shape ({counts['meshErrors']})")
             check_named_frames(b, pages["view_visuals"], os.path.join(tmp, "view_visuals.h5"))
             check_events(b, pages["panda_gripper"], os.path.join(tmp, "panda_gripper.h5"))
             check_controls(b, pages["double_pendulum"])

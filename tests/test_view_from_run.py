@@ -1,7 +1,8 @@
 #!/usr/bin/python3
-"""soadyn view reads nothing but the run file: a run whose target table moved, changed or became a
-FIFO is viewed as it ran; a crafted run file whose scenario names /etc/passwd as its robot or its
-table shows nothing of it (refused in one line, or drawn from what the file holds).  Real runs,
+"""soadyn view reads nothing but the run file (a URDF's mesh files aside): a run whose target table
+moved, changed or became a FIFO is viewed as it ran; a crafted run file whose scenario names
+/etc/passwd as its robot or its table shows nothing of it (refused in one line, or drawn from what
+the file holds), nor does a URDF naming it (or a link to it, or a device) as a mesh.  Real runs,
 real files, the real command.  An MJCF model's <include>s and meshes are stored in the run file
 (/model_files): a run viewed after its include changed and its mesh was deleted draws the run's
 model, and a run file written before they were stored is refused in one line."""
@@ -45,6 +46,11 @@ def set_text(f, name, text):
 
 
 class ViewFromRun(unittest.TestCase):
+    @staticmethod
+    def secret_lines_of():
+        with open(SECRET) as f:
+            return [line.strip() for line in f if len(line.strip()) > 8][:5]
+
     def setUp(self):
         self.dir = tempfile.mkdtemp(prefix="soadyn_view_run_")
         with open(self.path("scene.yaml"), "w") as f:
@@ -140,6 +146,12 @@ def tetrahedron_stl():
     return stl
 
 
+def mesh_block(path, k):
+    """the base64 text of the page's mesh file k (view.cpp writes each in a block of its own)"""
+    with open(path, encoding="utf-8") as f:
+        return re.search(rf'<script type="text/plain" id="soadyn-mesh-{k}">(.*?)</script>', f.read(), re.S).group(1)
+
+
 def page_data(path):
     """the JSON block the page embeds (view.cpp): the model as the page draws it"""
     with open(path, encoding="utf-8") as f:
@@ -222,6 +234,11 @@ class MjcfViewFromRun(unittest.TestCase):
                 self.assertEqual(after["frames"]["pose"], before["frames"]["pose"])
                 self.assertEqual(after["world_visuals"], before["world_visuals"])
                 self.assertEqual(sum(b["meshes"] for b in after["bodies"]), 1)  # the mesh geom, still the run's
+                # and drawn: the tetrahedron as MuJoCo compiled it from the stored file, in the page
+                self.assertEqual(after["meshes"], before["meshes"])
+                self.assertEqual([(m["format"], m["vertices"], m["triangles"], m["error"]) for m in after["meshes"]],
+                                 [("arrays", 4, 4, None)])
+                self.assertEqual(mesh_block(self.path(after_page), 0), mesh_block(self.path(before_page), 0))
                 # nothing of the disk's files: the changed include would have given three joints
                 self.assertNotIn("wrist", json.dumps(after))
 
@@ -254,6 +271,52 @@ class MjcfViewFromRun(unittest.TestCase):
         self.assertEqual(r.returncode, 0, r.stderr)
         data = page_data(self.path("plain.html"))
         self.assertEqual([b["joint"] for b in data["bodies"]], ["j"])
+
+
+class UrdfMeshFiles(unittest.TestCase):
+    """A URDF run's mesh files are not in the run file: soadyn view reads them from the disk when it
+    writes the page, as input files (regular files only, of a mesh format), so a crafted URDF naming
+    /etc/passwd, a link to it named .stl, or a device, puts nothing of them in the page"""
+
+    def setUp(self):
+        self.dir = tempfile.mkdtemp(prefix="soadyn_view_urdf_meshes_")
+
+    def tearDown(self):
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+    def path(self, name):
+        return os.path.join(self.dir, name)
+
+    def test_a_urdf_naming_etc_passwd_or_a_device_as_meshes_shows_nothing_of_them(self):
+        os.symlink(SECRET, self.path("passwd.stl"))
+        os.symlink(SECRET, self.path("passwd.dae"))
+        os.symlink("/dev/zero", self.path("zero.stl"))
+        names = [SECRET, "file://" + SECRET, "passwd.stl", "passwd.dae", "zero.stl", "package://etc/passwd.obj"]
+        visuals = "".join(f'<visual><geometry><mesh filename="{n}"/></geometry></visual>' for n in names)
+        with open(self.path("r.urdf"), "w") as f:
+            f.write('<robot name="r"><link name="base"/><link name="l"><inertial><mass value="1"/><inertia ixx="0.1" '
+                    f'iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial>{visuals}</link><joint name="j" '
+                    'type="continuous"><parent link="base"/><child link="l"/><axis xyz="1 0 0"/></joint></robot>\n')
+        r = subprocess.run([SOADYN, "run", self.path("r.urdf"), "-o", self.path("r.h5"), "-q", "--t-end", "0.1"],
+                           capture_output=True, text=True, timeout=60)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        r = subprocess.run([SOADYN, "view", self.path("r.h5"), "-o", self.path("v.html"), "-q"],
+                           capture_output=True, text=True, timeout=60)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        notes = r.stderr.splitlines()
+        # one per file (/etc/passwd named twice is one), each drawn as its body's default shape
+        self.assertEqual(len(notes), 5, r.stderr)
+        for line in notes:
+            self.assertTrue(line.startswith("soadyn: note: ") and "drawn as its body's default shape" in line, line)
+        for reason in ('a file without an extension', 'not an STL file', 'not a Collada file', 'a character device',
+                       "no package folder 'etc'"):
+            self.assertIn(reason, r.stderr)
+        with open(self.path("v.html"), encoding="utf-8") as f:
+            page = f.read()
+        for line in ViewFromRun.secret_lines_of():
+            self.assertNotIn(line, page)
+        self.assertNotIn('id="soadyn-mesh-', page)  # no file's bytes in it
+        self.assertEqual([m["error"] is not None for m in page_data(self.path("v.html"))["meshes"]], [True] * 5)
 
 
 if __name__ == "__main__":

@@ -28,7 +28,17 @@ struct MjcfGeom {
   Placement X;
   std::string kind;          // box | sphere | cylinder | capsule | ellipsoid | mesh | plane | hfield
   Vec3 size = Vec3::Zero();  // MuJoCo's geom_size: half-sizes (box, ellipsoid), radius and half-length
-  Vec3 rgb = Vec3::Constant(0.5);
+  Vec3 rgb = Vec3::Constant(0.5);  // the geom's rgba, else its material's (MuJoCo's rule: a geom rgba
+                                   // other than the default 0.5 0.5 0.5 1 takes precedence)
+  int mesh = -1;                   // a mesh geom: its index in MjcfModel::meshes
+};
+
+// A mesh as MuJoCo compiled it (scaled, and moved to its centre of mass and principal axes, the
+// geoms that use it placed to match): vertices and triangles in the frame of those geoms.
+struct MjcfMesh {
+  std::string name;
+  std::vector<float> vertices;  // x y z per vertex
+  std::vector<int> faces;       // three vertex indices per triangle
 };
 
 struct MjcfModel {
@@ -39,6 +49,7 @@ struct MjcfModel {
   std::vector<DamperInput> dampers;           // the joints' damping
   std::vector<SpringInput> springs;           // the joints' stiffness about springref
   std::vector<MjcfGeom> geoms;                // every geom, for soadyn view
+  std::vector<MjcfMesh> meshes;               // every mesh asset, for soadyn view
   // every file handed to MuJoCo's compiler, as handed (the name given to its virtual file system,
   // the bytes): the main text first, then the <include>s and mesh, skin, height-field and texture
   // files it read.  A run stores them (h5log.hpp /model_files) for parse_mjcf_files.

@@ -25,7 +25,8 @@
 namespace soadyn::cli {
 
 namespace assets {
-extern const std::string_view page_html, page_css, page_js, plot_js, frames_js, bodies_js, three_js, orbit_js;
+extern const std::string_view page_html, page_css, page_js, plot_js, frames_js, bodies_js, meshes_js, three_js, orbit_js,
+    stl_js, obj_js, collada_js;
 }
 
 namespace {
@@ -74,7 +75,8 @@ std::string quat(const Eigen::Quaterniond& q) {  // three.js order: x, y, z, w
 
 std::string shape(const Shape& s) {
   return "{\"kind\":" + quote(s.kind) + ",\"size\":" + vec(s.size) + ",\"p\":" + vec(s.p) + ",\"q\":" + quat(s.R) +
-         ",\"color\":" + (s.color.empty() ? std::string("null") : quote(s.color)) + "}";
+         ",\"color\":" + (s.color.empty() ? std::string("null") : quote(s.color)) +
+         (s.mesh >= 0 ? ",\"mesh\":" + std::to_string(s.mesh) : std::string()) + "}";
 }
 
 std::string shapes(const std::vector<Shape>& v) {
@@ -141,6 +143,34 @@ std::vector<std::string> coordinate_names(const Model& m) {
   return names;
 }
 
+// the SI unit of each q coordinate, for the joint plot's axis: m, rad, or 1 (a quaternion's parts)
+std::vector<std::string> coordinate_units(const Model& m) {
+  std::vector<std::string> units;
+  for (int i = 0; i < m.nbodies; ++i) {
+    const JointTraits& tr = joint_traits(m.joint_type[i]);
+    for (int k = 0; k < m.nq_i[i]; ++k) units.emplace_back(tr.q_units.at(k));
+  }
+  return units;
+}
+
+// the mesh files, for the page: a list in its JSON block (name, format, sizes, why one is not
+// drawn) and each file's bytes, base64, in a block of its own (read only by the script that
+// draws it); `formats` gets the formats drawn (their loaders go into the page)
+std::string mesh_list(const std::vector<view::MeshFile>& meshes, std::string& blocks, std::string& formats) {
+  std::string list = "[";
+  for (size_t k = 0; k < meshes.size(); ++k) {
+    const view::MeshFile& f = meshes[k];
+    list += std::string(k ? "," : "") + "{\"name\":" + quote(printable(f.name)) + ",\"format\":" + quote(f.format) +
+            ",\"bytes\":" + std::to_string(f.bytes.size()) + ",\"vertices\":" + std::to_string(f.vertices) +
+            ",\"triangles\":" + std::to_string(f.triangles) + ",\"error\":" + (f.error.empty() ? "null" : quote(f.error)) + "}";
+    if (!f.error.empty()) continue;
+    blocks += "<script type=\"text/plain\" id=\"soadyn-mesh-" + std::to_string(k) + "\">" + base64(f.bytes.data(), f.bytes.size()) +
+              "</script>\n";
+    if (formats.find(f.format) == std::string::npos) formats += f.format + " ";
+  }
+  return list + "]";
+}
+
 std::string fill_template(std::string_view tpl, const std::vector<std::pair<std::string, std::string_view>>& values) {
   std::string out;
   out.reserve(tpl.size() + [&] {
@@ -176,7 +206,8 @@ void add_view(CLI::App& app, ViewOptions& o) {
   CLI::App* c = app.add_subcommand(
       "view",
       "Write one self-contained web page (three.js inlined, nothing fetched) that plays a run in 3D,\n"
-      "with linked plots of the energy error and a joint.  Open RUN.html#t=1.5 to start paused at t = 1.5 s.\n"
+      "with linked plots of the energy error and a joint, the model drawn in its visuals (a URDF's mesh files\n"
+      "are read now and inlined).  Open RUN.html#t=1.5 to start paused at t = 1.5 s.\n"
       "Exit status: 0 written, 2 bad input or output refused (an input, in use, not a soadyn page), 4 writing failed.");
   c->add_option("RUN", o.run, "HDF5 run file from soadyn run")->required();
   c->add_option("-o,--output", o.output, "HTML file to write (default: RUN with the extension .html)");
@@ -299,10 +330,24 @@ int run_view(const ViewOptions& o) {
               ",\"meshes\":" + std::to_string(b.meshes) + "}";
   }
   bodies += "]";
-  std::string coords = "[";
-  const auto names = coordinate_names(m);
+  std::string coords = "[", units = "[";
+  const auto names = coordinate_names(m), unit = coordinate_units(m);
   for (size_t c = 0; c < names.size(); ++c) coords += (c ? "," : "") + quote(names[c]);
-  coords += "]";
+  for (size_t c = 0; c < unit.size(); ++c) units += (c ? "," : "") + quote(unit[c]);
+  coords += "]", units += "]";
+
+  // the mesh files; those that cannot be drawn are said on stderr too (the page's note names all)
+  std::string mesh_blocks, formats;
+  const std::string meshes = mesh_list(look.meshes, mesh_blocks, formats);
+  size_t failed = 0, mesh_bytes = 0;
+  for (const view::MeshFile& f : look.meshes) {
+    mesh_bytes += f.bytes.size();
+    if (f.error.empty()) continue;
+    if (++failed <= 5)
+      std::fprintf(stderr, "soadyn: note: %s: mesh %s drawn as its body's default shape: %s\n", o.run.c_str(),
+                   printable(f.name).c_str(), f.error.c_str());
+  }
+  if (failed > 5) std::fprintf(stderr, "soadyn: note: %s: and %zu more meshes (the page names them all)\n", o.run.c_str(), failed - 5);
 
   // the logged frames: names, the body each moves with, and per shown sample their poses
   std::string named = "{\"names\":[";
@@ -324,7 +369,7 @@ int run_view(const ViewOptions& o) {
       ",\"gravity\":" + vec(m.gravity) + ",\"bodies\":" + bodies + ",\"world_visuals\":" + shapes(look.world_visuals) + ",\"world_meshes\":" + std::to_string(look.world_meshes) +
       ",\"bounds\":{\"min\":" + vec(lo) + ",\"max\":" + vec(hi) + "},\"frames\":{\"n\":" + std::to_string(K) +
       ",\"nb\":" + std::to_string(N) + ",\"t\":" + base64(times) + ",\"pose\":" + base64(pose) + ",\"rule\":" +
-      quote(rule) + "},\"coords\":" + coords + ",\"nq\":" + std::to_string(m.nq) + ",\"q\":" + base64(qs) +
+      quote(rule) + "},\"coords\":" + coords + ",\"coord_units\":" + units + ",\"meshes\":" + meshes + ",\"nq\":" + std::to_string(m.nq) + ",\"q\":" + base64(qs) +
       ",\"energy\":" + energy + ",\"events\":" + events + ",\"named_frames\":" + named + "}";
 
   const std::string title = html_escape(rm.name);
@@ -336,6 +381,12 @@ int run_view(const ViewOptions& o) {
                                                              {"PLOT", assets::plot_js},
                                                              {"FRAMES", assets::frames_js},
                                                              {"BODIES", assets::bodies_js},
+                                                             {"MESHES", assets::meshes_js},
+                                                             {"MESH_DATA", mesh_blocks},
+                                                             // a mesh format's loader only in a page that has one
+                                                             {"STL", formats.find("stl") != std::string::npos ? assets::stl_js : ""},
+                                                             {"OBJ", formats.find("obj") != std::string::npos ? assets::obj_js : ""},
+                                                             {"COLLADA", formats.find("dae") != std::string::npos ? assets::collada_js : ""},
                                                              {"VIEWER", assets::page_js}});
 
   try {
@@ -351,6 +402,9 @@ int run_view(const ViewOptions& o) {
                 run.status.empty() ? "status unknown" : printable(run.status).c_str());
     std::printf("bodies                 %zu\n", N);
     std::printf("frames                 %s\n", rule);
+    if (!look.meshes.empty())
+      std::printf("meshes                 %zu file(s), %.3g MB in the page; %zu not drawn (said on stderr and in the page)\n",
+                  look.meshes.size(), double(mesh_bytes) / 1e6, failed);
     std::printf("page                   %s (%.3g MB)\n", out.c_str(), double(page.size()) / 1e6);
   }
   return 0;

@@ -1,13 +1,17 @@
 // soadyn view: the pieces behind the page (see view.cpp for the page itself).
 //   view_run.cpp    a run file read back (run_file.hpp), the model rebuilt from the text stored in it
 //   view_scene.cpp  what each body looks like: skeleton, centre of mass, inertia box, URDF visuals
+//   view_meshes.cpp the visuals' mesh files: found, read, checked, each embedded once
 #pragma once
 
+#include "soadyn/mjcf.hpp"
 #include "soadyn/model.hpp"
 #include "soadyn/run_file.hpp"
 
 #include <Eigen/Geometry>
 
+#include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -52,24 +56,59 @@ RunModel rebuild_model(const RunFile& run);
 
 // One drawn shape, in its body's frame (or the world's).
 struct Shape {
-  std::string kind;  // box | cylinder | sphere
-  Vec3 size = Vec3::Zero();  // box: edge lengths; cylinder: radius, length (along z), 0; sphere: radius
+  std::string kind;  // box | cylinder | sphere | mesh
+  Vec3 size = Vec3::Zero();  // box: edge lengths; cylinder: radius, length (along z), 0; sphere: radius;
+                             // mesh: its scale along x, y, z
   Vec3 p = Vec3::Zero();
   Eigen::Quaterniond R = Eigen::Quaterniond::Identity();
-  std::string color;  // "#rrggbb" from the URDF material, or empty
+  std::string color;  // "#rrggbb" from the URDF material (MJCF: the geom's or its material's), or empty
+  int mesh = -1;      // a mesh: its file in Look::meshes
 };
+
+// A mesh file of the model's visuals, in the page once however many visuals use it.
+struct MeshFile {
+  std::string name;    // as the model names it: a URDF <mesh filename>, an MJCF mesh's name
+  std::string key;     // what makes two the same: the file's resolved path, the MJCF mesh
+  std::string format;  // stl | obj | dae (the file's bytes) | arrays (an MJCF mesh as MuJoCo compiled it)
+  std::string bytes;   // the file; arrays: float32 x y z per vertex, then uint32 triangles
+  size_t vertices = 0, triangles = 0;  // arrays
+  std::string error;   // why it is not drawn (bytes empty): its bodies keep their default shape
+};
+
+// A page holds at most this much of mesh files: 64 MiB each, 128 MiB in all (base64 in the page:
+// 4/3 of that).  A file past either is not drawn, and the page's note says why.
+inline constexpr std::uint64_t kMaxMeshBytes = std::uint64_t(64) << 20;
+inline constexpr std::uint64_t kMaxMeshBytesTotal = std::uint64_t(128) << 20;
+
+// The mesh files a URDF's visuals name, read when the page is written (view_meshes.cpp).
+class UrdfMeshes {
+ public:
+  UrdfMeshes(const std::string& urdf_path, std::vector<MeshFile>& files);
+  // the index in `files` of the file a <mesh filename> names (package://, file://, absolute, or
+  // relative to the URDF), read and checked now; one that cannot be drawn keeps the reason
+  int add(const std::string& filename);
+
+ private:
+  std::vector<MeshFile>& files_;
+  std::filesystem::path dir_;  // the URDF's folder, absolute
+  std::uint64_t total_ = 0;
+};
+
+// An MJCF mesh as MuJoCo compiled it, for the page
+MeshFile compiled_mesh(const MjcfMesh& mesh);
 
 struct BodyLook {
   std::vector<Vec3> segments;  // skeleton: body-frame end points of capsules from the joint (origin)
   Shape inertia_box;           // the uniform box with the body's mass and principal moments
-  std::vector<Shape> visuals;  // URDF <visual> primitives
-  int meshes = 0;              // URDF <visual> meshes (drawn as the default shape)
+  std::vector<Shape> visuals;  // URDF <visual> and MJCF geom primitives and meshes
+  int meshes = 0;              // the meshes among them
 };
 
 struct Look {
   std::vector<BodyLook> bodies;
   std::vector<Shape> world_visuals;  // visuals of links welded to the world
   int world_meshes = 0;
+  std::vector<MeshFile> meshes;      // the files the mesh visuals name
 };
 
 // Skeleton and inertia box from the model; visuals from the URDF text when there is one.

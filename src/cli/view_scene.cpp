@@ -1,7 +1,8 @@
 // soadyn view: what each body looks like.  From the model: a skeleton (capsules from the joint to
 // the children's joints), the centre of mass, and the uniform box with the body's mass and
-// principal moments.  From a URDF: its <visual> boxes, cylinders and spheres, moved into the frame
-// of the body they were welded into; from an MJCF file, its geoms where MuJoCo's compiler put them.
+// principal moments.  From a URDF: its <visual> boxes, cylinders, spheres and meshes, moved into
+// the frame of the body they were welded into; from an MJCF file, its geoms where MuJoCo's
+// compiler put them.  Mesh files are found and read by view_meshes.cpp.
 #include "view.hpp"
 
 #include "soadyn/mjcf.hpp"
@@ -11,6 +12,7 @@
 #include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -63,6 +65,7 @@ void add_urdf_visuals(const Model& model, const std::string& urdf_text, const st
     robot = urdf::parseURDF(urdf_text);
   }
   if (!robot) throw Error(urdf_path + ": URDF: cannot be read for its visuals");
+  UrdfMeshes meshes(urdf_path, look.meshes);
   for (const auto& [name, link] : robot->links_) {
     if (link->visual_array.empty()) continue;
     // climb fixed joints up to the moving body the link belongs to: X = frame of link in that body
@@ -88,7 +91,10 @@ void add_urdf_visuals(const Model& model, const std::string& urdf_text, const st
       Shape s;
       s.p = Xv.p;
       s.R = Eigen::Quaterniond(Xv.R).normalized();
-      if (v->material) s.color = hex_color(v->material->color);
+      // a material's colour (a texture alone leaves urdfdom's black: the body's colour then)
+      if (v->material && (v->material->texture_filename.empty() || v->material->color.r > 0 || v->material->color.g > 0 ||
+                          v->material->color.b > 0))
+        s.color = hex_color(v->material->color);
       switch (v->geometry->type) {
         case urdf::Geometry::BOX: {
           const auto& b = static_cast<const urdf::Box&>(*v->geometry);
@@ -107,8 +113,15 @@ void add_urdf_visuals(const Model& model, const std::string& urdf_text, const st
           s.size = Vec3(static_cast<const urdf::Sphere&>(*v->geometry).radius, 0, 0);
           break;
         }
-        default:  // meshes: the body keeps its default shape
+        case urdf::Geometry::MESH: {
+          const auto& mesh = static_cast<const urdf::Mesh&>(*v->geometry);
+          s.kind = "mesh";
+          s.size = Vec3(mesh.scale.x, mesh.scale.y, mesh.scale.z);
+          s.mesh = meshes.add(mesh.filename);
           (body >= 0 ? look.bodies[body].meshes : look.world_meshes) += 1;
+          break;
+        }
+        default:
           continue;
       }
       (body >= 0 ? look.bodies[body].visuals : look.world_visuals).push_back(s);
@@ -116,18 +129,23 @@ void add_urdf_visuals(const Model& model, const std::string& urdf_text, const st
   }
 }
 
-// an MJCF file's geoms (MuJoCo's compiler placed them): boxes, spheres, cylinders; a capsule as
-// its cylinder, an ellipsoid as its box; planes and height fields (the floor) are not drawn
-// (compiled from the run's stored files alone, never from the disk)
+// an MJCF file's geoms (MuJoCo's compiler placed them): boxes, spheres, cylinders, meshes (as
+// compiled: MuJoCo 2.2 moves a mesh to its centre of mass and principal axes and keeps no record
+// of the move, only the geoms placed to match); a capsule as its cylinder, an ellipsoid as its
+// box; planes and height fields (the floor) are not drawn (compiled from the run's stored files
+// alone, never from the disk)
 void add_mjcf_visuals(const std::vector<ModelFile>& files, const std::string& path, Look& look) {
   MjcfOptions o;
   o.inertia_check = InertiaCheck::Balance;
-  for (const MjcfGeom& g : parse_mjcf_files(files, path, o).geoms) {
+  const MjcfModel compiled = parse_mjcf_files(files, path, o);
+  std::vector<int> page_mesh(compiled.meshes.size(), -1);  // each MJCF mesh's index in look.meshes
+  for (const MjcfGeom& g : compiled.geoms) {
     Shape s;
     s.p = g.X.p;
     s.R = Eigen::Quaterniond(g.X.R).normalized();
     char color[8];
-    std::snprintf(color, sizeof color, "#%02x%02x%02x", int(255 * g.rgb.x()), int(255 * g.rgb.y()), int(255 * g.rgb.z()));
+    auto byte = [](double x) { return int(std::lround(std::clamp(x, 0.0, 1.0) * 255)); };
+    std::snprintf(color, sizeof color, "#%02x%02x%02x", byte(g.rgb.x()), byte(g.rgb.y()), byte(g.rgb.z()));
     s.color = color;
     if (g.kind == "box" || g.kind == "ellipsoid") {
       s.kind = "box";
@@ -138,9 +156,16 @@ void add_mjcf_visuals(const std::vector<ModelFile>& files, const std::string& pa
     } else if (g.kind == "cylinder" || g.kind == "capsule") {
       s.kind = "cylinder";
       s.size = Vec3(g.size.x(), 2.0 * g.size.y() + (g.kind == "capsule" ? 2.0 * g.size.x() : 0.0), 0);
-    } else if (g.kind == "mesh") {
+    } else if (g.kind == "mesh" && g.mesh >= 0 && size_t(g.mesh) < compiled.meshes.size()) {
+      // the mesh as compiled, in the geom's frame; each embedded once
+      s.kind = "mesh";
+      s.size = Vec3::Ones();
+      if (page_mesh[size_t(g.mesh)] < 0) {
+        page_mesh[size_t(g.mesh)] = int(look.meshes.size());
+        look.meshes.push_back(compiled_mesh(compiled.meshes[size_t(g.mesh)]));
+      }
+      s.mesh = page_mesh[size_t(g.mesh)];
       (g.body >= 0 ? look.bodies[size_t(g.body)].meshes : look.world_meshes) += 1;
-      continue;
     } else {
       continue;
     }

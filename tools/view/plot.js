@@ -1,5 +1,6 @@
 // soadyn view: one plot against time on a canvas, with a cursor (two elements over the canvas, so
-// moving it redraws nothing) and click-or-drag to seek.  Used by viewer.js.
+// moving it redraws nothing), its axes' titles with their units (elements too, so they can be
+// read), and click-or-drag to seek.  Used by viewer.js.
 window.SoadynPlot = (function () {
   'use strict';
   function niceTicks(a, b, n) {
@@ -33,6 +34,13 @@ window.SoadynPlot = (function () {
     this.dot.className = 'plot-dot';
     wrap.appendChild(this.line);
     wrap.appendChild(this.dot);
+    // the axes' titles: "time (s)" under the plot, the quantity and its unit along its left side
+    this.xLabel = document.createElement('div');
+    this.xLabel.className = 'plot-axis plot-axis-x';
+    this.yLabel = document.createElement('div');
+    this.yLabel.className = 'plot-axis plot-axis-y';
+    wrap.appendChild(this.xLabel);
+    wrap.appendChild(this.yLabel);
     const self = this;
     let dragging = false;
     const seekTo = (e) => {
@@ -44,6 +52,8 @@ window.SoadynPlot = (function () {
     window.addEventListener('mouseup', () => { dragging = false; });
   }
   Plot.prototype.set = function (y) { this.y = y; this.draw(); };
+  // the axes' titles, each with its unit: x "time (s)", y e.g. "shoulder (rad)"
+  Plot.prototype.setLabels = function (x, y) { this.xLabel.textContent = x; this.yLabel.textContent = y; this.draw(); };
   // this.marks: times drawn as dashed vertical lines (the joint limits' events)
   Plot.prototype.resize = function () {
     const dpr = window.devicePixelRatio || 1;
@@ -65,7 +75,9 @@ window.SoadynPlot = (function () {
     if (!isFinite(ymin)) { ymin = -1; ymax = 1; }
     const yt = niceTicks(ymin, ymax, 4), xt = niceTicks(t0, t1, 5);
     xt.lo = t0; xt.ticks = xt.ticks.filter((v) => v >= t0 - 1e-9 && v <= t1 + 1e-9);
-    this.left = 58; this.top = 8; this.w = this.cw - this.left - 10; this.h = this.ch - this.top - 22;
+    this.left = 70; this.top = 8; this.w = this.cw - this.left - 10; this.h = this.ch - this.top - 34;
+    this.yLabel.style.top = this.top + 'px';
+    this.yLabel.style.height = this.h + 'px';
     this.x0 = t0; this.x1 = t1 > t0 ? t1 : t0 + 1; this.y0 = yt.lo; this.y1 = yt.hi;
     c.strokeStyle = '#e3e7ed'; c.fillStyle = '#5b6574'; c.lineWidth = 1;
     c.textAlign = 'right'; c.textBaseline = 'middle';
@@ -78,7 +90,7 @@ window.SoadynPlot = (function () {
     xt.ticks.forEach((v) => {
       const px = this.px(v);
       c.beginPath(); c.moveTo(px, this.top); c.lineTo(px, this.top + this.h); c.stroke();
-      c.fillText(xt.label(v) + (v === xt.ticks[xt.ticks.length - 1] ? ' s' : ''), px, this.top + this.h + 4);
+      c.fillText(xt.label(v), px, this.top + this.h + 4);
     });
     if (this.marks && this.marks.length) {
       c.save(); c.strokeStyle = 'rgba(194, 37, 92, 0.7)'; c.setLineDash([3, 3]); c.beginPath();

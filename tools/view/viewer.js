@@ -46,8 +46,10 @@
   const link = lengths.length ? lengths[lengths.length >> 1] : L;
   const rSkel = Math.min(0.012 * L, 0.06 * link), rCmMax = Math.min(0.035 * L, 0.25 * link), arrowLen = Math.min(0.09 * L, 0.5 * link);
 
-  // the bodies: a mesh per layer, skinned to a bone per body (bodies.js)
-  const bodies = new SoadynBodies(THREE, scene, RUN, L, rSkel, rCmMax, arrowLen);
+  // the model's mesh files, read by three.js's loaders (meshes.js); the bodies: a mesh per layer,
+  // skinned to a bone per body (bodies.js)
+  const meshFiles = new SoadynMeshes(THREE, RUN.meshes || []);
+  const bodies = new SoadynBodies(THREE, scene, RUN, L, rSkel, rCmMax, arrowLen, meshFiles);
   const bones = bodies.bones, layers = bodies.layers, bodyMeshes = bodies.meshes, visualCount = bodies.visualCount;
   // the frames the run logged: a triad each, with its name (frames.js)
   const named = new SoadynNamedFrames(THREE, scene, RUN.named_frames, decode, 0.8 * arrowLen, 0.22 * rSkel);
@@ -216,6 +218,7 @@
     else if (e.key === 'ArrowDown') setSpeed(speeds[Math.max(0, idx - 1)]);
     else if (e.key === 'Home') { setPlaying(false); seek(t0); }
     else if (e.key === 'End') { setPlaying(false); seek(t1); }
+    else if (e.key === 'v' || e.key === 'b') toggleLayer(e.key === 'v' ? 'visuals' : 'boxes');
     else return;
     e.preventDefault();
   });
@@ -225,6 +228,7 @@
   const plotEnergy = new SoadynPlot(document.getElementById('plot-energy'), T, onSeek);
   const plotJoint = new SoadynPlot(document.getElementById('plot-joint'), T, onSeek);
   const plots = [plotEnergy, plotJoint];
+  plotEnergy.setLabels('time (s)', RUN.energy ? 'relative error (J/J)' : '');
   if (RUN.energy) {
     plotEnergy.y = decode(RUN.energy.error, Float32Array);
     const L = RUN.energy.impacts;
@@ -236,17 +240,21 @@
     document.getElementById('energy-title').textContent = 'energy: not in this run file';
   }
   const coordSel = document.getElementById('coord');
-  // every q coordinate, and for a joint with a unit quaternion its rotation angle 2 acos|q_w|
-  const series = RUN.coords.map((name, c) => ({ name: name, at: (k) => Q[k * NQ + c] }));
+  // every q coordinate with its unit (rad, m, or 1 for a quaternion's parts), and for a joint with
+  // a unit quaternion its rotation angle 2 acos|q_w|
+  const units = RUN.coord_units || [];
+  const series = RUN.coords.map((name, c) => ({ name: name, unit: units[c] || '?', at: (k) => Q[k * NQ + c] }));
   RUN.bodies.forEach((b) => {
     const w = b.quaternion >= 0 ? b.iq + b.quaternion : -1;  // q_w of the joint's unit quaternion
-    if (w >= 0) series.push({ name: b.joint + ' rotation angle (rad)', at: (k) => 2 * Math.acos(Math.min(1, Math.abs(Q[k * NQ + w]))) });
+    if (w >= 0) series.push({ name: b.joint + ' rotation angle', unit: 'rad', angle: true, at: (k) => 2 * Math.acos(Math.min(1, Math.abs(Q[k * NQ + w]))) });
   });
-  series.forEach((sr, c) => { const o = document.createElement('option'); o.value = c; o.textContent = sr.name; coordSel.appendChild(o); });
+  const titled = (sr) => sr.name + ' (' + sr.unit + ')';
+  series.forEach((sr, c) => { const o = document.createElement('option'); o.value = c; o.textContent = titled(sr); coordSel.appendChild(o); });
   function setCoord(c) {
     const y = new Float32Array(K);
     for (let k = 0; k < K; ++k) y[k] = series[c].at(k);
     coordSel.value = String(c);
+    plotJoint.setLabels('time (s)', titled(series[c]));
     plotJoint.set(y);
     dirty = true;
   }
@@ -286,11 +294,23 @@
   }
 
   // --- options ----------------------------------------------------------------------------------
+  // a model with visuals is drawn in them, its inertia boxes hidden until asked for (key b);
+  // without, in its inertia boxes
+  const hasVisuals = visualCount + bodies.meshCount + bodies.fellBack.length > 0;
+  const layerBox = {};
+  function showLayer(layer, on) {
+    layerBox[layer].checked = on;
+    layers[layer].forEach((o) => { o.visible = on; });
+    dirty = true;
+  }
+  function toggleLayer(layer) { showLayer(layer, !layerBox[layer].checked); }
   [['show-skeleton', 'skeleton'], ['show-boxes', 'boxes'], ['show-visuals', 'visuals'], ['show-axes', 'axes']].forEach(([id, layer]) => {
     const box = document.getElementById(id);
-    if (layer === 'visuals' && visualCount === 0) box.parentNode.style.display = 'none';
-    box.addEventListener('change', () => { layers[layer].forEach((o) => { o.visible = box.checked; }); dirty = true; });
+    layerBox[layer] = box;
+    if (layer === 'visuals' && !hasVisuals) box.parentNode.style.display = 'none';
+    box.addEventListener('change', () => showLayer(layer, box.checked));
   });
+  showLayer('boxes', !hasVisuals);
   const framesBox = document.getElementById('show-frames');
   if (named.F === 0) document.getElementById('named-frames-box').style.display = 'none';
   framesBox.addEventListener('change', () => { named.group.visible = framesBox.checked; dirty = true; });
@@ -304,12 +324,18 @@
   document.getElementById('desc').textContent = RUN.description;
   document.getElementById('meta').textContent = RUN.run + ' \u00b7 ' + NB + ' bodies \u00b7 ' + (RUN.method || '?') +
     (RUN.status && RUN.status !== 'completed' ? ' \u00b7 ' + RUN.status : '') + ' \u00b7 soadyn ' + RUN.version;
-  const meshes = RUN.bodies.map((b) => b.meshes).reduce((a, b) => a + b, RUN.world_meshes);
-  document.getElementById('frames-note').textContent = 'frames: ' + RUN.frames.rule + '; poses in between are interpolated.' +
-    (meshes > 0 ? '  ' + meshes + ' URDF mesh visual(s) drawn as their body\'s default shape.' : '') +
+  // the mesh files that could not be drawn, each named with the reason (the file's, or its loader's)
+  const badMeshes = meshFiles.files.filter((f) => f.error);
+  const fellBack = bodies.fellBack.map((i) => RUN.bodies[i].name);
+  const meshNote = badMeshes.length === 0 ? '' : '  ' + badMeshes.length + ' mesh file(s) not drawn' +
+    (fellBack.length ? ' (' + fellBack.join(', ') + ' drawn in the default shape, the inertia box, instead)' : '') + ': ' +
+    badMeshes.map((f) => f.name + ': ' + f.error).join('; ') + '.';
+  document.getElementById('frames-note').textContent = 'frames: ' + RUN.frames.rule + '; poses in between are interpolated.' + meshNote +
     (named.F ? '  Logged frames (x red, y green, z blue): ' + named.names.map((n, j) => n + ' on ' + named.bodies[j]).join(', ') + '.' : '');
 
-  // picking: a click (not a drag) on a body puts the trail behind it
+  // picking: a click (not a drag) on a body puts the trail behind it (the body drawn there, else
+  // the one whose centre of mass is drawn nearest, within 30 px)
+  const raycaster = new THREE.Raycaster();
   const pointer = new THREE.Vector2();
   let downAt = null;
   renderer.domElement.addEventListener('pointerdown', (e) => { downAt = [e.clientX, e.clientY]; });
@@ -317,8 +343,9 @@
     if (!downAt || Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]) > 4) return;
     const r = renderer.domElement.getBoundingClientRect();
     pointer.set((e.clientX - r.left) / r.width * 2 - 1, -(e.clientY - r.top) / r.height * 2 + 1);
-    // the body whose centre of mass is drawn nearest the click, within 30 px
-    let i = -1, best = 30 * 30;
+    raycaster.setFromCamera(pointer, camera);
+    const hit = bodies.pick(raycaster.ray);
+    let i = hit ? hit.body : -1, best = hit ? -1 : 30 * 30;
     const c = new THREE.Vector3();
     bones.forEach((bone, j) => {
       c.fromArray(RUN.bodies[j].com).applyMatrix4(bone.matrixWorld).project(camera);
@@ -327,6 +354,32 @@
     });
     if (i >= 0) { trailSel.value = String(i); setTrailBody(i); }
   });
+
+  // hovering: the name of the body drawn under the pointer, in a label beside it (looked up once
+  // per frame at most, on the poses last drawn)
+  const hoverLabel = document.getElementById('hover-label');
+  let hoverAt = null;
+  renderer.domElement.addEventListener('pointermove', (e) => {
+    if (hoverAt === null) requestAnimationFrame(hover);
+    hoverAt = [e.clientX, e.clientY];
+  });
+  renderer.domElement.addEventListener('pointerleave', () => { hoverAt = null; hoverLabel.style.display = 'none'; });
+  function hover() {
+    if (hoverAt === null) return;
+    const r = renderer.domElement.getBoundingClientRect(), pr = pane.getBoundingClientRect();
+    pointer.set((hoverAt[0] - r.left) / r.width * 2 - 1, -(hoverAt[1] - r.top) / r.height * 2 + 1);
+    raycaster.setFromCamera(pointer, camera);
+    const hit = bodies.pick(raycaster.ray);
+    if (hit) {
+      hoverLabel.textContent = RUN.bodies[hit.body].name;
+      hoverLabel.style.left = (hoverAt[0] - pr.left + 14) + 'px';
+      hoverLabel.style.top = (hoverAt[1] - pr.top + 10) + 'px';
+      hoverLabel.style.display = 'block';
+    } else {
+      hoverLabel.style.display = 'none';
+    }
+    hoverAt = null;
+  }
 
   // --- URL fragment: #t=1.5 opens paused at t = 1.5 s ------------------------------------------
   function fromHash() {
@@ -378,7 +431,7 @@
   trailSel.value = String(defaultTrail);
   setTrailBody(defaultTrail);
   const firstCoord = RUN.bodies.findIndex((b) => b.type === 'revolute' || b.type === 'prismatic');
-  const angle = series.findIndex((sr) => sr.name.endsWith(' rotation angle (rad)'));
+  const angle = series.findIndex((sr) => sr.angle);
   setCoord(firstCoord >= 0 ? RUN.bodies[firstCoord].iq : Math.max(0, angle));
   coordSel.addEventListener('change', () => setCoord(Number(coordSel.value)));
   plotEnergy.draw();
@@ -400,7 +453,18 @@
     return { t: e.t, joint: e.joint, side: e.side, kind: e.kind, x: r.left + r.width / 2, y: r.top + r.height / 2 };
   });
   api.timeline = () => { const r = slider.getBoundingClientRect(); return { left: r.left, width: r.width }; };
-  api.counts = () => ({ bodies: NB, frames: K, visuals: visualCount, trailBody: trailBody, namedFrames: named.F });
+  api.counts = () => ({ bodies: NB, frames: K, visuals: visualCount, meshes: bodies.meshCount, meshFiles: meshFiles.files.length,
+    meshErrors: badMeshes.map((f) => f.name + ': ' + f.error), fellBack: bodies.fellBack.slice(), trailBody: trailBody, namedFrames: named.F });
+  // the layers (skeleton, cm, boxes, visuals, axes): which are shown, and showing or hiding one
+  api.layers = () => { const o = {}; Object.keys(layers).forEach((k) => { o[k] = layers[k].every((m) => m.visible); }); return o; };
+  api.showLayer = (layer, on) => { if (layerBox[layer]) showLayer(layer, on); else { layers[layer].forEach((m) => { m.visible = on; }); dirty = true; } };
+  // the body drawn at page pixel (x, y), or -1 (what hovering there names)
+  api.bodyAt = (x, y) => {
+    const r = renderer.domElement.getBoundingClientRect();
+    raycaster.setFromCamera(new THREE.Vector2((x - r.left) / r.width * 2 - 1, -(y - r.top) / r.height * 2 + 1), camera);
+    const hit = bodies.pick(raycaster.ray);
+    return hit ? hit.body : -1;
+  };
   api.namedFrames = () => named.state();
   api.showNamedFrames = (on) => { named.group.visible = on; framesBox.checked = on; dirty = true; };
   // where body i's centre of mass is drawn, in page pixels; the camera's position and target
