@@ -131,9 +131,11 @@ struct H5Log::Impl {
   LogGroups groups;
   std::unique_ptr<Model> model;  // for the frames' poses (groups.frames)
   std::unique_ptr<Data> data;
-  Scalar status, quaternion, t_reached, cpu, steps, rhs, jac, etf, nli, max_balance, final_balance, ticks;
+  Scalar status, quaternion, t_reached, cpu, steps, rhs, jac, etf, nli, max_balance, final_balance, ticks, stiffness,
+      stiffness_hint;
   std::vector<Scalar*> scalars() {
-    return {&status, &quaternion, &t_reached, &cpu, &steps, &rhs, &jac, &etf, &nli, &max_balance, &final_balance, &ticks};
+    return {&status, &quaternion, &t_reached, &cpu, &steps, &rhs, &jac, &etf, &nli, &max_balance, &final_balance, &ticks,
+            &stiffness, &stiffness_hint};
   }
   std::chrono::steady_clock::time_point last_flush;
   std::chrono::duration<double> flush_interval{0.5};
@@ -286,12 +288,17 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
     im.max_balance = Scalar(g_solver, "max_energy_balance_error", H5T_NATIVE_DOUBLE);
     im.final_balance = Scalar(g_solver, "final_energy_balance_error", H5T_NATIVE_DOUBLE);
     im.ticks = Scalar(g_solver, "control_ticks", H5T_NATIVE_LONG);
+    // RunSummary::stiffness_index and stiffness_hint (simulate.hpp)
+    im.stiffness = Scalar(g_solver, "stiffness_index", H5T_NATIVE_DOUBLE);
+    im.stiffness_hint = h5::string_scalar(g_solver, "stiffness_hint", 1024);
     for (Scalar* s : {&im.t_reached, &im.cpu}) attribute(s->dset, "units", std::string("s"));
-    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.max_balance, &im.final_balance, &im.ticks})
+    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.max_balance, &im.final_balance, &im.ticks,
+                      &im.stiffness})
       attribute(s->dset, "units", std::string("1"));
     im.status.write(std::string("running"));
     im.quaternion.write(std::string());
-    for (Scalar* s : {&im.t_reached, &im.cpu, &im.max_balance, &im.final_balance}) s->write(0.0);
+    im.stiffness_hint.write(std::string());
+    for (Scalar* s : {&im.t_reached, &im.cpu, &im.max_balance, &im.final_balance, &im.stiffness}) s->write(0.0);
     for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.ticks}) s->write(0L);
 
     {
@@ -424,6 +431,8 @@ void H5Log::flush(const RunSummary* summary) {
       im.max_balance.write(summary->max_energy_balance_error);
       im.final_balance.write(summary->final_energy_balance_error);
       im.ticks.write(summary->control_ticks);
+      im.stiffness.write(summary->stiffness_index);
+      im.stiffness_hint.write(summary->stiffness_hint);
     }
     check(H5Fflush(im.file, H5F_SCOPE_LOCAL), "H5Fflush");
     im.rows += n;

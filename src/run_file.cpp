@@ -236,6 +236,8 @@ void RunReader::Impl::read_metadata(RunContents& r) const {
     s.error_test_failures = to_count(number("error_test_failures"));
     s.nonlinear_iterations = to_count(number("nonlinear_iterations"));
     s.control_ticks = to_count(number("control_ticks"));
+    s.stiffness_index = number("stiffness_index");
+    s.stiffness_hint = text("stiffness_hint");
   }
 }
 

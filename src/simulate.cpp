@@ -1,5 +1,7 @@
 #include "soadyn/simulate.hpp"
 
+#include "stiffness.hpp"
+
 #include "soadyn/kinematics.hpp"
 #include "soadyn/sensitivity.hpp"
 #include "soadyn/text.hpp"
@@ -196,6 +198,29 @@ std::string interrupted_status(int stop, double t) {
   return "interrupted" + by + " at t = " + at;
 }
 
+namespace {
+
+// A cvode-adams run of many steps whose mean step h̄ sat at the edge of stability, h̄ ρ(∂f/∂y) ≥
+// kStiffIndex (stiffness.hpp): the summary says so once and names cvode-bdf.
+void assess_stiffness(System& sys, const SimulationSettings& settings, const VecX& y0, double t, const VecX& y,
+                      RunSummary& summary) {
+  if (settings.method != Method::CvodeAdams || summary.stats.steps < detail::kStiffSteps || !(summary.t_reached > 0)) return;
+  const double h = summary.t_reached / double(summary.stats.steps);
+  const double rho = std::fmax(detail::spectral_radius(sys, 0.0, y0), detail::spectral_radius(sys, t, y));
+  if (!std::isfinite(rho)) return;  // neither state gave an estimate
+  summary.stiffness_index = h * rho;
+  if (summary.stiffness_index < detail::kStiffIndex) return;
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "the run looks stiff: %ld cvode-adams steps of %.3g s on average, held by stability (mean step x the "
+                "largest |eigenvalue| of df/dy, %.3g, is %.2g), not by accuracy; cvode-bdf (method: cvode-bdf, or "
+                "--method cvode-bdf) takes its steps from the accuracy alone",
+                summary.stats.steps, h, rho, summary.stiffness_index);
+  summary.stiffness_hint = buf;
+}
+
+}  // namespace
+
 RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunObserver* observer,
                     std::vector<Sample>* samples, const std::atomic<int>* stop, std::function<void()> poll,
                     ControlFunction controller) {
@@ -233,6 +258,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
     sys.limits = &*limits;
   }
   VecX y = sys.state(sc.q0, sc.v0);
+  const VecX y0 = y;
   m.normalize(y.head(m.nq));
   double t = 0.0;
   // with sensitivities: CVODES carries ∂y/∂x₀ and ∂y/∂π along (sensitivity.hpp)
@@ -374,6 +400,7 @@ RunSummary simulate(const Scenario& sc, const SimulationSettings& settings, RunO
     summary.status = e.what();
   }
   update();
+  assess_stiffness(sys, settings, y0, t, y, summary);
   if (watch_limits) {
     std::string past;
     for (int k = 0; k < m.nv; ++k)

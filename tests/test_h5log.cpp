@@ -225,12 +225,14 @@ void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& 
   c.scalar("/solver/max_energy_balance_error", r.max_energy_balance_error, H5T_FLOAT);
   c.scalar("/solver/final_energy_balance_error", r.final_energy_balance_error, H5T_FLOAT);
   c.scalar("/solver/control_ticks", double(r.control_ticks), H5T_INTEGER);
+  c.scalar("/solver/stiffness_index", r.stiffness_index, H5T_FLOAT);
+  c.scalar("/solver/stiffness_hint", r.stiffness_hint);
   // CPU time: exact when this process wrote the file; from another process, only plausible
   c.scalar("/solver/cpu_seconds", same_process ? r.cpu_seconds : 30.0, H5T_FLOAT, same_process ? 0.0 : 1.0);
   c.text("/solver/t_reached", "units", "s");
   c.text("/solver/cpu_seconds", "units", "s");
   for (const char* n : {"steps", "rhs_evals", "jac_evals", "error_test_failures", "nonlinear_iterations",
-                        "max_energy_balance_error", "final_energy_balance_error", "control_ticks"})
+                        "max_energy_balance_error", "final_energy_balance_error", "control_ticks", "stiffness_index"})
     c.text(std::string("/solver/") + n, "units", "1");
 
   // /samples holds every number of the chosen groups, named and with units; the series are views

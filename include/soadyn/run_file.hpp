@@ -70,6 +70,8 @@ struct RunContents {
     double max_energy_balance_error = 0, final_energy_balance_error = 0;
     long steps = 0, rhs_evals = 0, jac_evals = 0, error_test_failures = 0, nonlinear_iterations = 0;
     long control_ticks = 0;  // layout 5 on (0 before)
+    double stiffness_index = 0;   // RunSummary's (simulate.hpp); 0 and "" in files from before them
+    std::string stiffness_hint;
   } solver;
   // /samples' columns, and the series logged (kViewPaths order), each with the same rows
   std::vector<std::string> column_names, column_units;

@@ -53,6 +53,12 @@ struct RunSummary {
   // what the run did that its settings allowed but a user should hear (one line each): joints
   // that went past limits which were not enforced (limits off)
   std::vector<std::string> warnings;
+  // a cvode-adams run of many steps (2000 or more): h̄ ρ, its mean step times the spectral radius of
+  // ∂f/∂y (the larger at the start and the end; 0 when not estimated: other methods, fewer steps,
+  // more than 400 state numbers); and, when h̄ ρ ≥ 0.2 (the steps were spent on stability, not accuracy), the one-line
+  // hint that the run was stiff and cvode-bdf would take far fewer steps ("" otherwise)
+  double stiffness_index = 0.0;
+  std::string stiffness_hint;
 };
 
 // Receives samples and the run's state as it goes (the HDF5 log implements it).

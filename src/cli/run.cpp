@@ -245,6 +245,7 @@ int run_simulation(const RunOptions& o) {
     Progress progress(log.get(), s.t_end);
     r = simulate(sc, s, &progress, nullptr, &g_stop);
     for (const std::string& w : r.warnings) warn(w);
+    if (!r.stiffness_hint.empty()) std::fprintf(stderr, "soadyn: hint: %s\n", r.stiffness_hint.c_str());
   } catch (const IoError& e) {
     std::fprintf(stderr, "soadyn: error: %s\n", e.what());
     return 4;

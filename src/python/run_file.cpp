@@ -52,7 +52,8 @@ py::dict read(const std::string& path) {
                   "cpu_seconds"_a = s.cpu_seconds, "max_energy_balance_error"_a = s.max_energy_balance_error,
                   "final_energy_balance_error"_a = s.final_energy_balance_error, "steps"_a = s.steps,
                   "rhs_evals"_a = s.rhs_evals, "jac_evals"_a = s.jac_evals, "error_test_failures"_a = s.error_test_failures,
-                  "nonlinear_iterations"_a = s.nonlinear_iterations, "control_ticks"_a = s.control_ticks);
+                  "nonlinear_iterations"_a = s.nonlinear_iterations, "control_ticks"_a = s.control_ticks,
+                  "stiffness_index"_a = s.stiffness_index, "stiffness_hint"_a = s.stiffness_hint);
   py::dict series;
   for (const RunSeries& r : c.series) series[text(r.path)] = series_array(r);
   py::list events;

@@ -127,6 +127,8 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   py::dict sd = summary_dict(summary);
   sd["events"] = events;
   sd["control_ticks"] = summary.control_ticks;
+  sd["stiffness_index"] = summary.stiffness_index;
+  sd["stiffness_hint"] = summary.stiffness_hint;
   return py::make_tuple(arrays, sd, pending.is_none() ? raised : pending, tr.warnings);
 }
 

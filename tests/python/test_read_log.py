@@ -28,7 +28,7 @@ OTHER = {"/samples", "/events", "/scenario", "/robot", "/bodies/names", "/frames
          "/model/joint_q_index", "/model/joint_v_index"}
 SOLVER = {"status", "t_reached", "steps", "rhs_evals", "jac_evals", "error_test_failures", "nonlinear_iterations",
           "cpu_seconds", "quaternion_handling", "max_energy_balance_error", "final_energy_balance_error",
-          "control_ticks"}
+          "control_ticks", "stiffness_index", "stiffness_hint"}
 
 
 def datasets(path):

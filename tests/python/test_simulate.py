@@ -159,3 +159,27 @@ def test_ctrl_c_stops_a_long_run_within_a_tenth_of_a_second(tmp_path):
     assert back.summary.status == status and not back.summary.completed
     assert len(back) == samples and back.t[-1] == t_last == back.summary.t_reached
     assert np.all(np.isfinite(back.q)) and np.all(np.diff(back.t) > 0)
+
+
+def test_a_stiff_adams_run_says_so_once(tmp_path):
+    """stiff_arm under cvode-adams: one RuntimeWarning naming cvode-bdf, the summary's hint and
+    index, the same in the run file (read_log) and one 'soadyn: hint:' line from the command
+    line; under cvode-bdf none of it"""
+    scene = f"{SCENARIOS}/stiff_arm.yaml"
+    out = tmp_path / "stiff.h5"
+    with pytest.warns(RuntimeWarning, match="cvode-bdf") as said:
+        tr = soadyn.simulate(scene, method="cvode-adams", t_end=0.3, output=str(out))
+    assert sum("looks stiff" in str(w.message) for w in said) == 1
+    assert tr.summary.stiffness_index >= 0.2 and "cvode-bdf" in tr.summary.stiffness_hint
+    back = soadyn.read_log(str(out)).summary
+    assert back.stiffness_hint == tr.summary.stiffness_hint
+    assert back.stiffness_index == pytest.approx(tr.summary.stiffness_index, rel=1e-12)
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        calm = soadyn.simulate(scene, method="cvode-bdf", t_end=0.3)
+    assert calm.summary.stiffness_hint == "" and calm.summary.stiffness_index == 0.0
+    p = cli("run", scene, "--method", "cvode-adams", "--t-end", "0.3", "-q", "-o", tmp_path / "cli.h5")
+    assert p.returncode == 0, p.stderr
+    hints = [line for line in p.stderr.splitlines() if line.startswith("soadyn: hint: the run looks stiff")]
+    assert len(hints) == 1 and "cvode-bdf" in hints[0], p.stderr

@@ -190,6 +190,8 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
                                                           controller)
     for w in warns:  # e.g. an rtol below what double precision can deliver
         _warnings.warn(w, RuntimeWarning, stacklevel=2)
+    if summary["stiffness_hint"]:  # said once; also in the Trajectory's summary
+        _warnings.warn(summary["stiffness_hint"], RuntimeWarning, stacklevel=2)
     model = scene.model
     sens = None
     if "sensitivity_names" in arrays:

@@ -144,6 +144,10 @@ class RunSummary:
     output_dt: float
     max_energy_balance_error: float
     final_energy_balance_error: float
+    events: List[dict]
+    control_ticks: int
+    stiffness_index: float
+    stiffness_hint: str
 
 class FramePoses:
     position: Vector

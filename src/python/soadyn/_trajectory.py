@@ -33,6 +33,11 @@ class RunSummary:
     # controller's evaluations (read_log: from the file's /events and /solver, as the run returned them)
     events: List[dict] = field(default_factory=list)
     control_ticks: int = 0
+    # a cvode-adams run of 2000 steps or more: h̄ ρ, the mean step times the spectral radius of
+    # ∂f/∂y (0 when not estimated), and when it is ≥ 0.2 the hint that the run was stiff and
+    # cvode-bdf would take far fewer steps ("" otherwise; include/soadyn/simulate.hpp)
+    stiffness_index: float = 0.0
+    stiffness_hint: str = ""
 
 
 @dataclass(frozen=True, eq=False)
@@ -248,7 +253,8 @@ def read_log(path: str) -> Trajectory:
         error_test_failures=solver["error_test_failures"], nonlinear_iterations=solver["nonlinear_iterations"],
         cpu_seconds=solver["cpu_seconds"], quaternion_handling=solver["quaternion_handling"],
         output_dt=solver["output_dt"], max_energy_balance_error=worst, final_energy_balance_error=last,
-        events=_events(c), control_ticks=solver["control_ticks"])
+        events=_events(c), control_ticks=solver["control_ticks"], stiffness_index=solver["stiffness_index"],
+        stiffness_hint=solver["stiffness_hint"])
     # /frames: names (F), position (T, F, 3), orientation (T, F, 4)
     fnames = c["frame_names"]
     pos, att = series("/frames/position", len(fnames), 3), series("/frames/orientation", len(fnames), 4)
