@@ -4,7 +4,7 @@
 // one owner of HDF5 ids, h5::Id.
 #pragma once
 
-#include "../src/h5_util.hpp"
+#include "../src/io/h5_util.hpp"
 
 #include <hdf5.h>
 

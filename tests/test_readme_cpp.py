@@ -22,7 +22,7 @@ PRELUDE = """[[maybe_unused]] static void fragment(
     soadyn::Scenario& scene, soadyn::Model& model, soadyn::Data& data, soadyn::VecX& q, soadyn::VecX& v,
     soadyn::VecX& qdd, soadyn::VecX& tau, soadyn::Inputs& inputs, soadyn::MatX& Y, soadyn::MatX& dqdd_dpi) {
 """
-BASE = ["soadyn/model.hpp", "soadyn/data.hpp", "soadyn/scenario.hpp", "soadyn/inputs.hpp"]
+BASE = ["soadyn/multibody/model.hpp", "soadyn/multibody/data.hpp", "soadyn/sim/scenario.hpp", "soadyn/algorithm/inputs.hpp"]
 
 
 def readmes():

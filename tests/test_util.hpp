@@ -1,9 +1,9 @@
 // Shared test helpers: seeded random trees and states, tolerance checks, dense references.
 #pragma once
 
-#include "soadyn/algorithms.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/model.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/multibody/model.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // The refusal a URDF text meets, as its one-line message ("(accepted)" if none), read as robot.urdf.
 #pragma once
 
-#include "soadyn/scenario.hpp"
+#include "soadyn/io/scenario_file.hpp"
 
 #include <string>
 

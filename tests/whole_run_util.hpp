@@ -2,8 +2,8 @@
 // settings, a ball falling freely (its derivatives have closed forms) and two seeded random scenes.
 #pragma once
 
-#include "soadyn/scenario.hpp"
-#include "soadyn/settings.hpp"
+#include "soadyn/sim/scenario.hpp"
+#include "soadyn/sim/settings.hpp"
 #include "test_util.hpp"
 
 #include <string>

@@ -1,9 +1,9 @@
 // The subcommands of the soadyn executable.
 #pragma once
 
-#include "soadyn/model.hpp"
-#include "soadyn/output_file.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/multibody/model.hpp"
+#include "soadyn/io/output_file.hpp"
+#include "soadyn/sim/scenario.hpp"
 
 #include <CLI/CLI.hpp>
 

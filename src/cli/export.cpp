@@ -7,9 +7,9 @@
 // a file of any length exports in bounded memory.  Outputs are written under a temporary name and renamed into place.
 #include "cli.hpp"
 
-#include "soadyn/h5log.hpp"
-#include "soadyn/run_file.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/io/h5log.hpp"
+#include "soadyn/io/run_file.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <unistd.h>
 

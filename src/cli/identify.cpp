@@ -3,9 +3,9 @@
 // the directions the data cannot see, and the scene written with the fitted values.
 #include "cli.hpp"
 
-#include "soadyn/h5log.hpp"
-#include "soadyn/identify.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/io/h5log.hpp"
+#include "soadyn/sim/identify.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -1,10 +1,10 @@
 #include "cli.hpp"
 
-#include "soadyn/algorithms.hpp"
-#include "soadyn/frames.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/scenario.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/frames.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/sim/scenario.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <cmath>
 #include <cstdio>

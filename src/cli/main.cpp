@@ -8,8 +8,8 @@
 //   soadyn sweep SWEEP ...     an ensemble of runs on Dask (python3 -m soadyn sweep)
 #include "cli.hpp"
 
-#include "soadyn/text.hpp"
-#include "soadyn/version.hpp"
+#include "soadyn/multibody/text.hpp"
+#include "soadyn/io/version.hpp"
 
 #include <CLI/CLI.hpp>
 

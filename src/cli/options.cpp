@@ -2,8 +2,8 @@
 // the choices that answer a typo with the nearest name.
 #include "cli.hpp"
 
-#include "soadyn/scenario.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/io/scenario_file.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -1,8 +1,8 @@
 #include "cli.hpp"
 
-#include "soadyn/h5log.hpp"
-#include "soadyn/integrators.hpp"
-#include "soadyn/simulate.hpp"
+#include "soadyn/io/h5log.hpp"
+#include "soadyn/sim/integrators.hpp"
+#include "soadyn/sim/simulate.hpp"
 
 #include <signal.h>
 #include <unistd.h>

@@ -8,11 +8,11 @@
 #include "cli.hpp"
 #include "view.hpp"
 
-#include "soadyn/frames.hpp"
-#include "soadyn/h5log.hpp"
-#include "soadyn/limits.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/algorithm/frames.hpp"
+#include "soadyn/io/h5log.hpp"
+#include "soadyn/sim/limits.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -220,90 +220,80 @@ void add_view(CLI::App& app, ViewOptions& o) {
   c->add_flag("-q,--quiet", o.quiet, "no summary on stdout");
 }
 
-int run_view(const ViewOptions& o) {
-  // the output is checked before anything is read, and nothing is touched if it is refused
-  const std::string out = o.output.empty() ? std::filesystem::path(o.run).replace_extension(".html").string() : o.output;
-  const OutputTarget target = check_outputs({{out, OutputKind::Page}}, {o.run}, o.force).at(0);
-  view::RunFile run = view::read_run(o.run);
-  // a run that went unstable may end in non-finite rows: shown up to the last finite one
-  Eigen::Index finite = 0;
-  while (finite < run.q.rows() && run.q.row(finite).allFinite()) ++finite;
-  if (finite == 0) throw Error(o.run + ": /q is not finite from its first row on: nothing to show");
-  if (finite < run.q.rows()) {
-    std::fprintf(stderr, "soadyn: note: %s: /q is not finite from t = %g s on; the page ends at t = %g s\n", o.run.c_str(),
-                 run.time(finite), run.time(finite - 1));
-    view::keep_rows(run, finite);
-  }
-  const view::RunModel rm = view::rebuild_model(run);
-  const Model& m = rm.model;
-  const view::Look look = view::make_look(m, rm.urdf_text, rm.urdf_path, rm.mjcf_files);
+namespace {
 
-  double h = 0.0;
-  const std::vector<Eigen::Index> keep = decimate(run.time, o.fps, o.max_frames, h);
-  const size_t K = keep.size(), N = size_t(m.nbodies);
-
-  // poses from q by the library's kinematics: R_i, η_i of every body (the note's [kin] stage),
-  // and of the frames the run logged (frames.hpp's placement: R = C_b X.R, p = η_b + C_b X.p)
-  Data d(m);
-  std::vector<int> logged;
-  for (const std::string& name : run.frame_names) logged.push_back(m.frame_index(name));
-  const size_t F = logged.size();
-  std::vector<double> times(K);
-  std::vector<float> pose(K * N * 7), frame_pose(K * F * 7), qs(K * size_t(m.nq));
+// Every shown sample's poses from q by the library's kinematics: R_i, η_i of every body (the note's
+// [kin] stage), and of the frames the run logged (frames.hpp's placement: R = C_b X.R, p = η_b +
+// C_b X.p), with the box that holds them all
+struct Poses {
+  std::vector<double> times;
+  std::vector<float> body, frame, q;  // K × N × 7, K × F × 7 ([p; x y z w]), K × nq
   Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
-  auto extend = [&](const Vec3& x) {
+  void extend(const Vec3& x) {
     lo = lo.cwiseMin(x);
     hi = hi.cwiseMax(x);
-  };
+  }
+};
+
+void put_pose(float* out, const Vec3& p, const Mat3& R) {
+  const Eigen::Quaterniond r(R);
+  for (int c = 0; c < 3; ++c) out[c] = float(p(c));
+  out[3] = float(r.x()), out[4] = float(r.y()), out[5] = float(r.z()), out[6] = float(r.w());
+}
+
+Poses poses(const Model& m, const view::RunFile& run, const view::Look& look, const std::vector<int>& logged,
+            const std::vector<Eigen::Index>& keep) {
+  const size_t K = keep.size(), N = size_t(m.nbodies), F = logged.size();
+  Poses P;
+  P.times.resize(K), P.body.resize(K * N * 7), P.frame.resize(K * F * 7), P.q.resize(K * size_t(m.nq));
+  Data d(m);
   for (size_t f = 0; f < K; ++f) {
     const Eigen::Index k = keep[f];
     VecX q = run.q.row(k).transpose();
     m.normalize(q);
     update_kinematics(m, d, q);
-    times[f] = run.time(k);
+    P.times[f] = run.time(k);
     for (size_t i = 0; i < N; ++i) {
-      const Eigen::Quaterniond r(d.R[i]);
       const Vec3 p = d.eta.col(i);
-      float* out = &pose[(f * N + i) * 7];
-      for (int c = 0; c < 3; ++c) out[c] = float(p(c));
-      out[3] = float(r.x()), out[4] = float(r.y()), out[5] = float(r.z()), out[6] = float(r.w());
-      extend(p);
-      extend(d.r.col(i));
-      for (const Vec3& s : look.bodies[i].segments) extend(p + d.R[i] * s);
+      put_pose(&P.body[(f * N + i) * 7], p, d.R[i]);
+      P.extend(p);
+      P.extend(d.r.col(i));
+      for (const Vec3& s : look.bodies[i].segments) P.extend(p + d.R[i] * s);
       const Shape& box = look.bodies[i].inertia_box;  // its corners
       for (int c = 0; c < 8; ++c) {
         const Vec3 corner(c & 1 ? 0.5 : -0.5, c & 2 ? 0.5 : -0.5, c & 4 ? 0.5 : -0.5);
-        extend(p + d.R[i] * (box.p + box.R * corner.cwiseProduct(box.size)));
+        P.extend(p + d.R[i] * (box.p + box.R * corner.cwiseProduct(box.size)));
       }
     }
     for (size_t j = 0; j < F; ++j) {
       const Placement X = frame_placement(m, d, logged[j]);
-      const Eigen::Quaterniond r(X.R);
-      float* out = &frame_pose[(f * F + j) * 7];
-      for (int c = 0; c < 3; ++c) out[c] = float(X.p(c));
-      out[3] = float(r.x()), out[4] = float(r.y()), out[5] = float(r.z()), out[6] = float(r.w());
-      extend(X.p);
+      put_pose(&P.frame[(f * F + j) * 7], X.p, X.R);
+      P.extend(X.p);
     }
-    for (int c = 0; c < m.nq; ++c) qs[f * size_t(m.nq) + c] = float(run.q(k, c));
+    for (int c = 0; c < m.nq; ++c) P.q[f * size_t(m.nq) + c] = float(run.q(k, c));
   }
+  return P;
+}
 
-  // the energy-balance error (E − E0 − W + L) / max(|E0|, peak T), as soadyn run reports it, L the
-  // energy the limits' impacts took (files before layout 3 hold no W: the energy error)
-  std::string energy = "null";
-  if (run.total.size()) {
-    const bool balance = run.work.size() > 0, impacts = run.impact_loss.size() > 0;
-    const auto L = [&](Eigen::Index k) { return impacts ? run.impact_loss(k) : 0.0; };
-    const double E0 = run.total(0) + L(0);
-    const double scale = std::max({std::abs(E0), run.kinetic.size() ? run.kinetic.maxCoeff() : 0.0, 1e-300});
-    std::vector<float> err(K);
-    for (size_t f = 0; f < K; ++f)
-      err[f] = float((run.total(keep[f]) - E0 - (balance ? run.work(keep[f]) : 0.0) + L(keep[f])) / scale);
-    energy = "{\"error\":" + base64(err) + ",\"E0\":" + num(E0) + ",\"scale\":" + num(scale) +
-             ",\"work_inputs\":" + (rm.has_work_inputs ? "true" : "false") + ",\"balance\":" + (balance ? "true" : "false") +
-             ",\"impacts\":" + (impacts ? "true" : "false") + "}";
-  }
+// the energy-balance error (E − E0 − W + L) / max(|E0|, peak T), as soadyn run reports it, L the
+// energy the limits' impacts took (files before layout 3 hold no W: the energy error); "null"
+// without energies
+std::string energy_json(const view::RunFile& run, const view::RunModel& rm, const std::vector<Eigen::Index>& keep) {
+  if (!run.total.size()) return "null";
+  const bool balance = run.work.size() > 0, impacts = run.impact_loss.size() > 0;
+  const auto L = [&](Eigen::Index k) { return impacts ? run.impact_loss(k) : 0.0; };
+  const double E0 = run.total(0) + L(0);
+  const double scale = std::max({std::abs(E0), run.kinetic.size() ? run.kinetic.maxCoeff() : 0.0, 1e-300});
+  std::vector<float> err(keep.size());
+  for (size_t f = 0; f < keep.size(); ++f)
+    err[f] = float((run.total(keep[f]) - E0 - (balance ? run.work(keep[f]) : 0.0) + L(keep[f])) / scale);
+  return "{\"error\":" + base64(err) + ",\"E0\":" + num(E0) + ",\"scale\":" + num(scale) +
+         ",\"work_inputs\":" + (rm.has_work_inputs ? "true" : "false") + ",\"balance\":" + (balance ? "true" : "false") +
+         ",\"impacts\":" + (impacts ? "true" : "false") + "}";
+}
 
-  // the joint limits' events, for the timeline: time, joint, side, kind and velocities
+// the joint limits' events, for the timeline: time, joint, side, kind and velocities
+std::string events_json(const view::RunFile& run, const Model& m) {
   std::string events = "[";
   const std::vector<std::string> vn = run.v_names.empty() ? m.v_names() : run.v_names;
   for (size_t k = 0; k < run.events.size(); ++k) {
@@ -313,11 +303,13 @@ int run_view(const ViewOptions& o) {
               ",\"side\":" + quote(e.side < 0 ? "lower" : "upper") + ",\"kind\":" + quote(kind) + ",\"v_before\":" + num(e.v_before) +
               ",\"v_after\":" + num(e.v_after) + ",\"energy_lost\":" + num(e.energy_lost) + "}";
   }
-  events += "]";
+  return events + "]";
+}
 
-  // the scene: bodies as the model knows them
+// the scene: bodies as the model knows them, and the coordinates' names and units
+std::string bodies_json(const Model& m, const view::Look& look) {
   std::string bodies = "[";
-  for (size_t i = 0; i < N; ++i) {
+  for (size_t i = 0; i < size_t(m.nbodies); ++i) {
     const view::BodyLook& b = look.bodies[i];
     std::string segs = "[";
     for (size_t s = 0; s < b.segments.size(); ++s) segs += (s ? "," : "") + vec(b.segments[s]);
@@ -329,35 +321,99 @@ int run_view(const ViewOptions& o) {
               ",\"segments\":" + segs + ",\"box\":" + shape(b.inertia_box) + ",\"visuals\":" + shapes(b.visuals) +
               ",\"meshes\":" + std::to_string(b.meshes) + "}";
   }
-  bodies += "]";
-  std::string coords = "[", units = "[";
-  const auto names = coordinate_names(m), unit = coordinate_units(m);
-  for (size_t c = 0; c < names.size(); ++c) coords += (c ? "," : "") + quote(names[c]);
-  for (size_t c = 0; c < unit.size(); ++c) units += (c ? "," : "") + quote(unit[c]);
-  coords += "]", units += "]";
+  return bodies + "]";
+}
 
-  // the mesh files; those that cannot be drawn are said on stderr too (the page's note names all)
-  std::string mesh_blocks, formats;
-  const std::string meshes = mesh_list(look.meshes, mesh_blocks, formats);
-  size_t failed = 0, mesh_bytes = 0;
+std::string string_list(const std::vector<std::string>& v) {
+  std::string out = "[";
+  for (size_t c = 0; c < v.size(); ++c) out += (c ? "," : "") + quote(v[c]);
+  return out + "]";
+}
+
+// the logged frames: names, the body each moves with, and per shown sample their poses
+std::string named_frames_json(const Model& m, const view::RunFile& run, const std::vector<int>& logged, const Poses& P) {
+  std::vector<std::string> bodies;
+  for (int f : logged) {
+    const int b = m.frame_body[size_t(f)];
+    bodies.push_back(b < 0 ? std::string("world") : m.body_names[size_t(b)]);
+  }
+  return "{\"names\":" + string_list(run.frame_names) + ",\"bodies\":" + string_list(bodies) + ",\"pose\":" + base64(P.frame) + "}";
+}
+
+// The mesh files: what the page draws, their bytes, how many cannot be drawn; those are said on
+// stderr too (the page's note names all)
+struct Meshes {
+  std::string list, blocks, formats;
+  size_t failed = 0, bytes = 0;
+};
+
+Meshes meshes(const view::Look& look, const std::string& run_path) {
+  Meshes M;
+  M.list = mesh_list(look.meshes, M.blocks, M.formats);
   for (const view::MeshFile& f : look.meshes) {
-    mesh_bytes += f.bytes.size();
+    M.bytes += f.bytes.size();
     if (f.error.empty()) continue;
-    if (++failed <= 5)
-      std::fprintf(stderr, "soadyn: note: %s: mesh %s drawn as its body's default shape: %s\n", o.run.c_str(),
+    if (++M.failed <= 5)
+      std::fprintf(stderr, "soadyn: note: %s: mesh %s drawn as its body's default shape: %s\n", run_path.c_str(),
                    printable(f.name).c_str(), f.error.c_str());
   }
-  if (failed > 5) std::fprintf(stderr, "soadyn: note: %s: and %zu more meshes (the page names them all)\n", o.run.c_str(), failed - 5);
+  if (M.failed > 5) std::fprintf(stderr, "soadyn: note: %s: and %zu more meshes (the page names them all)\n", run_path.c_str(), M.failed - 5);
+  return M;
+}
 
-  // the logged frames: names, the body each moves with, and per shown sample their poses
-  std::string named = "{\"names\":[";
-  for (size_t j = 0; j < F; ++j) named += (j ? "," : "") + quote(run.frame_names[j]);
-  named += "],\"bodies\":[";
-  for (size_t j = 0; j < F; ++j) {
-    const int b = m.frame_body[size_t(logged[j])];
-    named += (j ? "," : "") + quote(b < 0 ? std::string("world") : m.body_names[size_t(b)]);
+// the page: the template with the run's data, the styles and scripts inlined, and a mesh format's
+// loader only in a page that has one
+std::string page_html(const std::string& name, const std::string& data, const Meshes& M) {
+  const auto loader = [&](const char* ext, std::string_view js) {
+    return M.formats.find(ext) != std::string::npos ? js : std::string_view();
+  };
+  return fill_template(assets::page_html, {{"TITLE", html_escape(name)},
+                                           {"CSS", assets::page_css},
+                                           {"DATA", data},
+                                           {"THREE", assets::three_js},
+                                           {"ORBIT", assets::orbit_js},
+                                           {"PLOT", assets::plot_js},
+                                           {"FRAMES", assets::frames_js},
+                                           {"BODIES", assets::bodies_js},
+                                           {"MESHES", assets::meshes_js},
+                                           {"MESH_DATA", M.blocks},
+                                           {"STL", loader("stl", assets::stl_js)},
+                                           {"OBJ", loader("obj", assets::obj_js)},
+                                           {"COLLADA", loader("dae", assets::collada_js)},
+                                           {"VIEWER", assets::page_js}});
+}
+
+// a run that went unstable may end in non-finite rows: shown up to the last finite one
+void keep_finite(view::RunFile& run, const std::string& path) {
+  Eigen::Index finite = 0;
+  while (finite < run.q.rows() && run.q.row(finite).allFinite()) ++finite;
+  if (finite == 0) throw Error(path + ": /q is not finite from its first row on: nothing to show");
+  if (finite < run.q.rows()) {
+    std::fprintf(stderr, "soadyn: note: %s: /q is not finite from t = %g s on; the page ends at t = %g s\n", path.c_str(),
+                 run.time(finite), run.time(finite - 1));
+    view::keep_rows(run, finite);
   }
-  named += "],\"pose\":" + base64(frame_pose) + "}";
+}
+
+}  // namespace
+
+int run_view(const ViewOptions& o) {
+  // the output is checked before anything is read, and nothing is touched if it is refused
+  const std::string out = o.output.empty() ? std::filesystem::path(o.run).replace_extension(".html").string() : o.output;
+  const OutputTarget target = check_outputs({{out, OutputKind::Page}}, {o.run}, o.force).at(0);
+  view::RunFile run = view::read_run(o.run);
+  keep_finite(run, o.run);
+  const view::RunModel rm = view::rebuild_model(run);
+  const Model& m = rm.model;
+  const view::Look look = view::make_look(m, rm.urdf_text, rm.urdf_path, rm.mjcf_files);
+
+  double h = 0.0;
+  const std::vector<Eigen::Index> keep = decimate(run.time, o.fps, o.max_frames, h);
+  const size_t K = keep.size(), N = size_t(m.nbodies);
+  std::vector<int> logged;
+  for (const std::string& name : run.frame_names) logged.push_back(m.frame_index(name));
+  const Poses P = poses(m, run, look, logged, keep);
+  const Meshes M = meshes(look, o.run);
 
   char rule[160];
   std::snprintf(rule, sizeof rule, "%zu of %ld logged samples, at least %.4g s apart (at most %.4g per simulated second)", K,
@@ -366,28 +422,14 @@ int run_view(const ViewOptions& o) {
       "{\"name\":" + quote(rm.name) + ",\"description\":" + quote(rm.description) + ",\"run\":" +
       quote(std::filesystem::path(o.run).filename().string()) + ",\"scenario_path\":" + quote(run.scenario_path) +
       ",\"version\":" + quote(run.version) + ",\"method\":" + quote(run.method) + ",\"status\":" + quote(run.status) +
-      ",\"gravity\":" + vec(m.gravity) + ",\"bodies\":" + bodies + ",\"world_visuals\":" + shapes(look.world_visuals) + ",\"world_meshes\":" + std::to_string(look.world_meshes) +
-      ",\"bounds\":{\"min\":" + vec(lo) + ",\"max\":" + vec(hi) + "},\"frames\":{\"n\":" + std::to_string(K) +
-      ",\"nb\":" + std::to_string(N) + ",\"t\":" + base64(times) + ",\"pose\":" + base64(pose) + ",\"rule\":" +
-      quote(rule) + "},\"coords\":" + coords + ",\"coord_units\":" + units + ",\"meshes\":" + meshes + ",\"nq\":" + std::to_string(m.nq) + ",\"q\":" + base64(qs) +
-      ",\"energy\":" + energy + ",\"events\":" + events + ",\"named_frames\":" + named + "}";
-
-  const std::string title = html_escape(rm.name);
-  const std::string page = fill_template(assets::page_html, {{"TITLE", title},
-                                                             {"CSS", assets::page_css},
-                                                             {"DATA", data},
-                                                             {"THREE", assets::three_js},
-                                                             {"ORBIT", assets::orbit_js},
-                                                             {"PLOT", assets::plot_js},
-                                                             {"FRAMES", assets::frames_js},
-                                                             {"BODIES", assets::bodies_js},
-                                                             {"MESHES", assets::meshes_js},
-                                                             {"MESH_DATA", mesh_blocks},
-                                                             // a mesh format's loader only in a page that has one
-                                                             {"STL", formats.find("stl") != std::string::npos ? assets::stl_js : ""},
-                                                             {"OBJ", formats.find("obj") != std::string::npos ? assets::obj_js : ""},
-                                                             {"COLLADA", formats.find("dae") != std::string::npos ? assets::collada_js : ""},
-                                                             {"VIEWER", assets::page_js}});
+      ",\"gravity\":" + vec(m.gravity) + ",\"bodies\":" + bodies_json(m, look) + ",\"world_visuals\":" + shapes(look.world_visuals) +
+      ",\"world_meshes\":" + std::to_string(look.world_meshes) + ",\"bounds\":{\"min\":" + vec(P.lo) + ",\"max\":" + vec(P.hi) +
+      "},\"frames\":{\"n\":" + std::to_string(K) + ",\"nb\":" + std::to_string(N) + ",\"t\":" + base64(P.times) +
+      ",\"pose\":" + base64(P.body) + ",\"rule\":" + quote(rule) + "},\"coords\":" + string_list(coordinate_names(m)) +
+      ",\"coord_units\":" + string_list(coordinate_units(m)) + ",\"meshes\":" + M.list + ",\"nq\":" + std::to_string(m.nq) +
+      ",\"q\":" + base64(P.q) + ",\"energy\":" + energy_json(run, rm, keep) + ",\"events\":" + events_json(run, m) +
+      ",\"named_frames\":" + named_frames_json(m, run, logged, P) + "}";
+  const std::string page = page_html(rm.name, data, M);
 
   try {
     TextWriter w(out, target);
@@ -404,7 +446,7 @@ int run_view(const ViewOptions& o) {
     std::printf("frames                 %s\n", rule);
     if (!look.meshes.empty())
       std::printf("meshes                 %zu file(s), %.3g MB in the page; %zu not drawn (said on stderr and in the page)\n",
-                  look.meshes.size(), double(mesh_bytes) / 1e6, failed);
+                  look.meshes.size(), double(M.bytes) / 1e6, M.failed);
     std::printf("page                   %s (%.3g MB)\n", out.c_str(), double(page.size()) / 1e6);
   }
   return 0;

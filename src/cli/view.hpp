@@ -4,9 +4,9 @@
 //   view_meshes.cpp the visuals' mesh files: found, read, checked, each embedded once
 #pragma once
 
-#include "soadyn/mjcf.hpp"
-#include "soadyn/model.hpp"
-#include "soadyn/run_file.hpp"
+#include "soadyn/io/mjcf.hpp"
+#include "soadyn/multibody/model.hpp"
+#include "soadyn/io/run_file.hpp"
 
 #include <Eigen/Geometry>
 

@@ -7,8 +7,8 @@
 // cannot be drawn keeps the reason, for the page's note; its bodies keep their default shape.
 #include "view.hpp"
 
-#include "soadyn/input_file.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/io/input_file.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -2,9 +2,9 @@
 // from the scenario and robot text stored in it.
 #include "view.hpp"
 
-#include "soadyn/mjcf.hpp"
-#include "soadyn/run_file.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/io/mjcf.hpp"
+#include "soadyn/io/run_file.hpp"
+#include "soadyn/io/scenario_file.hpp"
 
 #include <yaml-cpp/yaml.h>
 

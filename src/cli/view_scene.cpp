@@ -5,8 +5,8 @@
 // compiler put them.  Mesh files are found and read by view_meshes.cpp.
 #include "view.hpp"
 
-#include "soadyn/mjcf.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/io/mjcf.hpp"
+#include "soadyn/sim/scenario.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <console_bridge/console.h>

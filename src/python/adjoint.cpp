@@ -2,8 +2,8 @@
 // reference, and the run behind soadyn.gradient.
 #include "common.hpp"
 
-#include "soadyn/adjoint.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/sim/adjoint.hpp"
+#include "soadyn/sim/scenario.hpp"
 
 namespace soadyn::python {
 

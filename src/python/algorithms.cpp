@@ -6,7 +6,7 @@
 // nanoseconds to the C++ time (tools/bench/python_overhead.py).
 #include "common.hpp"
 
-#include "soadyn/derivatives.hpp"
+#include "soadyn/algorithm/derivatives.hpp"
 
 #include <array>
 #include <chrono>

@@ -4,10 +4,10 @@
 // results come out as new arrays written in place by the library.
 #include "common.hpp"
 
-#include "soadyn/batch.hpp"
-#include "soadyn/rollout.hpp"
-#include "soadyn/scenario.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/algorithm/batch.hpp"
+#include "soadyn/sim/rollout.hpp"
+#include "soadyn/io/scenario_file.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <csignal>
 #include <cmath>

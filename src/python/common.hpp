@@ -2,13 +2,13 @@
 // arrays built without a copy, and the Data wrapper that the views keep alive.
 #pragma once
 
-#include "soadyn/trajectory.hpp"
-#include "soadyn/algorithms.hpp"
-#include "soadyn/data.hpp"
-#include "soadyn/derivatives.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/model.hpp"
-#include "soadyn/settings.hpp"
+#include "soadyn/sim/trajectory.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/multibody/data.hpp"
+#include "soadyn/algorithm/derivatives.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/multibody/model.hpp"
+#include "soadyn/sim/settings.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>

@@ -3,8 +3,8 @@
 // at v) and returns new arrays.
 #include "common.hpp"
 
-#include "soadyn/frames.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/algorithm/frames.hpp"
+#include "soadyn/multibody/text.hpp"
 
 namespace soadyn::python {
 

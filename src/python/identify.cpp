@@ -2,8 +2,8 @@
 // from arrays.
 #include "common.hpp"
 
-#include "soadyn/identify.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/sim/identify.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <optional>
 

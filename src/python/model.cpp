@@ -1,9 +1,9 @@
 // Model, Data, Scenario and their settings and inputs, as Python classes.
 #include "common.hpp"
 
-#include "soadyn/integrators.hpp"
-#include "soadyn/scenario.hpp"
-#include "soadyn/text.hpp"
+#include "soadyn/sim/integrators.hpp"
+#include "soadyn/io/scenario_file.hpp"
+#include "soadyn/multibody/text.hpp"
 
 #include <deque>
 #include <optional>

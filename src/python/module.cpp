@@ -1,7 +1,7 @@
 // soadyn._soadyn: the compiled part of the Python package (soadyn/__init__.py re-exports it).
 #include "common.hpp"
 
-#include "soadyn/version.hpp"
+#include "soadyn/io/version.hpp"
 
 #include <cmath>
 #include <cstdint>

@@ -16,7 +16,7 @@
 // soadyn.Error naming it.
 #include "common.hpp"
 
-#include "soadyn/scenario.hpp"
+#include "soadyn/io/scenario_file.hpp"
 
 #include <string>
 #include <vector>

@@ -3,8 +3,8 @@
 // velocities) at it; results are new arrays.
 #include "common.hpp"
 
-#include "soadyn/kinematics.hpp"
-#include "soadyn/regressor.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/algorithm/regressor.hpp"
 
 namespace soadyn::python {
 

@@ -2,7 +2,7 @@
 // (_trajectory.py), which builds the Trajectory from what it returns.
 #include "common.hpp"
 
-#include "soadyn/run_file.hpp"
+#include "soadyn/io/run_file.hpp"
 
 namespace soadyn::python {
 

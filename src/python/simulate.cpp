@@ -5,11 +5,11 @@
 // No thread of its own: a short run in a loop or a sweep pays no thread start and no hand-over.
 #include "common.hpp"
 
-#include "soadyn/run.hpp"
-#include "soadyn/sensitivity.hpp"
-#include "soadyn/simulate.hpp"
-#include "soadyn/text.hpp"
-#include "soadyn/version.hpp"
+#include "soadyn/io/run.hpp"
+#include "soadyn/sim/sensitivity.hpp"
+#include "soadyn/sim/simulate.hpp"
+#include "soadyn/multibody/text.hpp"
+#include "soadyn/io/version.hpp"
 
 #include <chrono>
 #include <cmath>

@@ -1,8 +1,8 @@
 // The fuzz targets' check of every accepted model (fuzz_check.hpp).
 #include "fuzz_check.hpp"
 
-#include "soadyn/algorithms.hpp"
-#include "soadyn/kinematics.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>

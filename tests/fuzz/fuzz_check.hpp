@@ -4,7 +4,7 @@
 // Compiled once, in fuzz_check.cpp, for both fuzz targets.
 #pragma once
 
-#include "soadyn/model.hpp"
+#include "soadyn/multibody/model.hpp"
 
 #include <cstddef>
 #include <cstdint>

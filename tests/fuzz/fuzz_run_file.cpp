@@ -4,7 +4,7 @@
 // files (tests/fuzz/seeds/*.h5: finished, and a killed run's SWMR file).  A crash, leak or hang,
 // or an exception other than soadyn::Error, is a finding; so is a file read whole whose series do
 // not all have its rows.
-#include "soadyn/run_file.hpp"
+#include "soadyn/io/run_file.hpp"
 
 #include <unistd.h>
 

@@ -1,9 +1,9 @@
 // libFuzzer target: scenario text → model → mass matrix and bias.  Any exception other than
 // soadyn::Error, any crash, leak or hang is a finding; so is an accepted model whose mass matrix
 // is not finite or not positive definite (fuzz_check.hpp).
-#include "soadyn/algorithms.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/io/scenario_file.hpp"
 
 #include "fuzz_check.hpp"
 

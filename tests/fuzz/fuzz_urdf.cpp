@@ -1,9 +1,9 @@
 // libFuzzer target: URDF text → model → mass matrix.  A crash, leak, hang or an exception other
 // than soadyn::Error is a finding; so is an accepted model whose mass matrix is not finite or not
 // positive definite (fuzz_check.hpp).
-#include "soadyn/algorithms.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/io/scenario_file.hpp"
 
 #include "fuzz_check.hpp"
 

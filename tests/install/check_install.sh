@@ -33,7 +33,7 @@ grep -q 'soadyn::simulate(' "$scratch/readme_run.cpp" || fail "README.md's secon
 
 echo "== cmake --install $build --prefix $prefix"
 "$cmake" --install "$build" --prefix "$prefix" >"$scratch/install.log"
-for f in include/soadyn/algorithms.hpp include/soadyn/types.hpp "$libdir/libsoadyn.a" "$libdir/libsoadyn.so" \
+for f in include/soadyn/algorithm/algorithms.hpp include/soadyn/multibody/types.hpp "$libdir/libsoadyn.a" "$libdir/libsoadyn.so" \
   "$libdir/cmake/soadyn/soadynConfig.cmake" "$libdir/cmake/soadyn/soadynConfigVersion.cmake" \
   "$libdir/pkgconfig/soadyn.pc" "$bindir/soadyn"; do
   [[ -e $prefix/$f ]] || fail "not installed: $f"

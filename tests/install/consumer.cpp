@@ -1,9 +1,9 @@
 // A two-link arm built in code: its mass matrix, bias and forward dynamics, checked against the
 // closed form (Lagrange, θ2 relative to link 1).  Build it with find_package(soadyn) and
 // soadyn::soadyn, or with `pkg-config --cflags --libs soadyn`.
-#include "soadyn/algorithms.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/model.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/multibody/model.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -166,7 +166,7 @@ def test_double_pendulum(rng):
 
 
 def test_three_link_arm(rng):
-    """(P7) with the hinge axis read as C_1 e_x (see tests/test_mass_matrix.cpp)"""
+    """(P7) with the hinge axis read as C_1 e_x (see tests/algorithm/test_mass_matrix.cpp)"""
     model = soadyn.load(f"{SCENARIOS}/three_link_arm.yaml")
     data = model.create_data()
     ex, ez = np.eye(3)[0], np.eye(3)[2]

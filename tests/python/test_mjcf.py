@@ -1,4 +1,4 @@
-"""MJCF files load in Python and through scenarios as they do in C++ (tests/test_mjcf.cpp checks the
+"""MJCF files load in Python and through scenarios as they do in C++ (tests/io/test_mjcf.cpp checks the
 dynamics against MuJoCo itself): the ignored features as a UserWarning, sites and welded bodies as
 frames, the drawn pose as the initial state, a scenario's `urdf:` naming an MJCF file."""
 import os

@@ -1,4 +1,4 @@
-"""One table of simulation settings (include/soadyn/settings.hpp): every setting it declares is a
+"""One table of simulation settings (include/soadyn/sim/settings.hpp): every setting it declares is a
 scenario key, a soadyn run option, a SimulationSettings attribute, a simulate() keyword and a /solver
 attribute of the run file, each carrying the value given to it."""
 import inspect

@@ -5,9 +5,9 @@
 // over 2, timed the same way.  One JSON object per line; tools/bench/batch.py runs it beside the
 // Python side and makes the table.
 //   soadyn_bench_batch MODEL.urdf FREE_ROOT(0|1) [MIN_SECONDS] [K …]
-#include "soadyn/batch.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/algorithm/batch.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/io/scenario_file.hpp"
 
 #include <chrono>
 #include <ctime>

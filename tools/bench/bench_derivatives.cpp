@@ -11,9 +11,9 @@
 //   jac_dq         System::jacobian_dq: the same by nq + nv forward differences of f
 #include "models.hpp"
 
-#include "soadyn/derivatives.hpp"
-#include "soadyn/integrators.hpp"
-#include "soadyn/kinematics.hpp"
+#include "soadyn/algorithm/derivatives.hpp"
+#include "soadyn/sim/integrators.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
 
 #include <benchmark/benchmark.h>
 

@@ -3,9 +3,9 @@
 // dynamics, each forward-dynamics route, one full right-hand side.
 #include "models.hpp"
 
-#include "soadyn/algorithms.hpp"
-#include "soadyn/integrators.hpp"
-#include "soadyn/kinematics.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/sim/integrators.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
 
 #include <benchmark/benchmark.h>
 

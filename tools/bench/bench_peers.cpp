@@ -20,10 +20,10 @@
 #include "models.hpp"
 #include "peer.hpp"
 
-#include "soadyn/algorithms.hpp"
-#include "soadyn/frames.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/frames.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/io/scenario_file.hpp"
 
 #include <benchmark/benchmark.h>
 #include <dlfcn.h>

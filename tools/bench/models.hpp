@@ -6,7 +6,7 @@
 //   legged: a free trunk and legs of those links (make_legged; C++ benchmarks only).
 #pragma once
 
-#include "soadyn/model.hpp"
+#include "soadyn/multibody/model.hpp"
 
 #include <random>
 

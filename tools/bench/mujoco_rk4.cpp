@@ -6,10 +6,10 @@
 // (wall clock) as a loop of mj_step and as soadyn's rollout() with rk4 on 1 and 2 threads; prints
 // rollouts per second of each and the largest difference between their final states.
 //   soadyn_mujoco_rk4 SCENARIO.yaml DT T_END --rollouts K
-#include "soadyn/algorithms.hpp"
-#include "soadyn/kinematics.hpp"
-#include "soadyn/rollout.hpp"
-#include "soadyn/scenario.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/sim/rollout.hpp"
+#include "soadyn/io/scenario_file.hpp"
 
 #include <mujoco/mujoco.h>
 

@@ -56,7 +56,7 @@ Many states per call (soadyn.batch: (K, nq), (K, nv) in, (K, nv) or (K, nv, nv) 
 Gradients of a whole run (adjoint, CVODES)
     gradient(scene, cost, wrt=("initial_state", "parameters"), parameters="all", …) -> Gradient
     Cost(running=f, terminal=phi);  tracking_cost(model, reference, q=1.0, v=0.0, q_final=0.0, v_final=0.0)
-Identification (include/soadyn/identify.hpp)
+Identification (include/soadyn/sim/identify.hpp)
     identify(scene, data, parameters=[body, ...] | "all") -> Identification   fitted π, standard
         errors, the unidentifiable directions, the fitted model and scene
 Ensembles (soadyn.ensemble: the sweep file's format)

@@ -1,4 +1,4 @@
-"""soadyn.identify: inertial parameters fitted to a logged motion (include/soadyn/identify.hpp)."""
+"""soadyn.identify: inertial parameters fitted to a logged motion (include/soadyn/sim/identify.hpp)."""
 import os
 from dataclasses import dataclass, field
 from typing import List, Optional, Sequence, Union

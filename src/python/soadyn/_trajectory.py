@@ -35,7 +35,7 @@ class RunSummary:
     control_ticks: int = 0
     # a cvode-adams run of 2000 steps or more: h̄ ρ, the mean step times the spectral radius of
     # ∂f/∂y (0 when not estimated), and when it is ≥ 0.2 the hint that the run was stiff and
-    # cvode-bdf would take far fewer steps ("" otherwise; include/soadyn/simulate.hpp)
+    # cvode-bdf would take far fewer steps ("" otherwise; include/soadyn/sim/simulate.hpp)
     stiffness_index: float = 0.0
     stiffness_hint: str = ""
 

@@ -1,0 +1,401 @@
+#include "soadyn/sim/integrators.hpp"
+
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/sim/limits.hpp"
+#include "soadyn/sim/newton_solver.hpp"
+
+#include <Eigen/LU>
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace soadyn {
+
+int first_non_finite(const VecX& y) {
+  for (int k = 0; k < y.size(); ++k)
+    if (!std::isfinite(y(k))) return k;
+  return -1;
+}
+
+StepCount count_steps(double T, double dt) {
+  const double r = T / dt, n = std::round(r);
+  if (std::abs(r - n) <= kWholeSteps * std::max(1.0, n)) return {std::max(0.0, n), false};
+  return {std::floor(r), true};
+}
+
+namespace {
+
+// Fixed-step methods: steps of exactly dt, step k ending at t0 + k·dt; a span that is not a whole
+// number of steps ends with one shorter step (count_steps).
+class FixedStep : public Integrator {
+ public:
+  FixedStep(System& s, double dt, double t0)
+      : sys_(s), dt_(dt), k1_(s.size()), k2_(s.size()), k3_(s.size()), k4_(s.size()), tmp_(s.size()), prev_(s.size()), t0_(t0), t_reported_(t0) {}
+
+  void advance(double t_out, double& t, VecX& y) override {
+    // the grid t0 + k·dt goes on from where the last call left it; a caller that moved t, or a last
+    // shorter step, starts a new one at t
+    if (t != t_reported_) {
+      t0_ = t;
+      k_ = 0;
+    }
+    const StepCount n = count_steps(t_out - t0_, dt_);
+    const long whole = long(n.whole);
+    while (k_ < whole) {
+      if (stop_requested()) {  // t < t_out: the run ends here
+        t_reported_ = t;
+        return;
+      }
+      take(t0_ + double(k_) * dt_, dt_, y);  // from the grid's time (t may be the caller's t_out)
+      ++k_;
+      t = t0_ + double(k_) * dt_;
+      check(t, dt_, y);
+    }
+    // t_out within rounding of the grid (count_steps): it is where the steps ended, and the time
+    // reported (the grid itself goes on from t0 + k·dt)
+    if (!n.partial && k_ == whole) t = t_out;
+    if (n.partial && k_ == whole && t < t_out) {
+      if (stop_requested()) {
+        t_reported_ = t;
+        return;
+      }
+      const double tk = t0_ + double(k_) * dt_, h = t_out - tk;
+      take(tk, h, y);
+      t = t_out;
+      t0_ = t_out;
+      k_ = 0;
+      check(t, h, y);
+    }
+    t_reported_ = t;
+  }
+
+  IntegratorStats stats() const override {
+    IntegratorStats s = stats_;
+    s.rhs_evals = sys_.rhs_evals;
+    return s;
+  }
+  std::string quaternion_handling() const override {
+    return sys_.model.has_quaternions() ? "renormalized after each step" : "none";
+  }
+
+ protected:
+  virtual void step(double t, double h, VecX& y) = 0;
+  void f(double t, const VecX& y, VecX& out) { sys_.rhs(t, y.data(), out.data()); }
+
+  System& sys_;
+  double dt_;
+  VecX k1_, k2_, k3_, k4_, tmp_, prev_;
+  IntegratorStats stats_;
+
+ private:
+  void take(double t, double h, VecX& y) {
+    prev_ = y;
+    step(t, h, y);
+    ++stats_.steps;
+    sys_.model.normalize(y.head(sys_.model.nq));
+  }
+  void check(double t, double h, const VecX& y) const {
+    if (first_non_finite(y) < 0) return;
+    // worst DOF: the largest velocity in the last finite state, the one blowing up
+    Eigen::Index worst = 0;
+    prev_.segment(sys_.model.nq, sys_.model.nv).cwiseAbs().maxCoeff(&worst);
+    std::ostringstream os;
+    os << "unstable at t = " << t << " s: the state is not finite after a step of " << h << " s; worst DOF "
+       << sys_.component_name(sys_.model.nq + int(worst)) << " = " << prev_(sys_.model.nq + worst) << " before it";
+    throw SimulationError(os.str(), t);
+  }
+
+  double t0_;           // the grid's origin
+  long k_ = 0;          // steps taken on it
+  double t_reported_;   // the t the last call returned (a caller passing another starts a new grid)
+};
+
+class Euler : public FixedStep {
+  using FixedStep::FixedStep;
+  // y ← y + h f(t, y)
+  void step(double t, double h, VecX& y) override {
+    f(t, y, k1_);
+    y += h * k1_;
+  }
+};
+
+class SemiImplicitEuler : public FixedStep {
+  using FixedStep::FixedStep;
+  // v ← v + h q̈(q, v);  q ← q + h q̇(q, v⁺);  quadratures W, D ← + h (P, D)(q, v) (left rectangle).
+  // Symplectic when 𝓜 is constant; with 𝓜(q) the velocity is not the canonical momentum and the
+  // map is not symplectic (its energy error grows secularly, test_integrators)
+  void step(double t, double h, VecX& y) override {
+    const int nq = sys_.model.nq, nv = sys_.model.nv;
+    f(t, y, k1_);
+    y.segment(nq, nv) += h * k1_.segment(nq, nv);
+    y.tail(sys_.nquad) += h * k1_.tail(sys_.nquad);
+    sys_.model.qdot(y.head(nq), y.segment(nq, nv), k2_.head(nq));
+    y.head(nq) += h * k2_.head(nq);
+  }
+};
+
+// Symplectic Euler for H(q, p) = ½ pᵀ 𝓜(q)⁻¹ p + V(q) in the canonical momenta p = 𝓜(q) v, V the
+// gravity and spring potential, the other inputs (torques, dampers) as forcing Q(t, v).  The variant
+// implicit in p, explicit in q:
+//   p⁺ = p − h ∂H/∂q(q, p⁺) + h Q(t, v⁺),   q⁺ = q + h ∂H/∂p(q, p⁺) = q + h v⁺,   v⁺ = 𝓜(q)⁻¹ p⁺.
+// With ∂H/∂q|_p = −∂T/∂q|_v + ∂V/∂q the unknown is v⁺, the root of
+//   R(w) = 𝓜(q) w − (h/2) P(w)ᵀ w − p + h g(q) − h τ_in(t, q, w),   P(w) = ∂(𝓜(q) w)/∂q,
+// since ∂T/∂q = ½ vᵀ ∂𝓜/∂q v = ½ P(v)ᵀ v; g = ∂V_gravity/∂q = bias(q, 0), the springs are in τ_in.
+// P(w) is inverse dynamics' ∂τ/∂q at (q, v = 0, q̈ = w) with gravity off (its τ is 𝓜 w), and
+// R'(w) = 𝓜(q) − h P(w)ᵀ − h ∂τ_in/∂v: Newton with the analytic derivatives (derivatives.hpp).
+// The state stays y = [q; v], so p = 𝓜(q) v at the start of a step and v⁺⁺ = 𝓜(q⁺)⁻¹ p⁺ at its end.
+// Only where q̇ = v (no quaternion: revolute, prismatic and planar joints) are (q, p) canonical.
+class SymplecticEuler : public FixedStep {
+ public:
+  SymplecticEuler(System& s, double dt, double t0)
+      : FixedStep(s, dt, t0),
+        free_(without_gravity(s.model)),
+        data_(s.model),
+        dd_(s.model),
+        q_(s.model.nq),
+        w_(s.model.nv),
+        p_(s.model.nv),
+        g_(s.model.nv),
+        r_(s.model.nv),
+        tau_(s.model.nv),
+        delta_(s.model.nv),
+        zero_(VecX::Zero(s.model.nv)),
+        J_(s.model.nv, s.model.nv),
+        dq_(s.model.nv, s.model.nv),
+        dv_(s.model.nv, s.model.nv),
+        lu_(s.model.nv) {}
+
+  static std::string refuses(const Model& m) {
+    if (!m.has_quaternions()) return "";
+    return "symplectic-euler: the model has a free or ball joint, whose quaternion makes (q, 𝓜 v) "
+           "non-canonical; use semi-implicit-euler (not symplectic), rk4 or implicit-midpoint";
+  }
+
+ private:
+  static Model without_gravity(const Model& m) {
+    Model f = m;
+    f.gravity.setZero();
+    return f;
+  }
+
+  void step(double t, double h, VecX& y) override {
+    const Model& m = sys_.model;
+    const int nq = m.nq, nv = m.nv;
+    q_ = y.head(nq);
+    auto v = y.segment(nq, nv);
+    // at q: kinematics, 𝓜, p = 𝓜 v, g = bias(q, 0)
+    update_kinematics(m, data_, q_);
+    mass_matrix(m, data_);
+    p_.noalias() = data_.M * v;
+    update_velocities(m, data_, zero_);
+    bias_forces(m, data_);
+    g_ = data_.bias;
+    // Newton on R(w) = 0 from w = v
+    w_ = v;
+    double previous = std::numeric_limits<double>::infinity();
+    for (int it = 0;; ++it) {
+      ++stats_.nonlinear_iterations;
+      ++stats_.jac_evals;
+      inverse_dynamics_derivatives(free_, data_, zero_, w_, dd_);  // τ = 𝓜 w, ∂τ/∂q = P(w)
+      sys_.inputs.evaluate(t, q_, w_, tau_);
+      if (sys_.controlled) tau_ += sys_.control;
+      // R(w) = 𝓜 w − (h/2) P(w)ᵀ w − p + h (g − τ_in)
+      r_ = dd_.tau - p_ + h * (g_ - tau_);
+      r_.noalias() -= (0.5 * h) * dd_.dtau_dq.transpose() * w_;
+      dq_.setZero();
+      dv_.setZero();
+      sys_.inputs.add_derivatives(dq_, dv_);
+      // R'(w) = 𝓜 − h P(w)ᵀ − h ∂τ_in/∂v
+      J_ = data_.M - h * dd_.dtau_dq.transpose() - h * dv_;
+      lu_.compute(J_);
+      delta_.noalias() = lu_.solve(r_);
+      w_ -= delta_;
+      const double size = delta_.norm(), scale = std::max(1.0, w_.norm());
+      if (!std::isfinite(size)) break;  // the state check reports it
+      if (size <= 1e-14 * scale) break;
+      // quadratic convergence: once a correction stops shrinking it has reached rounding
+      if (size <= 1e-10 * scale && size >= 0.5 * previous) break;
+      if (it == 49) {
+        std::ostringstream os;
+        os << "symplectic-euler: Newton did not converge at t = " << t << " s with a step of " << h
+           << " s (last correction " << size << ")";
+        throw SimulationError(os.str(), t);
+      }
+      previous = size;
+    }
+    // quadratures at v⁺ (right rectangle, as the damping in the momentum update)
+    if (sys_.nquad > 0) {
+      const Inputs::Power pw = sys_.inputs.power(t, w_);
+      y(nq + nv) += h * pw.inputs;
+      y(nq + nv + 1) += h * pw.dissipated;
+    }
+    // p⁺ = 𝓜(q) v⁺, q⁺ = q + h v⁺, v⁺⁺ = 𝓜(q⁺)⁻¹ p⁺
+    p_.noalias() = data_.M * w_;
+    y.head(nq) += h * w_;
+    q_ = y.head(nq);
+    update_kinematics(m, data_, q_);
+    mass_matrix(m, data_);
+    ltdl_factor(m, data_);
+    ltdl_solve(m, data_, p_);
+    v = p_;
+  }
+
+  Model free_;  // the model with gravity off: P(w) from inverse dynamics' derivatives
+  Data data_;
+  DerivativeData dd_;
+  VecX q_, w_, p_, g_, r_, tau_, delta_, zero_;
+  MatX J_, dq_, dv_;
+  Eigen::PartialPivLU<MatX> lu_;
+};
+
+class RK4 : public FixedStep {
+  using FixedStep::FixedStep;
+  // classical: y ← y + h/6 (k1 + 2 k2 + 2 k3 + k4)
+  void step(double t, double h, VecX& y) override {
+    f(t, y, k1_);
+    tmp_ = y + 0.5 * h * k1_;
+    f(t + 0.5 * h, tmp_, k2_);
+    tmp_ = y + 0.5 * h * k2_;
+    f(t + 0.5 * h, tmp_, k3_);
+    tmp_ = y + h * k3_;
+    f(t + h, tmp_, k4_);
+    y += h / 6.0 * (k1_ + 2.0 * k2_ + 2.0 * k3_ + k4_);
+  }
+};
+
+class ImplicitMidpoint : public FixedStep {
+ public:
+  ImplicitMidpoint(System& s, const SimulationSettings& settings, double t0)
+      : FixedStep(s, settings.dt, t0),
+        analytic_(settings.jacobian == Jacobian::Analytic),
+        full_(settings.newton == Newton::Full),
+        J_(s.size(), s.size()),
+        newton_(s.model, s.nquad),
+        delta_(s.size()) {
+    if (analytic_) s.prepare_jacobian();  // sized here, so no step allocates
+  }
+
+ private:
+  // y⁺ = y + h f(t + h/2, (y + y⁺)/2), symmetric but in (q, v), so not symplectic where 𝓜 depends
+  // on q (test_integrators measures its energy: level on the scenes there).  Newton on
+  // G(Y) = Y − y − h f(t + h/2, (y + Y)/2), with G'(Y) = e − h/2 ∂f/∂y at the midpoint.  Full
+  // Newton: G' at every iterate, starting from Y = y (its first iterate is the linearly implicit
+  // midpoint step, itself A-stable).  Simplified: G' once per step, at the explicit-Euler predictor.
+  void step(double t, double h, VecX& y) override {
+    const double tm = t + 0.5 * h;
+    VecX& Y = k2_;
+    if (full_) {
+      Y = y;
+    } else {
+      f(t, y, k1_);
+      Y = y + h * k1_;  // explicit Euler predictor
+      tmp_ = 0.5 * (y + Y);
+      factor(tm, h);
+    }
+    double previous = std::numeric_limits<double>::infinity();
+    for (int it = 0; it < 50; ++it) {
+      ++stats_.nonlinear_iterations;
+      tmp_ = 0.5 * (y + Y);
+      if (full_) factor(tm, h);
+      f(tm, tmp_, k3_);
+      k4_ = -(Y - y - h * k3_);
+      if (factored_) newton_.solve(k4_, delta_);
+      else delta_.setConstant(std::numeric_limits<double>::quiet_NaN());  // singular G': no step
+      Y += delta_;
+      if (!delta_.allFinite()) break;
+      const double size = delta_.norm(), scale = std::max(1.0, Y.norm());
+      if (size <= 1e-13 * scale) break;
+      // full Newton converges quadratically: once it stops shrinking it has reached rounding
+      if (full_ && size <= 1e-9 * scale && size >= 0.5 * previous) break;
+      if (full_ && it == 49) {
+        std::ostringstream os;
+        os << "implicit midpoint: full Newton did not converge at t = " << t << " s with a step of " << h
+           << " s (last correction " << size << ")";
+        throw SimulationError(os.str(), t);
+      }
+      previous = size;
+    }
+    y = Y;
+  }
+
+  // G' = e − (h/2) ∂f/∂y at tmp_ (the midpoint), factored by its structure as BDF's Newton matrix
+  // is (NewtonSolver: an nv×nv Schur complement; a difference-quotient J, whose q̇ = v rows are not
+  // exactly the identity, takes the dense LU of the whole matrix)
+  void factor(double tm, double h) {
+    if (analytic_)
+      sys_.jacobian(tm, tmp_.data(), J_);
+    else
+      sys_.jacobian_dq(tm, tmp_.data(), J_);
+    ++stats_.jac_evals;
+    newton_.set_jacobian(J_);
+    factored_ = newton_.factor(0.5 * h);
+  }
+
+  bool analytic_, full_;
+  MatX J_;
+  NewtonSolver newton_;
+  bool factored_ = false;
+  VecX delta_;
+};
+
+}  // namespace
+
+const std::vector<IntegratorInfo>& integrators() {
+  using S = const SimulationSettings&;
+  using P = std::unique_ptr<Integrator>;
+  static const std::vector<IntegratorInfo> table = {
+      {Method::CvodeAdams, "cvode-adams",
+       "SUNDIALS CVODE, Adams–Moulton with fixed-point iterations (non-stiff)", false, 0, false, 0, nullptr,
+       [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(false, sys, s, t0, y0); }},
+      {Method::CvodeBdf, "cvode-bdf",
+       "SUNDIALS CVODE, BDF with Newton and a direct solver (stiff)", false, 0, false, 24, nullptr,
+       [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(true, sys, s, t0, y0); }},
+      {Method::Euler, "euler",
+       "explicit Euler, order 1", true, 1, false, 0, nullptr,
+       [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<Euler>(sys, s.dt, t0); }},
+      {Method::SemiImplicitEuler, "semi-implicit-euler",
+       "v then q, order 1; not symplectic where the mass matrix depends on q", true, 1, false, 0,
+       nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SemiImplicitEuler>(sys, s.dt, t0); }},
+      {Method::SymplecticEuler, "symplectic-euler",
+       "symplectic Euler in the momenta p = M(q) v by Newton, order 1, symplectic (no free or ball joints)",
+       true, 1, true, 12, &SymplecticEuler::refuses,
+       [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SymplecticEuler>(sys, s.dt, t0); }},
+      {Method::Rk4, "rk4",
+       "classical Runge–Kutta, order 4", true, 4, false, 0, nullptr,
+       [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<RK4>(sys, s.dt, t0); }},
+      {Method::ImplicitMidpoint, "implicit-midpoint",
+       "implicit midpoint rule in (q, v) by Newton, order 2, symmetric and A-stable", true, 2, false, 24,
+       nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<ImplicitMidpoint>(sys, s, t0); }},
+  };
+  return table;
+}
+
+const IntegratorInfo* find_integrator(std::string_view name) {
+  for (const auto& info : integrators())
+    if (info.name == name) return &info;
+  return nullptr;
+}
+
+std::vector<std::string> integrator_names() {
+  std::vector<std::string> names;
+  for (const auto& info : integrators()) names.emplace_back(info.name);
+  return names;
+}
+
+const IntegratorInfo& find_integrator(Method method) {
+  for (const auto& info : integrators())
+    if (info.method == method) return info;
+  throw Error("method: not an integration method (" + std::to_string(int(method)) + ")");
+}
+
+std::unique_ptr<Integrator> make_integrator(Method method, System& system, const SimulationSettings& settings,
+                                            double t0, const VecX& y0) {
+  const IntegratorInfo& info = find_integrator(method);
+  if (info.refuses)
+    if (const std::string why = info.refuses(system.model); !why.empty()) throw Error(why);
+  return info.make(system, settings, t0, y0);
+}
+
+}  // namespace soadyn

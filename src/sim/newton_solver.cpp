@@ -1,0 +1,135 @@
+#include "soadyn/sim/newton_solver.hpp"
+
+namespace soadyn {
+
+namespace {
+// a partial-pivot LU is usable when every pivot is finite and non-zero
+template <class LU>
+bool regular(const LU& lu) {
+  const auto d = lu.matrixLU().diagonal();
+  return d.allFinite() && (d.array() != 0.0).all();
+}
+}  // namespace
+
+NewtonSolver::NewtonSolver(const Model& m, int nquad)
+    : nq_(m.nq),
+      nv_(m.nv),
+      nw_(nquad),
+      n_(m.nq + m.nv + nquad),
+      joint_of_q_(m.nq),
+      J_(MatX::Zero(n_, n_)),
+      G_(MatX::Zero(m.nq, m.nv)),
+      S_(n_, n_),
+      lu_s_(m.nv),
+      lu_full_(n_),
+      y_(m.nq),
+      r_(m.nv),
+      x_(n_) {
+  blocks_.resize(m.nbodies);
+  for (int i = 0; i < m.nbodies; ++i) {
+    blocks_[i].iq = m.idx_q[i];
+    blocks_[i].mq = m.nq_i[i];
+    blocks_[i].iv = m.idx_v[i];
+    blocks_[i].nv = m.nv_i[i];
+    for (int k = 0; k < m.nq_i[i]; ++k) joint_of_q_[m.idx_q[i] + k] = i;
+  }
+  unit_.reserve(m.nq);
+  general_.reserve(m.nbodies);
+}
+
+// J has the structure of the header, entry by entry: in the q rows only the joint's own columns
+// (J_qq, J_qv block-diagonal), and nothing in the columns of W, D
+bool NewtonSolver::has_structure() const {
+  if (!J_.rightCols(nw_).isZero(0.0)) return false;
+  for (const Block& b : blocks_)
+    for (int r = b.iq; r < b.iq + b.mq; ++r)
+      for (int c = 0; c < nq_ + nv_; ++c) {
+        const bool own = c < nq_ ? joint_of_q_[c] == joint_of_q_[r] : (c - nq_ >= b.iv && c - nq_ < b.iv + b.nv);
+        if (!own && J_(r, c) != 0.0) return false;
+      }
+  return true;
+}
+
+bool NewtonSolver::set_jacobian(const Eigen::Ref<const MatX>& J) {
+  J_ = J;
+  structured_ = has_structure();
+  unit_.clear();
+  general_.clear();
+  for (int i = 0; i < int(blocks_.size()); ++i) {
+    Block& b = blocks_[i];
+    b.identity = J_.block(b.iq, b.iq, b.mq, b.mq).isZero(0.0);
+    if (b.identity && b.mq == b.nv && J_.block(b.iq, nq_ + b.iv, b.mq, b.nv).isIdentity(0.0))
+      for (int k = 0; k < b.mq; ++k) unit_.emplace_back(b.iq + k, b.iv + k);
+    else
+      general_.push_back(i);
+  }
+  return structured_;
+}
+
+bool NewtonSolver::factor(double gamma) {
+  gamma_ = gamma;
+  if (!structured_) {
+    // the dense route: I − γJ
+    S_ = -gamma * J_;
+    S_.diagonal().array() += 1.0;
+    lu_full_.compute(S_);
+    return regular(lu_full_);
+  }
+  // S = I − γJ_vv − γ² J_vq G,  G_i = P_i⁻¹ J_qv,i joint by joint
+  const auto Jvq = J_.block(nq_, 0, nv_, nq_);
+  auto S = S_.topLeftCorner(nv_, nv_);
+  S = -gamma * J_.block(nq_, nq_, nv_, nv_);
+  S.diagonal().array() += 1.0;
+  for (const auto& [iq, iv] : unit_) S.col(iv).noalias() -= (gamma * gamma) * Jvq.col(iq);
+  for (const int i : general_) {
+    Block& b = blocks_[i];
+    auto Gi = G_.block(b.iq, b.iv, b.mq, b.nv);
+    const auto Jqv = J_.block(b.iq, nq_ + b.iv, b.mq, b.nv);
+    if (b.identity) {
+      Gi = Jqv;
+    } else {
+      SmallMat P = -gamma * J_.block(b.iq, b.iq, b.mq, b.mq);
+      P.diagonal().array() += 1.0;
+      b.lu.compute(P);
+      if (!regular(b.lu)) return false;
+      Gi = b.lu.solve(Jqv);
+    }
+    S.middleCols(b.iv, b.nv).noalias() -= (gamma * gamma) * Jvq.middleCols(b.iq, b.mq) * Gi;
+  }
+  lu_s_.compute(S);
+  return regular(lu_s_);
+}
+
+void NewtonSolver::solve(const Eigen::Ref<const VecX>& b, Eigen::Ref<VecX> x) {
+  if (!structured_) {
+    x_ = lu_full_.solve(b);
+    x = x_;
+    return;
+  }
+  const double g = gamma_;
+  // y = P⁻¹ b_q, joint by joint (P_i = I but where a quaternion turns)
+  y_ = b.head(nq_);
+  for (const int i : general_) {
+    const Block& blk = blocks_[i];
+    if (!blk.identity) y_.segment(blk.iq, blk.mq) = blk.lu.solve(b.segment(blk.iq, blk.mq));
+  }
+  // S x_v = b_v + γ J_vq y
+  r_ = b.segment(nq_, nv_);
+  r_.noalias() += g * (J_.block(nq_, 0, nv_, nq_) * y_);
+  x_.segment(nq_, nv_) = lu_s_.solve(r_);
+  // x_q = y + γ G x_v (G block-diagonal)
+  for (const auto& [iq, iv] : unit_) x_(iq) = y_(iq) + g * x_(nq_ + iv);
+  for (const int i : general_) {
+    const Block& blk = blocks_[i];
+    x_.segment(blk.iq, blk.mq) = y_.segment(blk.iq, blk.mq);
+    x_.segment(blk.iq, blk.mq).noalias() += g * (G_.block(blk.iq, blk.iv, blk.mq, blk.nv) * x_.segment(nq_ + blk.iv, blk.nv));
+  }
+  // x_w = b_w + γ [J_wq J_wv] [x_q; x_v]
+  if (nw_ > 0) {
+    x_.tail(nw_) = b.tail(nw_);
+    x_.tail(nw_).noalias() += g * (J_.bottomLeftCorner(nw_, nq_ + nv_) * x_.head(nq_ + nv_));
+  }
+  x = x_;
+}
+
+}  // namespace soadyn

@@ -1,0 +1,141 @@
+// Trajectory: a run's samples as columns, and the observer that gathers them.
+#include "soadyn/sim/trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace soadyn {
+
+namespace {
+
+void append(std::vector<double>& to, const double* from, Eigen::Index n) { to.insert(to.end(), from, from + n); }
+
+// T rows of k numbers each from a flat vector (emptied)
+SampleRows rows(std::vector<double>& flat, Eigen::Index T, Eigen::Index k) {
+  SampleRows out = Eigen::Map<const SampleRows>(flat.data(), T, k);
+  std::vector<double>().swap(flat);
+  return out;
+}
+
+VecX column(std::vector<double>& flat) {
+  VecX out = Eigen::Map<const VecX>(flat.data(), Eigen::Index(flat.size()));
+  std::vector<double>().swap(flat);
+  return out;
+}
+
+// max(|E(0)|, peak T so far) at each sample: the scale of the energy errors
+VecX energy_scale(const VecX& E, const VecX& T) {
+  VecX scale(E.size());
+  double peak = 0.0;
+  for (Eigen::Index k = 0; k < E.size(); ++k) {
+    peak = std::max(peak, T(k));
+    scale(k) = std::max({std::abs(E(0)), peak, 1e-300});
+  }
+  return scale;
+}
+
+}  // namespace
+
+void TrajectoryRecorder::on_sample(const Sample& s) {
+  t_.push_back(s.t);
+  append(q_, s.q.data(), s.q.size());
+  append(v_, s.qd.data(), s.qd.size());
+  append(qdd_, s.qdd.data(), s.qdd.size());
+  kinetic_.push_back(s.kinetic);
+  potential_.push_back(s.potential);
+  total_.push_back(s.total);
+  work_.push_back(s.work_inputs);
+  dissipated_.push_back(s.dissipated);
+  impact_loss_.push_back(s.impact_loss);
+  append(control_, s.control.data(), s.control.size());
+  append(linear_, s.linear.data(), 3);
+  append(angular_, s.angular.data(), 3);
+  // column-major 3×N and 4×N: body after body, as the rows want them
+  append(position_, s.body_position.data(), s.body_position.size());
+  append(orientation_, s.body_orientation.data(), s.body_orientation.size());
+  append(com_, s.body_com.data(), s.body_com.size());
+  // each sensitivity matrix row after row
+  const MatX x0 = s.sensitivity_initial_state.transpose(), pi = s.sensitivity_parameters.transpose();
+  append(dx_dx0_, x0.data(), x0.size());
+  append(dx_dpi_, pi.data(), pi.size());
+  if (next_) next_->on_sample(s);
+}
+
+void TrajectoryRecorder::on_event(const LimitEvent& e) {
+  if (next_) next_->on_event(e);
+}
+
+void TrajectoryRecorder::on_progress(const RunSummary& r) {
+  if (next_) next_->on_progress(r);
+}
+
+void TrajectoryRecorder::on_finish(const RunSummary& r) {
+  if (next_) next_->on_finish(r);
+}
+
+Trajectory TrajectoryRecorder::take(const Model& m) {
+  Trajectory tr;
+  const Eigen::Index T = Eigen::Index(t_.size()), N = m.nbodies;
+  const Eigen::Index nx0 = T > 0 ? Eigen::Index(dx_dx0_.size()) / T : 0, nxp = T > 0 ? Eigen::Index(dx_dpi_.size()) / T : 0;
+  tr.t = column(t_);
+  tr.q = rows(q_, T, m.nq);
+  tr.v = rows(v_, T, m.nv);
+  tr.qdd = rows(qdd_, T, m.nv);
+  tr.kinetic_energy = column(kinetic_);
+  tr.potential_energy = column(potential_);
+  tr.total_energy = column(total_);
+  tr.work_inputs = column(work_);
+  tr.dissipated = column(dissipated_);
+  tr.impact_loss = column(impact_loss_);
+  tr.control = rows(control_, T, T > 0 ? Eigen::Index(control_.size()) / T : m.nv);
+  tr.linear_momentum = rows(linear_, T, 3);
+  tr.angular_momentum = rows(angular_, T, 3);
+  tr.body_position = rows(position_, T, 3 * N);
+  tr.body_orientation = rows(orientation_, T, 4 * N);
+  tr.body_com = rows(com_, T, 3 * N);
+  tr.sensitivity_initial_state = rows(dx_dx0_, T, nx0);
+  tr.sensitivity_parameters = rows(dx_dpi_, T, nxp);
+  tr.joint_names = m.joint_names;
+  tr.parents = m.parent;
+  return tr;
+}
+
+Sample Trajectory::sample(Eigen::Index k) const {
+  Sample s;
+  s.t = t(k);
+  s.q = q.row(k).transpose();
+  s.qd = v.row(k).transpose();
+  s.qdd = qdd.row(k).transpose();
+  s.kinetic = kinetic_energy(k), s.potential = potential_energy(k), s.total = total_energy(k);
+  s.work_inputs = work_inputs(k), s.dissipated = dissipated(k), s.impact_loss = impact_loss(k);
+  s.control = control.row(k).transpose();
+  s.linear = linear_momentum.row(k).transpose();
+  s.angular = angular_momentum.row(k).transpose();
+  const Eigen::Index N = body_position.cols() / 3;
+  s.body_position = Eigen::Map<const Mat3X>(body_position.row(k).data(), 3, N);
+  s.body_com = Eigen::Map<const Mat3X>(body_com.row(k).data(), 3, N);
+  s.body_orientation = Eigen::Map<const Eigen::Matrix<double, 4, Eigen::Dynamic>>(body_orientation.row(k).data(), 4, N);
+  // the sensitivities, stored row after row, nx = 2 nv rows each
+  const Eigen::Index nx = 2 * v.cols();
+  if (sensitivity_initial_state.cols() > 0)
+    s.sensitivity_initial_state = Eigen::Map<const SampleRows>(sensitivity_initial_state.row(k).data(), nx, nx);
+  if (sensitivity_parameters.cols() > 0)
+    s.sensitivity_parameters =
+        Eigen::Map<const SampleRows>(sensitivity_parameters.row(k).data(), nx, sensitivity_parameters.cols() / nx);
+  return s;
+}
+
+VecX Trajectory::energy_error() const {
+  if (size() == 0) return VecX();
+  // (E − E(0)) / max(|E(0)|, peak T)
+  return (total_energy.array() - total_energy(0)) / energy_scale(total_energy, kinetic_energy).array();
+}
+
+VecX Trajectory::balance_error() const {
+  if (size() == 0) return VecX();
+  // (E − E(0) − W + L) / max(|E(0)|, peak T)
+  return (total_energy.array() - total_energy(0) - work_inputs.array() + impact_loss.array()) /
+         energy_scale(total_energy, kinetic_energy).array();
+}
+
+}  // namespace soadyn
