@@ -4,6 +4,7 @@
 // errors.  The library is SUNDIALS' CVODES, CVODE's superset with the same calls.  Internal.
 #pragma once
 
+#include "soadyn/configuration.hpp"
 #include "soadyn/integrators.hpp"
 #include "soadyn/newton_solver.hpp"
 
@@ -303,7 +304,7 @@ class Cvode : public Integrator {
     auto c = map(corr);
     c.setZero();
     for (int i = 0; i < m.nbodies; ++i) {
-      const int offset = joint_traits(m.joint_type[i]).quaternion;
+      const int offset = joint_quaternion(m, i);
       if (offset < 0) continue;
       const int k = m.idx_q[i] + offset;
       const Eigen::Vector4d quat = y.segment<4>(k);

@@ -146,6 +146,7 @@ void joint_units(const Model& m, std::vector<std::string>& qu, std::vector<std::
     switch (t) {
       case JointType::Revolute: q = {"rad"}, v = {"rad/s"}; break;
       case JointType::Prismatic: q = {"m"}, v = {"m/s"}; break;
+      case JointType::Helical: q = {"rad"}, v = {"rad/s"}; break;
       case JointType::Ball: q = {"1", "1", "1", "1"}, v = {"rad/s", "rad/s", "rad/s"}; break;
       case JointType::Planar: q = {"m", "m", "rad"}, v = {"m/s", "m/s", "rad/s"}; break;
       case JointType::Free: q = {"m", "m", "m", "1", "1", "1", "1"}, v = {"rad/s", "rad/s", "rad/s", "m/s", "m/s", "m/s"}; break;

@@ -2,6 +2,7 @@
 // the choices that answer a typo with the nearest name.
 #include "cli.hpp"
 
+#include "soadyn/configuration.hpp"
 #include "soadyn/scenario.hpp"
 #include "soadyn/text.hpp"
 
@@ -97,7 +98,7 @@ Scenario load_with_options(const std::string& path, const StateOptions& o) {
 void state_from_options(const Model& m, const StateOptions& o, VecX& q, VecX& v) {
   q = vector_option("--q", o.q, m.nq, q);
   for (int i = 0; i < m.nbodies; ++i)
-    if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
+    if (const int k = joint_quaternion(m, i); k >= 0) {
       const double norm = q.segment<4>(m.idx_q[i] + k).norm();
       if (std::abs(norm - 1.0) > 1e-6)
         throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + exact_number(norm));

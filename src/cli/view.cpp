@@ -8,6 +8,7 @@
 #include "cli.hpp"
 #include "view.hpp"
 
+#include "soadyn/configuration.hpp"
 #include "soadyn/frames.hpp"
 #include "soadyn/h5log.hpp"
 #include "soadyn/limits.hpp"
@@ -324,7 +325,7 @@ int run_view(const ViewOptions& o) {
     segs += "]";
     bodies += std::string(i ? "," : "") + "{\"name\":" + quote(m.body_names[i]) + ",\"joint\":" + quote(m.joint_names[i]) +
               ",\"type\":" + quote(std::string(to_string(m.joint_type[i]))) + ",\"parent\":" + std::to_string(m.parent[i]) + ",\"iq\":" + std::to_string(m.idx_q[i]) +
-              ",\"quaternion\":" + std::to_string(joint_traits(m.joint_type[i]).quaternion) +
+              ",\"quaternion\":" + std::to_string(joint_quaternion(m, i)) +
               ",\"mass\":" + num(m.mass[i]) + ",\"com\":" + vec(m.com[i]) + ",\"axis\":" + vec(m.axis[i]) +
               ",\"segments\":" + segs + ",\"box\":" + shape(b.inertia_box) + ",\"visuals\":" + shapes(b.visuals) +
               ",\"meshes\":" + std::to_string(b.meshes) + "}";

@@ -444,7 +444,7 @@ def test_inputs_of_a_scenario():
 
 def test_joint_types_and_a_ball_joint(rng):
     """the library's registries by name; the spherical pendulum's 𝓜 = I_pivot in the bob's frame"""
-    assert soadyn.JOINT_TYPES == ("revolute", "prismatic", "ball", "planar", "free", "fixed")
+    assert soadyn.JOINT_TYPES == ("revolute", "prismatic", "ball", "planar", "free", "helical", "fixed")
     assert {"cvode-adams", "cvode-bdf", "rk4", "euler", "symplectic-euler", "implicit-midpoint"} <= set(soadyn.METHODS)
     assert soadyn.DYNAMICS == ("dense", "sparse", "aba")
     model = soadyn.load(f"{SCENARIOS}/spherical_pendulum.yaml")
