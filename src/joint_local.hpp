@@ -11,8 +11,8 @@
 //                e_b → −s e_a + c e_b (a = k + 1, b = k + 2)
 //   Rigid        any (R, p)
 // The subspaces: AngularAxis<k> ±[e_k; 0], LinearAxis<k> ±[0; e_k], Angular [a; 0], Linear [0; a],
-// Screw [a; h a] (helical, pitch h), Spherical [e; 0], PlanarBody [0 0 n; t1 t2 0] (t = Rmᵀ e, turning with θ), FreeBody
-// [Rᵀ 0; 0 Rᵀ] (the free joint's velocity is inertial).  Each answers:
+// Screw [a; h a] (helical, pitch h), Spherical [e; 0], PlanarBody [0 0 n; t1 t2 0] (t = Rmᵀ e,
+// turning with θ), FreeBody [Rᵀ 0; 0 Rᵀ] (the free joint's velocity is inertial).  Each answers:
 //   add_motion(x, v̂, â)  v̂ += Ĝ x and â += v̂ × Ĝ x + c_J, c_J = Ġ̂ x at q̈ = 0: zero where Ĝ is
 //                        constant, [0; −gw × gu] for the planar and free joints (d/dt Rᵀ e = −ω × Rᵀ e)
 //   project(n, f, out)   Ĝᵀ [n; f] into out[0 .. nv)

@@ -194,6 +194,8 @@ void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& 
   c.mentions("/model", "free_joint", {"[x y z qw qx qy qz]", "body to inertial", "[wx wy wz vx vy vz]", "inertial coordinates"});
   c.mentions("/model", "ball_joint", {"[qw qx qy qz]", "[wx wy wz]", "in the child's frame"});
   c.mentions("/model", "planar_joint", {"[x y theta]"});
+  c.mentions("/model", "helical_joint", {"[theta]", "pitch * theta", "m/rad"});
+  c.numbers("/model", "joint_pitches", m.pitch);
   c.ints("/model/parents", std::vector<int>(m.parent.begin(), m.parent.end()));
   c.ints("/model/joint_q_index", std::vector<int>(m.idx_q.begin(), m.idx_q.end()));
   c.ints("/model/joint_v_index", std::vector<int>(m.idx_v.begin(), m.idx_v.end()));

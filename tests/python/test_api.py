@@ -462,6 +462,21 @@ def test_joint_types_and_a_ball_joint(rng):
     assert_close(traj.angular_momentum[:, 2], np.full(len(traj), traj.angular_momentum[0, 2]), 1e-8)
 
 
+def test_a_helical_joint(rng):
+    """screw_lift's nut: 𝓜 = I_zz + m_nut pitch² + the hanging arm's share, the nut rising pitch · θ"""
+    model = soadyn.load(f"{SCENARIOS}/screw_lift.yaml")
+    assert model.joint_types == ["helical", "revolute"] and (model.nq, model.nv) == (2, 2)
+    assert_close(model.pitches, [0.05, 0.0], 0)
+    data = model.create_data()
+    q = np.array([rng.uniform(-3, 3), 0.0])
+    # arm hanging straight down at x = 0.1 (its cm at (0.1, 0, −0.3) in the nut's frame, Ixx about its cm)
+    nut = 0.02 + 2.0 * 0.05 ** 2
+    arm = 0.0002 + 0.5 * (0.1 ** 2 + 0.05 ** 2)
+    assert_close(soadyn.mass_matrix(model, data, q)[0, 0], nut + arm, 1e-12)
+    traj = soadyn.simulate(f"{SCENARIOS}/screw_lift.yaml", t_end=2.0)
+    assert traj.summary.completed and np.abs(traj.energy_error).max() < 1e-6
+
+
 def test_version_is_the_libraries():
     from conftest import cli
     assert re.fullmatch(r"\d+\.\d+\.\d+", soadyn.__version__)
