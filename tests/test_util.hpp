@@ -63,6 +63,7 @@ struct TreeOptions {
   double prismatic = 0.0;        // fraction of prismatic joints
   double ball = 0.0;             // fraction of ball joints
   double planar = 0.0;           // fraction of planar joints
+  double helical = 0.0;          // fraction of helical joints (pitch uniform in [−0.3, 0.3] m/rad)
   bool free_root = false;
   int fixed = 0;                 // extra bodies attached by fixed joints
   double unit_axis = 0.0;        // fraction of axes along ±x, ±y or ±z (half of them with an
@@ -96,7 +97,9 @@ inline std::vector<BodySpec> random_specs(Rng& rng, const TreeOptions& o) {
       b.joint = u < o.prismatic                        ? JointType::Prismatic
                 : u < o.prismatic + o.ball             ? JointType::Ball
                 : u < o.prismatic + o.ball + o.planar ? JointType::Planar
+                : u < o.prismatic + o.ball + o.planar + o.helical ? JointType::Helical
                                                        : JointType::Revolute;
+      if (b.joint == JointType::Helical) b.pitch = rng.uniform(-0.3, 0.3);
     }
     b.axis = rng.vec3().normalized() * rng.uniform(0.5, 2.0);
     if (b.joint != JointType::Free) b.placement = {rng.rotation(), rng.vec3(-0.6, 0.6)};

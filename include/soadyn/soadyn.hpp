@@ -6,10 +6,12 @@
 //   io         files: scenarios, URDF, MJCF, run files (HDF5) and the one-call simulate(scenario)
 #pragma once
 
+#include "soadyn/multibody/configuration.hpp"
 #include "soadyn/multibody/data.hpp"
 #include "soadyn/multibody/inertia.hpp"
 #include "soadyn/multibody/joint.hpp"
 #include "soadyn/multibody/joint_model.hpp"
+#include "soadyn/multibody/joint_space.hpp"
 #include "soadyn/multibody/model.hpp"
 #include "soadyn/multibody/text.hpp"
 #include "soadyn/multibody/types.hpp"

@@ -11,8 +11,8 @@
 //                e_b → −s e_a + c e_b (a = k + 1, b = k + 2)
 //   Rigid        any (R, p)
 // The subspaces: AngularAxis<k> ±[e_k; 0], LinearAxis<k> ±[0; e_k], Angular [a; 0], Linear [0; a],
-// Spherical [e; 0], PlanarBody [0 0 n; t1 t2 0] (t = Rmᵀ e, turning with θ), FreeBody
-// [Rᵀ 0; 0 Rᵀ] (the free joint's velocity is inertial).  Each answers:
+// Screw [a; h a] (helical, pitch h), Spherical [e; 0], PlanarBody [0 0 n; t1 t2 0] (t = Rmᵀ e,
+// turning with θ), FreeBody [Rᵀ 0; 0 Rᵀ] (the free joint's velocity is inertial).  Each answers:
 //   add_motion(x, v̂, â)  v̂ += Ĝ x and â += v̂ × Ĝ x + c_J, c_J = Ġ̂ x at q̈ = 0: zero where Ĝ is
 //                        constant, [0; −gw × gu] for the planar and free joints (d/dt Rᵀ e = −ω × Rᵀ e)
 //   project(n, f, out)   Ĝᵀ [n; f] into out[0 .. nv)
@@ -199,6 +199,30 @@ struct Linear {
   void times(const SpatialInertia& K, Mat6X& F, int c) const { store(F, c, K.h.cross(g), K.m * g); }
 };
 
+// [a; h a]: the helical joint's, constant in body axes (the turn about a keeps a, and the body's
+// origin stays on the axis)
+struct Screw {
+  static constexpr int nv = 1;
+  const Vec3& g;
+  double pitch;
+  // v̂ += Ĝ q̇ = [gw; gu],  â += v̂ × [gw; gu] = [ω × gw; ω × gu + u × gw]
+  void add_motion(const double* x, Vec3& w, Vec3& u, Vec3& aw, Vec3& au) const {
+    const Vec3 gw = x[0] * g, gu = pitch * gw;
+    aw += w.cross(gw);
+    au += w.cross(gu) + u.cross(gw);
+    w += gw;
+    u += gu;
+  }
+  void project(const Vec3& n, const Vec3& f, double* out) const { out[0] = g.dot(n) + pitch * g.dot(f); }
+  double entry(int, const double* col) const {
+    return g[0] * (col[0] + pitch * col[3]) + g[1] * (col[1] + pitch * col[4]) + g[2] * (col[2] + pitch * col[5]);
+  }
+  // K Ĝ = [I a + h_K × h a; m h a − h_K × a]
+  void times(const SpatialInertia& K, Mat6X& F, int c) const {
+    store(F, c, K.I * g + pitch * K.h.cross(g), pitch * K.m * g - K.h.cross(g));
+  }
+};
+
 struct Spherical {
   static constexpr int nv = 3;
   void add_motion(const double* x, Vec3& w, Vec3& u, Vec3& aw, Vec3& au) const {
@@ -302,7 +326,7 @@ inline Rigid transform(const joints::Prismatic& j, const Model& model, const Dat
 template <class J>
 inline Rigid transform(const J& joint, const Model& model, const Data&, const VecX& q, int i) {
   static_assert(std::is_same_v<J, joints::Revolute> || std::is_same_v<J, joints::Ball> ||
-                std::is_same_v<J, joints::Planar> || std::is_same_v<J, joints::Free>);
+                std::is_same_v<J, joints::Planar> || std::is_same_v<J, joints::Free> || std::is_same_v<J, joints::Helical>);
   const Placement& X = model.placement[i];
   Mat3 Rm;
   Vec3 pm;
@@ -318,6 +342,7 @@ template <int k, class T>
 inline LinearAxis<k> subspace(const joints::PrismaticAxis<k>& j, const T&, const Model&, int) { return {j.sign}; }
 inline Angular subspace(const joints::Revolute& j, const Rigid&, const Model&, int) { return {j.axis}; }
 inline Linear subspace(const joints::Prismatic& j, const Rigid&, const Model&, int) { return {j.axis}; }
+inline Screw subspace(const joints::Helical& j, const Rigid&, const Model&, int) { return {j.axis, j.pitch}; }
 inline Spherical subspace(const joints::Ball&, const Rigid&, const Model&, int) { return {}; }
 // t = Rmᵀ e with Rm = X.Rᵀ of the placement times X's R
 inline PlanarBody subspace(const joints::Planar& j, const Rigid& X, const Model& model, int i) {

@@ -215,14 +215,15 @@ void update_kinematics_reference(const Model& model, Data& data, const VecX& q) 
     const Mat3 Rj = Rp * model.placement[i].R;
     Mat3 Rm;
     Vec3 pm;
-    joint_motion(model.joint_type[i], model.axis[i], q.data() + model.idx_q[i], Rm, pm);
+    joint_motion(model.joint_type[i], model.axis[i], q.data() + model.idx_q[i], Rm, pm, model.pitch[i]);
     data.R[i].noalias() = Rj * Rm;
     data.eta.col(i) = eta_p + Rp * model.placement[i].p + Rj * pm;
     // d_i = η_i − η_p;  s_i = C_i com_i;  r_i = η_i + s_i
     data.d.col(i) = data.eta.col(i) - eta_p;
     data.s.col(i) = data.R[i] * model.com[i];
     data.r.col(i) = data.eta.col(i) + data.s.col(i);
-    joint_subspace(model.joint_type[i], model.axis[i], Rj, data.R[i], data.G.middleCols(model.idx_v[i], model.nv_i[i]));
+    joint_subspace(model.joint_type[i], model.axis[i], Rj, data.R[i], data.G.middleCols(model.idx_v[i], model.nv_i[i]),
+                   model.pitch[i]);
     // M_i = [I_i − m s̃ s̃, m s̃; −m s̃, m e] (eq. 12); its upper-left block, the inertia about η_i,
     // is the body-frame one turned: C_i I_η C_iᵀ
     data.inertia[i].m = model.mass[i];

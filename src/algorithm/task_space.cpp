@@ -43,18 +43,12 @@ void operational_space_inertia(const Model& model, Data& data, const MatX& J, Ma
 
 namespace {
 
-// Ġ_k = Ω × G_k on both halves: G_j is fixed in the parent's frame (Ω = ω_parent), except a
-// ball's, which turns with the child (Ω = ω_j; joint.hpp)
-bool subspace_turns_with_child(JointType t) {
-  switch (t) {
-    case JointType::Ball: return true;
-    case JointType::Revolute:
-    case JointType::Prismatic:
-    case JointType::Planar:
-    case JointType::Free:
-    case JointType::Fixed: return false;
-  }
-  throw Error("coriolis_matrix: unknown joint type " + std::to_string(int(t)));
+// Ġ_k = Ω × G_k on both halves: G_j is fixed in the parent's frame (Ω = ω_parent), except where
+// it turns with the child (Ω = ω_j: the ball's; joint.hpp)
+bool subspace_turns_with_child(const Model& model, int j) {
+  bool turns = false;
+  visit_joint(model, j, [&](const auto& joint) { turns = joints::turns_with_child<std::decay_t<decltype(joint)>>; });
+  return turns;
 }
 
 }  // namespace
@@ -69,7 +63,7 @@ void coriolis_matrix(const Model& model, const Data& data, MatX& C) {
     const Vec3 r = data.r.col(i), rd = data.Vbar.col(i).tail<3>();
     for (int j = i; j >= 0; j = model.parent[j]) {
       const int p = model.parent[j];
-      const Vec3 W = subspace_turns_with_child(model.joint_type[j]) ? Vec3(data.V.col(j).head<3>())
+      const Vec3 W = subspace_turns_with_child(model, j) ? Vec3(data.V.col(j).head<3>())
                      : p >= 0                                          ? Vec3(data.V.col(p).head<3>())
                                                                        : Vec3::Zero();
       const Vec3 arm = r - data.eta.col(j), arm_d = rd - data.V.col(j).tail<3>();

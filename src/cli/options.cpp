@@ -4,6 +4,8 @@
 
 #include "soadyn/io/scenario_file.hpp"
 #include "soadyn/multibody/text.hpp"
+#include "soadyn/multibody/configuration.hpp"
+#include "soadyn/sim/scenario.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -97,7 +99,7 @@ Scenario load_with_options(const std::string& path, const StateOptions& o) {
 void state_from_options(const Model& m, const StateOptions& o, VecX& q, VecX& v) {
   q = vector_option("--q", o.q, m.nq, q);
   for (int i = 0; i < m.nbodies; ++i)
-    if (const int k = joint_traits(m.joint_type[i]).quaternion; k >= 0) {
+    if (const int k = joint_quaternion(m, i); k >= 0) {
       const double norm = q.segment<4>(m.idx_q[i] + k).norm();
       if (std::abs(norm - 1.0) > 1e-6)
         throw Error("--q: joint '" + m.joint_names[i] + "': expected a unit quaternion, got norm " + exact_number(norm));

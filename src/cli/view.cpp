@@ -13,6 +13,7 @@
 #include "soadyn/sim/limits.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/multibody/text.hpp"
+#include "soadyn/multibody/configuration.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -316,7 +317,7 @@ std::string bodies_json(const Model& m, const view::Look& look) {
     segs += "]";
     bodies += std::string(i ? "," : "") + "{\"name\":" + quote(m.body_names[i]) + ",\"joint\":" + quote(m.joint_names[i]) +
               ",\"type\":" + quote(std::string(to_string(m.joint_type[i]))) + ",\"parent\":" + std::to_string(m.parent[i]) + ",\"iq\":" + std::to_string(m.idx_q[i]) +
-              ",\"quaternion\":" + std::to_string(joint_traits(m.joint_type[i]).quaternion) +
+              ",\"quaternion\":" + std::to_string(joint_quaternion(m, i)) +
               ",\"mass\":" + num(m.mass[i]) + ",\"com\":" + vec(m.com[i]) + ",\"axis\":" + vec(m.axis[i]) +
               ",\"segments\":" + segs + ",\"box\":" + shape(b.inertia_box) + ",\"visuals\":" + shapes(b.visuals) +
               ",\"meshes\":" + std::to_string(b.meshes) + "}";

@@ -40,6 +40,9 @@ const char* kFreeJoint =
 const char* kBallJoint =
     "q = [qw qx qy qz]: the unit quaternion of the child's frame relative to the joint frame (child to joint "
     "frame), w first; v = qd = [wx wy wz]: the child's angular velocity relative to the parent, in the child's frame";
+const char* kHelicalJoint =
+    "q = [theta]: a screw: the child turns by theta about the axis and slides pitch * theta along it "
+    "(joint_pitches, m/rad; 0 for the other joint types); v = its rate";
 const char* kPlanarJoint =
     "q = [x y theta]: translation along e1 and e2 spanning the plane normal to the axis n, then rotation theta "
     "about n (e1: the coordinate axis least aligned with n, made orthogonal to it; e2 = n x e1); v = their rates";
@@ -261,6 +264,8 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
       attribute(g, "free_joint", std::string(kFreeJoint));
       attribute(g, "ball_joint", std::string(kBallJoint));
       attribute(g, "planar_joint", std::string(kPlanarJoint));
+      attribute(g, "helical_joint", std::string(kHelicalJoint));
+      attribute(g, "joint_pitches", m.pitch);
       h5::int_dataset(g, "parents", std::vector<int>(m.parent.begin(), m.parent.end()), "1");
       h5::int_dataset(g, "joint_q_index", std::vector<int>(m.idx_q.begin(), m.idx_q.end()), "1");
       h5::int_dataset(g, "joint_v_index", std::vector<int>(m.idx_v.begin(), m.idx_v.end()), "1");

@@ -62,11 +62,11 @@ int read_parent(const Reader& rd, const YAML::Node& b, const std::string& name, 
   rd.fail(b["parent"], fb + ".parent", "no body named '" + excerpt(parent) + "'" + did_you_mean(parent, names));
 }
 
-// body.joint {type, name, axis} and body.origin {xyz, rpy}
+// body.joint {type, name, axis, pitch} and body.origin {xyz, rpy}
 void read_joint(const Reader& rd, const YAML::Node& b, const std::string& fb, std::set<std::string>& joint_names,
                 BodySpec& s) {
   const YAML::Node j = rd.require(b, "joint", fb);
-  rd.keys(j, fb + ".joint", {"type", "name", "axis"});
+  rd.keys(j, fb + ".joint", {"type", "name", "axis", "pitch"});
   s.joint = joint_type(rd, rd.require(j, "type", fb + ".joint"), fb + ".joint.type");
   const JointTraits& tr = joint_traits(s.joint);
   s.joint_name = j["name"] ? rd.string(j["name"], fb + ".joint.name") : s.name;
@@ -82,6 +82,11 @@ void read_joint(const Reader& rd, const YAML::Node& b, const std::string& fb, st
   } else if (j["axis"]) {
     rd.fail(j["axis"], fb + ".joint.axis", "a " + std::string(tr.name) + " joint has no axis");
   }
+  // a helical joint's pitch h (m/rad): it slides h θ along its axis as it turns by θ
+  if (s.joint == JointType::Helical)
+    s.pitch = rd.number(rd.require(j, "pitch", fb + ".joint"), fb + ".joint.pitch");
+  else if (j["pitch"])
+    rd.fail(j["pitch"], fb + ".joint.pitch", "a " + std::string(tr.name) + " joint has no pitch (a helical one has)");
   if (const YAML::Node o = b["origin"]) {
     if (tr.root_only)
       rd.fail(o, fb + ".origin", "a free joint has no origin: its q is the body's pose in the world");

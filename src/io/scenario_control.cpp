@@ -15,7 +15,7 @@ namespace {
 int one_dof_joint(const Reader& rd, const Model& m, const YAML::Node& key, const std::string& field) {
   const int i = find_joint(rd, m, key, field);
   if (m.nv_i[i] != 1 || m.nq_i[i] != 1)
-    rd.fail(key, field, "acts on revolute or prismatic joints; '" + excerpt(key.Scalar()) + "' is " + std::string(to_string(m.joint_type[i])));
+    rd.fail(key, field, "acts on 1-DOF joints (revolute, prismatic, helical); '" + excerpt(key.Scalar()) + "' is " + std::string(to_string(m.joint_type[i])));
   return i;
 }
 

@@ -4,6 +4,7 @@
 #include "soadyn/sim/integrators.hpp"
 #include "soadyn/io/mjcf.hpp"
 #include "soadyn/multibody/text.hpp"
+#include "soadyn/multibody/configuration.hpp"
 
 #include "mjcf_files.hpp"
 #include "scenario_reader.hpp"
@@ -57,7 +58,7 @@ void read_initial(const Reader& rd, const YAML::Node& n, const Model& m, VecX& q
         if (std::abs(x(k)) > kMaxStateMagnitude)
           rd.fail(it->second, fj, "expected |value| <= " + Reader::show_number(kMaxStateMagnitude) + " (m, rad, m/s or rad/s), got " +
                                       Reader::show_number(x(k)) + ": a double resolves no finer than 1e-10 of it there");
-      if (const int k = joint_traits(m.joint_type[i]).quaternion; is_q && k >= 0) {
+      if (const int k = joint_quaternion(m, i); is_q && k >= 0) {
         const double norm = x.segment<4>(k).norm();
         if (std::abs(norm - 1.0) > 1e-6)
           rd.fail(it->second, fj, "expected a unit quaternion [w, x, y, z]" + std::string(k ? " after the position" : "") +

@@ -4,6 +4,7 @@
 
 #include "soadyn/multibody/inertia.hpp"
 #include "soadyn/multibody/text.hpp"
+#include "soadyn/multibody/configuration.hpp"
 
 #include <Eigen/Eigenvalues>
 
@@ -77,6 +78,7 @@ Model Model::build(const std::vector<BodySpec>& given, const Vec3& gravity, Iner
     m.parent.push_back(parent_target.body);
     m.joint_type.push_back(b.joint);
     m.axis.push_back(joint_traits(b.joint).has_axis ? Vec3(b.axis.normalized()) : Vec3::Zero());
+    m.pitch.push_back(b.joint == JointType::Helical ? b.pitch : 0.0);
     m.placement.push_back(joint_in_target);
     m.mass.push_back(b.mass);
     m.com.push_back(b.com);
@@ -231,7 +233,7 @@ int Model::add_frame(const std::string& name, int body, const Placement& X) {
 void Model::classify_joints() {
   joint_model.clear();
   angles = {};
-  for (int k = 0; k < nbodies; ++k) joint_model.push_back(classify_joint(joint_type[k], axis[k], placement[k].R));
+  for (int k = 0; k < nbodies; ++k) joint_model.push_back(classify_joint(joint_type[k], axis[k], placement[k].R, pitch[k]));
   for (const bool roots : {true, false})
     for (int k = 0; k < nbodies; ++k)
       if (turns_by_angle(joint_model[k]) && (parent[k] < 0) == roots) {
@@ -254,26 +256,26 @@ bool Model::has_limits() const {
 }
 
 bool Model::has_quaternions() const {
-  for (auto t : joint_type)
-    if (joint_traits(t).quaternion >= 0) return true;
+  for (int i = 0; i < nbodies; ++i)
+    if (joint_quaternion(*this, i) >= 0) return true;
   return false;
 }
 
 VecX Model::neutral_configuration() const {
   VecX q(nq);
-  for (int i = 0; i < nbodies; ++i) joint_neutral(joint_type[i], q.data() + idx_q[i]);
+  for (int i = 0; i < nbodies; ++i) visit_joint(*this, i, [&](const auto& j) { j.neutral(q.data() + idx_q[i]); });
   return q;
 }
 
 void Model::normalize(Eigen::Ref<VecX> q) const {
   for (int i = 0; i < nbodies; ++i)
-    if (const int k = joint_traits(joint_type[i]).quaternion; k >= 0) q.segment<4>(idx_q[i] + k).normalize();
+    if (const int k = joint_quaternion(*this, i); k >= 0) q.segment<4>(idx_q[i] + k).normalize();
 }
 
 void Model::check_unit_quaternions(const VecX& q, const std::string& where) const {
   if (q.size() != nq) return;  // the size is the caller's check, with its own words
   for (int i = 0; i < nbodies; ++i)
-    if (const int k = joint_traits(joint_type[i]).quaternion; k >= 0) {
+    if (const int k = joint_quaternion(*this, i); k >= 0) {
       const double norm = q.segment<4>(idx_q[i] + k).norm();
       if (!(std::abs(norm - 1.0) <= kUnitQuaternionTolerance))  // NaN too
         throw Error(where + ": joint '" + printable(joint_names[size_t(i)]) + "': expected a unit quaternion [w, x, y, z]" +
@@ -282,22 +284,22 @@ void Model::check_unit_quaternions(const VecX& q, const std::string& where) cons
     }
 }
 
+// q̇_i = T̄_i(q_i) v_i
 void Model::qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const {
   for (int i = 0; i < nbodies; ++i)
-    joint_qdot(joint_type[i], q.data() + idx_q[i], v.data() + idx_v[i], qd.data() + idx_q[i]);
+    visit_joint(*this, i, [&](const auto& j) { j.qdot(q.data() + idx_q[i], v.data() + idx_v[i], qd.data() + idx_q[i]); });
 }
 
 VecX Model::velocity(const VecX& q, const VecX& qd) const {
   VecX v(nv);
   for (int i = 0; i < nbodies; ++i)
-    joint_velocity(joint_type[i], q.data() + idx_q[i], qd.data() + idx_q[i], v.data() + idx_v[i]);
+    visit_joint(*this, i, [&](const auto& j) { j.velocity(q.data() + idx_q[i], qd.data() + idx_q[i], v.data() + idx_v[i]); });
   return v;
 }
 
 VecX Model::integrate(const VecX& q, const VecX& v, double h) const {
   VecX out(nq);
-  for (int i = 0; i < nbodies; ++i)
-    joint_integrate(joint_type[i], q.data() + idx_q[i], v.data() + idx_v[i], h, out.data() + idx_q[i]);
+  soadyn::integrate(*this, q, v, h, out);
   return out;
 }
 

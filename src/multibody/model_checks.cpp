@@ -162,6 +162,8 @@ void validate(const BodySpec& b, int i) {
   const JointTraits& tr = joint_traits(b.joint);
   if (tr.has_axis && (!(b.axis.norm() > 1e-12) || !std::isfinite(b.axis.squaredNorm())))
     refuse(b, i, "axis", "a non-zero vector of norm between 1e-12 and 1e150", fmt(b.axis.transpose()));
+  if (b.joint == JointType::Helical && !std::isfinite(b.pitch))
+    refuse(b, i, "pitch", "a finite pitch in m/rad", fmt(b.pitch));
   if (tr.root_only) {
     if (b.parent != -1) refuse(b, i, "joint", "a free joint only at a root (parent = ground)", "a parent");
     if (!b.placement.R.isIdentity(1e-12) || !b.placement.p.isZero(0.0))
@@ -229,7 +231,7 @@ void check_mass_matrix(const Model& m, const std::vector<BodySpec>& specs, const
   double coarse_diagonal = 0, coarse_error = 0, total_error = 0, largest = 0;
   for (int i = m.nbodies - 1; i >= 0; --i) {
     Mat6X G(6, m.nv_i[i]);
-    joint_subspace(m.joint_type[i], m.axis[i], R[i], R[i], G);  // at the neutral configuration Rb = Rj
+    joint_subspace(m.joint_type[i], m.axis[i], R[i], R[i], G, m.pitch[i]);  // at the neutral configuration Rb = Rj
     const Mat6 before = P[i];
     const double mi = m.mass[i], ms = mi * s[i].norm(), rot = m.inertia[i].trace() + 2.0 * ms * s[i].norm();
     for (int j = m.nv_i[i] - 1; j >= 0; --j) {

@@ -130,6 +130,8 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
                              "inertia about each body's centre of mass, body frame, shape (N, 3, 3)")
       .def_property_readonly("axes", [](const Model& self) { return rows3(self.axis); },
                              "unit joint axis of each body in its joint frame, shape (N, 3)")
+      .def_property_readonly("pitches", [](const Model& self) { return owned(VecX(Eigen::Map<const VecX>(self.pitch.data(), self.nbodies))); },
+                             "each body's helical-joint pitch, m/rad (0 for the other joint types), shape (N,)")
       .def("create_data", [](const py::object& self) {
             PyData d(self.cast<const Model&>());
             d.model = self;

@@ -2,7 +2,7 @@
 // file.
 //
 // A Model's state is ("soadyn.Model", version, fields): its bodies as BodySpec fields (name, joint,
-// parent, axis, placement, mass, centre of mass, inertia, travel, effort), rebuilt by Model::build,
+// parent, axis, pitch, placement, mass, centre of mass, inertia, travel, effort), rebuilt by Model::build,
 // so everything derived (DOF tree, depth-first order, unit axes) comes from the library's own code
 // and every check it makes refuses a corrupted state; then the fields build derives by arithmetic
 // that could round differently are set to the stored bits (axes, a merged body's inertia, inertias
@@ -124,6 +124,7 @@ py::tuple model_state(const Model& m) {
   f["parent"] = m.parent;
   f["joint_type"] = joints;
   f["axis"] = matrices(m.axis);
+  f["pitch"] = m.pitch;
   f["placement_R"] = matrices(R);
   f["placement_p"] = matrices(p);
   f["mass"] = m.mass;
@@ -154,6 +155,8 @@ Model model_from_state(const py::object& state) {
   const auto parent = r.list<int>("parent", n);
   const auto joints = r.list<int>("joint_type", n);
   const auto axis = r.fixed_list<Vec3>("axis", n);
+  // a helical joint's pitch (states from before helical joints have none: all zero)
+  const auto pitch = r.fields.contains("pitch") ? r.list<double>("pitch", n) : std::vector<double>(n, 0.0);
   const auto R = r.fixed_list<Mat3>("placement_R", n);
   const auto p = r.fixed_list<Vec3>("placement_p", n);
   const auto mass = r.list<double>("mass", n);
@@ -175,6 +178,7 @@ Model model_from_state(const py::object& state) {
     if (b.parent >= int(i)) r.refuse("parent", "entry " + std::to_string(i) + " is not an earlier body");
     b.joint = JointType(joints[i]);
     b.axis = axis[i];
+    b.pitch = pitch[i];
     b.placement = {R[i], p[i]};
     b.mass = mass[i];
     b.com = com[i];

@@ -7,6 +7,7 @@
 #include "soadyn/sim/sensitivity.hpp"
 #include "soadyn/sim/simulate.hpp"
 #include "soadyn/algorithm/table.hpp"
+#include "soadyn/multibody/configuration.hpp"
 
 #include "cvode.hpp"
 #include "step_quadrature.hpp"
@@ -207,24 +208,9 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       gv = -gv;
       s.inputs.add_derivatives_transpose_times(a.mu_, a.g_, gv);
       out.head(m.nq).setZero();
-      // the q̇(q, v) rows joint by joint, and the tangent's chain rule to the coordinates
-      for (int i = 0; i < m.nbodies; ++i) {
-        const JointType type = m.joint_type[i];
-        const int iq = m.idx_q[i], iv = m.idx_v[i], ni = m.nv_i[i], mi = m.nq_i[i];
-        if (joint_traits(type).quaternion < 0) {  // q̇ = v: ∂q̇/∂q = 0, ∂q̇/∂v = e, and T = e
-          out.segment(m.nq + iv, ni) += lam.segment(iq, mi);
-          out.segment(iq, mi) += a.g_.segment(iv, ni);
-          continue;
-        }
-        auto Jqq = s.Tq.topLeftCorner(mi, mi);  // System's joint scratch: rhs, run by CVODES in between, leaves it
-        auto Jqv = s.Tv.topLeftCorner(mi, ni);
-        joint_qdot_jacobian(type, a.lin_.q.data() + iq, a.lin_.v.data() + iv, Jqq, Jqv);
-        out.segment(iq, mi).noalias() += Jqq.transpose() * lam.segment(iq, mi);
-        out.segment(m.nq + iv, ni).noalias() += Jqv.transpose() * lam.segment(iq, mi);
-        auto Ti = s.T.topLeftCorner(ni, mi);
-        joint_tangent_map(type, a.lin_.q.data() + iq, Ti);
-        out.segment(iq, mi).noalias() += Ti.transpose() * a.g_.segment(iv, ni);
-      }
+      // the q̇(q, v) rows, (∂q̇/∂q)ᵀ λ_q and (∂q̇/∂v)ᵀ λ_q, and the tangent's chain rule Tᵀ g to the coordinates
+      add_qdot_jacobian_transpose_times(m, a.lin_.q, a.lin_.v, lam.head(m.nq), out.head(m.nq), out.segment(m.nq, m.nv));
+      add_tangent_transpose_times(m, a.lin_.q, a.g_, out.head(m.nq));
       out = -out;
       if (a.cost_.running) {
         a.dq_.setZero();
@@ -310,7 +296,7 @@ Cost tracking_cost(const Model& m, const VecX& t, const MatX& q, const MatX& v, 
   for (int c = 0; c < m.nq; ++c) ref->q.emplace_back(t, q.col(c));
   for (int c = 0; c < m.nv; ++c) ref->v.emplace_back(t, v.col(c));
   for (int i = 0; i < m.nbodies; ++i)
-    if (const int o = joint_traits(m.joint_type[i]).quaternion; o >= 0) ref->quaternion.push_back(m.idx_q[i] + o);
+    if (const int o = joint_quaternion(m, i); o >= 0) ref->quaternion.push_back(m.idx_q[i] + o);
   // Σ ½ w (x − x̂)² and its gradient w (x − x̂), x̂ = the reference at t (a quaternion's sign matched to x's)
   const auto term = [ref](double t, const VecX& x, const VecX& wx, bool is_q, Eigen::Ref<VecX> grad) {
     if (wx.size() == 0) return 0.0;

@@ -6,6 +6,7 @@
 
 #include "soadyn/sim/integrators.hpp"
 #include "soadyn/sim/newton_solver.hpp"
+#include "soadyn/multibody/configuration.hpp"
 
 #include "fixed_point.hpp"
 #include "nvector_ops.hpp"
@@ -303,7 +304,7 @@ class Cvode : public Integrator {
     auto c = map(corr);
     c.setZero();
     for (int i = 0; i < m.nbodies; ++i) {
-      const int offset = joint_traits(m.joint_type[i]).quaternion;
+      const int offset = joint_quaternion(m, i);
       if (offset < 0) continue;
       const int k = m.idx_q[i] + offset;
       const Eigen::Vector4d quat = y.segment<4>(k);

@@ -108,19 +108,10 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       for (int k = 0; k < ns_; ++k) S_.col(k) = map(yS_[k]);
     }
     q = map(y_out_.get()).head(m.nq);
-    // rows to the tangent: δ = T(q) s_q joint by joint (T = I without a quaternion); v's rows as they are
+    // rows to the tangent: δ = T(q) s_q; v's rows as they are
     MatX X(2 * m.nv, ns_);
     X.bottomRows(m.nv) = S_.middleRows(m.nq, m.nv);
-    for (int i = 0; i < m.nbodies; ++i) {
-      const int iq = m.idx_q[i], iv = m.idx_v[i], mi = m.nq_i[i], ni = m.nv_i[i];
-      if (joint_traits(m.joint_type[i]).quaternion < 0) {
-        X.middleRows(iv, ni) = S_.middleRows(iq, mi);
-        continue;
-      }
-      MatX T(ni, mi);
-      joint_tangent_map(m.joint_type[i], q.data() + iq, T);
-      X.middleRows(iv, ni) = T * S_.middleRows(iq, mi);
-    }
+    tangent_times(m, q, S_.topRows(m.nq), X.topRows(m.nv));
     dx_dx0 = X.leftCols(plan_.nx0());
     dx_dpi = X.rightCols(plan_.np());
   }
@@ -187,24 +178,6 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
 };
 
 }  // namespace
-
-// dq = P dδ, the coordinates' change along a tangent increment: the right inverse Tᵀ (T Tᵀ)⁻¹ of
-// joint_tangent_map's T, which for a unit quaternion is exactly ½ [0; δθ] ⊗ Q (free) or ½ Q ⊗ [0; δθ]
-// (ball): T annihilates only the change along Q, and this dQ is orthogonal to Q
-MatX tangent_to_coordinates(const Model& m, const VecX& q) {
-  MatX P = MatX::Zero(m.nq, m.nv);
-  for (int i = 0; i < m.nbodies; ++i) {
-    const int iq = m.idx_q[i], iv = m.idx_v[i], mi = m.nq_i[i], ni = m.nv_i[i];
-    if (joint_traits(m.joint_type[i]).quaternion < 0) {
-      P.block(iq, iv, mi, ni).setIdentity();
-      continue;
-    }
-    MatX T(ni, mi);
-    joint_tangent_map(m.joint_type[i], q.data() + iq, T);
-    P.block(iq, iv, mi, ni) = T.transpose() * (T * T.transpose()).inverse();
-  }
-  return P;
-}
 
 SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s) {
   SensitivityPlan plan;

@@ -6,6 +6,7 @@
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/sim/limits.hpp"
+#include "soadyn/multibody/configuration.hpp"
 
 #include <cmath>
 #include <string>
@@ -28,9 +29,6 @@ System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
       y_work(m.nq + m.nv + nquad),
       f0(m.nq + m.nv + nquad),
       f1(m.nq + m.nv + nquad),
-      T(MatX::Zero(6, 7)),
-      Tq(MatX::Zero(7, 7)),
-      Tv(MatX::Zero(7, 6)),
       dP(m.nv),
       dD(m.nv),
       eval_y_(VecX::Zero(m.nq + m.nv + nquad)) {}
@@ -98,22 +96,10 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
   const MatX& dq = derivatives->dqdd_dq;
   J.setZero();
-  for (int i = 0; i < model.nbodies; ++i) {
-    const JointType type = model.joint_type[i];
-    const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
-    // ∂q̇/∂q and ∂q̇/∂v: block diagonal, joint by joint
-    joint_qdot_jacobian(type, q.data() + iq, v.data() + iv, J.block(iq, iq, mi, mi), J.block(iq, nq + iv, mi, ni));
-    // ∂q̈/∂q_coords = ∂q̈/∂δ · ∂δ/∂q_coords (T = 1 without a quaternion)
-    if (joint_traits(type).quaternion < 0) {
-      J.block(nq, iq, nv, ni) = dq.middleCols(iv, ni);
-      continue;
-    }
-    auto Ti = T.topLeftCorner(ni, mi);
-    joint_tangent_map(type, q.data() + iq, Ti);
-    for (int c = 0; c < mi; ++c)
-      for (int k = 0; k < ni; ++k)
-        if (Ti(k, c) != 0.0) J.block(nq, iq + c, nv, 1) += Ti(k, c) * dq.col(iv + k);
-  }
+  // ∂q̇/∂q and ∂q̇/∂v: block diagonal, joint by joint
+  qdot_jacobian(model, q, v, J.topLeftCorner(nq, nq), J.block(0, nq, nq, nv));
+  // ∂q̈/∂q_coords = ∂q̈/∂δ · T(q)
+  add_times_tangent(model, q, dq, J.block(nq, 0, nv, nq));
   J.block(nq, nq, nv, nv) = derivatives->dqdd_dv;
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v); nothing depends on W or D
   if (nquad > 0) {
@@ -190,25 +176,10 @@ void System::linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, co
 }
 
 void System::linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out) {
-  const int nq = model.nq;
-  // q̇(q, v) joint by joint, and δ = T(q) s_q
-  for (int i = 0; i < model.nbodies; ++i) {
-    const JointType type = model.joint_type[i];
-    const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
-    if (joint_traits(type).quaternion < 0) {  // q̇ = v: ∂q̇/∂q = 0, ∂q̇/∂v = e, and T = e
-      out.middleRows(iq, mi) = S.middleRows(nq + iv, ni);
-      delta.middleRows(iv, ni) = S.middleRows(iq, mi);
-      continue;
-    }
-    auto Jq = Tq.topLeftCorner(mi, mi);
-    auto Jv = Tv.topLeftCorner(mi, ni);
-    joint_qdot_jacobian(type, q.data() + iq, v.data() + iv, Jq, Jv);
-    out.middleRows(iq, mi).noalias() = Jq * S.middleRows(iq, mi);
-    out.middleRows(iq, mi).noalias() += Jv * S.middleRows(nq + iv, ni);
-    auto Ti = T.topLeftCorner(ni, mi);
-    joint_tangent_map(type, q.data() + iq, Ti);
-    delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
-  }
+  const int nq = model.nq, nv = model.nv;
+  // q̇'s rows ∂q̇/∂q s_q + ∂q̇/∂v s_v, and δ = T(q) s_q
+  qdot_jacobian_times(model, q, v, S.topRows(nq), S.middleRows(nq, nv), out.topRows(nq));
+  tangent_times(model, q, S.topRows(nq), delta);
 }
 
 void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {

@@ -53,6 +53,7 @@ INSTANTIATE_TEST_SUITE_P(
                              .fixed = 4, .unit_axis = 0.5}},
         Case{"free_alone", {.n = 1, .free_root = true}},
         Case{"planar25", {.n = 25, .branching = 0.5, .ball = 0.2, .planar = 0.3, .unit_axis = 0.5}},
+        Case{"helical25", {.n = 25, .branching = 0.5, .ball = 0.2, .helical = 0.4, .unit_axis = 0.3}},
         Case{"unit_chain120", {.n = 120, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}}),
     [](const auto& info) { return std::string(info.param.name); });
 

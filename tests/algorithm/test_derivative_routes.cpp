@@ -19,6 +19,7 @@ const TreeCase kCases[] = {
     {"free_tree50_mixed", {.n = 50, .branching = 0.4, .prismatic = 0.2, .ball = 0.2, .planar = 0.1, .free_root = true}},
     {"free_alone", {.n = 1, .free_root = true}},
     {"chain3", {.n = 3, .branching = 0.0}},
+    {"tree40_helical", {.n = 40, .branching = 0.5, .prismatic = 0.1, .ball = 0.1, .helical = 0.5, .free_root = true}},
 };
 
 // q̈ by the O(N) route at (q ⊕ δ, v)

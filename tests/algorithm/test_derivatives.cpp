@@ -24,6 +24,7 @@ const Case kCases[] = {
     {"free_chain10_ball", {.n = 10, .branching = 0.0, .ball = 0.5, .free_root = true}},
     {"free_alone", {.n = 1, .free_root = true}},
     {"fixed_tree14", {.n = 14, .branching = 0.5, .prismatic = 0.2, .ball = 0.2, .free_root = true, .fixed = 4}},
+    {"tree12_helical", {.n = 12, .branching = 0.5, .prismatic = 0.1, .ball = 0.2, .helical = 0.5, .free_root = true}},
 };
 
 // q ⊕ h e_c: the tangent perturbation of derivatives.hpp

@@ -17,6 +17,7 @@ const Case kCases[] = {
     {"tree200", {.n = 200, .branching = 0.5, .prismatic = 0.2}},
     {"free_chain200", {.n = 200, .branching = 0.05, .prismatic = 0.1, .free_root = true}},
     {"fixed_tree30", {.n = 30, .branching = 0.5, .prismatic = 0.2, .free_root = true, .fixed = 6}},
+    {"helical_tree30", {.n = 30, .branching = 0.5, .prismatic = 0.2, .ball = 0.1, .helical = 0.4, .free_root = true}},
 };
 
 class Routes : public ::testing::TestWithParam<Case> {};

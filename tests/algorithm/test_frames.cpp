@@ -80,10 +80,15 @@ TreeOptions free_root() {
   o.free_root = true;
   return o;
 }
+TreeOptions helical() {
+  TreeOptions o = free_root();
+  o.helical = 0.4;
+  return o;
+}
 
 INSTANTIATE_TEST_SUITE_P(Trees, Frames,
                          ::testing::Values(TreeCase{"chain", chain()}, TreeCase{"mixed", mixed()},
-                                           TreeCase{"free_root", free_root()}),
+                                           TreeCase{"free_root", free_root()}, TreeCase{"helical", helical()}),
                          [](const auto& info) { return std::string(info.param.name); });
 
 TEST_P(Frames, JacobianMatchesDifferencesOfThePlacement) {

@@ -264,7 +264,8 @@ INSTANTIATE_TEST_SUITE_P(
                       TreeCase{"free200", {.n = 200, .branching = 0.3, .prismatic = 0.3, .free_root = true}},
                       TreeCase{"fixed30", {.n = 30, .branching = 0.5, .prismatic = 0.2, .fixed = 8}},
                       TreeCase{"unit_axes40", {.n = 40, .branching = 0.5, .prismatic = 0.3, .unit_axis = 0.7}},
-                      TreeCase{"unit_axes_chain64", {.n = 64, .branching = 0.0, .unit_axis = 1.0}}),
+                      TreeCase{"unit_axes_chain64", {.n = 64, .branching = 0.0, .unit_axis = 1.0}},
+                      TreeCase{"helical40", {.n = 40, .branching = 0.5, .prismatic = 0.2, .helical = 0.4}}),
     [](const auto& info) { return std::string(info.param.name); });
 
 // The specialized kinematics (joints along ±x, ±y, ±z of their frame, unturned placements) against

@@ -74,6 +74,8 @@ INSTANTIATE_TEST_SUITE_P(
                                .free_root = true, .fixed = 4, .unit_axis = 0.5}},
         Case{"free_unit20", {.n = 20, .branching = 0.4, .free_root = true, .unit_axis = 0.8}},
         Case{"ball_planar25", {.n = 25, .branching = 0.5, .ball = 0.4, .planar = 0.4}},
+        Case{"helical_tree30", {.n = 30, .branching = 0.5, .prismatic = 0.2, .helical = 0.4, .unit_axis = 0.5}},
+        Case{"helical_chain30", {.n = 30, .branching = 0.0, .helical = 0.5, .unit_axis = 0.3}},  // deeper than kLocalDepth
         Case{"unit_chain22", {.n = 22, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},  // deepest local
         Case{"unit_chain26", {.n = 26, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},  // mixed, entry by entry
         Case{"unit_chain40", {.n = 40, .branching = 0.0, .prismatic = 0.2, .unit_axis = 0.7}},  // mixed, one product

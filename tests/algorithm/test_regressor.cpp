@@ -18,6 +18,7 @@ const TreeCase kCases[] = {
     {"chain_revolute", {.n = 6, .branching = 0.0}},
     {"tree_mixed", {.n = 9, .branching = 0.6, .prismatic = 0.3, .ball = 0.2, .planar = 0.1, .fixed = 2}},
     {"free_root", {.n = 7, .branching = 0.5, .prismatic = 0.2, .ball = 0.2, .free_root = true}},
+    {"helical", {.n = 7, .branching = 0.5, .prismatic = 0.1, .helical = 0.5}},
 };
 
 class Regressor : public ::testing::TestWithParam<TreeCase> {};

@@ -330,7 +330,7 @@ class RunLog(unittest.TestCase):
     def test_body_poses_match_inspect_at_sampled_states(self):
         import h5py
         for scene in ("satellite_two_arrays", "heavy_top", "three_link_arm", "pendulum_on_cart", "spherical_pendulum",
-                      "driven_pendulum"):
+                      "driven_pendulum", "screw_lift"):
             out = os.path.join(self.dir.name, scene + ".h5")
             self.run_ok(f"{SCENARIOS}/{scene}.yaml", "--t-end", "1", "-q", "-o", out)
             with h5py.File(out, "r") as f:

@@ -148,6 +148,7 @@ void joint_units(const Model& m, std::vector<std::string>& qu, std::vector<std::
     switch (t) {
       case JointType::Revolute: q = {"rad"}, v = {"rad/s"}; break;
       case JointType::Prismatic: q = {"m"}, v = {"m/s"}; break;
+      case JointType::Helical: q = {"rad"}, v = {"rad/s"}; break;
       case JointType::Ball: q = {"1", "1", "1", "1"}, v = {"rad/s", "rad/s", "rad/s"}; break;
       case JointType::Planar: q = {"m", "m", "rad"}, v = {"m/s", "m/s", "rad/s"}; break;
       case JointType::Free: q = {"m", "m", "m", "1", "1", "1", "1"}, v = {"rad/s", "rad/s", "rad/s", "m/s", "m/s", "m/s"}; break;
@@ -195,6 +196,8 @@ void check_run_file(FileCheck& c, const Scenario& sc, const SimulationSettings& 
   c.mentions("/model", "free_joint", {"[x y z qw qx qy qz]", "body to inertial", "[wx wy wz vx vy vz]", "inertial coordinates"});
   c.mentions("/model", "ball_joint", {"[qw qx qy qz]", "[wx wy wz]", "in the child's frame"});
   c.mentions("/model", "planar_joint", {"[x y theta]"});
+  c.mentions("/model", "helical_joint", {"[theta]", "pitch * theta", "m/rad"});
+  c.numbers("/model", "joint_pitches", m.pitch);
   c.ints("/model/parents", std::vector<int>(m.parent.begin(), m.parent.end()));
   c.ints("/model/joint_q_index", std::vector<int>(m.idx_q.begin(), m.idx_q.end()));
   c.ints("/model/joint_v_index", std::vector<int>(m.idx_v.begin(), m.idx_v.end()));

@@ -133,7 +133,8 @@ TEST(LogContent, EveryColumnNameLeadsToItsNumberInEveryScenario) {
 // the angular velocities ω_i; integrated by the trapezoid rule between fine output rows they must
 // give the logged positions (error O(h²)), and q̇ = ½ [0; ω] ⊗ quat the logged attitudes.
 TEST(LogContent, BodyPosesAgreeWithTheJacobianIntegratedVelocities) {
-  for (const char* name : {"satellite_two_arrays", "heavy_top", "three_link_arm", "pendulum_on_cart", "spherical_pendulum"}) {
+  for (const char* name :
+       {"satellite_two_arrays", "heavy_top", "three_link_arm", "pendulum_on_cart", "spherical_pendulum", "screw_lift"}) {
     SCOPED_TRACE(name);
     const Scenario sc = load_scenario(kDir + name + ".yaml");
     const Model& m = sc.model;

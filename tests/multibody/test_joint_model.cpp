@@ -31,6 +31,7 @@ TEST(JointModel, ClassifiesEveryJointIntoItsKind) {
       {JointType::Ball, Vec3::UnitZ(), turn, "ball", 0},
       {JointType::Planar, Vec3::UnitZ(), e, "planar", 0},
       {JointType::Free, Vec3::UnitZ(), e, "free", 0},
+      {JointType::Helical, Vec3::UnitZ(), turn, "helical", 0},
   };
   for (const auto& c : cases) {
     const JointModel j = classify_joint(c.type, c.axis, c.placement);
@@ -68,6 +69,7 @@ TEST(JointModel, EachKindAgreesWithTheJointInterface) {
   joints_in.push_back({JointType::Ball, Vec3::UnitZ()});
   joints_in.push_back({JointType::Planar, skew_axis});
   joints_in.push_back({JointType::Free, Vec3::UnitZ()});
+  joints_in.push_back({JointType::Helical, skew_axis});
   std::set<std::string> kinds;
   for (const auto& [type, axis] : joints_in)
     for (const Mat3& X : {e, rng.rotation()}) {

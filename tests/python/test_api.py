@@ -444,7 +444,7 @@ def test_inputs_of_a_scenario():
 
 def test_joint_types_and_a_ball_joint(rng):
     """the library's registries by name; the spherical pendulum's 𝓜 = I_pivot in the bob's frame"""
-    assert soadyn.JOINT_TYPES == ("revolute", "prismatic", "ball", "planar", "free", "fixed")
+    assert soadyn.JOINT_TYPES == ("revolute", "prismatic", "ball", "planar", "free", "helical", "fixed")
     assert {"cvode-adams", "cvode-bdf", "rk4", "euler", "symplectic-euler", "implicit-midpoint"} <= set(soadyn.METHODS)
     assert soadyn.DYNAMICS == ("dense", "sparse", "aba")
     model = soadyn.load(f"{SCENARIOS}/spherical_pendulum.yaml")
@@ -460,6 +460,21 @@ def test_joint_types_and_a_ball_joint(rng):
     assert traj.summary.completed and np.abs(traj.energy_error).max() < 1e-7
     assert_close(np.linalg.norm(traj.q, axis=1), np.ones(len(traj)), 1e-9)
     assert_close(traj.angular_momentum[:, 2], np.full(len(traj), traj.angular_momentum[0, 2]), 1e-8)
+
+
+def test_a_helical_joint(rng):
+    """screw_lift's nut: 𝓜 = I_zz + m_nut pitch² + the hanging arm's share, the nut rising pitch · θ"""
+    model = soadyn.load(f"{SCENARIOS}/screw_lift.yaml")
+    assert model.joint_types == ["helical", "revolute"] and (model.nq, model.nv) == (2, 2)
+    assert_close(model.pitches, [0.05, 0.0], 0)
+    data = model.create_data()
+    q = np.array([rng.uniform(-3, 3), 0.0])
+    # arm hanging straight down at x = 0.1 (its cm at (0.1, 0, −0.3) in the nut's frame, Ixx about its cm)
+    nut = 0.02 + 2.0 * 0.05 ** 2
+    arm = 0.0002 + 0.5 * (0.1 ** 2 + 0.05 ** 2)
+    assert_close(soadyn.mass_matrix(model, data, q)[0, 0], nut + arm, 1e-12)
+    traj = soadyn.simulate(f"{SCENARIOS}/screw_lift.yaml", t_end=2.0)
+    assert traj.summary.completed and np.abs(traj.energy_error).max() < 1e-6
 
 
 def test_version_is_the_libraries():

@@ -22,6 +22,7 @@ def models(rng):
     arm.add_frame("tool_tip", arm.frame_names[-1], [0.0, 0.0, 0.05], [0.1, 0.2, 0.3])
     out = [("arm_fixed.urdf", arm),
            ("satellite (free root)", soadyn.load(os.path.join(SCENARIOS, "satellite_two_arrays.yaml"))),
+           ("screw_lift (helical joint)", soadyn.load(os.path.join(SCENARIOS, "screw_lift.yaml"))),
            ("random tree, free root, every joint kind",
             soadyn.parse_scenario(random_tree_yaml(rng, 8, free_root=True, fixed=2)).model)]
     # a fitted model: inertias about the origin set directly by with_parameters
@@ -46,7 +47,7 @@ def fields(model):
 def same_numbers(a, b, rng):
     """a and b compute bit-identical results at seeded random states"""
     assert fields(a) == fields(b)
-    for name in ("gravity", "masses", "coms", "inertias", "axes"):
+    for name in ("gravity", "masses", "coms", "inertias", "axes", "pitches"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert np.array_equal(soadyn.parameters(a), soadyn.parameters(b))
     da, db = a.create_data(), b.create_data()

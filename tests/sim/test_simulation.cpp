@@ -19,7 +19,7 @@ using namespace soadyn::test;
 namespace {
 
 const std::string kDir = SOADYN_SOURCE_DIR "/scenarios/";
-const char* kScenarios[] = {"pendulum_on_cart", "double_pendulum", "satellite_two_arrays", "three_link_arm"};
+const char* kScenarios[] = {"pendulum_on_cart", "double_pendulum", "satellite_two_arrays", "three_link_arm", "screw_lift"};
 
 std::string tmp(const std::string& name) {
   return (std::filesystem::temp_directory_path() / ("soadyn_test_" + std::to_string(getpid()) + "_" + name)).string();

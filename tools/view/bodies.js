@@ -155,10 +155,10 @@ function SoadynBodies(THREE, scene, RUN, L, rSkel, rCmMax, arrowLen, meshes) {
       fellBack.push(i);
       if (hasBox) addShape(batches.visuals, b.box, color, i);
     }
-    // joint axis: an arrow through the joint (revolute: orange, prismatic: purple, planar: teal,
-    // along the plane's normal); free: a triad; ball: a ring
+    // joint axis: an arrow through the joint (revolute: orange, prismatic: purple, helical: green,
+    // planar: teal, along the plane's normal); free: a triad; ball: a ring
     const rA = 0.22 * rSkel, head = [0.1 * arrowLen, 0.25 * arrowLen];
-    const axisColor = { revolute: 0xd9480f, prismatic: 0x7048e8, planar: 0x0c8599 }[b.type];
+    const axisColor = { revolute: 0xd9480f, prismatic: 0x7048e8, helical: 0x2b8a3e, planar: 0x0c8599 }[b.type];
     if (axisColor !== undefined && V(b.axis).length() > 0) {  // planar: the plane's normal
       const u = V(b.axis).normalize();
       addRod(batches.axes, u.clone().multiplyScalar(-0.5 * arrowLen), u.clone().multiplyScalar(arrowLen), rA,

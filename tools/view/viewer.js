@@ -430,7 +430,7 @@
   const defaultTrail = freeRoot >= 0 ? freeRoot : NB - 1;
   trailSel.value = String(defaultTrail);
   setTrailBody(defaultTrail);
-  const firstCoord = RUN.bodies.findIndex((b) => b.type === 'revolute' || b.type === 'prismatic');
+  const firstCoord = RUN.bodies.findIndex((b) => b.type === 'revolute' || b.type === 'prismatic' || b.type === 'helical');
   const angle = series.findIndex((sr) => sr.angle);
   setCoord(firstCoord >= 0 ? RUN.bodies[firstCoord].iq : Math.max(0, angle));
   coordSel.addEventListener('change', () => setCoord(Number(coordSel.value)));

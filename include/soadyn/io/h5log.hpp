@@ -30,7 +30,8 @@
 //                    name in MuJoCo's VFS); soadyn view compiles the model from these alone.  Absent
 //                    without an MJCF model and in files written before it was added
 //   /model: attributes nq, nv, q_names, v_names, q_units, v_units, joint_names, joint_types,
-//           body_names, gravity, units, free_joint, ball_joint, planar_joint (conventions);
+//           body_names, gravity, units, free_joint, ball_joint, planar_joint, helical_joint
+//           (conventions), joint_pitches (m/rad, 0 but on helical joints);
 //           datasets parents, joint_q_index, joint_v_index (ints, −1 = world)
 //   /solver: attributes method, rtol, atol, dt, output_dt, t_end, dynamics, jacobian, newton (fixed
 //            at the start);

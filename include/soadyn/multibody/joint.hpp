@@ -14,7 +14,13 @@
 //   free       [x y z, qw qx qy qz]: position of  [ω; η̇], both        nq=7 nv=6   e (identity)
 //              the body frame and its attitude    inertial (the
 //              body → inertial                    note's Example 3)
+//   helical    angle θ of a screw about the axis:  its rate         nq=nv=1     [g_i; h g_i]
+//              turn θ about it, slide h θ along
+//              it (pitch h, m/rad; h = 0 is revolute)
 //   fixed      merged into its parent when a model is built            nq=nv=0
+//
+// Each function below answers for a JointType by the kind it names (joint_model.hpp, with_kind):
+// the formulas live once, in the kinds and their configuration spaces (joint_space.hpp).
 //
 // The plane of a planar joint: e1 is the coordinate axis least aligned with n, made orthogonal to
 // it, and e2 = n × e1 (n = z gives e1 = x, e2 = y).
@@ -31,7 +37,9 @@
 
 namespace soadyn {
 
-enum class JointType { Revolute, Prismatic, Ball, Planar, Free, Fixed };
+// the user's word for a joint (a scenario's `type:`, a URDF's or MJCF's joint type): Model::build
+// classifies each into a kind (joint_model.hpp) once; Fixed stays last (pickles check against it)
+enum class JointType { Revolute, Prismatic, Ball, Planar, Free, Helical, Fixed };
 
 // What every algorithm needs to know about a joint type.
 struct JointTraits {
@@ -39,7 +47,7 @@ struct JointTraits {
   std::string_view name;                    // as written in scenario files and logs
   int nq, nv;
   int quaternion;                           // offset of a unit quaternion [w x y z] in the joint's q, or -1
-  bool has_axis;                            // revolute, prismatic: the axis; planar: the plane's normal
+  bool has_axis;                            // revolute, prismatic, helical: the axis; planar: the plane's normal
   bool root_only;                           // free joints hang only from the world
   std::vector<std::string_view> q_labels;   // one suffix per q ("" for a 1-DOF joint)
   std::vector<std::string_view> v_labels;   // one suffix per v
@@ -54,8 +62,9 @@ std::string_view to_string(JointType t);
 inline int joint_nq(JointType t) { return joint_traits(t).nq; }
 inline int joint_nv(JointType t) { return joint_traits(t).nv; }
 
-// The joint's motion: body frame = joint frame · (R, p)(q).  q points at joint_nq(t) numbers.
-void joint_motion(JointType t, const Vec3& axis, const double* q, Mat3& R, Vec3& p);
+// The joint's motion: body frame = joint frame · (R, p)(q).  q points at joint_nq(t) numbers;
+// pitch: a helical joint's (m/rad)
+void joint_motion(JointType t, const Vec3& axis, const double* q, Mat3& R, Vec3& p, double pitch = 0.0);
 
 // R = Rj Rot_k(θ) for a revolute joint along e_k, given (c, s) = (cos θ, sin θ): the turn mixes
 // the other two columns of Rj only (Rot_k takes e_a → c e_a + s e_b, e_b → −s e_a + c e_b, with
@@ -69,7 +78,8 @@ inline void turn_frame(const Mat3& Rj, int k, double c, double s, Mat3& R) {
 
 // G_i in inertial coordinates, given the joint frame's orientation Rj (joint → inertial) and the
 // body's, Rb = Rj · R(q).
-void joint_subspace(JointType t, const Vec3& axis, const Mat3& Rj, const Mat3& Rb, Eigen::Ref<Mat6X> G);
+void joint_subspace(JointType t, const Vec3& axis, const Mat3& Rj, const Mat3& Rb, Eigen::Ref<Mat6X> G,
+                    double pitch = 0.0);
 
 // q̇ of the joint from its q and v (differs from v only where q holds a quaternion).
 void joint_qdot(JointType t, const double* q, const double* v, double* qdot);
@@ -78,7 +88,7 @@ void joint_qdot(JointType t, const double* q, const double* v, double* qdot);
 // would change its norm, is ignored.
 void joint_velocity(JointType t, const double* q, const double* qdot, double* v);
 
-// q ← q ⊕ h v: exact for revolute, prismatic and planar; a quaternion is turned by exp(h ω) (about
+// q ← q ⊕ h v: exact for revolute, prismatic, helical and planar; a quaternion is turned by exp(h ω) (about
 // inertial axes for the free joint, body axes for the ball) and the free joint's position moves by h η̇.
 void joint_integrate(JointType t, const double* q, const double* v, double h, double* q_out);
 
@@ -104,6 +114,9 @@ void joint_qdot_jacobian(JointType t, const double* q, const double* v, Eigen::R
 
 // the neutral configuration (zero coordinates, identity quaternion)
 void joint_neutral(JointType t, double* q);
+
+// q1 ⊖ q0: the v with joint_integrate(q0, v, 1) = q1 (a quaternion's shorter turn)
+void joint_difference(JointType t, const double* q0, const double* q1, double* v);
 
 // The unit vectors e1, e2 spanning the plane normal to n (planar joints; see above).
 void plane_basis(const Vec3& n, Vec3& e1, Vec3& e2);

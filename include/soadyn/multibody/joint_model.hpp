@@ -9,7 +9,13 @@
 //   TurnedRevoluteAxis<k>     the same, the placement turning it      ±[C_j e_k; 0]     ±[e_k; 0]
 //   PrismaticAxis<k>          prismatic along ±e_k of its joint frame ±[0; C_j e_k]     ±[0; e_k]
 //   Revolute, Prismatic       along any other unit axis a             [C_j a; 0] / [0; C_j a]
+//   Helical                   a screw: turn θ about the unit axis a,  [C_j a; h C_j a]   [a; h a]
+//                             slide h θ along it (pitch h, m/rad)
 //   Ball, Planar, Free        as joint.hpp describes them
+//
+// A kind is one struct here holding its geometry (its configuration space from joint_space.hpp,
+// motion, subspace, carries), registered in JointModel, kind_name and visit_joint (model.hpp), in
+// classify_joint, and given its body-axes subspace in src/algorithm/joint_local.hpp.
 //
 // The unit-axis kinds are what URDFs mostly hold (axis "0 0 1", "1 0 0"): a turn by θ about e_k
 // mixes two components by (cos θ, sin θ), with no 3×3 product, and k is a template argument so
@@ -19,32 +25,46 @@
 
 #include "soadyn/multibody/joint.hpp"
 #include "soadyn/multibody/types.hpp"
+#include "soadyn/multibody/joint_space.hpp"
 
 #include <cmath>
+#include <type_traits>
 #include <variant>
 
 namespace soadyn {
 
 namespace joints {
 
-// Each kind: nv; motion(q, R, p), the joint's motion (body frame = joint frame · (R, p)(q), as
-// joint_motion); subspace(Rj, Rb, G), G_i in inertial axes into the 6×nv block G, given the joint
-// frame's orientation Rj and the body's Rb = Rj R(q) (as joint_subspace); carries(k, m), whether
-// column k of G_i carries column m, ∂G_m/∂δ_k = G_k × G_m (as joint_carries).
+// Each kind: its configuration space (joint_space.hpp: nq, nv, integrate, difference, qdot,
+// tangent, qdot_jacobian, neutral, random, all templates on the scalar); motion(q, R, p), the
+// joint's motion (body frame = joint frame · (R, p)(q)), a template on the scalar too;
+// subspace(Rj, Rb, G), G_i in inertial axes into the 6×nv block G, given the joint frame's
+// orientation Rj and the body's Rb = Rj R(q); carries(k, m), whether column k of G_i carries
+// column m, ∂G_m/∂δ_k = G_k × G_m.
 
 // the rotation of a unit quaternion stored [w x y z] (normalized here)
-inline Mat3 quaternion_rotation(const double* q) {
-  return Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+template <class S>
+inline Mat3T<S> quaternion_rotation(const S* q) {
+  return quaternion_at(q).normalized().toRotationMatrix();
+}
+
+// R = Rot_k(θ): e_a → c e_a + s e_b, e_b → −s e_a + c e_b (a = k + 1, b = k + 2)
+template <int k, class S>
+inline void axis_rotation(const S& c, const S& s, Mat3T<S>& R) {
+  constexpr int a = (k + 1) % 3, b = (k + 2) % 3;
+  R.setIdentity();
+  R(a, a) = c, R(b, a) = s, R(a, b) = -s, R(b, b) = c;
 }
 
 template <int k>
-struct RevoluteAxis {
-  static constexpr int axis = k, nv = 1;
+struct RevoluteAxis : VectorSpace<1> {
+  static constexpr int axis = k;
   static constexpr bool carries(int, int) { return false; }  // G × G = 0
   double sign = 1.0;  // the axis is sign · e_k
-  void motion(const double* q, Mat3& R, Vec3& p) const {
-    R.setIdentity();
-    turn_frame(Mat3::Identity(), k, std::cos(q[0]), sign * std::sin(q[0]), R);
+  template <class S>
+  void motion(const S* q, Mat3T<S>& R, Vec3T<S>& p) const {
+    using std::cos, std::sin;
+    axis_rotation<k>(S(cos(q[0])), S(sign * sin(q[0])), R);
     p.setZero();
   }
   template <class G>
@@ -55,26 +75,27 @@ struct RevoluteAxis {
 template <int k>
 struct TurnedRevoluteAxis : RevoluteAxis<k> {};
 template <int k>
-struct PrismaticAxis {
-  static constexpr int axis = k, nv = 1;
+struct PrismaticAxis : VectorSpace<1> {
+  static constexpr int axis = k;
   static constexpr bool carries(int, int) { return false; }  // G × G = 0
   double sign = 1.0;
   bool turned = false;  // the placement turns the frame
-  void motion(const double* q, Mat3& R, Vec3& p) const {
+  template <class S>
+  void motion(const S* q, Mat3T<S>& R, Vec3T<S>& p) const {
     R.setIdentity();
-    p = (sign * q[0]) * Vec3::Unit(k);
+    p = (sign * q[0]) * Vec3T<S>::Unit(k);
   }
   template <class G>
   void subspace(const Mat3& Rj, const Mat3&, G&& out) const {
     out.col(0) << Vec3::Zero(), sign * Rj.col(k);
   }
 };
-struct Revolute {
-  static constexpr int nv = 1;
+struct Revolute : VectorSpace<1> {
   static constexpr bool carries(int, int) { return false; }  // G × G = 0
   Vec3 axis;  // unit, joint frame
-  void motion(const double* q, Mat3& R, Vec3& p) const {
-    R = Eigen::AngleAxisd(q[0], axis).toRotationMatrix();
+  template <class S>
+  void motion(const S* q, Mat3T<S>& R, Vec3T<S>& p) const {
+    R = Eigen::AngleAxis<S>(q[0], axis.cast<S>()).toRotationMatrix();
     p.setZero();
   }
   template <class G>
@@ -82,24 +103,42 @@ struct Revolute {
     out.col(0) << Rj * axis, Vec3::Zero();
   }
 };
-struct Prismatic {
-  static constexpr int nv = 1;
+struct Prismatic : VectorSpace<1> {
   static constexpr bool carries(int, int) { return false; }  // G × G = 0
   Vec3 axis;
-  void motion(const double* q, Mat3& R, Vec3& p) const {
+  template <class S>
+  void motion(const S* q, Mat3T<S>& R, Vec3T<S>& p) const {
     R.setIdentity();
-    p = q[0] * axis;
+    p = q[0] * axis.cast<S>();
   }
   template <class G>
   void subspace(const Mat3& Rj, const Mat3&, G&& out) const {
     out.col(0) << Vec3::Zero(), Rj * axis;
   }
 };
+// q = θ: a turn by θ about the unit axis a and a slide by pitch · θ along it (a screw; pitch in
+// m/rad, 0 is a revolute joint); the body's origin stays on the axis, so G_i = [C_j a; pitch C_j a]
+// is fixed in the parent's frame, and in body axes Ĝ_i = [a; pitch a]
+struct Helical : VectorSpace<1> {
+  static constexpr bool carries(int, int) { return false; }  // G × G = 0
+  Vec3 axis;
+  double pitch = 0.0;
+  template <class S>
+  void motion(const S* q, Mat3T<S>& R, Vec3T<S>& p) const {
+    R = Eigen::AngleAxis<S>(q[0], axis.cast<S>()).toRotationMatrix();
+    p = (pitch * q[0]) * axis.cast<S>();
+  }
+  template <class G>
+  void subspace(const Mat3& Rj, const Mat3&, G&& out) const {
+    const Vec3 g = Rj * axis;
+    out.col(0) << g, pitch * g;
+  }
+};
 // q = [w x y z], the child's attitude in the joint frame; G_i = [C_i; 0]
-struct Ball {
-  static constexpr int nv = 3;
+struct Ball : Rotation {
   static constexpr bool carries(int, int) { return true; }  // all three turn with the child
-  void motion(const double* q, Mat3& R, Vec3& p) const {
+  template <class S>
+  void motion(const S* q, Mat3T<S>& R, Vec3T<S>& p) const {
     R = quaternion_rotation(q);
     p.setZero();
   }
@@ -110,13 +149,13 @@ struct Ball {
   }
 };
 // q = [x, y, θ]; G_i = [0 0 n; e1 e2 0] in inertial axes
-struct Planar {
-  static constexpr int nv = 3;
+struct Planar : VectorSpace<3> {
   static constexpr bool carries(int k, int m) { return k < 2 && m == 2; }  // x, y carry θ's axis
   Vec3 n, e1, e2;  // the plane's normal and the two directions of travel (plane_basis), joint frame
-  void motion(const double* q, Mat3& R, Vec3& p) const {
-    R = Eigen::AngleAxisd(q[2], n).toRotationMatrix();
-    p = q[0] * e1 + q[1] * e2;
+  template <class S>
+  void motion(const S* q, Mat3T<S>& R, Vec3T<S>& p) const {
+    R = Eigen::AngleAxis<S>(q[2], n.cast<S>()).toRotationMatrix();
+    p = q[0] * e1.cast<S>() + q[1] * e2.cast<S>();
   }
   template <class G>
   void subspace(const Mat3& Rj, const Mat3&, G&& out) const {
@@ -126,12 +165,12 @@ struct Planar {
   }
 };
 // q = [x y z, qw qx qy qz]; G_i = e
-struct Free {
-  static constexpr int nv = 6;
+struct Free : RigidMotion {
   static constexpr bool carries(int k, int m) { return k >= 3 && m < 3; }  // η̇ carries the rotations' arm
-  void motion(const double* q, Mat3& R, Vec3& p) const {
+  template <class S>
+  void motion(const S* q, Mat3T<S>& R, Vec3T<S>& p) const {
     R = quaternion_rotation(q + 3);
-    p = Vec3(q[0], q[1], q[2]);
+    p = Vec3T<S>(q[0], q[1], q[2]);
   }
   template <class G>
   void subspace(const Mat3&, const Mat3&, G&& out) const {
@@ -139,18 +178,31 @@ struct Free {
   }
 };
 
+// whether G_i turns with the child (Ġ_i = ω_i × G_i) rather than with the parent
+// (Ġ_i = ω_parent × G_i): the ball's alone (joint.hpp)
+template <class J>
+inline constexpr bool turns_with_child = std::is_same_v<J, Ball>;
+
 }  // namespace joints
 
 using JointModel =
     std::variant<joints::RevoluteAxis<0>, joints::RevoluteAxis<1>, joints::RevoluteAxis<2>,
                  joints::TurnedRevoluteAxis<0>, joints::TurnedRevoluteAxis<1>, joints::TurnedRevoluteAxis<2>,
                  joints::PrismaticAxis<0>, joints::PrismaticAxis<1>, joints::PrismaticAxis<2>, joints::Revolute,
-                 joints::Prismatic, joints::Ball, joints::Planar, joints::Free>;
+                 joints::Prismatic, joints::Ball, joints::Planar, joints::Free, joints::Helical>;
 
 // The kind of a moving joint (not Fixed: Model::build merges those away) along the unit axis
 // `axis`, its joint frame turned by `placement_rotation` from its parent's.  Throws
 // soadyn::Error for JointType::Fixed.
-JointModel classify_joint(JointType type, const Vec3& axis, const Mat3& placement_rotation);
+JointModel classify_joint(JointType type, const Vec3& axis, const Mat3& placement_rotation, double pitch = 0.0);
+
+// f(kind) for the kind a JointType names along the unit `axis` (its joint frame unturned): how the
+// per-JointType functions of joint.hpp answer.  A fixed joint has no kind and no q or v: f is not called.
+template <class F>
+void with_kind(JointType type, const Vec3& axis, double pitch, F&& f) {
+  if (type == JointType::Fixed) return;
+  std::visit(std::forward<F>(f), classify_joint(type, axis, Mat3::Identity(), pitch));
+}
 
 // whether the kind is a revolute joint along a unit axis, whose (cos θ, sin θ) the sweeps take
 // in one batch (joint_turns, kinematics.hpp)

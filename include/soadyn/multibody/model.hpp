@@ -43,6 +43,7 @@ struct BodySpec {
   int parent = -1;                      // index in the spec list; -1 = the ground
   JointType joint = JointType::Revolute;
   Vec3 axis = Vec3::UnitZ();            // joint axis in the joint frame (normalized on build)
+  double pitch = 0.0;                   // a helical joint's slide per turn, m/rad (finite)
   Placement placement;                  // joint frame in the parent body frame (world for -1)
   double mass = 0.0;                    // must be > 0 (≥ 0 for a body merged by a fixed joint)
   Vec3 com = Vec3::Zero();              // centre of mass in the body frame
@@ -80,6 +81,7 @@ class Model {
   std::vector<int> parent;                 // parent(i) < i, or -1 for the ground
   std::vector<JointType> joint_type;
   std::vector<Vec3> axis;                  // unit axis in the joint frame
+  std::vector<double> pitch;               // a helical joint's pitch, m/rad (0 for the others)
   std::vector<Placement> placement;        // joint frame in the parent body frame
   std::vector<double> mass;
   std::vector<Vec3> com;                   // body frame
@@ -124,7 +126,7 @@ class Model {
     std::vector<int> body, q;
     int roots = 0;
   } angles;
-  // joint_model and angles from joint_type, axis and placement (build calls it; so must whoever
+  // joint_model and angles from joint_type, axis, pitch and placement (build calls it; so must whoever
   // changes those fields of a built model, as unpickling does)
   void classify_joints();
   std::vector<std::string> warnings;       // what build accepted but a user should hear (one line each)
@@ -146,7 +148,7 @@ class Model {
   // is not a finite proper rotation and translation.
   int add_frame(const std::string& name, int body, const Placement& X);
   bool has_free_joint() const;
-  bool has_quaternions() const;              // a free or ball joint
+  bool has_quaternions() const;              // a joint whose q holds a quaternion (free, ball)
   VecX neutral_configuration() const;
   void normalize(Eigen::Ref<VecX> q) const;  // unit quaternions of free and ball joints
   // A state given from outside (Python, C++ callers): each free or ball joint's quaternion within
@@ -155,7 +157,7 @@ class Model {
   // "where: joint 'j': expected a unit quaternion [w, x, y, z] …, got norm …"
   static constexpr double kUnitQuaternionTolerance = 1e-6;
   void check_unit_quaternions(const VecX& q, const std::string& where) const;
-  // q̇ from (q, v), and q ⊕ h v (see joint.hpp)
+  // q̇ from (q, v), and q ⊕ h v, joint by joint by each kind (configuration.hpp has the rest)
   void qdot(const VecX& q, const VecX& v, Eigen::Ref<VecX> qd) const;
   VecX velocity(const VecX& q, const VecX& qd) const;  // the reverse map: v from q̇
   VecX integrate(const VecX& q, const VecX& v, double h) const;
@@ -170,7 +172,7 @@ class Model {
 template <class F>
 inline void visit_joint(const Model& model, int i, F&& f) {
   const JointModel& j = model.joint_model[i];
-  static_assert(std::variant_size_v<JointModel> == 14, "one case per joint kind");
+  static_assert(std::variant_size_v<JointModel> == 15, "one case per joint kind");
   switch (j.index()) {
     case 0: return f(*std::get_if<0>(&j));
     case 1: return f(*std::get_if<1>(&j));
@@ -186,6 +188,7 @@ inline void visit_joint(const Model& model, int i, F&& f) {
     case 11: return f(*std::get_if<11>(&j));
     case 12: return f(*std::get_if<12>(&j));
     case 13: return f(*std::get_if<13>(&j));
+    case 14: return f(*std::get_if<14>(&j));
   }
   throw Error("visit_joint: body " + std::to_string(i) + " has no joint kind");  // valueless: never built so
 }

@@ -71,7 +71,7 @@ class System {
   // just converged, sensitivity.cpp)
   bool holds_rhs_at(double t, const double* y) const;
   // ∂f/∂y (size()×size()) by the analytic derivatives: ∂q̈/∂q along the tangent, chained to the
-  // coordinates y holds (joint_tangent_map), ∂q̈/∂v, and the Jacobian of q̇(q, v) (joint_qdot_jacobian);
+  // coordinates y holds (add_times_tangent, configuration.hpp), ∂q̈/∂v, and the Jacobian of q̇(q, v) (qdot_jacobian);
   // the inputs' springs and dampers included.  Counts evaluations.  The first call (or
   // prepare_jacobian) allocates the derivatives' workspace, 7 nv² doubles: a run that never asks for
   // ∂f/∂y (CVODE Adams, the explicit methods) keeps memory linear in nv beyond Data's 𝓜
@@ -122,8 +122,7 @@ class System {
   // joint limits holding DOFs at a bound (limits.hpp): rhs applies their constraint forces
   JointLimits* limits = nullptr;
   VecX y_work, f0, f1;             // jacobian_dq's scratch
-  MatX T;                          // one joint's tangent map (≤ 6×7)
-  MatX Tq, Tv, delta, W;           // jacobian_times: one joint's ∂q̇/∂q, ∂q̇/∂v; S's q rows on the tangent; the forces
+  MatX delta, W;                   // jacobian_times: S's q rows on the tangent; the forces
   MatX solve_work;                 // articulated_solve's (prepare_jacobian)
   VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
   long rhs_evals = 0;

@@ -23,6 +23,7 @@
 #include "soadyn/sim/integrators.hpp"
 #include "soadyn/algorithm/regressor.hpp"
 #include "soadyn/sim/scenario.hpp"
+#include "soadyn/multibody/configuration.hpp"
 
 #include <memory>
 #include <string>
@@ -42,9 +43,8 @@ struct SensitivityPlan {
   std::vector<std::string> state_names, state_units, parameter_names, parameter_units;
 };
 
-// P = ∂q/∂δ (nq × nv): how the coordinates move along a tangent increment δ at q (the identity on
-// joints without a quaternion; ½ [0; δθ] ⊗ Q on a free root, ½ Q ⊗ [0; δθ] on a ball joint)
-MatX tangent_to_coordinates(const Model& model, const VecX& q);
+// P = ∂q/∂δ (nq × nv), how the coordinates move along a tangent increment δ at q:
+// tangent_to_coordinates (configuration.hpp)
 
 // The plan for `settings` on `model`; throws soadyn::Error naming an unknown body (with the nearest
 // name) or "all" mixed with names.

@@ -13,7 +13,7 @@ q (nq,) is the configuration and v (nv,) its rates (the note's q̇; ω for a fre
 𝓜(q) q̈ + bias(q, q̇) = τ.
 
 Names
-    JOINT_TYPES (revolute, prismatic, ball, planar, free, fixed), METHODS (the integrators),
+    JOINT_TYPES (revolute, prismatic, ball, planar, free, helical, fixed), METHODS (the integrators),
     DYNAMICS (the forward-dynamics routes: dense, sparse, aba; "on", the old word for aba, is taken too)
 Loading
     load(path, free_root=False, gravity=None) -> Model        a URDF or a scenario's model
