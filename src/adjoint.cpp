@@ -186,7 +186,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     const Model& m = sys_.model;
     lin_.linearize(t, y);
     mu_ = Eigen::Map<const VecX>(lam + m.nq, m.nv);
-    articulated_solve(m, lin_.data, Eigen::Map<MatX>(mu_.data(), m.nv, 1), lin_.solve_work);
+    lin_.linearized_solve(Eigen::Map<MatX>(mu_.data(), m.nv, 1));
   }
 
   // f_B = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ, (∂f/∂y)ᵀ λ by the vector–Jacobian product of the header comment
@@ -216,12 +216,12 @@ class CvodeAdjoint : public cvode_impl::Cvode {
           out.segment(iq, mi) += a.g_.segment(iv, ni);
           continue;
         }
-        auto Jqq = s.Tq.topLeftCorner(mi, mi);  // System's joint scratch: rhs, run by CVODES in between, leaves it
-        auto Jqv = s.Tv.topLeftCorner(mi, ni);
+        auto Jqq = a.Tq_.topLeftCorner(mi, mi);
+        auto Jqv = a.Tv_.topLeftCorner(mi, ni);
         joint_qdot_jacobian(type, a.lin_.q.data() + iq, a.lin_.v.data() + iv, Jqq, Jqv);
         out.segment(iq, mi).noalias() += Jqq.transpose() * lam.segment(iq, mi);
         out.segment(m.nq + iv, ni).noalias() += Jqv.transpose() * lam.segment(iq, mi);
-        auto Ti = s.T.topLeftCorner(ni, mi);
+        auto Ti = a.T_.topLeftCorner(ni, mi);
         joint_tangent_map(type, a.lin_.q.data() + iq, Ti);
         out.segment(iq, mi).noalias() += Ti.transpose() * a.g_.segment(iv, ni);
       }
@@ -275,6 +275,8 @@ class CvodeAdjoint : public cvode_impl::Cvode {
   int which_ = -1;
   VecX mu_, g_, dq_, dv_, ytmu_;
   MatX J_;
+  // adjoint_rhs' joint blocks: one joint's ∂q̇/∂q, ∂q̇/∂v and tangent map (≤ 7×7, 7×6, 6×7)
+  MatX Tq_ = MatX::Zero(7, 7), Tv_ = MatX::Zero(7, 6), T_ = MatX::Zero(6, 7);
   cvode_impl::MatrixPtr AB_;
   cvode_impl::LinSolPtr lsB_;
   cvode_impl::NonlinSolPtr nlsB_;

@@ -1,7 +1,6 @@
 #include "soadyn/scenario.hpp"
 
 #include "soadyn/input_file.hpp"
-#include "soadyn/integrators.hpp"
 #include "soadyn/mjcf.hpp"
 #include "soadyn/text.hpp"
 

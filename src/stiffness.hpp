@@ -1,7 +1,7 @@
 // Whether a run was stiff for its method: the stiffness hint in RunSummary (simulate.hpp).
 #pragma once
 
-#include "soadyn/integrators.hpp"
+#include "soadyn/system.hpp"
 
 namespace soadyn::detail {
 

@@ -1,11 +1,10 @@
-// The system the integrators step (integrators.hpp): ẏ = f(t, y) for a model with its inputs and
+// The system the integrators step (system.hpp): ẏ = f(t, y) for a model with its inputs and
 // controllers, its Jacobian ∂f/∂y by the analytic derivatives (and by forward differences), and the
 // Jacobian applied to columns without forming it.
-#include "soadyn/integrators.hpp"
+#include "soadyn/system.hpp"
 
 #include "soadyn/algorithms.hpp"
 #include "soadyn/kinematics.hpp"
-#include "soadyn/limits.hpp"
 
 #include <cmath>
 #include <string>
@@ -25,15 +24,15 @@ System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
       control(VecX::Zero(m.nv)),
       feedback_tau(VecX::Zero(m.nv)),
       control_work(control_work),
-      y_work(m.nq + m.nv + nquad),
-      f0(m.nq + m.nv + nquad),
-      f1(m.nq + m.nv + nquad),
-      T(MatX::Zero(6, 7)),
-      Tq(MatX::Zero(7, 7)),
-      Tv(MatX::Zero(7, 6)),
-      dP(m.nv),
-      dD(m.nv),
-      eval_y_(VecX::Zero(m.nq + m.nv + nquad)) {}
+      eval_y_(VecX::Zero(m.nq + m.nv + nquad)),
+      y_work_(m.nq + m.nv + nquad),
+      f0_(m.nq + m.nv + nquad),
+      f1_(m.nq + m.nv + nquad),
+      T_(MatX::Zero(6, 7)),
+      Tq_(MatX::Zero(7, 7)),
+      Tv_(MatX::Zero(7, 6)),
+      dP_(m.nv),
+      dD_(m.nv) {}
 
 VecX System::state(const VecX& q0, const VecX& v0) const {
   VecX y = VecX::Zero(size());
@@ -62,7 +61,7 @@ void System::rhs(double t, const double* y, double* ydot) {
   ++rhs_evals;
   at_state(t, y);
   forward_dynamics(model, data, tau, method);
-  if (limits) limits->constrain(*this);  // held DOFs: their constraint forces
+  if (constraint) constraint->constrain(*this);  // held DOFs: their constraint forces
   model.qdot(q, v, qd);
   Eigen::Map<VecX>(ydot, model.nq) = qd;
   Eigen::Map<VecX>(ydot + model.nq, model.nv) = data.qdd;
@@ -86,7 +85,7 @@ bool System::holds_rhs_at(double t, const double* y) const {
 void System::prepare_jacobian() {
   if (!derivatives) derivatives.emplace(model);
   if (lin_y_.size() != size()) lin_y_ = VecX::Zero(size());  // linearize's record of its state
-  if (solve_work.size() == 0) solve_work = articulated_solve_work(model);
+  if (solve_work_.size() == 0) solve_work_ = articulated_solve_work(model);
 }
 
 void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
@@ -108,7 +107,7 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
       J.block(nq, iq, nv, ni) = dq.middleCols(iv, ni);
       continue;
     }
-    auto Ti = T.topLeftCorner(ni, mi);
+    auto Ti = T_.topLeftCorner(ni, mi);
     joint_tangent_map(type, q.data() + iq, Ti);
     for (int c = 0; c < mi; ++c)
       for (int k = 0; k < ni; ++k)
@@ -117,10 +116,10 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   J.block(nq, nq, nv, nv) = derivatives->dqdd_dv;
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v); nothing depends on W or D
   if (nquad > 0) {
-    inputs.power_derivatives(t, v, dP, dD);
-    if (control_work && controlled) dP += control;  // ∂(control · v)/∂v
-    J.row(nq + nv).segment(nq, nv) = dP.transpose();
-    J.row(nq + nv + 1).segment(nq, nv) = dD.transpose();
+    inputs.power_derivatives(t, v, dP_, dD_);
+    if (control_work && controlled) dP_ += control;  // ∂(control · v)/∂v
+    J.row(nq + nv).segment(nq, nv) = dP_.transpose();
+    J.row(nq + nv + 1).segment(nq, nv) = dD_.transpose();
   }
 }
 
@@ -129,10 +128,10 @@ long System::linearize(double t, const double* y) {
   const int n = size();
   if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
   // [kin], [vel], τ, q̈ and the articulated-body factor: rhs's when it has just evaluated this very
-  // (t, y) by that route without limits (CVODES evaluates f at each iterate before the
+  // (t, y) by that route without constraints (CVODES evaluates f at each iterate before the
   // sensitivities' right-hand side there, and at the state it has converged before the staggered
   // corrector), else evaluated here
-  if (!(method == FdMethod::ArticulatedBody && !limits && holds_rhs_at(t, y))) {
+  if (!(method == FdMethod::ArticulatedBody && !constraint && holds_rhs_at(t, y))) {
     at_state(t, y);
     forward_dynamics(model, data, tau, FdMethod::ArticulatedBody);
   }
@@ -163,7 +162,7 @@ void System::linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, co
     throw Error("System::linearized_times: forces: expected " + std::to_string(nv) + " rows and at most as many columns as S");
   if (S.rows() != size() || out.rows() != size() || out.cols() != ns)
     throw Error("System::linearized_times: expected S and out of " + std::to_string(size()) + " rows and the same columns");
-  if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns), W.resize(nv, ns);
+  if (delta_.rows() != nv || delta_.cols() != ns) delta_.resize(nv, ns), W_.resize(nv, ns);
   const auto s_v = S.middleRows(nq, nv);
   // q̇'s rows, and S's q rows on the tangent: δ = T(q) s_q (q itself when no joint holds a quaternion)
   const bool tangent = model.has_quaternions();
@@ -171,22 +170,27 @@ void System::linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, co
     linearized_tangent_rows(S, out);
   else
     out.topRows(nq) = s_v;
-  const auto dq = tangent ? Eigen::Ref<const MatX>(delta) : Eigen::Ref<const MatX>(S.topRows(nq));
+  const auto dq = tangent ? Eigen::Ref<const MatX>(delta_) : Eigen::Ref<const MatX>(S.topRows(nq));
   // q̈'s rows: 𝓜⁻¹ ((∂τ_in/∂q − ∂ID/∂q) δ + (∂τ_in/∂v − ∂ID/∂v) s_v + F): the products O(N) per
   // column, then 𝓜⁻¹ by the articulated-body factor, O(N) per column
-  inverse_dynamics_derivatives_times(model, *derivatives, dq, s_v, W);
-  W = -W;
-  inputs.add_derivatives_directions(dq, s_v, W);
-  if (forces) W.rightCols(forces->cols()) += *forces;
-  articulated_solve(model, data, W, solve_work);
-  out.middleRows(nq, nv) = W;
+  inverse_dynamics_derivatives_times(model, *derivatives, dq, s_v, W_);
+  W_ = -W_;
+  inputs.add_derivatives_directions(dq, s_v, W_);
+  if (forces) W_.rightCols(forces->cols()) += *forces;
+  articulated_solve(model, data, W_, solve_work_);
+  out.middleRows(nq, nv) = W_;
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
   if (nquad > 0) {
-    inputs.power_derivatives(t, v, dP, dD);
-    if (control_work && controlled) dP += control;
-    out.row(nq + nv).noalias() = dP.transpose() * s_v;
-    out.row(nq + nv + 1).noalias() = dD.transpose() * s_v;
+    inputs.power_derivatives(t, v, dP_, dD_);
+    if (control_work && controlled) dP_ += control;
+    out.row(nq + nv).noalias() = dP_.transpose() * s_v;
+    out.row(nq + nv + 1).noalias() = dD_.transpose() * s_v;
   }
+}
+
+void System::linearized_solve(Eigen::Ref<MatX> X) {
+  if (!linearized_) throw Error("System::linearized_solve: no state linearized since the last evaluation");
+  articulated_solve(model, data, X, solve_work_);
 }
 
 void System::linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out) {
@@ -197,32 +201,32 @@ void System::linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref
     const int iq = model.idx_q[i], iv = model.idx_v[i], ni = model.nv_i[i], mi = model.nq_i[i];
     if (joint_traits(type).quaternion < 0) {  // q̇ = v: ∂q̇/∂q = 0, ∂q̇/∂v = e, and T = e
       out.middleRows(iq, mi) = S.middleRows(nq + iv, ni);
-      delta.middleRows(iv, ni) = S.middleRows(iq, mi);
+      delta_.middleRows(iv, ni) = S.middleRows(iq, mi);
       continue;
     }
-    auto Jq = Tq.topLeftCorner(mi, mi);
-    auto Jv = Tv.topLeftCorner(mi, ni);
+    auto Jq = Tq_.topLeftCorner(mi, mi);
+    auto Jv = Tv_.topLeftCorner(mi, ni);
     joint_qdot_jacobian(type, q.data() + iq, v.data() + iv, Jq, Jv);
     out.middleRows(iq, mi).noalias() = Jq * S.middleRows(iq, mi);
     out.middleRows(iq, mi).noalias() += Jv * S.middleRows(nq + iv, ni);
-    auto Ti = T.topLeftCorner(ni, mi);
+    auto Ti = T_.topLeftCorner(ni, mi);
     joint_tangent_map(type, q.data() + iq, Ti);
-    delta.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
+    delta_.middleRows(iv, ni).noalias() = Ti * S.middleRows(iq, mi);
   }
 }
 
 void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {
   ++jac_evals;
   const int n = size();
-  y_work = Eigen::Map<const VecX>(y, n);
-  rhs(t, y_work.data(), f0.data());
+  y_work_ = Eigen::Map<const VecX>(y, n);
+  rhs(t, y_work_.data(), f0_.data());
   for (int c = 0; c < n; ++c) {
-    const double e = 1e-7 * std::max(1.0, std::abs(y_work(c)));
-    const double keep = y_work(c);
-    y_work(c) += e;
-    rhs(t, y_work.data(), f1.data());
-    J.col(c) = (f1 - f0) / e;
-    y_work(c) = keep;
+    const double e = 1e-7 * std::max(1.0, std::abs(y_work_(c)));
+    const double keep = y_work_(c);
+    y_work_(c) += e;
+    rhs(t, y_work_.data(), f1_.data());
+    J.col(c) = (f1_ - f0_) / e;
+    y_work_(c) = keep;
   }
 }
 
