@@ -19,6 +19,7 @@
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/algorithm/batch.hpp"
 #include "soadyn/algorithm/derivatives.hpp"
+#include "soadyn/algorithm/fd_method.hpp"
 #include "soadyn/algorithm/frames.hpp"
 #include "soadyn/algorithm/inputs.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
@@ -36,6 +37,7 @@
 #include "soadyn/sim/scenario.hpp"
 #include "soadyn/sim/sensitivity.hpp"
 #include "soadyn/sim/settings.hpp"
+#include "soadyn/sim/system.hpp"
 #include "soadyn/sim/simulate.hpp"
 #include "soadyn/sim/trajectory.hpp"
 

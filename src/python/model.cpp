@@ -247,6 +247,16 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
       },
       "the settings' names, in the table's order (sensitivities apart)");
   settings.def_property_readonly_static(
+      "integration_names",
+      [](const py::object&) {
+        py::list out;
+        for (const SettingInfo& info : setting_table())
+          if (info.integration) out.append(std::string(info.name));
+        return py::tuple(out);
+      },
+      "the names of the settings that say how the equations are integrated (method, tolerances, steps, "
+      "routes): what a sweep's reference run may set");
+  settings.def_property_readonly_static(
       "words",
       [](const py::object&) {
         py::dict out;

@@ -187,7 +187,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     const Model& m = sys_.model;
     lin_.linearize(t, y);
     mu_ = Eigen::Map<const VecX>(lam + m.nq, m.nv);
-    articulated_solve(m, lin_.data, Eigen::Map<MatX>(mu_.data(), m.nv, 1), lin_.solve_work);
+    lin_.linearized_solve(Eigen::Map<MatX>(mu_.data(), m.nv, 1));
   }
 
   // f_B = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ, (∂f/∂y)ᵀ λ by the vector–Jacobian product of the header comment

@@ -80,6 +80,7 @@ class Cvode : public Integrator {
   // project: keep a free root's quaternion unit by CVODE's projection where it can (BDF)
   Cvode(bool bdf, System& sys, const SimulationSettings& s, double t0, const VecX& y0, bool project = true)
       : sys_(sys), bdf_(bdf), max_steps_(s.max_steps), rtol_(s.rtol), atol_(s.atol) {
+    locates_events_ = true;
     SUNContext ctx = nullptr;
     check(SUNContext_Create(nullptr, &ctx), "SUNContext_Create");
     ctx_.reset(ctx);
@@ -118,61 +119,6 @@ class Cvode : public Integrator {
     if (project && sys.model.has_quaternions()) {
       projection_ = CVodeSetProjFn(mem, &Cvode::project) == CV_SUCCESS;
       error_message_.clear();
-    }
-  }
-
-  void advance(double t_out, double& t, VecX& y) override {
-    void* mem = mem_.get();
-    // CVODE's own CV_NORMAL, one internal step at a time so that a stop request is seen before
-    // every step: step until t_n ≥ t_out, then interpolate y(t_out) from the Nordsieck history.
-    double tn = t;
-    check(CVodeGetCurrentTime(mem, &tn), "CVodeGetCurrentTime");
-    int flag = CV_SUCCESS;
-    roots_.clear();
-    // no step past t_out when a restart follows there (a control tick) or a root may lie beyond it
-    if ((exact_stops_ || nroots_ > 0) && tn < t_out) check(CVodeSetStopTime(mem, t_out), "CVodeSetStopTime");
-    while (tn < t_out) {
-      if (stop_requested()) {  // y_ holds y(t_n), the last step's state
-        t = tn;
-        y = map(y_.get());
-        if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
-        return;
-      }
-      long steps = 0;  // one counter, not the whole stats() set, on every step
-      check(CVodeGetNumSteps(mem, &steps), "CVodeGetNumSteps");
-      steps += before_.steps;
-      if (steps >= max_steps_) fail(tn, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
-      flag = CVode(mem, t_out, y_.get(), &tn, CV_ONE_STEP);
-      rethrow_pending();
-      if (flag < 0) break;
-      if (flag == CV_ROOT_RETURN) {  // y_ holds y(t_root): the caller acts, then restarts here
-        std::vector<int> found(size_t(nroots_), 0);
-        check(CVodeGetRootInfo(mem, found.data()), "CVodeGetRootInfo");
-        for (int i = 0; i < nroots_; ++i)
-          if (found[size_t(i)] != 0) roots_.push_back(i);
-        t = tn;
-        y = map(y_.get());
-        if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
-        return;
-      }
-    }
-    if (flag >= 0) {
-      flag = CVodeGetDky(mem, t_out, 0, y_.get());
-      tn = t_out;
-    }
-    t = tn;
-    y = map(y_.get());
-    if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
-    if (flag < 0) {
-      std::string why = flag_name(flag);
-      if (!error_message_.empty()) why += ": " + error_message_;
-      fail(t, why);
-    }
-    if (const int bad = first_non_finite(y); bad >= 0)
-    {
-      char at[32];
-      std::snprintf(at, sizeof at, "%.9g", t);
-      throw SimulationError(std::string("unstable at t = ") + at + " s: " + sys_.component_name(bad) + " is not finite", t);
     }
   }
 
@@ -216,16 +162,6 @@ class Cvode : public Integrator {
     check(CVodeReInit(mem_.get(), t, y_.get()), "CVodeReInit");
   }
 
-  void set_roots(int n, RootFunction g) override {
-    nroots_ = n;
-    root_fn_ = std::move(g);
-    check(CVodeRootInit(mem_.get(), n, &Cvode::root), "CVodeRootInit");
-    std::vector<int> down(size_t(n), -1);  // only crossings from g > 0 to g < 0
-    if (n > 0) check(CVodeSetRootDirection(mem_.get(), down.data()), "CVodeSetRootDirection");
-  }
-
-  void set_exact_stops(bool on) override { exact_stops_ = on; }
-
   std::string quaternion_handling() const override {
     if (!sys_.model.has_quaternions()) return "none";
     return projection_ ? "CVODE projection (CVodeSetProjFn) onto the unit quaternion"
@@ -233,6 +169,81 @@ class Cvode : public Integrator {
   }
 
  protected:
+  bool step_to(double t_out, double& t, VecX& y) override {
+    void* mem = mem_.get();
+    // CVODE's own CV_NORMAL, one internal step at a time so that a stop request is seen before
+    // every step: step until t_n ≥ t_out, then interpolate y(t_out) from the Nordsieck history.
+    double tn = t;
+    check(CVodeGetCurrentTime(mem, &tn), "CVodeGetCurrentTime");
+    watch_roots();
+    int flag = CV_SUCCESS;
+    // no step past t_out when a restart follows there (a control tick) or a root may lie beyond it
+    if (((schedule_ && schedule_->exact_stops()) || nroots_ > 0) && tn < t_out) check(CVodeSetStopTime(mem, t_out), "CVodeSetStopTime");
+    while (tn < t_out) {
+      if (stop_requested()) {  // y_ holds y(t_n), the last step's state
+        take_state(tn, t, y);
+        return false;
+      }
+      long steps = 0;  // one counter, not the whole stats() set, on every step
+      check(CVodeGetNumSteps(mem, &steps), "CVodeGetNumSteps");
+      steps += before_.steps;
+      if (steps >= max_steps_) fail(tn, "reached the maximum number of steps (" + std::to_string(max_steps_) + ")");
+      flag = CVode(mem, t_out, y_.get(), &tn, CV_ONE_STEP);
+      rethrow_pending();
+      if (flag < 0) break;
+      if (flag == CV_ROOT_RETURN) {  // y_ holds y(t_root): the schedule acts, the caller restarts here
+        take_state(tn, t, y);
+        schedule_->at_roots(t, y, found_roots());
+        return true;
+      }
+    }
+    if (flag >= 0) {
+      flag = CVodeGetDky(mem, t_out, 0, y_.get());
+      tn = t_out;
+    }
+    take_state(tn, t, y);
+    if (flag < 0) {
+      std::string why = flag_name(flag);
+      if (!error_message_.empty()) why += ": " + error_message_;
+      fail(t, why);
+    }
+    if (const int bad = first_non_finite(y); bad >= 0) {
+      char at[32];
+      std::snprintf(at, sizeof at, "%.9g", t);
+      throw SimulationError(std::string("unstable at t = ") + at + " s: " + sys_.component_name(bad) + " is not finite", t);
+    }
+    return false;
+  }
+
+  // (t, y) ← (t_n, y_), the quaternions normalized where CVODE does not project them
+  void take_state(double tn, double& t, VecX& y) const {
+    t = tn;
+    y = map(y_.get());
+    if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
+  }
+
+  // the schedule's root functions, registered with CVODE once (CVodeRootInit): only crossings from
+  // g > 0 to g < 0
+  void watch_roots() {
+    if (!schedule_ || rooted_ == schedule_) return;
+    rooted_ = schedule_;
+    nroots_ = schedule_->root_count();
+    if (nroots_ == 0) return;
+    check(CVodeRootInit(mem_.get(), nroots_, &Cvode::root), "CVodeRootInit");
+    std::vector<int> down(size_t(nroots_), -1);
+    check(CVodeSetRootDirection(mem_.get(), down.data()), "CVodeSetRootDirection");
+  }
+
+  // the indices of the root functions CVODE found at its last return
+  const std::vector<int>& found_roots() {
+    std::vector<int> found(size_t(nroots_), 0);
+    check(CVodeGetRootInfo(mem_.get(), found.data()), "CVodeGetRootInfo");
+    roots_.clear();
+    for (int i = 0; i < nroots_; ++i)
+      if (found[size_t(i)] != 0) roots_.push_back(i);
+    return roots_;
+  }
+
   // the exception a callback stored (no C++ exception crosses SUNDIALS' C frames), thrown here
   void rethrow_pending() {
     if (pending_) {
@@ -265,7 +276,7 @@ class Cvode : public Integrator {
   static int root(double t, N_Vector y, double* g, void* user) {
     auto* self = static_cast<Cvode*>(user);
     try {
-      self->root_fn_(t, N_VGetArrayPointer(y), g);
+      self->schedule_->roots(t, N_VGetArrayPointer(y), g);
       return 0;
     } catch (...) {
       self->pending_ = std::current_exception();
@@ -352,10 +363,10 @@ class Cvode : public Integrator {
   long max_steps_;
   double rtol_, atol_;
   bool projection_ = false;
-  bool exact_stops_ = false;
   IntegratorStats before_;  // the counters of the run before the last restart
+  const Schedule* rooted_ = nullptr;  // the schedule whose roots CVODE watches (nroots_ of them)
   int nroots_ = 0;
-  RootFunction root_fn_;
+  std::vector<int> roots_;            // those found at the last root return
   std::exception_ptr pending_;
   std::string error_message_;
   // declared in creation order, destroyed in reverse: the CVODE memory before what it uses, every

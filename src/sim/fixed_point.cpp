@@ -3,12 +3,20 @@
 
 #include <sundials/sundials_nvector.h>
 
+#include <memory>
 #include <new>
+#include <type_traits>
 #include <utility>
 
 namespace soadyn::cvode_impl {
 
 namespace {
+
+// the solver's own vectors, destroyed with its content
+struct VectorDeleter {
+  void operator()(N_Vector v) const { N_VDestroy(v); }
+};
+using VectorPtr = std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorDeleter>;
 
 struct Content {
   SUNNonlinSolSysFn sys = nullptr;
@@ -18,8 +26,8 @@ struct Content {
   int curiter = 0;
   long niters = 0;      // in the last solve, as SUNDIALS counts them (CVODES adds them up)
   long nconvfails = 0;  // likewise
-  N_Vector other = nullptr;  // the second buffer for the iterates
-  N_Vector delta = nullptr;  // the change of the last iteration
+  VectorPtr other;  // the second buffer for the iterates
+  VectorPtr delta;  // the change of the last iteration
   N_Vector cloned_from = nullptr;  // the correction vector `other` and `delta` were cloned from
 };
 
@@ -39,16 +47,14 @@ int initialize(SUNNonlinearSolver S) {
 int solve(SUNNonlinearSolver S, N_Vector, N_Vector ycor, N_Vector w, realtype tol, booleantype, void* mem) {
   Content& c = content(S);
   if (ycor != c.cloned_from) {  // the first solve, or CVODE hands over other vectors: buffers like them
-    if (c.other) N_VDestroy(c.other);
-    if (c.delta) N_VDestroy(c.delta);
-    c.other = N_VClone(ycor);
-    c.delta = N_VClone(ycor);
+    c.other.reset(N_VClone(ycor));
+    c.delta.reset(N_VClone(ycor));
     c.cloned_from = c.other && c.delta ? ycor : nullptr;
     if (!c.cloned_from) return SUN_NLS_MEM_FAIL;
   }
   c.niters = 0, c.nconvfails = 0;
   // iterate k in `cur`, g(cur) into `next`; SUNDIALS' ycor is `next` after each iteration
-  N_Vector cur = ycor, next = c.other;
+  N_Vector cur = ycor, next = c.other.get();
   const auto finish = [&](N_Vector last, int status) {
     if (last != ycor) N_VScale(1.0, last, ycor);
     return status;
@@ -56,8 +62,8 @@ int solve(SUNNonlinearSolver S, N_Vector, N_Vector ycor, N_Vector w, realtype to
   for (c.curiter = 0; c.curiter < c.maxiters; ++c.curiter) {
     if (c.sys(cur, next, mem) != 0) break;  // as SUNDIALS: a failed g ends the solve as a convergence failure
     ++c.niters;
-    N_VLinearSum(1.0, next, -1.0, cur, c.delta);
-    const int status = c.ctest(S, next, c.delta, tol, w, c.ctest_data);
+    N_VLinearSum(1.0, next, -1.0, cur, c.delta.get());
+    const int status = c.ctest(S, next, c.delta.get(), tol, w, c.ctest_data);
     if (status == SUN_NLS_SUCCESS) return finish(next, SUN_NLS_SUCCESS);
     if (status != SUN_NLS_CONTINUE) {
       ++c.nconvfails;
@@ -71,13 +77,8 @@ int solve(SUNNonlinearSolver S, N_Vector, N_Vector ycor, N_Vector w, realtype to
 
 int free_solver(SUNNonlinearSolver S) {
   if (!S) return SUN_NLS_SUCCESS;
-  if (S->content) {
-    Content& c = content(S);
-    if (c.other) N_VDestroy(c.other);
-    if (c.delta) N_VDestroy(c.delta);
-    delete &c;
-    S->content = nullptr;
-  }
+  delete static_cast<Content*>(S->content);  // its vectors with it
+  S->content = nullptr;
   SUNNonlinSolFreeEmpty(S);
   return SUN_NLS_SUCCESS;
 }

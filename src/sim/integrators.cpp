@@ -25,6 +25,34 @@ StepCount count_steps(double T, double dt) {
   return {std::floor(r), true};
 }
 
+void Integrator::set_schedule(Schedule* schedule) {
+  if (schedule && schedule->root_count() > 0 && !locates_events_)
+    throw Error("this integration method cannot locate events (joint limits): use cvode-adams or cvode-bdf");
+  schedule_ = schedule;
+}
+
+void Integrator::advance(double t_out, double& t, VecX& y) {
+  if (!schedule_) {
+    step_to(t_out, t, y);
+    return;
+  }
+  // to t_out through the schedule: each stop (a control tick) and each event ends the steps there,
+  // the schedule acts, and the integrator starts afresh from the state it left
+  for (;;) {
+    const Schedule::Stop stop = schedule_->next_stop(t_out);
+    if (step_to(stop.t, t, y)) {
+      restart(t, y);
+      continue;
+    }
+    if (t < stop.t) return;  // a stop request before a step
+    if (stop.acts) {
+      schedule_->at_stop(t, y);
+      restart(t, y);
+    }
+    if (stop.t == t_out) return;
+  }
+}
+
 namespace {
 
 // Fixed-step methods: steps of exactly dt, step k ending at t0 + k·dt; a span that is not a whole
@@ -34,7 +62,7 @@ class FixedStep : public Integrator {
   FixedStep(System& s, double dt, double t0)
       : sys_(s), dt_(dt), k1_(s.size()), k2_(s.size()), k3_(s.size()), k4_(s.size()), tmp_(s.size()), prev_(s.size()), t0_(t0), t_reported_(t0) {}
 
-  void advance(double t_out, double& t, VecX& y) override {
+  bool step_to(double t_out, double& t, VecX& y) override {
     // the grid t0 + k·dt goes on from where the last call left it; a caller that moved t, or a last
     // shorter step, starts a new one at t
     if (t != t_reported_) {
@@ -46,7 +74,7 @@ class FixedStep : public Integrator {
     while (k_ < whole) {
       if (stop_requested()) {  // t < t_out: the run ends here
         t_reported_ = t;
-        return;
+        return false;
       }
       take(t0_ + double(k_) * dt_, dt_, y);  // from the grid's time (t may be the caller's t_out)
       ++k_;
@@ -59,7 +87,7 @@ class FixedStep : public Integrator {
     if (n.partial && k_ == whole && t < t_out) {
       if (stop_requested()) {
         t_reported_ = t;
-        return;
+        return false;
       }
       const double tk = t0_ + double(k_) * dt_, h = t_out - tk;
       take(tk, h, y);
@@ -69,6 +97,7 @@ class FixedStep : public Integrator {
       check(t, h, y);
     }
     t_reported_ = t;
+    return false;
   }
 
   IntegratorStats stats() const override {
@@ -346,26 +375,26 @@ const std::vector<IntegratorInfo>& integrators() {
   using S = const SimulationSettings&;
   using P = std::unique_ptr<Integrator>;
   static const std::vector<IntegratorInfo> table = {
-      {Method::CvodeAdams, "cvode-adams",
+      {Method::CvodeAdams, to_string(Method::CvodeAdams),
        "SUNDIALS CVODE, Adams–Moulton with fixed-point iterations (non-stiff)", false, 0, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(false, sys, s, t0, y0); }},
-      {Method::CvodeBdf, "cvode-bdf",
+      {Method::CvodeBdf, to_string(Method::CvodeBdf),
        "SUNDIALS CVODE, BDF with Newton and a direct solver (stiff)", false, 0, false, 24, nullptr,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(true, sys, s, t0, y0); }},
-      {Method::Euler, "euler",
+      {Method::Euler, to_string(Method::Euler),
        "explicit Euler, order 1", true, 1, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<Euler>(sys, s.dt, t0); }},
-      {Method::SemiImplicitEuler, "semi-implicit-euler",
+      {Method::SemiImplicitEuler, to_string(Method::SemiImplicitEuler),
        "v then q, order 1; not symplectic where the mass matrix depends on q", true, 1, false, 0,
        nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SemiImplicitEuler>(sys, s.dt, t0); }},
-      {Method::SymplecticEuler, "symplectic-euler",
+      {Method::SymplecticEuler, to_string(Method::SymplecticEuler),
        "symplectic Euler in the momenta p = M(q) v by Newton, order 1, symplectic (no free or ball joints)",
        true, 1, true, 12, &SymplecticEuler::refuses,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SymplecticEuler>(sys, s.dt, t0); }},
-      {Method::Rk4, "rk4",
+      {Method::Rk4, to_string(Method::Rk4),
        "classical Runge–Kutta, order 4", true, 4, false, 0, nullptr,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<RK4>(sys, s.dt, t0); }},
-      {Method::ImplicitMidpoint, "implicit-midpoint",
+      {Method::ImplicitMidpoint, to_string(Method::ImplicitMidpoint),
        "implicit midpoint rule in (q, v) by Newton, order 2, symmetric and A-stable", true, 2, false, 24,
        nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<ImplicitMidpoint>(sys, s, t0); }},
   };

@@ -21,7 +21,12 @@ using S = SimulationSettings;
 using K = SettingKind;
 using R = SettingRange;
 
-// the words of the two enums no registry lists: each value once, in the enum's order
+// the words of the enums whose registry is elsewhere or nowhere: each value once, in the enum's order
+// (integrators() describes each method and makes its integrator; it takes its name from here)
+constexpr std::pair<Method, std::string_view> kMethodWords[] = {
+    {Method::CvodeAdams, "cvode-adams"}, {Method::CvodeBdf, "cvode-bdf"}, {Method::Euler, "euler"},
+    {Method::SemiImplicitEuler, "semi-implicit-euler"}, {Method::SymplecticEuler, "symplectic-euler"},
+    {Method::Rk4, "rk4"}, {Method::ImplicitMidpoint, "implicit-midpoint"}};
 constexpr std::pair<Jacobian, std::string_view> kJacobianWords[] = {{Jacobian::Analytic, "analytic"}, {Jacobian::Dq, "dq"}};
 constexpr std::pair<Newton, std::string_view> kNewtonWords[] = {{Newton::Full, "full"}, {Newton::Simplified, "simplified"}};
 
@@ -44,14 +49,12 @@ std::vector<std::string> words_in(const std::pair<E, std::string_view> (&table)[
   return out;
 }
 
+std::vector<std::string> method_words() { return words_in(kMethodWords); }
 std::vector<std::string> jacobian_words() { return words_in(kJacobianWords); }
 std::vector<std::string> newton_words() { return words_in(kNewtonWords); }
 
 // word → enum (nullopt: none of its words)
-std::optional<Method> method_of(std::string_view w) {
-  if (const IntegratorInfo* info = find_integrator(w)) return info->method;
-  return std::nullopt;
-}
+std::optional<Method> method_of(std::string_view w) { return value_in(kMethodWords, w); }
 std::optional<FdMethod> route_of(std::string_view w) {
   for (const FdMethodInfo& info : fd_methods())
     if (info.name == w) return info.method;
@@ -72,16 +75,21 @@ WordField word_field() {
 }
 
 SettingInfo real(std::string_view name, double S::*field, std::string_view unit, R range, std::string_view help) {
-  return {name, K::Real, field, unit, help, range, nullptr, "", "", ""};
+  return {name, K::Real, field, unit, help, range, nullptr, "", "", "", false};
 }
 SettingInfo word(std::string_view name, WordField field, std::vector<std::string> (*words)(), std::string_view noun,
                  std::string_view help, std::string_view old_word = "", std::string_view new_word = "") {
-  return {name, K::Word, field, "", help, R::Any, words, noun, old_word, new_word};
+  return {name, K::Word, field, "", help, R::Any, words, noun, old_word, new_word, false};
+}
+// a setting of IntegrationSettings
+SettingInfo integration(SettingInfo info) {
+  info.integration = true;
+  return info;
 }
 
 }  // namespace
 
-std::string_view to_string(Method m) { return find_integrator(m).name; }
+std::string_view to_string(Method m) { return word_in(kMethodWords, m); }
 std::string_view to_string(Jacobian j) { return word_in(kJacobianWords, j); }
 std::string_view to_string(Newton n) { return word_in(kNewtonWords, n); }
 
@@ -104,19 +112,20 @@ const std::vector<SettingInfo>& setting_table() {
   static const std::vector<SettingInfo> table = {
       real("t_end", &S::t_end, "s", R::Positive, "end time"),
       real("output_dt", &S::output_dt, "s", R::Positive, "time between logged samples"),
-      word("method", word_field<&S::method, method_of>(), integrator_names, "method", "the integrator"),
-      real("rtol", &S::rtol, "1", R::Positive, "CVODE relative tolerance, in (0, 1)"),
-      real("atol", &S::atol, "1", R::Positive, "CVODE absolute tolerance (in the state's own units)"),
-      real("dt", &S::dt, "s", R::Positive, "fixed-step methods' step"),
-      real("max_step", &S::max_step, "s", R::NonNegative, "CVODE's largest step (0: none)"),
-      {"max_steps", K::Count, &S::max_steps, "1", "CVODE steps allowed in the whole run", R::Positive, nullptr, "", "", ""},
-      word("dynamics", word_field<&S::dynamics, route_of>(), fd_method_names, "route",
-           "forward-dynamics route (on, the old word for aba, is taken)", kFdMethodAliasOn, to_string(FdMethod::ArticulatedBody)),
-      word("jacobian", word_field<&S::jacobian, jacobian_of>(), jacobian_words, "",
-           "cvode-bdf and implicit-midpoint: analytic derivatives or difference quotients (dq)"),
-      word("newton", word_field<&S::newton, newton_of>(), newton_words, "",
-           "implicit-midpoint: the Jacobian at every iterate, or once per step"),
-      {"limits", K::Flag, &S::limits, "", "joint limits as events (CVODE): impact, hold, release", R::Any, nullptr, "", "", ""},
+      integration(word("method", word_field<&S::method, method_of>(), method_words, "method", "the integrator")),
+      integration(real("rtol", &S::rtol, "1", R::Positive, "CVODE relative tolerance, in (0, 1)")),
+      integration(real("atol", &S::atol, "1", R::Positive, "CVODE absolute tolerance (in the state's own units)")),
+      integration(real("dt", &S::dt, "s", R::Positive, "fixed-step methods' step")),
+      integration(real("max_step", &S::max_step, "s", R::NonNegative, "CVODE's largest step (0: none)")),
+      {"max_steps", K::Count, &S::max_steps, "1", "CVODE steps allowed in the whole run", R::Positive, nullptr, "", "", "", true},
+      integration(word("dynamics", word_field<&S::dynamics, route_of>(), fd_method_names, "route",
+                       "forward-dynamics route (on, the old word for aba, is taken)", kFdMethodAliasOn,
+                       to_string(FdMethod::ArticulatedBody))),
+      integration(word("jacobian", word_field<&S::jacobian, jacobian_of>(), jacobian_words, "",
+                       "cvode-bdf and implicit-midpoint: analytic derivatives or difference quotients (dq)")),
+      integration(word("newton", word_field<&S::newton, newton_of>(), newton_words, "",
+                       "implicit-midpoint: the Jacobian at every iterate, or once per step")),
+      {"limits", K::Flag, &S::limits, "", "joint limits as events (CVODE): impact, hold, release", R::Any, nullptr, "", "", "", false},
       real("restitution", &S::restitution, "1", R::UnitInterval, "coefficient of restitution at a limit"),
       real("control_dt", &S::control_dt, "s", R::NonNegative, "time between controller samples, zero-order hold (0: continuous)"),
   };

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "soadyn/sim/integrators.hpp"
+#include "soadyn/sim/system.hpp"
 
 namespace soadyn::detail {
 

@@ -1,12 +1,12 @@
-// The system the integrators step (integrators.hpp): ẏ = f(t, y) for a model with its inputs and
+// The system the integrators step (system.hpp): ẏ = f(t, y) for a model with its inputs and
 // controllers, its Jacobian ∂f/∂y by the analytic derivatives (and by forward differences), and the
 // Jacobian applied to columns without forming it.
 #include "soadyn/sim/integrators.hpp"
-
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/sim/limits.hpp"
 #include "soadyn/multibody/configuration.hpp"
+#include "soadyn/sim/system.hpp"
 
 #include <cmath>
 #include <string>
@@ -26,12 +26,12 @@ System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
       control(VecX::Zero(m.nv)),
       feedback_tau(VecX::Zero(m.nv)),
       control_work(control_work),
-      y_work(m.nq + m.nv + nquad),
-      f0(m.nq + m.nv + nquad),
-      f1(m.nq + m.nv + nquad),
-      dP(m.nv),
-      dD(m.nv),
-      eval_y_(VecX::Zero(m.nq + m.nv + nquad)) {}
+      eval_y_(VecX::Zero(m.nq + m.nv + nquad)),
+      y_work_(m.nq + m.nv + nquad),
+      f0_(m.nq + m.nv + nquad),
+      f1_(m.nq + m.nv + nquad),
+      dP_(m.nv),
+      dD_(m.nv) {}
 
 VecX System::state(const VecX& q0, const VecX& v0) const {
   VecX y = VecX::Zero(size());
@@ -60,7 +60,7 @@ void System::rhs(double t, const double* y, double* ydot) {
   ++rhs_evals;
   at_state(t, y);
   forward_dynamics(model, data, tau, method);
-  if (limits) limits->constrain(*this);  // held DOFs: their constraint forces
+  if (constraint) constraint->constrain(*this);  // held DOFs: their constraint forces
   model.qdot(q, v, qd);
   Eigen::Map<VecX>(ydot, model.nq) = qd;
   Eigen::Map<VecX>(ydot + model.nq, model.nv) = data.qdd;
@@ -84,7 +84,7 @@ bool System::holds_rhs_at(double t, const double* y) const {
 void System::prepare_jacobian() {
   if (!derivatives) derivatives.emplace(model);
   if (lin_y_.size() != size()) lin_y_ = VecX::Zero(size());  // linearize's record of its state
-  if (solve_work.size() == 0) solve_work = articulated_solve_work(model);
+  if (solve_work_.size() == 0) solve_work_ = articulated_solve_work(model);
 }
 
 void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
@@ -103,10 +103,10 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   J.block(nq, nq, nv, nv) = derivatives->dqdd_dv;
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v); nothing depends on W or D
   if (nquad > 0) {
-    inputs.power_derivatives(t, v, dP, dD);
-    if (control_work && controlled) dP += control;  // ∂(control · v)/∂v
-    J.row(nq + nv).segment(nq, nv) = dP.transpose();
-    J.row(nq + nv + 1).segment(nq, nv) = dD.transpose();
+    inputs.power_derivatives(t, v, dP_, dD_);
+    if (control_work && controlled) dP_ += control;  // ∂(control · v)/∂v
+    J.row(nq + nv).segment(nq, nv) = dP_.transpose();
+    J.row(nq + nv + 1).segment(nq, nv) = dD_.transpose();
   }
 }
 
@@ -115,10 +115,10 @@ long System::linearize(double t, const double* y) {
   const int n = size();
   if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
   // [kin], [vel], τ, q̈ and the articulated-body factor: rhs's when it has just evaluated this very
-  // (t, y) by that route without limits (CVODES evaluates f at each iterate before the
+  // (t, y) by that route without constraints (CVODES evaluates f at each iterate before the
   // sensitivities' right-hand side there, and at the state it has converged before the staggered
   // corrector), else evaluated here
-  if (!(method == FdMethod::ArticulatedBody && !limits && holds_rhs_at(t, y))) {
+  if (!(method == FdMethod::ArticulatedBody && !constraint && holds_rhs_at(t, y))) {
     at_state(t, y);
     forward_dynamics(model, data, tau, FdMethod::ArticulatedBody);
   }
@@ -149,7 +149,7 @@ void System::linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, co
     throw Error("System::linearized_times: forces: expected " + std::to_string(nv) + " rows and at most as many columns as S");
   if (S.rows() != size() || out.rows() != size() || out.cols() != ns)
     throw Error("System::linearized_times: expected S and out of " + std::to_string(size()) + " rows and the same columns");
-  if (delta.rows() != nv || delta.cols() != ns) delta.resize(nv, ns), W.resize(nv, ns);
+  if (delta_.rows() != nv || delta_.cols() != ns) delta_.resize(nv, ns), W_.resize(nv, ns);
   const auto s_v = S.middleRows(nq, nv);
   // q̇'s rows, and S's q rows on the tangent: δ = T(q) s_q (q itself when no joint holds a quaternion)
   const bool tangent = model.has_quaternions();
@@ -157,43 +157,48 @@ void System::linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, co
     linearized_tangent_rows(S, out);
   else
     out.topRows(nq) = s_v;
-  const auto dq = tangent ? Eigen::Ref<const MatX>(delta) : Eigen::Ref<const MatX>(S.topRows(nq));
+  const auto dq = tangent ? Eigen::Ref<const MatX>(delta_) : Eigen::Ref<const MatX>(S.topRows(nq));
   // q̈'s rows: 𝓜⁻¹ ((∂τ_in/∂q − ∂ID/∂q) δ + (∂τ_in/∂v − ∂ID/∂v) s_v + F): the products O(N) per
   // column, then 𝓜⁻¹ by the articulated-body factor, O(N) per column
-  inverse_dynamics_derivatives_times(model, *derivatives, dq, s_v, W);
-  W = -W;
-  inputs.add_derivatives_directions(dq, s_v, W);
-  if (forces) W.rightCols(forces->cols()) += *forces;
-  articulated_solve(model, data, W, solve_work);
-  out.middleRows(nq, nv) = W;
+  inverse_dynamics_derivatives_times(model, *derivatives, dq, s_v, W_);
+  W_ = -W_;
+  inputs.add_derivatives_directions(dq, s_v, W_);
+  if (forces) W_.rightCols(forces->cols()) += *forces;
+  articulated_solve(model, data, W_, solve_work_);
+  out.middleRows(nq, nv) = W_;
   // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
   if (nquad > 0) {
-    inputs.power_derivatives(t, v, dP, dD);
-    if (control_work && controlled) dP += control;
-    out.row(nq + nv).noalias() = dP.transpose() * s_v;
-    out.row(nq + nv + 1).noalias() = dD.transpose() * s_v;
+    inputs.power_derivatives(t, v, dP_, dD_);
+    if (control_work && controlled) dP_ += control;
+    out.row(nq + nv).noalias() = dP_.transpose() * s_v;
+    out.row(nq + nv + 1).noalias() = dD_.transpose() * s_v;
   }
+}
+
+void System::linearized_solve(Eigen::Ref<MatX> X) {
+  if (!linearized_) throw Error("System::linearized_solve: no state linearized since the last evaluation");
+  articulated_solve(model, data, X, solve_work_);
 }
 
 void System::linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out) {
   const int nq = model.nq, nv = model.nv;
   // q̇'s rows ∂q̇/∂q s_q + ∂q̇/∂v s_v, and δ = T(q) s_q
   qdot_jacobian_times(model, q, v, S.topRows(nq), S.middleRows(nq, nv), out.topRows(nq));
-  tangent_times(model, q, S.topRows(nq), delta);
+  tangent_times(model, q, S.topRows(nq), delta_);
 }
 
 void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {
   ++jac_evals;
   const int n = size();
-  y_work = Eigen::Map<const VecX>(y, n);
-  rhs(t, y_work.data(), f0.data());
+  y_work_ = Eigen::Map<const VecX>(y, n);
+  rhs(t, y_work_.data(), f0_.data());
   for (int c = 0; c < n; ++c) {
-    const double e = 1e-7 * std::max(1.0, std::abs(y_work(c)));
-    const double keep = y_work(c);
-    y_work(c) += e;
-    rhs(t, y_work.data(), f1.data());
-    J.col(c) = (f1 - f0) / e;
-    y_work(c) = keep;
+    const double e = 1e-7 * std::max(1.0, std::abs(y_work_(c)));
+    const double keep = y_work_(c);
+    y_work_(c) += e;
+    rhs(t, y_work_.data(), f1_.data());
+    J.col(c) = (f1_ - f0_) / e;
+    y_work_(c) = keep;
   }
 }
 

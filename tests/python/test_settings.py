@@ -121,3 +121,50 @@ def test_every_word_round_trips(tmp_path):
     assert s.method == "cvode-adams" and s.jacobian == "analytic"
     s.dynamics = "on"
     assert s.dynamics == "aba"
+
+
+def _stub():
+    """soadyn/__init__.pyi as a syntax tree: its SimulationSettings attributes and simulate()'s keywords"""
+    import ast
+    tree = ast.parse(open(os.path.join(os.path.dirname(soadyn.__file__), "__init__.pyi")).read())
+    attributes, keywords = set(), set()
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef) and node.name == "SimulationSettings":
+            attributes = {n.target.id for n in node.body if isinstance(n, ast.AnnAssign)}
+        if isinstance(node, ast.FunctionDef) and node.name == "simulate":
+            keywords = {a.arg for a in node.args.args + node.args.kwonlyargs}
+    return attributes, keywords
+
+
+def test_every_setting_is_in_the_stub():
+    """The .pyi restates the table for type checkers: a setting added to the table and not there fails"""
+    attributes, keywords = _stub()
+    for name in soadyn.SimulationSettings.names:
+        assert name in attributes, f"__init__.pyi: SimulationSettings has no attribute {name}"
+        assert name in keywords, f"__init__.pyi: simulate() has no keyword {name}"
+    # and nothing the table does not declare
+    own = {"names", "words", "integration_names", "sensitivities"}
+    assert attributes - own == set(soadyn.SimulationSettings.names)
+
+
+def test_every_setting_is_a_sweep_path(tmp_path):
+    """A sweep varies simulation.<name> for every setting of the table (the scenario parser reads each),
+    and its reference run takes the integration settings, whose names come from the table too"""
+    from soadyn import ensemble
+    names = soadyn.SimulationSettings.names
+    integration = soadyn.SimulationSettings.integration_names
+    assert set(integration) < set(names)
+    assert {"method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics"} <= set(integration)
+    scene = os.path.join(SCENARIOS, "double_pendulum.yaml")
+
+    def word(value):
+        return str(value).lower() if isinstance(value, bool) else value
+    ref = "".join(f"  {k}: {word(VALUES[k])}\n" for k in integration)
+    for name in names:
+        fixed = ", ".join(f"simulation.{k}: {v}" for k, v in (("t_end", 0.04), ("output_dt", 0.02), ("method", "cvode-bdf"))
+                          if k != name)
+        p = tmp_path / f"{name}.sweep.yaml"
+        p.write_text(f"scenario: {scene}\nset: {{{fixed}}}\n"
+                     f"vary:\n  - {{path: simulation.{name}, values: [{word(VALUES[name])}]}}\nreference:\n{ref}")
+        sweep = ensemble.load_sweep(str(p))
+        assert sweep.paths == [f"simulation.{name}"] and set(sweep.reference) == set(integration)

@@ -168,3 +168,16 @@ vary:
     assert 1 <= len(done) < 3
     r = soadyn.sweep(str(sweep), str(out), scheduler="serial", quiet=True)
     assert r.skipped == 40 * len(done) and r.ran == 120 - r.skipped and r.failed == 0
+
+
+def test_cases_and_batched_import_one_way():
+    """_batched builds on _cases (run_batch: the groups here, the rest by run_case); _cases imports
+    nothing of _batched, so neither module needs the other half-loaded"""
+    import ast
+    from soadyn import _cases
+
+    def imported(module):
+        tree = ast.parse(open(module.__file__).read())
+        return {n.module for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) and n.module} | \
+               {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+    assert "_cases" in imported(_batched) and "_batched" not in imported(_cases)

@@ -10,6 +10,7 @@
 
 #include "soadyn/multibody/data.hpp"
 #include "soadyn/multibody/model.hpp"
+#include "soadyn/algorithm/fd_method.hpp"
 
 #include <string>
 #include <string_view>
@@ -49,26 +50,7 @@ void inverse_dynamics(const Model& model, Data& data, const VecX& qdd);
 // then the sweeps.  Needs nothing; leaves [kin] and [vel] at (q, v); returns data.tau.
 const VecX& inverse_dynamics(const Model& model, Data& data, const VecX& q, const VecX& v, const VecX& qdd);
 
-enum class FdMethod {
-  Dense,           // "dense": composite 𝓜, then Cholesky
-  Sparse,          // "sparse": composite 𝓜 factored in place as LᵀDL along the tree (no fill-in off
-                   //   ancestor chains)
-  ArticulatedBody  // "aba": the O(N) articulated-body recursion (the factored inverse mass matrix);
-                   //   𝓜 never formed
-};
-
-// The one registry of forward-dynamics routes: the word users write for each, and a line about it.
-struct FdMethodInfo {
-  FdMethod method;
-  std::string_view name;
-  std::string_view description;
-};
-const std::vector<FdMethodInfo>& fd_methods();
-std::vector<std::string> fd_method_names();  // {"dense", "sparse", "aba"}
-std::string_view to_string(FdMethod m);
-// "on", the O(N) route's word before "aba" (YAML 1.1 and PyYAML read a bare on as true): still taken
-inline constexpr std::string_view kFdMethodAliasOn = "on";
-FdMethod parse_fd_method(std::string_view s);  // a name of fd_methods() or "on"; throws soadyn::Error
+// FdMethod and its words: fd_method.hpp
 
 // q̈ = 𝓜⁻¹ (τ − bias).  Needs [kin] and [vel]; fills data.qdd (Dense and Sparse also fill
 // data.M and data.bias).

@@ -30,6 +30,7 @@
 #include "soadyn/algorithm/derivatives.hpp"
 #include "soadyn/algorithm/inputs.hpp"
 #include "soadyn/sim/settings.hpp"
+#include "soadyn/sim/system.hpp"
 
 #include <atomic>
 #include <functional>
@@ -41,103 +42,11 @@
 
 namespace soadyn {
 
-class JointLimits;
-
 // A run that went unstable or that the integrator could not continue.
 class SimulationError : public Error {
  public:
   SimulationError(const std::string& what, double t) : Error(what), t(t) {}
   double t;
-};
-
-// ẏ = f(t, y) for the model with its inputs.  The state is y = [q; v], followed, when the inputs
-// do work (torques or dampers), by two quadratures the integrator advances with the rest:
-// W = ∫ P dt, the work of the inputs, and D = ∫ Σ c q̇² dt ≥ 0, the part the dampers dissipated
-// (Inputs::power).  Nothing feeds back from them into q and v.
-class System {
- public:
-  // control_work: a controller acts (feedback or control), so W has the quadratures and counts it
-  System(const Model& model, const Inputs& inputs, FdMethod method, bool control_work = false);
-  int size() const { return model.nq + model.nv + nquad; }
-  // [q; v; 0 …]: the state at the start of a run (the quadratures start at zero)
-  VecX state(const VecX& q0, const VecX& v0) const;
-  // ẏ = [q̇(q, v); q̈; P; D]; counts evaluations
-  void rhs(double t, const double* y, double* ydot);
-  // q, v and [kin], [vel] at y, and τ: the inputs', the held control's and the feedback controller's
-  // (rhs, jacobian and jacobian_times begin with it)
-  void at_state(double t, const double* y);
-  // whether data holds rhs's evaluation at exactly (t, y), nothing evaluated since: [kin], [vel], τ,
-  // q̈ and the factor of `method` (the forward sensitivities start from it at the state CVODES has
-  // just converged, sensitivity.cpp)
-  bool holds_rhs_at(double t, const double* y) const;
-  // ∂f/∂y (size()×size()) by the analytic derivatives: ∂q̈/∂q along the tangent, chained to the
-  // coordinates y holds (add_times_tangent, configuration.hpp), ∂q̈/∂v, and the Jacobian of q̇(q, v) (qdot_jacobian);
-  // the inputs' springs and dampers included.  Counts evaluations.  The first call (or
-  // prepare_jacobian) allocates the derivatives' workspace, 7 nv² doubles: a run that never asks for
-  // ∂f/∂y (CVODE Adams, the explicit methods) keeps memory linear in nv beyond Data's 𝓜
-  void jacobian(double t, const double* y, Eigen::Ref<MatX> J);
-  // out = (∂f/∂y) S for the columns of S (size() rows) without forming ∂f/∂y: the q̇ rows joint by
-  // joint, and q̈'s = 𝓜⁻¹ ((∂τ_in/∂q − ∂ID/∂q) T S_q + (∂τ_in/∂v − ∂ID/∂v) S_v) by the inverse-dynamics
-  // derivatives' products (O(N) per column after O(N) sweeps, derivatives.hpp) and the articulated-body
-  // factor (O(N) per column, articulated_solve); springs and dampers included (forward sensitivities,
-  // sensitivity.hpp).  Allocates out and its scratch on the first call of a width.
-  void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
-  // jacobian_times in two halves, for many products at one state (CVODES' BDF, with the staggered
-  // corrector, iterates on the sensitivities at the state it has converged): linearize leaves data (q̈ and the
-  // articulated-body factor; τ, A, F free for the caller) and the sweeps at (t, y), doing nothing when
-  // they already hold for this very (t, y) (no evaluation since), and starting from rhs's evaluation
-  // when it has just made one there; it returns the number of that linearization (a new number for
-  // each one it makes, so that a caller keeping more at the state knows when to redo it).
-  // linearized_times applies it to S; with `forces` (nv × m, m ≤ S's columns), the last m columns
-  // also move along τ by them: their q̈ rows gain ∂q̈/∂τ F = 𝓜⁻¹ F (∂q̈/∂π = −𝓜⁻¹ Y, sensitivity.cpp).
-  // The MatX form sizes out; the Ref form writes into out as it is (size() × S's columns), so
-  // that CVODES' own vectors can be S and out without a copy
-  long linearize(double t, const double* y);
-  void linearized_times(const MatX& S, MatX& out, const MatX* forces = nullptr);
-  void linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces = nullptr);
-  void prepare_jacobian();
-  // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
-  void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
-  // the name of component k of y ("theta2 (q)", "bus.wz (v)", "the inputs' work W")
-  std::string component_name(int k) const;
-
-  const Model& model;
-  const Inputs& inputs;
-  FdMethod method;
-  int nquad;  // 2 (W, D) when the inputs do work, else 0
-  Data data;
-  std::optional<DerivativeData> derivatives;  // jacobian's workspace, made on first use
-  VecX q, v, tau, qd;
-  // an external generalized force added to the inputs' τ while `controlled` (rollout.hpp: a
-  // control held over each step); it depends on neither q nor v, so ∂f/∂y is unchanged
-  VecX control;
-  bool controlled = false;
-  // a feedback controller τ_c(t, q, v) added on every evaluation (controller.hpp; continuous
-  // control: sampled control holds its τ in `control`), feedback_tau its last value.  With
-  // control_work, W also counts (control + τ_c) · q̇.  ∂f/∂y leaves out ∂τ_c/∂y (Newton then
-  // converges on an approximate Jacobian)
-  ControlFunction feedback;
-  VecX feedback_tau;
-  bool control_work = false;
-  // joint limits holding DOFs at a bound (limits.hpp): rhs applies their constraint forces
-  JointLimits* limits = nullptr;
-  VecX y_work, f0, f1;             // jacobian_dq's scratch
-  MatX delta, W;                   // jacobian_times: S's q rows on the tangent; the forces
-  MatX solve_work;                 // articulated_solve's (prepare_jacobian)
-  VecX dP, dD;                     // ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
-  long rhs_evals = 0;
-  long jac_evals = 0;
-
- private:
-  // linearized_times' q̇ rows and δ = T(q) S_q when a joint holds a quaternion
-  void linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out);
-  bool evaluated_ = false;         // rhs's state (eval_t_, eval_y_) is still data's
-  double eval_t_ = 0.0;
-  VecX eval_y_;
-  bool linearized_ = false;        // linearize's state (lin_t_, lin_y_) is still data's
-  long linearizations_ = 0;        // how many linearize has made: the current one's number
-  double lin_t_ = 0.0;
-  VecX lin_y_;
 };
 
 struct IntegratorStats {
@@ -148,12 +57,41 @@ struct IntegratorStats {
   long nonlinear_iterations = 0;
 };
 
+// What an integrator asks of the run it steps (the run's scheduler, simulate.cpp): where its steps
+// must end and what happens there (a control tick), and the events, as root functions of the state,
+// and what happens at one (joint limits: an impact, a hold, a release).  Integrator::advance goes to
+// t_out through them, restarting after each (the right-hand side or the state jumps there).
+class Schedule {
+ public:
+  virtual ~Schedule() = default;
+  struct Stop {
+    double t;   // the next time the steps end at, ≤ t_out
+    bool acts;  // at_stop acts there (a control tick), then the integrator restarts
+  };
+  virtual Stop next_stop(double t_out) = 0;
+  virtual void at_stop(double t, VecX& y) = 0;
+  // whether every advance must end its steps exactly at t_out (a restart may follow there), rather
+  // than step past it and interpolate
+  virtual bool exact_stops() const = 0;
+  // n root functions g(t, y) → g[0 … n), each located where it crosses zero going down; at_roots
+  // acts on those found at (t, y), y changed in place
+  virtual int root_count() const = 0;
+  virtual void roots(double t, const double* y, double* g) = 0;
+  virtual void at_roots(double t, VecX& y, const std::vector<int>& which) = 0;
+};
+
 class Integrator {
  public:
   virtual ~Integrator() = default;
-  // advance (t, y) to t_out; throws SimulationError when the run cannot continue.  Returns early,
-  // with t < t_out and y the state at t, when a stop was requested (set_stop) before a step.
-  virtual void advance(double t_out, double& t, VecX& y) = 0;
+  // advance (t, y) to t_out through the schedule's stops and events (set_schedule); throws
+  // SimulationError when the run cannot continue.  Returns early, with t < t_out and y the state
+  // at t, when a stop was requested (set_stop) before a step.
+  void advance(double t_out, double& t, VecX& y);
+  // the run's schedule (nullptr: none, steps straight to each t_out).  Throws soadyn::Error for a
+  // schedule with events when the method cannot locate them (locates_events)
+  void set_schedule(Schedule* schedule);
+  // whether the method locates the roots of a schedule's events (CVODE's root finding)
+  bool locates_events() const { return locates_events_; }
   // `stop` (nullptr: none) is read before every step; a non-zero value ends advance() there.  Only
   // read, so a signal handler may set it.  `poll` (empty: none) runs just before each read, for a
   // caller whose signal handlers do not run by themselves (Python's run only when asked) to ask.
@@ -167,30 +105,21 @@ class Integrator {
   }
   virtual IntegratorStats stats() const = 0;
   // start afresh at (t, y), forgetting the history of earlier steps: after a jump in the
-  // right-hand side (a new control), which a multistep method must not step across.  Fixed-step
-  // methods keep no history between steps: nothing to do
+  // right-hand side (a new control) or the state (an impact), which a multistep method must not
+  // step across.  Fixed-step methods keep no history between steps: nothing to do
   virtual void restart(double t, const VecX& y) {
     (void)t;
     (void)y;
   }
   // how the quaternion of a free root is kept unit ("none" without a free joint)
   virtual std::string quaternion_handling() const = 0;
-  // n root functions g(t, y) → g[0 … n) (limits.hpp), each located where it crosses zero going
-  // down: advance() then returns at the root, t < t_out possibly, with roots() the indices found
-  // (empty otherwise); the caller restarts there.  Methods without root finding throw soadyn::Error
-  using RootFunction = std::function<void(double t, const double* y, double* g)>;
-  virtual void set_roots(int n, RootFunction g) {
-    (void)n;
-    (void)g;
-    throw Error("this integration method cannot locate events (joint limits): use cvode-adams or cvode-bdf");
-  }
-  const std::vector<int>& roots() const { return roots_; }
-  // never step past an advance()'s t_out (a restart follows there: a control tick).  Fixed-step
-  // methods end their steps there already
-  virtual void set_exact_stops(bool) {}
 
  protected:
-  std::vector<int> roots_;
+  // steps from (t, y) to t_stop (exactly there when schedule_->exact_stops()); returns early with
+  // t < t_stop on a stop request, and true at the schedule's events after at_roots acted on them
+  virtual bool step_to(double t_stop, double& t, VecX& y) = 0;
+  Schedule* schedule_ = nullptr;
+  bool locates_events_ = false;  // set by a method with root finding
 
  private:
   const std::atomic<int>* stop_ = nullptr;

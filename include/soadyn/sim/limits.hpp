@@ -12,11 +12,13 @@
 //            by a constraint force λ on DOF k, q̈ = 𝓜⁻¹(τ + Σ e_k λ_k − bias) with q̈_k = 0.  Its
 //            root function becomes σ λ, the force's push into the allowed side:
 //   release  when σ λ would turn negative (the constraint would have to pull): the joint leaves.
-// Then the integrator restarts (CVodeReInit).  Fixed-step methods have no root finding: check_run
-// refuses them with limits on.
+// Then the integrator restarts (CVodeReInit).  The run's scheduler (simulate.cpp) hands the root
+// functions to the integrator and calls start and on_roots; System::rhs calls constrain (Constraint,
+// system.hpp).  Fixed-step methods have no root finding: check_run refuses them with limits on.
 #pragma once
 
 #include "soadyn/sim/integrators.hpp"
+#include "soadyn/sim/system.hpp"
 
 #include <string>
 #include <vector>
@@ -42,7 +44,7 @@ struct LimitEvent {
   double energy_lost = 0.0;  // J, kinetic energy taken by the impact
 };
 
-class JointLimits {
+class JointLimits : public Constraint {
  public:
   JointLimits(const Model& model, double restitution);
   int count() const { return int(sides_.size()); }  // root functions, one per finite bound
@@ -55,7 +57,7 @@ class JointLimits {
   // the roots the integrator located at (t, y): impacts, holds, releases; y changed in place
   std::vector<LimitEvent> on_roots(System& sys, double t, VecX& y, const std::vector<int>& which);
   // System::rhs: data.qdd, computed with sys.tau, becomes that of the held DOFs' constraint
-  void constrain(System& sys);
+  void constrain(System& sys) override;
   double energy_lost() const { return lost_; }  // J, all impacts so far
   bool holding() const { return !held_.empty(); }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/fd_method.hpp"
 
 #include <string>
 #include <string_view>
@@ -19,8 +20,9 @@ struct SensitivitySettings {
   bool any() const { return initial_state || !parameters.empty(); }
 };
 
-// The integration method: each one a row of integrators() (integrators.hpp), the registry that
-// names it (the word in parentheses), says what it does and makes it.
+// The integration method: its word (in parentheses) is said in settings.cpp with the other enums'
+// words; each one is a row of integrators() (integrators.hpp), the registry that says what it does
+// and makes it.
 enum class Method {
   CvodeAdams,         // "cvode-adams": SUNDIALS CVODE, Adams–Moulton (non-stiff), adaptive steps
   CvodeBdf,           // "cvode-bdf": SUNDIALS CVODE, BDF with Newton (stiff), adaptive steps
@@ -41,7 +43,7 @@ enum class Newton {
   Simplified  // "simplified": once per step, at the explicit-Euler predictor
 };
 // Each one's word (the scenario's, the command line's, Python's, the run file's): Method's from
-// integrators(), FdMethod's (algorithms.hpp) from fd_methods()
+// kMethodWords (settings.cpp; integrators() describes each), FdMethod's (fd_method.hpp) from fd_methods()
 std::string_view to_string(Method m);
 std::string_view to_string(Jacobian j);
 std::string_view to_string(Newton n);
@@ -105,6 +107,9 @@ struct SettingInfo {
   std::string_view noun;
   // Word: an older word still taken (not among words()), stored as its successor: dynamics' on → aba
   std::string_view old_word, new_word;
+  // a field of IntegrationSettings (how the equations are integrated): what a sweep's reference run
+  // may set (Python: SimulationSettings.integration_names)
+  bool integration = false;
 };
 
 const std::vector<SettingInfo>& setting_table();

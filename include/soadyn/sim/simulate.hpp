@@ -61,7 +61,9 @@ struct RunSummary {
   std::string stiffness_hint;
 };
 
-// Receives samples and the run's state as it goes (the HDF5 log implements it).
+// Receives samples and the run's state as it goes (the HDF5 log implements it): the loop's
+// observers (run_loop.hpp: the energy books, the stiffness assessment, …) fill their part of the
+// summary before it is passed on.
 class RunObserver {
  public:
   virtual ~RunObserver() = default;
@@ -71,7 +73,8 @@ class RunObserver {
   virtual void on_finish(const RunSummary& summary) = 0;
 };
 
-// Evaluates the logged quantities at (t, y), y the integrator's state [q; v; W; D] (System).
+// Evaluates the logged quantities at (t, y), y the integrator's state [q; v; W; D] (System); the
+// events' impact_loss L(t) and the sensitivities are the run's to add (simulate.cpp).
 Sample observe(System& system, double t, const VecX& y);
 
 // Throws soadyn::Error if sc cannot be run with settings: t_end, output_dt, dt or atol not positive

@@ -91,6 +91,7 @@ class Data:
 class SimulationSettings:
     names: Tuple[str, ...]  # the settings below, from the library's one table (settings.hpp)
     words: Dict[str, Tuple[str, ...]]  # each word-valued setting's words: method, dynamics, jacobian, newton
+    integration_names: Tuple[str, ...]  # those of IntegrationSettings: what a sweep's reference run may set
     def __init__(self) -> None: ...
     t_end: float
     output_dt: float

@@ -15,19 +15,24 @@ joint's slot of q0 or v0, the same double: a float's JSON text is its shortest r
 and a value the parser would refuse (not a number, a boolean, |value| > 1e6) makes its case run
 alone.  So does a case whose group would be one case, and every case of a group whose scenario
 does not parse (each case's own run then says why).
+
+run_batch, the Dask task, runs a batch of cases: the groups here, the rest by soadyn._cases.run_case.
 """
 from __future__ import annotations
 
 import json
 import math
+import os
 import warnings
 from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
+import yaml
 
 from . import _soadyn
 from ._soadyn import Error, parse_scenario
-from ._cases import _CASE_PREFIX, _Copy, _text, _tokens, apply, case_path, compare_reference, empty_row
+from ._cases import _CASE_PREFIX, _Copy, _text, _tokens, apply, case_path, compare_reference, empty_row, run_case
+from ._yaml_doc import _FastLoader
 
 MAX_STATE = 1e6  # kMaxStateMagnitude (scenario.hpp): the parser refuses an initial value beyond it
 
@@ -162,4 +167,34 @@ def _group(tree, model, scenario_path, rest, paths, members, reference, cache) -
                     compare_reference(row, t, y, s["completed"], ref)
         row["case"] = cid
         rows[cid] = row
+    return rows
+
+
+def run_batch(scenario_text: str, scenario_path: str, settings: Dict[str, Any],
+              cases: List[Tuple[int, Dict[str, Any]]], reference: Optional[Dict[str, Any]],
+              logs_dir: Optional[str] = None, together: bool = True) -> List[Dict[str, Any]]:
+    """A Dask task: run the given (case id, values) and return their rows.  Pure: the same input
+    gives the same rows (CPU times aside), whichever worker runs it and however often.  Without
+    logs_dir (and with together), the cases that differ only in their initial state run together,
+    one library call per such group (run_together); the rest, and every case with logs_dir,
+    one soadyn.simulate each: the rows are the same, bit for bit, either way."""
+    tree = yaml.load(scenario_text, Loader=_FastLoader)
+    model = parse_scenario(scenario_text, case_path(scenario_path)).model
+    cache: dict = {}
+    done: Dict[int, Dict[str, Any]] = {}
+    if together and not logs_dir:
+        done = run_together(tree, model, scenario_path, [(cid, dict(settings, **values)) for cid, values in cases],
+                            reference, cache)
+    rows = []
+    for cid, values in cases:
+        if cid in done:
+            rows.append(done[cid])
+            continue
+        log = None
+        if logs_dir:
+            os.makedirs(logs_dir, exist_ok=True)
+            log = os.path.join(logs_dir, f"case-{cid:07d}.h5")
+        row = run_case(tree, model, scenario_path, dict(settings, **values), reference, log, cache)
+        row["case"] = cid
+        rows.append(row)
     return rows

@@ -1,7 +1,8 @@
 """A sweep's cases (soadyn.ensemble): a case's {field path: value} applied to the base scenario's
 YAML tree (path copying: the base is shared, never changed), the edited tree parsed and run, and
 the case's row of results (RESULT_COLUMNS), with its state error against a reference run.
-run_batch is the Dask task that runs a batch of cases on a worker."""
+The Dask task that runs a batch of cases on a worker, run_batch, is soadyn._batched's (it groups
+the cases that run together, and runs the others here)."""
 from __future__ import annotations
 
 import functools
@@ -12,10 +13,9 @@ import re
 from typing import Any, Dict, List, Optional, Tuple
 
 import numpy as np
-import yaml
 
 from ._soadyn import Error, parse_scenario
-from ._yaml_doc import _FastLoader, _clip
+from ._yaml_doc import _clip
 
 RESULT_COLUMNS = ("status", "completed", "initial_energy", "t_reached", "steps", "rhs_evals", "cpu_seconds",
                   "max_energy_balance_error", "final_energy_balance_error", "state_error", "final_state_error", "reference_status")
@@ -219,34 +219,3 @@ def run_case(sweep_tree: dict, model, scenario_path: str, values: Dict[str, Any]
         if ref is not None:
             compare_reference(row, traj.t, _state(traj), s.completed, ref)
     return row
-
-
-def run_batch(scenario_text: str, scenario_path: str, settings: Dict[str, Any],
-              cases: List[Tuple[int, Dict[str, Any]]], reference: Optional[Dict[str, Any]],
-              logs_dir: Optional[str] = None, together: bool = True) -> List[Dict[str, Any]]:
-    """A Dask task: run the given (case id, values) and return their rows.  Pure: the same input
-    gives the same rows (CPU times aside), whichever worker runs it and however often.  Without
-    logs_dir (and with together), the cases that differ only in their initial state run together,
-    one library call per such group (soadyn._batched); the rest, and every case with logs_dir,
-    one soadyn.simulate each: the rows are the same, bit for bit, either way."""
-    tree = yaml.load(scenario_text, Loader=_FastLoader)
-    model = parse_scenario(scenario_text, case_path(scenario_path)).model
-    cache: dict = {}
-    done: Dict[int, Dict[str, Any]] = {}
-    if together and not logs_dir:
-        from ._batched import run_together
-        done = run_together(tree, model, scenario_path, [(cid, dict(settings, **values)) for cid, values in cases],
-                            reference, cache)
-    rows = []
-    for cid, values in cases:
-        if cid in done:
-            rows.append(done[cid])
-            continue
-        log = None
-        if logs_dir:
-            os.makedirs(logs_dir, exist_ok=True)
-            log = os.path.join(logs_dir, f"case-{cid:07d}.h5")
-        row = run_case(tree, model, scenario_path, dict(settings, **values), reference, log, cache)
-        row["case"] = cid
-        rows.append(row)
-    return rows

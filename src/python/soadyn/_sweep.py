@@ -35,7 +35,7 @@ from typing import Any, Dict, List, Optional, Tuple
 import numpy as np
 
 from ._soadyn import Error
-from ._cases import run_batch
+from ._batched import run_batch
 from ._sweep_store import _lock, _open_store, _read_parts, _save_part, _table, check_results_path, write_results
 from ._yaml_doc import printable
 from .ensemble import Sweep

@@ -39,8 +39,9 @@ import numpy as np
 import yaml
 
 from . import _soadyn
-from ._cases import RESULT_COLUMNS, _CASE_PREFIX, _text, apply, case_path, parse_path, run_batch, run_case  # noqa: F401
-from ._soadyn import Error, parse_scenario
+from ._batched import run_batch  # noqa: F401
+from ._cases import RESULT_COLUMNS, _CASE_PREFIX, _text, apply, case_path, parse_path, run_case  # noqa: F401
+from ._soadyn import Error, SimulationSettings, parse_scenario
 from ._yaml_doc import (MAX_FILE_BYTES, MAX_YAML_DEPTH, MAX_YAML_NODES, _Doc, _FastLoader, _clip, _plain,  # noqa: F401
                         _show, check_yaml, printable, read_text)
 
@@ -293,7 +294,7 @@ class Sweep:
                 self._check(doc, node, leaf.path, dict(self.settings, **{leaf.path: v}))
         self.reference = None
         if "reference" in top:
-            ref = doc.mapping(top["reference"], "reference", ("method", "rtol", "atol", "dt", "max_step", "max_steps", "dynamics"))
+            ref = doc.mapping(top["reference"], "reference", SimulationSettings.integration_names)
             self.reference = {}
             for k, v in ref.items():
                 self.reference[k] = doc.value(v, f"reference.{k}")

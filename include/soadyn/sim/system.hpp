@@ -1,0 +1,118 @@
+// The system the integrators step: ẏ = f(t, y) for a model with its inputs and controllers, and its
+// Jacobian ∂f/∂y (system.cpp).  The integrators (integrators.hpp) and the events (limits.hpp) use it.
+#pragma once
+
+#include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/sim/controller.hpp"
+#include "soadyn/algorithm/derivatives.hpp"
+#include "soadyn/algorithm/inputs.hpp"
+
+#include <optional>
+#include <string>
+
+namespace soadyn {
+
+class System;
+
+// Forces that hold DOFs where the run's events put them (joint limits at a bound, limits.hpp).
+// System::rhs hands them data.qdd, computed with sys.tau, and they make it the constrained q̈.
+class Constraint {
+ public:
+  virtual ~Constraint() = default;
+  virtual void constrain(System& sys) = 0;
+};
+
+// ẏ = f(t, y) for the model with its inputs.  The state is y = [q; v], followed, when the inputs
+// do work (torques or dampers), by two quadratures the integrator advances with the rest:
+// W = ∫ P dt, the work of the inputs, and D = ∫ Σ c q̇² dt ≥ 0, the part the dampers dissipated
+// (Inputs::power).  Nothing feeds back from them into q and v.
+class System {
+ public:
+  // control_work: a controller acts (feedback or control), so W has the quadratures and counts it
+  System(const Model& model, const Inputs& inputs, FdMethod method, bool control_work = false);
+  int size() const { return model.nq + model.nv + nquad; }
+  // [q; v; 0 …]: the state at the start of a run (the quadratures start at zero)
+  VecX state(const VecX& q0, const VecX& v0) const;
+  // ẏ = [q̇(q, v); q̈; P; D]; counts evaluations
+  void rhs(double t, const double* y, double* ydot);
+  // q, v and [kin], [vel] at y, and τ: the inputs', the held control's and the feedback controller's
+  // (rhs, jacobian and jacobian_times begin with it)
+  void at_state(double t, const double* y);
+  // whether data holds rhs's evaluation at exactly (t, y), nothing evaluated since: [kin], [vel], τ,
+  // q̈ and the factor of `method` (the forward sensitivities start from it at the state CVODES has
+  // just converged, sensitivity.cpp)
+  bool holds_rhs_at(double t, const double* y) const;
+  // ∂f/∂y (size()×size()) by the analytic derivatives: ∂q̈/∂q along the tangent, chained to the
+  // coordinates y holds (add_times_tangent, configuration.hpp), ∂q̈/∂v, and the Jacobian of q̇(q, v) (qdot_jacobian);
+  // the inputs' springs and dampers included.  Counts evaluations.  The first call (or
+  // prepare_jacobian) allocates the derivatives' workspace, 7 nv² doubles: a run that never asks for
+  // ∂f/∂y (CVODE Adams, the explicit methods) keeps memory linear in nv beyond Data's 𝓜
+  void jacobian(double t, const double* y, Eigen::Ref<MatX> J);
+  // out = (∂f/∂y) S for the columns of S (size() rows) without forming ∂f/∂y: the q̇ rows joint by
+  // joint, and q̈'s = 𝓜⁻¹ ((∂τ_in/∂q − ∂ID/∂q) T S_q + (∂τ_in/∂v − ∂ID/∂v) S_v) by the inverse-dynamics
+  // derivatives' products (O(N) per column after O(N) sweeps, derivatives.hpp) and the articulated-body
+  // factor (O(N) per column, articulated_solve); springs and dampers included (forward sensitivities,
+  // sensitivity.hpp).  Allocates out and its scratch on the first call of a width.
+  void jacobian_times(double t, const double* y, const MatX& S, MatX& out);
+  // jacobian_times in two halves, for many products at one state (CVODES' BDF, with the staggered
+  // corrector, iterates on the sensitivities at the state it has converged): linearize leaves data (q̈ and the
+  // articulated-body factor; τ, A, F free for the caller) and the sweeps at (t, y), doing nothing when
+  // they already hold for this very (t, y) (no evaluation since), and starting from rhs's evaluation
+  // when it has just made one there; it returns the number of that linearization (a new number for
+  // each one it makes, so that a caller keeping more at the state knows when to redo it).
+  // linearized_times applies it to S; with `forces` (nv × m, m ≤ S's columns), the last m columns
+  // also move along τ by them: their q̈ rows gain ∂q̈/∂τ F = 𝓜⁻¹ F (∂q̈/∂π = −𝓜⁻¹ Y, sensitivity.cpp).
+  // The MatX form sizes out; the Ref form writes into out as it is (size() × S's columns), so
+  // that CVODES' own vectors can be S and out without a copy
+  long linearize(double t, const double* y);
+  void linearized_times(const MatX& S, MatX& out, const MatX* forces = nullptr);
+  void linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces = nullptr);
+  // X ← 𝓜⁻¹ X (nv rows) by the articulated-body factor linearize left in data (O(N) per column)
+  void linearized_solve(Eigen::Ref<MatX> X);
+  void prepare_jacobian();
+  // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
+  void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
+  // the name of component k of y ("theta2 (q)", "bus.wz (v)", "the inputs' work W")
+  std::string component_name(int k) const;
+
+  const Model& model;
+  const Inputs& inputs;
+  FdMethod method;
+  int nquad;  // 2 (W, D) when the inputs do work, else 0
+  Data data;
+  std::optional<DerivativeData> derivatives;  // jacobian's workspace, made on first use
+  VecX q, v, tau, qd;
+  // an external generalized force added to the inputs' τ while `controlled` (rollout.hpp: a
+  // control held over each step); it depends on neither q nor v, so ∂f/∂y is unchanged
+  VecX control;
+  bool controlled = false;
+  // a feedback controller τ_c(t, q, v) added on every evaluation (controller.hpp; continuous
+  // control: sampled control holds its τ in `control`), feedback_tau its last value.  With
+  // control_work, W also counts (control + τ_c) · q̇.  ∂f/∂y leaves out ∂τ_c/∂y (Newton then
+  // converges on an approximate Jacobian)
+  ControlFunction feedback;
+  VecX feedback_tau;
+  bool control_work = false;
+  // forces holding DOFs where events put them (joint limits at a bound, limits.hpp): rhs applies them
+  Constraint* constraint = nullptr;
+  long rhs_evals = 0;
+  long jac_evals = 0;
+
+ private:
+  // linearized_times' q̇ rows and δ = T(q) S_q when a joint holds a quaternion
+  void linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out);
+  bool evaluated_ = false;         // rhs's state (eval_t_, eval_y_) is still data's
+  double eval_t_ = 0.0;
+  VecX eval_y_;
+  bool linearized_ = false;        // linearize's state (lin_t_, lin_y_) is still data's
+  long linearizations_ = 0;        // how many linearize has made: the current one's number
+  double lin_t_ = 0.0;
+  VecX lin_y_;
+  // scratch, each the workspace of the method named
+  VecX y_work_, f0_, f1_;          // jacobian_dq
+  MatX delta_, W_;                 // linearized_times: S's q rows on the tangent; the forces
+  MatX solve_work_;                // articulated_solve's (prepare_jacobian)
+  VecX dP_, dD_;                   // jacobian, linearized_times: ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
+};
+
+}  // namespace soadyn
