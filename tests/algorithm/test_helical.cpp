@@ -5,6 +5,7 @@
 #include "test_util.hpp"
 
 #include "soadyn/multibody/configuration.hpp"
+#include "soadyn/io/scenario_file.hpp"
 #include "soadyn/algorithm/derivatives.hpp"
 #include "soadyn/sim/scenario.hpp"
 #include "soadyn/sim/simulate.hpp"

@@ -3,7 +3,6 @@
 // file must hold nothing the test does not check.  And the file `soadyn run` writes against an
 // in-memory run of the same scenario.
 #include "soadyn/io/h5log.hpp"
-#include "soadyn/io/table_file.hpp"
 #include "soadyn/io/scenario_file.hpp"
 #include "soadyn/sim/simulate.hpp"
 

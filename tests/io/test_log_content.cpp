@@ -4,7 +4,6 @@
 // run; the energy balance E(t) − E(0) = W(t) closes to the integrator's tolerance on a damped and
 // a driven scene, and W and D agree with a quadrature of the power taken from the logged samples.
 #include "soadyn/io/h5log.hpp"
-#include "soadyn/io/table_file.hpp"
 #include "soadyn/io/scenario_file.hpp"
 #include "soadyn/sim/simulate.hpp"
 

@@ -33,7 +33,8 @@ build_soadyn_cli
 
 echo "== harness: $harness/derivs"
 mkdir -p "$work"
-build_harness "$harness/derivs" "$work" DERIVS_PINOCCHIO_ONLY bench_derivs_pinocchio derivs_peers
+copy_harness "$work/harness"
+build_harness "$work/harness/derivs" "$work" DERIVS_PINOCCHIO_ONLY bench_derivs_pinocchio derivs_peers
 
 # the binary trees, and the robots: the quadruped and the humanoid as URDF, fixed and free-floating (":free")
 models=$work/models

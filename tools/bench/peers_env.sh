@@ -20,6 +20,14 @@ require_harness() {
   fi
 }
 
+# copy_harness DEST: the harness copied to DEST (file times kept, so a rebuild is incremental), its
+# soadyn adapters including soadyn/soadyn.hpp: they predate the layered headers (soadyn/<layer>/…)
+copy_harness() {
+  rm -rf "$1"
+  cp -a "$harness" "$1"
+  grep -rlE '#include "soadyn/[a-z_]+\.hpp"' "$1" | xargs -r sed -i -E 's|#include "soadyn/[a-z_]+\.hpp"|#include "soadyn/soadyn.hpp"|'
+}
+
 build_soadyn_cli() {
   echo "== soadyn: $build"
   if [[ ! -f $build/CMakeCache.txt ]]; then

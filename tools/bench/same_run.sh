@@ -43,17 +43,16 @@ build_soadyn_cli
 # The harness is copied, and the copy measured: its soadyn adapter names the O(N) route
 # FdMethod::ON, which soadyn's API calls FdMethod::ArticulatedBody.
 echo "== harness: $harness -> $work/harness"
-rm -rf "$work/harness"
 mkdir -p "$work"
-cp -a "$harness" "$work/harness"  # -a: file times kept, so a rebuild is incremental
-if ! grep -Eq '^\s*ON\b' "$repo/include/soadyn/algorithms.hpp"; then
+copy_harness "$work/harness"
+if ! grep -Eq '^\s*ON\b' "$repo/include/soadyn/algorithm/fd_method.hpp"; then
   sed -i 's/FdMethod::ON\b/FdMethod::ArticulatedBody/g' "$work/harness/same_run/adapter_soadyn.cc"
 fi
 # ... and it predates the entry points that start from the state alone, mass_matrix(model, data, q)
 # and bias_forces(model, data, q, v): the copy gains them as two more routes (the harness takes
 # each library's best route for 𝓜 and bias)
 if grep -q 'void bias_forces(const Model& model, Data& data, const VecX& q, const VecX& v);' \
-    "$repo/include/soadyn/algorithms.hpp" && ! grep -q 'mass_matrix(q)' "$work/harness/same_run/adapter_soadyn.cc"; then
+    "$repo/include/soadyn/algorithm/algorithms.hpp" && ! grep -q 'mass_matrix(q)' "$work/harness/same_run/adapter_soadyn.cc"; then
   sed -i 's|^\(\s*\)routes = {$|&\
 \1    {kMass, "mass_matrix(q)", false, [this] { soadyn::mass_matrix(model, data, q); },\
 \1     [this] { return permute_mat(data.Mass, vidx); }},\
@@ -63,7 +62,7 @@ if grep -q 'void bias_forces(const Model& model, Data& data, const VecX& q, cons
     { echo "same_run: could not add the from-state routes to the adapter copy" >&2; exit 1; }
 fi
 # ... and names 𝓜 data.Mass, which Data calls M (as Python does)
-if ! grep -q 'MatX Mass;' "$repo/include/soadyn/data.hpp"; then
+if ! grep -q 'MatX Mass;' "$repo/include/soadyn/multibody/data.hpp"; then
   sed -i 's/\bdata\.Mass\b/data.M/g' "$work/harness/same_run/adapter_soadyn.cc"
 fi
 
