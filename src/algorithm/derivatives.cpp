@@ -164,6 +164,51 @@ void add(SpatialInertia& to, const SpatialInertia& K) {
   cv.segment<3>(0) = -lw, cv.segment<3>(3) = -lu, cv.segment<3>(6) = xw;
 }
 
+// per column c of a joint j of several DOFs: κ_c, β_c, λ_c, φ_c, ψ_c, ρ_c
+template <class J>
+void multi_dof_columns(const Model& model, DerivativeData& dd, int j, const VecX& qd, const VecX& qdd) {
+  constexpr int nj = J::nv;
+  const int p = model.parent[j], vj = model.idx_v[j];
+  const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
+  const Vec6 vel = dd.v.col(j), acc = dd.a.col(j), Fj = dd.F.col(j);
+  for (int k = 0; k < nj; ++k) {
+    const int c = vj + k;
+    const Vec6 xi = dd.S.col(c);
+    Vec6 nu = vp, mu = vp;  // ν_c: not carried by c;  μ_c: carries c
+    for (int m = 0; m < nj; ++m) {
+      if (!J::carries(k, m)) nu += dd.S.col(vj + m) * qd(vj + m);
+      if (J::carries(m, k)) mu += dd.S.col(vj + m) * qd(vj + m);
+    }
+    // the joint's own term ∂a_j: ∂(S_m q̈_m) = [c carries m] ξ × S_m q̈_m, and
+    // ∂(μ_m × S_m) = ∂μ_m × S_m + [c carries m] μ_m × (ξ × S_m), ∂μ_m = ξ × Σ_l [l carries m][c carries l] S_l q̇_l;
+    // zero for a one-DOF joint, whose every term has ξ × S_c = S_c × S_c = 0
+    Vec6 da = Vec6::Zero();
+    if constexpr (nj > 1) for (int m = 0; m < nj; ++m) {
+      const Vec6 Sm = dd.S.col(vj + m);
+      Vec6 dmu = Vec6::Zero(), mu_m = vp;
+      for (int l = 0; l < nj; ++l) {
+        if (J::carries(l, m)) mu_m += dd.S.col(vj + l) * qd(vj + l);
+        if (J::carries(l, m) && J::carries(k, l)) dmu += dd.S.col(vj + l) * qd(vj + l);
+      }
+      if (J::carries(k, m)) {
+        const Vec6 xS = mcross(xi, Sm);
+        da += qdd(vj + m) * xS + qd(vj + m) * mcross(mu_m, xS);
+      }
+      if (!dmu.isZero(0)) da += qd(vj + m) * mcross(mcross(xi, dmu), Sm);
+    }
+    const Vec6 beta = -mcross(xi, nu);
+    const Vec6 kappa = da - mcross(xi, acc) - mcross(beta, vel);
+    const Vec6 lambda = mcross(xi, nu + mu);
+    dd.phi.col(c) = fcross(xi, Fj);
+    dd.psi.col(c) = dd.Y[j] * kappa + dd.B[j] * beta + dd.phi.col(c);
+    dd.rho.col(c) = dd.B[j] * xi - dd.Y[j] * lambda;
+    dd.colq.col(c).head<6>() = kappa;
+    dd.colq.col(c).tail<3>() = beta.head<3>();
+    dd.colv.col(c).head<6>() = -lambda;
+    dd.colv.col(c).tail<3>() = xi.head<3>();
+  }
+}
+
 }  // namespace
 
 namespace detail {
@@ -230,50 +275,8 @@ void derivative_sweeps(const Model& model, const Data& data, const VecX& qd, con
   // per column c of joint j: κ_c, β_c, λ_c, φ_c, ψ_c, ρ_c
   for (int j = 0; j < N; ++j) visit_joint(model, j, [&](const auto& joint) {
     using J = std::decay_t<decltype(joint)>;
-    constexpr int nj = J::nv;
-    if constexpr (nj == 1) {
-      one_dof_column(model, dd, j);
-      return;
-    }
-    const int p = model.parent[j], vj = model.idx_v[j];
-    const Vec6 vp = p < 0 ? Vec6::Zero() : Vec6(dd.v.col(p));
-    const Vec6 vel = dd.v.col(j), acc = dd.a.col(j), Fj = dd.F.col(j);
-    for (int k = 0; k < nj; ++k) {
-      const int c = vj + k;
-      const Vec6 xi = dd.S.col(c);
-      Vec6 nu = vp, mu = vp;  // ν_c: not carried by c;  μ_c: carries c
-      for (int m = 0; m < nj; ++m) {
-        if (!J::carries(k, m)) nu += dd.S.col(vj + m) * qd(vj + m);
-        if (J::carries(m, k)) mu += dd.S.col(vj + m) * qd(vj + m);
-      }
-      // the joint's own term ∂a_j: ∂(S_m q̈_m) = [c carries m] ξ × S_m q̈_m, and
-      // ∂(μ_m × S_m) = ∂μ_m × S_m + [c carries m] μ_m × (ξ × S_m), ∂μ_m = ξ × Σ_l [l carries m][c carries l] S_l q̇_l;
-      // zero for a one-DOF joint, whose every term has ξ × S_c = S_c × S_c = 0
-      Vec6 da = Vec6::Zero();
-      if constexpr (nj > 1) for (int m = 0; m < nj; ++m) {
-        const Vec6 Sm = dd.S.col(vj + m);
-        Vec6 dmu = Vec6::Zero(), mu_m = vp;
-        for (int l = 0; l < nj; ++l) {
-          if (J::carries(l, m)) mu_m += dd.S.col(vj + l) * qd(vj + l);
-          if (J::carries(l, m) && J::carries(k, l)) dmu += dd.S.col(vj + l) * qd(vj + l);
-        }
-        if (J::carries(k, m)) {
-          const Vec6 xS = mcross(xi, Sm);
-          da += qdd(vj + m) * xS + qd(vj + m) * mcross(mu_m, xS);
-        }
-        if (!dmu.isZero(0)) da += qd(vj + m) * mcross(mcross(xi, dmu), Sm);
-      }
-      const Vec6 beta = -mcross(xi, nu);
-      const Vec6 kappa = da - mcross(xi, acc) - mcross(beta, vel);
-      const Vec6 lambda = mcross(xi, nu + mu);
-      dd.phi.col(c) = fcross(xi, Fj);
-      dd.psi.col(c) = dd.Y[j] * kappa + dd.B[j] * beta + dd.phi.col(c);
-      dd.rho.col(c) = dd.B[j] * xi - dd.Y[j] * lambda;
-      dd.colq.col(c).head<6>() = kappa;
-      dd.colq.col(c).tail<3>() = beta.head<3>();
-      dd.colv.col(c).head<6>() = -lambda;
-      dd.colv.col(c).tail<3>() = xi.head<3>();
-    }
+    if constexpr (J::nv == 1) one_dof_column(model, dd, j);
+    else multi_dof_columns<J>(model, dd, j, qd, qdd);
   });
 
 }

@@ -185,16 +185,11 @@ void warn(const std::string& what) { std::fprintf(stderr, "soadyn: warning: %s\n
 
 }  // namespace
 
-int run_simulation(const RunOptions& o) {
-  // everything is checked before any file is touched
-  const LogGroups groups = LogGroups::parse(o.log);
-  Scenario sc = load_with_options(o.scenario, o.state);
-  state_from_options(sc.model, o.state, sc.q0, sc.v0);
+namespace {
+
+// the settings the command line gives, over the scenario's (checked by the options' validators)
+SimulationSettings settings_from_options(const Scenario& sc, const RunOptions& o) {
   SimulationSettings s = sc.simulation;
-  const auto given = [&](const char* name) {
-    const auto it = o.settings.find(name);
-    return it != o.settings.end() && !it->second.empty();
-  };
   for (const auto& [name, text] : o.settings) {  // checked by the options' validators
     if (text.empty()) continue;
     const SettingInfo& info = *find_setting(name);
@@ -204,19 +199,14 @@ int run_simulation(const RunOptions& o) {
       default: set_setting(s, info, std::strtod(text.c_str(), nullptr)); break;
     }
   }
-  const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
+  return s;
+}
 
-  // controller ticks, named by the option that set them (the scenario's own are checked as it is read)
-  if (given("control_dt") || given("t_end"))
-    if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty())
-      throw Error(std::string(given("control_dt") ? "--control-dt" : "--t-end") + ": " + p);
-  for (const auto& w : check_run(sc, s)) warn(w);
-  const std::string method(to_string(s.method));
-  if (is_fixed_step(s.method) && (given("rtol") || given("atol")))
-    warn(std::string(given("rtol") ? "--rtol" : "--atol") + " has no effect with " + method + " (a fixed-step method; see --dt)");
-  if (!is_fixed_step(s.method) && given("dt")) warn("--dt has no effect with " + method + " (it chooses its own steps; see --rtol)");
-  // the row as the file will hold it: the sensitivities, frames, controls and impacts included
-  // and the MJCF model's files the file stores (/model_files)
+// the run file's projected size, refused beyond --max-output-size: the row as the file will hold it
+// (the sensitivities, frames, controls and impacts included) and the MJCF model's files the file
+// stores (/model_files)
+void check_output_size(const Scenario& sc, const SimulationSettings& s, const LogGroups& groups, const RunOptions& o,
+                       const std::string& out) {
   const std::uint64_t row = row_bytes(sc.model, logged_groups(sc, s, groups));
   std::uint64_t stored = 0;
   for (const ModelFile& f : sc.model_files) stored += f.data.size();
@@ -230,6 +220,76 @@ int run_simulation(const RunOptions& o) {
     throw Error(out + ": the output would take " + human_size(bytes) + " (" + buf + "), more than --max-output-size " +
                 o.max_output_size + ": raise --output-dt, lower --t-end, or allow it with --max-output-size");
   }
+}
+
+// the summary on stdout: the method, the solver's statistics, the energy balance, events, output
+void print_summary(const Scenario& sc, const SimulationSettings& s, const RunSummary& r, const H5Log& log,
+                   const std::string& out) {
+  const std::string method(to_string(s.method));
+  std::printf("scenario               %s\n", sc.path.c_str());
+  const std::string newton(to_string(s.newton)), jacobian(to_string(s.jacobian));
+  if (s.method == Method::ImplicitMidpoint)
+    std::printf("method                 %s (dt %g s, %s Newton, %s Jacobian)\n", method.c_str(), s.dt, newton.c_str(),
+                jacobian.c_str());
+  else if (is_fixed_step(s.method))
+    std::printf("method                 %s (dt %g s)\n", method.c_str(), s.dt);
+  else if (s.method == Method::CvodeBdf)
+    std::printf("method                 %s (rtol %g, atol %g, %s Jacobian)\n", method.c_str(), s.rtol, s.atol,
+                jacobian.c_str());
+  else
+    std::printf("method                 %s (rtol %g, atol %g)\n", method.c_str(), s.rtol, s.atol);
+  std::printf("quaternion             %s\n", r.quaternion_handling.c_str());
+  std::printf("status                 %s\n", r.status.c_str());
+  std::printf("t reached              %.9g s\n", r.t_reached);
+  std::printf("steps                  %ld\n", r.stats.steps);
+  std::printf("RHS evaluations        %ld\n", r.stats.rhs_evals);
+  std::printf("Jacobian evaluations   %ld\n", r.stats.jac_evals);
+  std::printf("error-test failures    %ld\n", r.stats.error_test_failures);
+  std::printf("nonlinear iterations   %ld\n", r.stats.nonlinear_iterations);
+  std::printf("CPU time               %.4g s\n", r.cpu_seconds);
+  std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t)| / max(|E0|, peak T),\n"
+              "                       W the work of torques and dampers\n",
+              r.final_energy_balance_error, r.max_energy_balance_error);
+  if (!r.events.empty()) {
+    // the limits' events (in the run file's /events): how many, the energy the impacts took, the first
+    double lost = 0;
+    for (const LimitEvent& e : r.events) lost += e.energy_lost;
+    const LimitEvent& first = r.events.front();
+    std::printf("limit events           %zu (impacts took %.3g J, in the balance; the first at t = %.9g s, %s at its %s limit)\n",
+                r.events.size(), lost, first.t, first.joint.c_str(), first.side < 0 ? "lower" : "upper");
+  }
+  if (log.published())
+    std::printf("output                 %s (%ld flushes, %.3g ms each)\n", out.c_str(), log.flushes(),
+                1e3 * log.flush_seconds() / double(std::max(1L, log.flushes())));
+  else
+    std::printf("output                 none (nothing written; an existing %s is unchanged)\n", out.c_str());
+  std::fflush(stdout);
+}
+
+}  // namespace
+
+int run_simulation(const RunOptions& o) {
+  // everything is checked before any file is touched
+  const LogGroups groups = LogGroups::parse(o.log);
+  Scenario sc = load_with_options(o.scenario, o.state);
+  state_from_options(sc.model, o.state, sc.q0, sc.v0);
+  const SimulationSettings s = settings_from_options(sc, o);
+  const auto given = [&](const char* name) {
+    const auto it = o.settings.find(name);
+    return it != o.settings.end() && !it->second.empty();
+  };
+  const std::string out = o.output.empty() ? "out/" + sc.name + ".h5" : o.output;
+
+  // controller ticks, named by the option that set them (the scenario's own are checked as it is read)
+  if (given("control_dt") || given("t_end"))
+    if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty())
+      throw Error(std::string(given("control_dt") ? "--control-dt" : "--t-end") + ": " + p);
+  for (const auto& w : check_run(sc, s)) warn(w);
+  const std::string method(to_string(s.method));
+  if (is_fixed_step(s.method) && (given("rtol") || given("atol")))
+    warn(std::string(given("rtol") ? "--rtol" : "--atol") + " has no effect with " + method + " (a fixed-step method; see --dt)");
+  if (!is_fixed_step(s.method) && given("dt")) warn("--dt has no effect with " + method + " (it chooses its own steps; see --rtol)");
+  check_output_size(sc, s, groups, o, out);
   // never onto a file the run reads (the scenario, its robot and includes, its tables), forced or not
   std::vector<std::string> inputs = sc.files;
   inputs.push_back(o.scenario);
@@ -252,44 +312,7 @@ int run_simulation(const RunOptions& o) {
   }
 
   if (!o.quiet) {
-    std::printf("scenario               %s\n", sc.path.c_str());
-    const std::string newton(to_string(s.newton)), jacobian(to_string(s.jacobian));
-    if (s.method == Method::ImplicitMidpoint)
-      std::printf("method                 %s (dt %g s, %s Newton, %s Jacobian)\n", method.c_str(), s.dt, newton.c_str(),
-                  jacobian.c_str());
-    else if (is_fixed_step(s.method))
-      std::printf("method                 %s (dt %g s)\n", method.c_str(), s.dt);
-    else if (s.method == Method::CvodeBdf)
-      std::printf("method                 %s (rtol %g, atol %g, %s Jacobian)\n", method.c_str(), s.rtol, s.atol,
-                  jacobian.c_str());
-    else
-      std::printf("method                 %s (rtol %g, atol %g)\n", method.c_str(), s.rtol, s.atol);
-    std::printf("quaternion             %s\n", r.quaternion_handling.c_str());
-    std::printf("status                 %s\n", r.status.c_str());
-    std::printf("t reached              %.9g s\n", r.t_reached);
-    std::printf("steps                  %ld\n", r.stats.steps);
-    std::printf("RHS evaluations        %ld\n", r.stats.rhs_evals);
-    std::printf("Jacobian evaluations   %ld\n", r.stats.jac_evals);
-    std::printf("error-test failures    %ld\n", r.stats.error_test_failures);
-    std::printf("nonlinear iterations   %ld\n", r.stats.nonlinear_iterations);
-    std::printf("CPU time               %.4g s\n", r.cpu_seconds);
-    std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t)| / max(|E0|, peak T),\n"
-                "                       W the work of torques and dampers\n",
-                r.final_energy_balance_error, r.max_energy_balance_error);
-    if (!r.events.empty()) {
-      // the limits' events (in the run file's /events): how many, the energy the impacts took, the first
-      double lost = 0;
-      for (const LimitEvent& e : r.events) lost += e.energy_lost;
-      const LimitEvent& first = r.events.front();
-      std::printf("limit events           %zu (impacts took %.3g J, in the balance; the first at t = %.9g s, %s at its %s limit)\n",
-                  r.events.size(), lost, first.t, first.joint.c_str(), first.side < 0 ? "lower" : "upper");
-    }
-    if (log->published())
-      std::printf("output                 %s (%ld flushes, %.3g ms each)\n", out.c_str(), log->flushes(),
-                  1e3 * log->flush_seconds() / double(std::max(1L, log->flushes())));
-    else
-      std::printf("output                 none (nothing written; an existing %s is unchanged)\n", out.c_str());
-    std::fflush(stdout);
+    print_summary(sc, s, r, *log, out);
   }
   const std::string kept = log->published() ? "logged up to there in " + out
                                              : "nothing written; an existing " + out + " is unchanged";

@@ -80,7 +80,10 @@ py::array rows(const Vec6& x, const std::string& part, const char* where) {
 
 }  // namespace
 
-void bind_frames(py::module_& m) {
+namespace {
+
+// the Model's named frames: frame_names, frame_bodies, frame_index, add_frame
+void bind_model_frames(py::module_& m) {
   auto model = py::reinterpret_borrow<py::class_<Model>>(m.attr("Model"));
   model
       .def_readonly("frame_names", &Model::frame_names,
@@ -111,7 +114,10 @@ void bind_frames(py::module_& m) {
           }, "name"_a, "body"_a, "position"_a = std::vector<double>{0, 0, 0}, "rpy"_a = std::vector<double>{0, 0, 0},
           "Add a frame on `body` (a body's or any frame's name, or 'world'), at position and rpy (R = Rz Ry Rx)\n"
           "in that frame, as a scenario's frames: {name: {body, position, rpy}}; returns its index.");
+}
 
+// a frame's placement, velocity, acceleration, Jacobian and J̇v; a point's Jacobian
+void bind_frame_functions(py::module_& m) {
   m.def("frame_placement", [](const Model& mo, PyData& d, const py::object& q, const py::object& frame) {
         const int f = frame_arg(mo, frame, "frame_placement");
         kin(mo, d, "frame_placement", q);
@@ -181,6 +187,10 @@ void bind_frames(py::module_& m) {
         return owned(std::move(J));
       }, "model"_a, "data"_a, "q"_a, "body"_a, "point"_a,
       "J (3, nv) with ṗ = J @ v for the point at `point` (3,) of `body` (name or index), body frame coordinates.");
+}
+
+// the centre of mass and the centroidal momentum
+void bind_centroidal(py::module_& m) {
   m.def("com", [](const Model& mo, PyData& d, const py::object& q) {
         kin(mo, d, "com", q);
         return vec(com(mo, *d.data));
@@ -216,6 +226,10 @@ void bind_frames(py::module_& m) {
         return py::make_tuple(K.m, mat3(K.I));
       }, "model"_a, "data"_a, "q"_a,
       "(m, I_G): the moving bodies' total mass and composite inertia (3, 3) about the centre of mass, inertial axes.");
+}
+
+// the operational-space inertia and the Coriolis matrix
+void bind_task_space(py::module_& m) {
   m.def("operational_space_inertia", [](const Model& mo, PyData& d, const py::object& q, const ArrayIn& J) {
         if (J.ndim() != 2) throw Error("operational_space_inertia: J: expected a 2-D array (k, nv)");
         MatX Jm(J.shape(0), J.shape(1));
@@ -237,6 +251,15 @@ void bind_frames(py::module_& m) {
         return owned(std::move(C));
       }, "model"_a, "data"_a, "q"_a, "v"_a,
       "C(q, v) (nv, nv): C @ v = bias − gravity's part, 𝓜̇ − 2C skew-symmetric.");
+}
+
+}  // namespace
+
+void bind_frames(py::module_& m) {
+  bind_model_frames(m);
+  bind_frame_functions(m);
+  bind_centroidal(m);
+  bind_task_space(m);
 }
 
 }  // namespace soadyn::python

@@ -80,8 +80,10 @@ py::array derivative_view(PyData& self, py::array PyData::*view) {
 
 }  // namespace
 
-void bind_model(py::module_& m) {
-  // the library's registries, as tuples of the names users write
+namespace {
+
+// the library's registries, as tuples of the names users write
+void bind_registries(py::module_& m) {
   py::list joints, methods, routes;
   for (const auto& t : joint_traits_table()) joints.append(std::string(t.name));
   for (const auto& n : integrator_names()) methods.append(n);
@@ -89,6 +91,10 @@ void bind_model(py::module_& m) {
   m.attr("JOINT_TYPES") = py::tuple(joints);
   m.attr("METHODS") = py::tuple(methods);
   m.attr("DYNAMICS") = py::tuple(routes);
+}
+
+// Model: its sizes, names and mass properties
+void bind_model_class(py::module_& m) {
   py::class_<Model> model(m, "Model", R"(The constant tree: parents in parent-first order, joints, placements and mass properties.
 
 Built once (soadyn.load, soadyn.load_scenario, Model.build) and never changed by an algorithm;
@@ -131,7 +137,13 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
       .def_property_readonly("axes", [](const Model& self) { return rows3(self.axis); },
                              "unit joint axis of each body in its joint frame, shape (N, 3)")
       .def_property_readonly("pitches", [](const Model& self) { return owned(VecX(Eigen::Map<const VecX>(self.pitch.data(), self.nbodies))); },
-                             "each body's helical-joint pitch, m/rad (0 for the other joint types), shape (N,)")
+                             "each body's helical-joint pitch, m/rad (0 for the other joint types), shape (N,)");
+}
+
+// Model: Data, configurations and names to indices
+void bind_model_methods(py::module_& m) {
+  auto model = py::reinterpret_borrow<py::class_<Model>>(m.attr("Model"));
+  model
       .def("create_data", [](const py::object& self) {
             PyData d(self.cast<const Model&>());
             d.model = self;
@@ -174,7 +186,10 @@ quaternion body → inertial), v = [ωx, ωy, ωz, vx, vy, vz] in inertial coord
         return "<soadyn.Model: " + std::to_string(self.nbodies) + " bodies, nq = " + std::to_string(self.nq) +
                ", nv = " + std::to_string(self.nv) + ">";
       });
+}
 
+// Data, with its results as NumPy views
+void bind_data(py::module_& m) {
   py::class_<PyData>(m, "Data", R"(The per-state arrays of one Model, allocated once (model.create_data()).
 
 The algorithms fill it and return read-only views of it (no copy), each array one function's
@@ -221,7 +236,10 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
         return "<soadyn.Data: " + std::to_string(self.nbodies) + " bodies, nq = " + std::to_string(self.nq) +
                ", nv = " + std::to_string(self.nv) + ">";
       });
+}
 
+// SimulationSettings: one attribute per setting of the table
+void bind_settings(py::module_& m) {
   py::class_<SimulationSettings> settings(m, "SimulationSettings", "A scenario's 'simulation' section (scenarios/README.md).");
   settings.def(py::init<>());
   // one attribute per setting of the table (settings.hpp): its name, its help and unit
@@ -298,7 +316,10 @@ v̄_i = [ω_i; ṙ_i] (filled by the algorithms that take v).  Not shared betwee
                py::repr(py::float_(s.atol)).cast<std::string>() + ", dt=" + py::repr(py::float_(s.dt)).cast<std::string>() +
                ", dynamics='" + std::string(to_string(s.dynamics)) + "')";
       });
+}
 
+// Inputs and Scenario
+void bind_scenario(py::module_& m) {
   py::class_<Inputs>(m, "Inputs", "A scenario's joint inputs: torques, springs and dampers.")
       .def_property_readonly("torques", [](const Inputs& in) {
             py::list out;
@@ -369,7 +390,10 @@ full text).  q0 and v0 may be assigned (size-checked); settings is changed in pl
         return "<soadyn.Scenario '" + s.name + "' from " + s.path + ": " + std::to_string(s.model.nbodies) +
                " bodies, nq = " + std::to_string(s.model.nq) + ", nv = " + std::to_string(s.model.nv) + ">";
       });
+}
 
+// load, load_scenario, parse_scenario
+void bind_loaders(py::module_& m) {
   m.def("load", [](const std::string& path, bool free_root, const std::optional<ArrayIn>& gravity,
                    const std::optional<std::string>& inertia_check) {
         return warned(load_scenario(path, free_root, gravity_arg(gravity), inertia_check_arg(inertia_check)).model);
@@ -397,6 +421,18 @@ Raises soadyn.Error naming the file, line and field of any mistake.)");
       },
         "text"_a, "path"_a = "<string>", "inertia_check"_a = py::none(),
         "A Scenario from YAML text; path names it in messages and anchors a relative 'urdf:'.");
+}
+
+}  // namespace
+
+void bind_model(py::module_& m) {
+  bind_registries(m);
+  bind_model_class(m);
+  bind_model_methods(m);
+  bind_data(m);
+  bind_settings(m);
+  bind_scenario(m);
+  bind_loaders(m);
 }
 
 }  // namespace soadyn::python

@@ -51,11 +51,28 @@ class CvodeAdjoint : public cvode_impl::Cvode {
   CvodeAdjoint& operator=(const CvodeAdjoint&) = delete;
 
   CostGradient run(long steps_per_checkpoint) {
-    const Model& m = sys_.model;
+    CostGradient out;
+    forward(steps_per_checkpoint, out);
+    cvode_impl::VectorPtr yb = terminal_adjoint(out);
+    create_backward(yb.get());
+    backward(yb.get(), out);
+    // ∂G/∂x₀ = [Pᵀ λ_q(0); λ_v(0)]
+    if (plan_.initial_state) {
+      const Model& m = sys_.model;
+      const VecX lam = map(yb.get());
+      out.d_initial_state.resize(2 * m.nv);
+      out.d_initial_state.head(m.nv) = tangent_to_coordinates(m, y0q_).transpose() * lam.head(m.nq);
+      out.d_initial_state.tail(m.nv) = lam.tail(m.nv);
+    }
+    return out;
+  }
+
+ private:
+  // forward: y and, when there is a running cost, the quadrature ∫ ℓ dt with error control, with
+  // CVODES' checkpoints for the backward run
+  void forward(long steps_per_checkpoint, CostGradient& out) {
     void* mem = mem_.get();
     const double T = settings_.t_end;
-    CostGradient out;
-    // forward: y and, when there is a running cost, the quadrature ∫ ℓ dt with error control
     cvode_impl::VectorPtr yq;
     if (cost_.running) {
       yq.reset(pool_.make(1, ctx_.get()));
@@ -82,7 +99,11 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       check(CVodeGetQuad(mem, &t, yq.get()), "CVodeGetQuad");
       out.cost = N_VGetArrayPointer(yq.get())[0];
     }
-    // λ(T) = (∂Φ/∂y)ᵀ at y(T)
+  }
+
+  // λ(T) = (∂Φ/∂y)ᵀ at y(T), the terminal cost added to out.cost
+  cvode_impl::VectorPtr terminal_adjoint(CostGradient& out) {
+    const Model& m = sys_.model;
     const VecX yT = map(y_.get());
     cvode_impl::VectorPtr yb(pool_.make(nb_, ctx_.get()));
     if (!yb) throw Error("CVODES: could not allocate the adjoint");
@@ -93,9 +114,16 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       out.cost += cost_.terminal(yT.head(m.nq), yT.segment(m.nq, m.nv), dq_, dv_);
       map(yb.get()) << dq_, dv_;
     }
-    // backward: λ̇ = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ from T to 0, and q_B = ∫ Yᵀ μ dt so that q_B(0) = ∂G/∂π
+    return yb;
+  }
+
+  // the backward problem: λ̇ = −(∂f/∂y)ᵀ λ − (∂ℓ/∂y)ᵀ from T to 0, and q_B = ∫ Yᵀ μ dt so that
+  // q_B(0) = ∂G/∂π; Newton with the analytic ∂f/∂y under BDF, fixed point under Adams
+  void create_backward(N_Vector yb) {
+    void* mem = mem_.get();
+    const double T = settings_.t_end;
     check(CVodeCreateB(mem, bdf_ ? CV_BDF : CV_ADAMS, &which_), "CVodeCreateB");
-    check(CVodeInitB(mem, which_, &CvodeAdjoint::adjoint_rhs, T, yb.get()), "CVodeInitB");
+    check(CVodeInitB(mem, which_, &CvodeAdjoint::adjoint_rhs, T, yb), "CVodeInitB");
     check(CVodeSStolerancesB(mem, which_, settings_.rtol, settings_.atol), "CVodeSStolerancesB");
     check(CVodeSetUserDataB(mem, which_, static_cast<Cvode*>(this)), "CVodeSetUserDataB");
     check(CVodeSetMaxNumStepsB(mem, which_, settings_.max_steps), "CVodeSetMaxNumStepsB");
@@ -103,7 +131,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     if (bdf_) {
       // Newton on I − γ ∂f_B/∂λ with ∂f_B/∂λ = −(∂f/∂y)ᵀ (System::jacobian), CVODE's dense LU
       AB_.reset(SUNDenseMatrix(nb_, nb_, ctx_.get()));
-      if (AB_) lsB_.reset(SUNLinSol_Dense(yb.get(), AB_.get(), ctx_.get()));
+      if (AB_) lsB_.reset(SUNLinSol_Dense(yb, AB_.get(), ctx_.get()));
       if (!AB_ || !lsB_) throw Error("CVODES: could not allocate the adjoint's linear solver");
       check(CVodeSetLinearSolverB(mem, which_, lsB_.get(), AB_.get()), "CVodeSetLinearSolverB");
       check(CVodeSetJacFnB(mem, which_, &CvodeAdjoint::adjoint_jacobian), "CVodeSetJacFnB");
@@ -113,6 +141,13 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       if (!nlsB_) throw Error("CVODES: could not allocate the adjoint's fixed-point solver");
       check(CVodeSetNonlinearSolverB(mem, which_, nlsB_.get()), "CVodeSetNonlinearSolverB");
     }
+  }
+
+  void backward(N_Vector yb, CostGradient& out) {
+    void* mem = mem_.get();
+    const double T = settings_.t_end;
+    double t = T;
+    int flag = 0;
     // backward one step at a time, each accepted step's Yᵀμ into ∂G/∂π = ∫_T^0 Yᵀμ dt (q̇_B = Yᵀμ from
     // q_B(T) = 0): by StepQuadrature, not as a CVODES quadrature, whose 10·N numbers would ride through
     // every step's Nordsieck history.  Its rule (degree 5 through the last samples) is below the local
@@ -126,11 +161,11 @@ class CvodeAdjoint : public cvode_impl::Cvode {
     // interpolation, the same the backward right-hand side was given (its derivative sweeps are reused)
     const auto sample = [&](double ts, bool at_end) {
       if (!at_end) check(CVodeGetAdjY(mem, ts, yf.get()), "CVodeGetAdjY");
-      parameter_integrand(ts, N_VGetArrayPointer(at_end ? y_.get() : yf.get()), N_VGetArrayPointer(yb.get()), integrand);
+      parameter_integrand(ts, N_VGetArrayPointer(at_end ? y_.get() : yf.get()), N_VGetArrayPointer(yb), integrand);
       quadrature.add(ts, integrand);
     };
     if (parameters) sample(T, true);  // y(T): CVodeF's last state (no interpolation set up before CVodeB)
-    for (t = T; t > 0.0;) {
+    while (t > 0.0) {
       const double before = t;
       flag = CVodeB(mem, 0.0, CV_ONE_STEP);
       rethrow_pending();
@@ -138,7 +173,7 @@ class CvodeAdjoint : public cvode_impl::Cvode {
         throw SimulationError("CVODES adjoint failed: " + cvode_impl::flag_name(flag) +
                                   (error_message_.empty() ? "" : ": " + error_message_),
                               t);
-      check(CVodeGetB(mem, which_, &t, yb.get()), "CVodeGetB");
+      check(CVodeGetB(mem, which_, &t, yb), "CVodeGetB");
       if (!(t < before)) throw SimulationError("CVODES adjoint: the backward run did not advance", t);
       if (parameters) sample(t, false);
     }
@@ -150,17 +185,8 @@ class CvodeAdjoint : public cvode_impl::Cvode {
       out.backward_steps = steps;
       out.backward_rhs_evals = evals;
     }
-    // ∂G/∂x₀ = [Pᵀ λ_q(0); λ_v(0)]
-    if (plan_.initial_state) {
-      const VecX lam = map(yb.get());
-      out.d_initial_state.resize(2 * m.nv);
-      out.d_initial_state.head(m.nv) = tangent_to_coordinates(m, y0q_).transpose() * lam.head(m.nq);
-      out.d_initial_state.tail(m.nv) = lam.tail(m.nv);
-    }
-    return out;
   }
 
- private:
   static CvodeAdjoint& self(void* user) { return *static_cast<CvodeAdjoint*>(static_cast<Cvode*>(user)); }
 
   // q_Q̇ = ℓ(t, q, v)

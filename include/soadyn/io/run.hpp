@@ -13,7 +13,7 @@
 #pragma once
 
 #include "soadyn/sim/controller.hpp"
-#include "soadyn/sim/scenario.hpp"
+#include "soadyn/io/scenario_file.hpp"
 #include "soadyn/sim/simulate.hpp"
 #include "soadyn/sim/trajectory.hpp"
 
