@@ -3,7 +3,6 @@
 
 #include <Eigen/Eigenvalues>
 
-#include <cmath>
 #include <limits>
 
 namespace soadyn::detail {
@@ -13,17 +12,10 @@ double spectral_radius(System& sys, double t, const VecX& y) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (n > kMaxStiffnessStates || y.size() != n) return nan;
   try {
-    // J(:, j) ≈ (f(y + δ_j e_j) − f(y)) / δ_j,  δ_j = √ε · max(1, |y_j|)
-    VecX f0(n), f1(n), yj = y;
+    // J = ∂f/∂y by forward differences of the right-hand side (System::jacobian_dq: controllers and
+    // springs included, which the analytic ∂f/∂y leaves out of a feedback controller)
     MatX J(n, n);
-    sys.rhs(t, y.data(), f0.data());
-    for (int j = 0; j < n; ++j) {
-      const double d = std::sqrt(std::numeric_limits<double>::epsilon()) * std::max(1.0, std::abs(y(j)));
-      yj(j) = y(j) + d;
-      sys.rhs(t, yj.data(), f1.data());
-      yj(j) = y(j);
-      J.col(j) = (f1 - f0) / d;
-    }
+    sys.jacobian_dq(t, y.data(), J);
     if (!J.allFinite()) return nan;
     // max |λ| over J's eigenvalues (complex pairs for oscillating modes)
     const Eigen::EigenSolver<MatX> es(J, false);
