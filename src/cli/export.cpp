@@ -159,6 +159,66 @@ void add_export(CLI::App& app, ExportOptions& o) {
   c->add_flag("-q,--quiet", o.quiet, "no summary on stderr");
 }
 
+namespace {
+
+// the header of a CSV ("name [unit]" per column) or a JSON output (file, columns, units, the rows' opening)
+std::string header(bool json, const Samples& s, const std::vector<size_t>& cols, const std::string& run) {
+  std::string h;
+  if (!json) {
+    for (size_t k = 0; k < cols.size(); ++k)
+      h += (k ? "," : "") + csv_field(s.names[cols[k]] + " [" + s.units[cols[k]] + "]");
+    h += "\n";
+  } else {
+    h = "{\"file\": " + json_string(run) + ",\n \"columns\": [";
+    for (size_t k = 0; k < cols.size(); ++k) h += (k ? ", " : "") + json_string(s.names[cols[k]]);
+    h += "],\n \"units\": [";
+    for (size_t k = 0; k < cols.size(); ++k) h += (k ? ", " : "") + json_string(s.units[cols[k]]);
+    h += "],\n \"rows\": [";
+  }
+  return h;
+}
+
+// the rows written and the first and last of their first column
+struct Written {
+  std::uint64_t rows = 0;
+  double t_first = 0, t_last = 0;
+};
+
+// rows, read in blocks of about 4 MB: rows 0, K, 2K, … (K = every) of the extent seen at opening
+Written write_rows(Samples& s, const std::vector<size_t>& cols, long every,
+                   const std::vector<std::unique_ptr<TextWriter>>& writers, const std::vector<bool>& is_json) {
+  const std::uint64_t K = std::uint64_t(every), block = std::max<std::uint64_t>(1, (std::uint64_t(1) << 19) / std::max<std::uint64_t>(1, s.width));
+  std::vector<double> buf;
+  std::string csv_text, json_text;
+  std::uint64_t written = 0;
+  double t_first = 0, t_last = 0;
+  for (std::uint64_t r0 = 0; r0 < s.rows; r0 += block) {
+    const std::uint64_t n = std::min(block, s.rows - r0);
+    buf.resize(size_t(n * s.width));
+    s.run.read_rows(r0, n, buf.data());
+    csv_text.clear(), json_text.clear();
+    for (std::uint64_t r = (K - r0 % K) % K; r < n; r += K) {
+      const double* row = buf.data() + r * s.width;
+      for (size_t k = 0; k < cols.size(); ++k) {
+        const double x = row[cols[k]];
+        if (k) csv_text += ',';
+        number(csv_text, x);
+        json_text += k ? ", " : (written ? ",\n  [" : "\n  [");
+        if (std::isfinite(x)) number(json_text, x);
+        else json_text += "null";
+      }
+      csv_text += '\n', json_text += ']';
+      if (written == 0) t_first = row[cols[0]];
+      t_last = row[cols[0]];
+      ++written;
+    }
+    for (size_t i = 0; i < writers.size(); ++i) writers[i]->write(is_json[i] ? json_text : csv_text);
+  }
+  return {written, t_first, t_last};
+}
+
+}  // namespace
+
 int run_export(const ExportOptions& o) {
   if (!o.list && o.csv.empty() && o.json.empty()) throw Error("export: give --csv FILE or --json FILE (or --list)");
   if (o.csv == "-" && o.json == "-") throw Error("export: only one of --csv and --json can be stdout");
@@ -180,61 +240,20 @@ int run_export(const ExportOptions& o) {
   try {
     if (!o.csv.empty()) writers.push_back(std::make_unique<TextWriter>(o.csv, targets[0])), is_json.push_back(false);
     if (!o.json.empty()) writers.push_back(std::make_unique<TextWriter>(o.json, targets[1])), is_json.push_back(true);
-    // headers
-    for (size_t i = 0; i < writers.size(); ++i) {
-      std::string h;
-      if (!is_json[i]) {
-        for (size_t k = 0; k < cols.size(); ++k)
-          h += (k ? "," : "") + csv_field(s.names[cols[k]] + " [" + s.units[cols[k]] + "]");
-        h += "\n";
-      } else {
-        h = "{\"file\": " + json_string(o.run) + ",\n \"columns\": [";
-        for (size_t k = 0; k < cols.size(); ++k) h += (k ? ", " : "") + json_string(s.names[cols[k]]);
-        h += "],\n \"units\": [";
-        for (size_t k = 0; k < cols.size(); ++k) h += (k ? ", " : "") + json_string(s.units[cols[k]]);
-        h += "],\n \"rows\": [";
-      }
-      writers[i]->write(h);
-    }
-    // rows, read in blocks of about 4 MB: rows 0, K, 2K, … of the extent seen at opening
-    const std::uint64_t K = std::uint64_t(o.every), block = std::max<std::uint64_t>(1, (std::uint64_t(1) << 19) / std::max<std::uint64_t>(1, s.width));
-    std::vector<double> buf;
-    std::string csv_text, json_text;
-    std::uint64_t written = 0;
-    double t_first = 0, t_last = 0;
-    for (std::uint64_t r0 = 0; r0 < s.rows; r0 += block) {
-      const std::uint64_t n = std::min(block, s.rows - r0);
-      buf.resize(size_t(n * s.width));
-      s.run.read_rows(r0, n, buf.data());
-      csv_text.clear(), json_text.clear();
-      for (std::uint64_t r = (K - r0 % K) % K; r < n; r += K) {
-        const double* row = buf.data() + r * s.width;
-        for (size_t k = 0; k < cols.size(); ++k) {
-          const double x = row[cols[k]];
-          if (k) csv_text += ',';
-          number(csv_text, x);
-          json_text += k ? ", " : (written ? ",\n  [" : "\n  [");
-          if (std::isfinite(x)) number(json_text, x);
-          else json_text += "null";
-        }
-        csv_text += '\n', json_text += ']';
-        if (written == 0) t_first = row[cols[0]];
-        t_last = row[cols[0]];
-        ++written;
-      }
-      for (size_t i = 0; i < writers.size(); ++i) writers[i]->write(is_json[i] ? json_text : csv_text);
-    }
+    for (size_t i = 0; i < writers.size(); ++i) writers[i]->write(header(is_json[i], s, cols, o.run));
+    const Written w = write_rows(s, cols, o.every, writers, is_json);
     for (size_t i = 0; i < writers.size(); ++i) {
       if (is_json[i]) writers[i]->write("]}\n");
       writers[i]->commit();
     }
     char time_range[80] = "";
-    if (written && s.names[cols[0]] == "time") std::snprintf(time_range, sizeof time_range, " (t = %g to %g s)", t_first, t_last);
+    if (w.rows && s.names[cols[0]] == "time")
+      std::snprintf(time_range, sizeof time_range, " (t = %g to %g s)", w.t_first, w.t_last);
     if (!o.quiet)
-      for (auto& w : writers)
-        if (w->path() != "-")
-          std::fprintf(stderr, "wrote %s: %llu rows x %zu columns%s\n", w->path().c_str(),
-                       static_cast<unsigned long long>(written), cols.size(), time_range);
+      for (auto& out : writers)
+        if (out->path() != "-")
+          std::fprintf(stderr, "wrote %s: %llu rows x %zu columns%s\n", out->path().c_str(),
+                       static_cast<unsigned long long>(w.rows), cols.size(), time_range);
   } catch (const IoError& e) {
     std::fprintf(stderr, "soadyn: error: %s\n", e.what());
     return 4;

@@ -5,6 +5,7 @@
 #include "soadyn/multibody/text.hpp"
 
 #include "h5_util.hpp"
+#include "h5log_header.hpp"
 #include "log_layout.hpp"
 
 #include <hdf5.h>
@@ -30,52 +31,6 @@ std::string number(double x) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.9g", x);
   return buf;
-}
-
-// the conventions a reader needs to make sense of q and v
-const char* kFreeJoint =
-    "q = [x y z qw qx qy qz]: the body frame's origin in inertial coordinates (m) and the unit quaternion of its "
-    "attitude, body to inertial, w first; v = qd = [wx wy wz vx vy vz] = [omega; eta_dot]: the body's angular "
-    "velocity and the velocity of its frame's origin, both in inertial coordinates (qd is v, not the derivative of q)";
-const char* kBallJoint =
-    "q = [qw qx qy qz]: the unit quaternion of the child's frame relative to the joint frame (child to joint "
-    "frame), w first; v = qd = [wx wy wz]: the child's angular velocity relative to the parent, in the child's frame";
-const char* kHelicalJoint =
-    "q = [theta]: a screw: the child turns by theta about the axis and slides pitch * theta along it "
-    "(joint_pitches, m/rad; 0 for the other joint types); v = its rate";
-const char* kPlanarJoint =
-    "q = [x y theta]: translation along e1 and e2 spanning the plane normal to the axis n, then rotation theta "
-    "about n (e1: the coordinate axis least aligned with n, made orthogonal to it; e2 = n x e1); v = their rates";
-const char* kUnits = "SI: s, m, kg, rad, J; quaternion components are dimensionless (1)";
-const char* kModelFiles =
-    "the MJCF model's files as MuJoCo's compiler was handed them at run time (the main text, its includes, "
-    "mesh, skin, height-field and texture files): dataset k (0 .. count-1) holds one file's bytes, its "
-    "attribute name the name given to MuJoCo's virtual file system; soadyn view compiles the model from these alone";
-const char* kBodies =
-    "N bodies, those of the model after fixed joints are merged (a body welded by a fixed joint moves with the one "
-    "it is welded to); position: each body frame's origin (its joint point), orientation: the unit quaternion "
-    "[w x y z] of its attitude, body to inertial, with w >= 0, com: its centre of mass (merged bodies included); "
-    "all in inertial coordinates";
-
-const char* kFrames =
-    "F named frames (a scenario's log: frames:), each fixed on a body: a body's own frame, a link merged by a fixed "
-    "joint or a scenario's frames: entry; position: the frame's origin, orientation: the unit quaternion [w x y z] "
-    "of its attitude, frame to inertial, with w >= 0; all in inertial coordinates";
-
-const char* kSensitivities =
-    "forward sensitivities by CVODES under its error control: initial_state[t, i, j] = dx_i(t)/dx0_j, "
-    "parameters[t, i, j] = dx_i(t)/dpi_j, with x = [q along the tangent; v] (2 nv numbers, state_names): the "
-    "tangent increment of q is the coordinate's own on revolute, prismatic and planar joints, [dtheta; dp] on a free "
-    "joint (attitude turned about inertial axes, exp(dtheta) * Q, origin moved by dp) and dtheta in the child's axes "
-    "on a ball joint (Q * exp(dtheta)); pi the 10 inertial parameters of each body named (parameter_names: m, m c, "
-    "and the inertia about the body frame's origin in the body's axes, ordered Ixx Ixy Iyy Ixz Iyz Izz)";
-
-// "rad", or one unit per column when they differ
-void units_attribute(hid_t obj, const std::vector<std::string>& units) {
-  if (std::all_of(units.begin(), units.end(), [&](const std::string& u) { return u == units.front(); }))
-    attribute(obj, "units", units.front());
-  else
-    attribute(obj, "units", units);
 }
 
 }  // namespace
@@ -145,6 +100,9 @@ struct H5Log::Impl {
   long flushes = 0;
   double flush_seconds = 0.0;
 
+  // /solver: the settings as attributes, the scalars flush() rewrites (running, zeros until then)
+  void create_solver(const SimulationSettings& settings);
+
   // after a failed write: give every id up unclosed, so nothing writes to the file again
   void abandon() {
     broken = true;
@@ -168,27 +126,64 @@ struct H5Log::Impl {
 
 namespace {
 
-// a view of /samples' columns (log_layout.hpp): rank 1, 2, or 3 (T × bodies × cols)
-void create_view(hid_t file, const log::View& v, int width) {
-  const hsize_t c = hsize_t(std::max(1, v.cols)), nb = hsize_t(v.bodies), n = v.bodies > 0 ? nb * c : c;
-  const int rank = v.bodies > 0 ? 3 : v.cols > 0 ? 2 : 1;
-  hsize_t dims[3] = {0, v.bodies > 0 ? nb : c, c}, maxdims[3] = {H5S_UNLIMITED, dims[1], c};
-  Id vspace(H5Screate_simple(rank, dims, maxdims), H5Sclose, "H5Screate_simple");
-  // one block per row: the row's n numbers, in row-major order
-  hsize_t start[3] = {0, 0, 0}, stride[3] = {1, 1, 1}, count[3] = {H5S_UNLIMITED, 1, 1}, block[3] = {1, dims[1], c};
-  check(H5Sselect_hyperslab(vspace, H5S_SELECT_SET, start, stride, count, block), "selecting a view");
-  hsize_t sdims[2] = {0, hsize_t(width)}, smax[2] = {H5S_UNLIMITED, hsize_t(width)};
-  Id sspace(H5Screate_simple(2, sdims, smax), H5Sclose, "H5Screate_simple");
-  hsize_t sstart[2] = {0, hsize_t(v.first)}, sblock[2] = {1, n};
-  check(H5Sselect_hyperslab(sspace, H5S_SELECT_SET, sstart, stride, count, sblock), "selecting a view's source");
-  Id props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "H5Pcreate");
-  check(H5Pset_virtual(props, vspace, ".", "/samples", sspace), "mapping view " + v.path);
-  Id d(H5Dcreate2(file, v.path.c_str(), H5T_NATIVE_DOUBLE, vspace, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose,
-       "creating view " + v.path);
-  units_attribute(d, v.units);
+// a new file at tmp_path, in HDF5's latest format (for SWMR), never an existing one's target
+Id create_file(const std::string& path, const std::string& tmp_path) {
+  Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "H5Pcreate");
+  check(H5Pset_libver_bounds(fapl, H5F_LIBVER_LATEST, H5F_LIBVER_LATEST), "H5Pset_libver_bounds");
+  // a new file, never an existing one's target: a name left there (a killed run's file, or a
+  // symlink) is removed, not followed, and H5F_ACC_EXCL (O_CREAT | O_EXCL) opens no symlink
+  ::unlink(tmp_path.c_str());
+  const hid_t f = H5Fcreate(tmp_path.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, fapl);
+  if (f < 0) {
+    h5::record_cause();
+    const std::string& cause = h5::last_cause;
+    if (h5::last_errno == ENOSPC || h5::last_errno == EDQUOT || h5::last_errno == EIO || h5::last_errno == EFBIG) {
+      std::remove(tmp_path.c_str());
+      throw IoError(cause + " while creating " + path + " (the output was not written; an existing file there is unchanged)");
+    }
+    throw Error(path + ": cannot create the output file " + tmp_path + (cause.empty() ? std::string() : " (" + cause + ")") +
+                "; is the directory writable?");
+  }
+  return Id(f, H5Fclose, "H5Fcreate");
 }
 
 }  // namespace
+
+void H5Log::Impl::create_solver(const SimulationSettings& settings) {
+  Id g_solver = h5::group(file, "solver");
+  // every setting of the table (settings.hpp) under its own name: numbers as doubles, words as
+  // strings, flags as "true"/"false"; output_dt as the interval the rows really have
+  for (const SettingInfo& info : setting_table()) {
+    const std::string name(info.name);
+    if (name == "output_dt") attribute(g_solver, "output_dt", output_interval(settings));
+    else if (info.kind == SettingKind::Real || info.kind == SettingKind::Count)
+      attribute(g_solver, name.c_str(), setting_number(settings, info));
+    else attribute(g_solver, name.c_str(), setting_text(settings, info));
+  }
+  status = h5::string_scalar(g_solver, "status", 1024);
+  quaternion = h5::string_scalar(g_solver, "quaternion_handling", 256);
+  t_reached = Scalar(g_solver, "t_reached", H5T_NATIVE_DOUBLE);
+  cpu = Scalar(g_solver, "cpu_seconds", H5T_NATIVE_DOUBLE);
+  steps = Scalar(g_solver, "steps", H5T_NATIVE_LONG);
+  rhs = Scalar(g_solver, "rhs_evals", H5T_NATIVE_LONG);
+  jac = Scalar(g_solver, "jac_evals", H5T_NATIVE_LONG);
+  etf = Scalar(g_solver, "error_test_failures", H5T_NATIVE_LONG);
+  nli = Scalar(g_solver, "nonlinear_iterations", H5T_NATIVE_LONG);
+  max_balance = Scalar(g_solver, "max_energy_balance_error", H5T_NATIVE_DOUBLE);
+  final_balance = Scalar(g_solver, "final_energy_balance_error", H5T_NATIVE_DOUBLE);
+  ticks = Scalar(g_solver, "control_ticks", H5T_NATIVE_LONG);
+  // RunSummary::stiffness_index and stiffness_hint (simulate.hpp)
+  stiffness = Scalar(g_solver, "stiffness_index", H5T_NATIVE_DOUBLE);
+  stiffness_hint = h5::string_scalar(g_solver, "stiffness_hint", 1024);
+  for (Scalar* s : {&t_reached, &cpu}) attribute(s->dset, "units", std::string("s"));
+  for (Scalar* s : {&steps, &rhs, &jac, &etf, &nli, &max_balance, &final_balance, &ticks, &stiffness})
+    attribute(s->dset, "units", std::string("1"));
+  status.write(std::string("running"));
+  quaternion.write(std::string());
+  stiffness_hint.write(std::string());
+  for (Scalar* s : {&t_reached, &cpu, &max_balance, &final_balance, &stiffness}) s->write(0.0);
+  for (Scalar* s : {&steps, &rhs, &jac, &etf, &nli, &ticks}) s->write(0L);
+}
 
 H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettings& settings, const std::string& version,
              const LogGroups& groups)
@@ -205,160 +200,14 @@ H5Log::H5Log(const std::string& path, const Scenario& sc, const SimulationSettin
   const log::Layout lay = log::layout(m, im.groups);
   im.width = int(lay.columns.size());
   try {
-    Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, "H5Pcreate");
-    check(H5Pset_libver_bounds(fapl, H5F_LIBVER_LATEST, H5F_LIBVER_LATEST), "H5Pset_libver_bounds");
-    // a new file, never an existing one's target: a name left there (a killed run's file, or a
-    // symlink) is removed, not followed, and H5F_ACC_EXCL (O_CREAT | O_EXCL) opens no symlink
-    ::unlink(im.tmp_path.c_str());
-    const hid_t f = H5Fcreate(im.tmp_path.c_str(), H5F_ACC_EXCL, H5P_DEFAULT, fapl);
-    if (f < 0) {
-      h5::record_cause();
-      const std::string& cause = h5::last_cause;
-      if (h5::last_errno == ENOSPC || h5::last_errno == EDQUOT || h5::last_errno == EIO || h5::last_errno == EFBIG) {
-        std::remove(im.tmp_path.c_str());
-        throw IoError(cause + " while creating " + path + " (the output was not written; an existing file there is unchanged)");
-      }
-      throw Error(path + ": cannot create the output file " + im.tmp_path + (cause.empty() ? std::string() : " (" + cause + ")") +
-                  "; is the directory writable?");
-    }
-    im.file = Id(f, H5Fclose, "H5Fcreate");
-    attribute(im.file, "soadyn_version", version);
-    attribute(im.file, "scenario_path", sc.path);
-    attribute(im.file, "layout_version", long(kLayoutVersion));
-    attribute(im.file, "log_groups", groups.str());
-    h5::text_dataset(im.file, "scenario", sc.text);
-    if (!sc.robot_text.empty()) {
-      // the robot file the scenario named, so the run can be shown without it (soadyn view)
-      Id d = h5::text_dataset(im.file, "robot", sc.robot_text);
-      attribute(d, "path", sc.robot_path);
-    }
-    if (!sc.model_files.empty()) {
-      // every file MuJoCo's compiler was handed for an MJCF model, as handed: soadyn view compiles
-      // the run's model from these alone, never from the files on disk (which may have changed)
-      Id g = h5::group(im.file, "model_files");
-      attribute(g, "count", long(sc.model_files.size()));
-      attribute(g, "description", std::string(kModelFiles));
-      for (size_t k = 0; k < sc.model_files.size(); ++k) {
-        Id d = h5::byte_dataset(g, std::to_string(k).c_str(), sc.model_files[k].data);
-        attribute(d, "name", sc.model_files[k].name);
-      }
-    }
-
-    {
-      // the model: names and units of every column of q and v, the joints, the tree, the conventions
-      Id g = h5::group(im.file, "model");
-      attribute(g, "nq", long(m.nq));
-      attribute(g, "nv", long(m.nv));
-      attribute(g, "q_names", m.q_names());
-      attribute(g, "v_names", m.v_names());
-      attribute(g, "q_units", log::q_units(m));
-      attribute(g, "v_units", log::v_units(m));
-      std::vector<std::string> types;
-      for (JointType t : m.joint_type) types.emplace_back(to_string(t));
-      attribute(g, "joint_names", m.joint_names);
-      attribute(g, "joint_types", types);
-      attribute(g, "body_names", m.body_names);
-      attribute(g, "gravity", std::vector<double>(m.gravity.data(), m.gravity.data() + 3));
-      attribute(g, "gravity_units", std::string("m/s^2"));
-      attribute(g, "units", std::string(kUnits));
-      attribute(g, "free_joint", std::string(kFreeJoint));
-      attribute(g, "ball_joint", std::string(kBallJoint));
-      attribute(g, "planar_joint", std::string(kPlanarJoint));
-      attribute(g, "helical_joint", std::string(kHelicalJoint));
-      attribute(g, "joint_pitches", m.pitch);
-      h5::int_dataset(g, "parents", std::vector<int>(m.parent.begin(), m.parent.end()), "1");
-      h5::int_dataset(g, "joint_q_index", std::vector<int>(m.idx_q.begin(), m.idx_q.end()), "1");
-      h5::int_dataset(g, "joint_v_index", std::vector<int>(m.idx_v.begin(), m.idx_v.end()), "1");
-    }
-
-    Id g_solver = h5::group(im.file, "solver");
-    // every setting of the table (settings.hpp) under its own name: numbers as doubles, words as
-    // strings, flags as "true"/"false"; output_dt as the interval the rows really have
-    for (const SettingInfo& info : setting_table()) {
-      const std::string name(info.name);
-      if (name == "output_dt") attribute(g_solver, "output_dt", output_interval(settings));
-      else if (info.kind == SettingKind::Real || info.kind == SettingKind::Count)
-        attribute(g_solver, name.c_str(), setting_number(settings, info));
-      else attribute(g_solver, name.c_str(), setting_text(settings, info));
-    }
-    im.status = h5::string_scalar(g_solver, "status", 1024);
-    im.quaternion = h5::string_scalar(g_solver, "quaternion_handling", 256);
-    im.t_reached = Scalar(g_solver, "t_reached", H5T_NATIVE_DOUBLE);
-    im.cpu = Scalar(g_solver, "cpu_seconds", H5T_NATIVE_DOUBLE);
-    im.steps = Scalar(g_solver, "steps", H5T_NATIVE_LONG);
-    im.rhs = Scalar(g_solver, "rhs_evals", H5T_NATIVE_LONG);
-    im.jac = Scalar(g_solver, "jac_evals", H5T_NATIVE_LONG);
-    im.etf = Scalar(g_solver, "error_test_failures", H5T_NATIVE_LONG);
-    im.nli = Scalar(g_solver, "nonlinear_iterations", H5T_NATIVE_LONG);
-    im.max_balance = Scalar(g_solver, "max_energy_balance_error", H5T_NATIVE_DOUBLE);
-    im.final_balance = Scalar(g_solver, "final_energy_balance_error", H5T_NATIVE_DOUBLE);
-    im.ticks = Scalar(g_solver, "control_ticks", H5T_NATIVE_LONG);
-    // RunSummary::stiffness_index and stiffness_hint (simulate.hpp)
-    im.stiffness = Scalar(g_solver, "stiffness_index", H5T_NATIVE_DOUBLE);
-    im.stiffness_hint = h5::string_scalar(g_solver, "stiffness_hint", 1024);
-    for (Scalar* s : {&im.t_reached, &im.cpu}) attribute(s->dset, "units", std::string("s"));
-    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.max_balance, &im.final_balance, &im.ticks,
-                      &im.stiffness})
-      attribute(s->dset, "units", std::string("1"));
-    im.status.write(std::string("running"));
-    im.quaternion.write(std::string());
-    im.stiffness_hint.write(std::string());
-    for (Scalar* s : {&im.t_reached, &im.cpu, &im.max_balance, &im.final_balance, &im.stiffness}) s->write(0.0);
-    for (Scalar* s : {&im.steps, &im.rhs, &im.jac, &im.etf, &im.nli, &im.ticks}) s->write(0L);
-
-    {
-      // the table every series is a view of: chunks of about 64 KiB
-      const hsize_t w = hsize_t(im.width);
-      hsize_t dims[2] = {0, w}, maxdims[2] = {H5S_UNLIMITED, w}, chunk[2] = {std::max<hsize_t>(1, 8192 / w), w};
-      Id space(H5Screate_simple(2, dims, maxdims), H5Sclose, "H5Screate_simple");
-      Id props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "H5Pcreate");
-      check(H5Pset_chunk(props, 2, chunk), "H5Pset_chunk");
-      im.samples = Id(H5Dcreate2(im.file, "samples", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose,
-                      "creating /samples");
-      std::vector<std::string> names, units;
-      for (const log::Column& c : lay.columns) names.push_back(c.name), units.push_back(c.unit);
-      attribute(im.samples, "column_names", names);
-      attribute(im.samples, "column_units", units);
-    }
-    if (im.groups.impacts) {
-      // the joint limits' events, 7 numbers a row, appended at each flush
-      hsize_t dims[2] = {0, 7}, maxdims[2] = {H5S_UNLIMITED, 7}, chunk[2] = {64, 7};
-      Id space(H5Screate_simple(2, dims, maxdims), H5Sclose, "H5Screate_simple");
-      Id props(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "H5Pcreate");
-      check(H5Pset_chunk(props, 2, chunk), "H5Pset_chunk");
-      im.events = Id(H5Dcreate2(im.file, "events", H5T_NATIVE_DOUBLE, space, H5P_DEFAULT, props, H5P_DEFAULT), H5Dclose,
-                     "creating /events");
-      attribute(im.events, "column_names",
-                std::vector<std::string>{"t", "dof", "side", "kind", "v_before", "v_after", "energy_lost"});
-      attribute(im.events, "description",
-                std::string("joint-limit events: t (s), dof (index into v, /model v_names), side (-1 lower, +1 upper), "
-                            "kind (0 impact, 1 hold: an impact that stopped it at the limit, 2 release), v_before and "
-                            "v_after (the DOF's speed, rad/s or m/s), energy_lost (J, kinetic energy the impact took)"));
-    }
-    for (const std::string& g : lay.groups) h5::group(im.file, g.c_str() + 1);
-    if (groups.bodies) {
-      Id g(H5Gopen2(im.file, "bodies", H5P_DEFAULT), H5Gclose, "opening /bodies");
-      attribute(g, "description", std::string(kBodies));
-      h5::string_dataset(g, "names", m.body_names);
-    }
-    if (!im.groups.frames.empty()) {
-      Id g(H5Gopen2(im.file, "frames", H5P_DEFAULT), H5Gclose, "opening /frames");
-      attribute(g, "description", std::string(kFrames));
-      std::vector<std::string> names;
-      for (const int f : im.groups.frames) names.push_back(m.frame_names[size_t(f)]);
-      h5::string_dataset(g, "names", names);
-    }
-    if (const SensitivityPlan* p = im.groups.sensitivities.get()) {
-      Id g(H5Gopen2(im.file, "sensitivities", H5P_DEFAULT), H5Gclose, "opening /sensitivities");
-      attribute(g, "description", std::string(kSensitivities));
-      attribute(g, "state_names", p->state_names);
-      attribute(g, "state_units", p->state_units);
-      if (p->np() > 0) {
-        attribute(g, "parameter_names", p->parameter_names);
-        attribute(g, "parameter_units", p->parameter_units);
-      }
-    }
-    for (const log::View& v : lay.views) create_view(im.file, v, im.width);
+    im.file = create_file(path, im.tmp_path);
+    log::write_sources(im.file, sc, version, groups);
+    log::write_model(im.file, m);
+    im.create_solver(settings);
+    im.samples = log::create_samples(im.file, lay);
+    if (im.groups.impacts) im.events = log::create_events(im.file);
+    log::write_groups(im.file, lay, m, im.groups);
+    log::create_views(im.file, lay, im.width);
     check(H5Fstart_swmr_write(im.file), "H5Fstart_swmr_write");  // writes everything so far
   } catch (const H5Failure& e) {
     im.io_error(e);

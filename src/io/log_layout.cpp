@@ -41,6 +41,90 @@ struct Builder {
   }
 };
 
+// /q, /qd, /qdd: a column per coordinate of q and of v, q̈ in v's units per second
+void state_views(Builder& b, const Model& m) {
+  const std::vector<std::string> qn = m.q_names(), vn = m.v_names(), qu = q_units(m), vu = v_units(m);
+  std::vector<Column> q, qd, qdd;
+  for (int k = 0; k < m.nq; ++k) q.push_back({"q." + qn[size_t(k)], qu[size_t(k)]});
+  for (int k = 0; k < m.nv; ++k) qd.push_back({"qd." + vn[size_t(k)], vu[size_t(k)]});
+  for (int k = 0; k < m.nv; ++k) qdd.push_back({"qdd." + vn[size_t(k)], per_second(vu[size_t(k)])});
+  b.view("/q", q, m.nq);
+  b.view("/qd", qd, m.nv);
+  b.view("/qdd", qdd, m.nv);
+}
+
+// /momentum/linear and /momentum/angular: 3 columns each, x y z
+void momentum_views(Builder& b) {
+  b.out.groups.push_back("/momentum");
+  for (const auto& [kind, unit] : {std::pair{"linear", "kg m/s"}, std::pair{"angular", "kg m^2/s"}}) {
+    std::vector<Column> c;
+    for (const char* x : {"x", "y", "z"}) c.push_back({std::string("momentum.") + kind + "." + x, unit});
+    b.view(std::string("/momentum/") + kind, c, 3);
+  }
+}
+
+// /bodies/position, orientation and com: T × N × (3 | 4), body by body
+void body_views(Builder& b, const Model& m) {
+  b.out.groups.push_back("/bodies");
+  const std::pair<const char*, std::vector<const char*>> series[] = {
+      {"position", {"x", "y", "z"}}, {"orientation", {"w", "x", "y", "z"}}, {"com", {"x", "y", "z"}}};
+  for (const auto& [kind, parts] : series) {
+    const std::string unit = std::string(kind) == "orientation" ? "1" : "m";
+    std::vector<Column> c;
+    for (int i = 0; i < m.nbodies; ++i)
+      for (const char* x : parts) c.push_back({std::string("bodies.") + kind + "." + m.body_names[size_t(i)] + "." + x, unit});
+    b.view(std::string("/bodies/") + kind, c, int(parts.size()), m.nbodies);
+  }
+}
+
+// /control: a generalized force per DOF: N m on a turning one, N on a sliding one
+void control_view(Builder& b, const Model& m) {
+  const std::vector<std::string> vn = m.v_names(), vu = v_units(m);
+  std::vector<Column> c;
+  for (int k = 0; k < m.nv; ++k) c.push_back({"control." + vn[size_t(k)], vu[size_t(k)] == "rad/s" ? "N m" : "N"});
+  b.view("/control", c, m.nv);
+}
+
+// /sensitivities: ∂x_i/∂p_j, row-major (i, j): a T × nx × (nx | np) view; its units x_i's over p_j's
+void sensitivity_views(Builder& b, const SensitivityPlan& p) {
+  b.out.groups.push_back("/sensitivities");
+  auto ratio = [](const std::string& a, const std::string& c) {
+    if (a == c) return std::string("1");
+    if (c == "1") return a;
+    return a + "/" + (c.find_first_of(" /") != std::string::npos ? "(" + c + ")" : c);
+  };
+  const std::pair<const char*, std::pair<const std::vector<std::string>*, const std::vector<std::string>*>> parts[] = {
+      {"initial_state", {&p.state_names, &p.state_units}}, {"parameters", {&p.parameter_names, &p.parameter_units}}};
+  for (const auto& [kind, by] : parts) {
+    const auto& [names, units] = by;
+    if (std::string(kind) == "initial_state" ? !p.initial_state : p.np() == 0) continue;
+    std::vector<Column> c;
+    std::vector<std::string> all_units;
+    for (int i = 0; i < p.nx; ++i)
+      for (size_t j = 0; j < names->size(); ++j) {
+        c.push_back({std::string("sensitivities.") + kind + "." + p.state_names[size_t(i)] + "." + (*names)[j],
+                     ratio(p.state_units[size_t(i)], (*units)[j])});
+        all_units.push_back(c.back().unit);
+      }
+    b.view(std::string("/sensitivities/") + kind, c, int(names->size()), p.nx);
+    b.out.views.back().units = std::move(all_units);
+  }
+}
+
+// /frames/position and orientation: T × F × (3 | 4), frame by frame
+void frame_views(Builder& b, const Model& m, const std::vector<int>& frames) {
+  b.out.groups.push_back("/frames");
+  const std::pair<const char*, std::vector<const char*>> series[] = {{"position", {"x", "y", "z"}},
+                                                                      {"orientation", {"w", "x", "y", "z"}}};
+  for (const auto& [kind, parts] : series) {
+    const std::string unit = std::string(kind) == "orientation" ? "1" : "m";
+    std::vector<Column> c;
+    for (const int f : frames)
+      for (const char* x : parts) c.push_back({std::string("frames.") + kind + "." + m.frame_names[size_t(f)] + "." + x, unit});
+    b.view(std::string("/frames/") + kind, c, int(parts.size()), int(frames.size()));
+  }
+}
+
 }  // namespace
 
 std::vector<std::string> q_units(const Model& model) { return units_of(model, true); }
@@ -49,87 +133,18 @@ std::vector<std::string> v_units(const Model& model) { return units_of(model, fa
 Layout layout(const Model& m, const LogGroups& g) {
   Builder b;
   b.view("/time", {{"time", "s"}}, 0);
-  if (g.state) {
-    const std::vector<std::string> qn = m.q_names(), vn = m.v_names(), qu = q_units(m), vu = v_units(m);
-    std::vector<Column> q, qd, qdd;
-    for (int k = 0; k < m.nq; ++k) q.push_back({"q." + qn[size_t(k)], qu[size_t(k)]});
-    for (int k = 0; k < m.nv; ++k) qd.push_back({"qd." + vn[size_t(k)], vu[size_t(k)]});
-    for (int k = 0; k < m.nv; ++k) qdd.push_back({"qdd." + vn[size_t(k)], per_second(vu[size_t(k)])});
-    b.view("/q", q, m.nq);
-    b.view("/qd", qd, m.nv);
-    b.view("/qdd", qdd, m.nv);
-  }
+  if (g.state) state_views(b, m);
   if (g.energy) {
     b.out.groups.push_back("/energy");
     for (const char* e : {"kinetic", "potential", "total", "work_inputs", "dissipated"})
       b.view(std::string("/energy/") + e, {{std::string("energy.") + e, "J"}}, 0);
   }
   if (g.energy && g.impacts) b.view("/energy/impact_loss", {{"energy.impact_loss", "J"}}, 0);
-  if (g.momentum) {
-    b.out.groups.push_back("/momentum");
-    for (const auto& [kind, unit] : {std::pair{"linear", "kg m/s"}, std::pair{"angular", "kg m^2/s"}}) {
-      std::vector<Column> c;
-      for (const char* x : {"x", "y", "z"}) c.push_back({std::string("momentum.") + kind + "." + x, unit});
-      b.view(std::string("/momentum/") + kind, c, 3);
-    }
-  }
-  if (g.bodies) {
-    b.out.groups.push_back("/bodies");
-    const std::pair<const char*, std::vector<const char*>> series[] = {
-        {"position", {"x", "y", "z"}}, {"orientation", {"w", "x", "y", "z"}}, {"com", {"x", "y", "z"}}};
-    for (const auto& [kind, parts] : series) {
-      const std::string unit = std::string(kind) == "orientation" ? "1" : "m";
-      std::vector<Column> c;
-      for (int i = 0; i < m.nbodies; ++i)
-        for (const char* x : parts) c.push_back({std::string("bodies.") + kind + "." + m.body_names[size_t(i)] + "." + x, unit});
-      b.view(std::string("/bodies/") + kind, c, int(parts.size()), m.nbodies);
-    }
-  }
-  if (g.control) {
-    // a generalized force per DOF: N m on a turning one, N on a sliding one
-    const std::vector<std::string> vn = m.v_names(), vu = v_units(m);
-    std::vector<Column> c;
-    for (int k = 0; k < m.nv; ++k) c.push_back({"control." + vn[size_t(k)], vu[size_t(k)] == "rad/s" ? "N m" : "N"});
-    b.view("/control", c, m.nv);
-  }
-  if (g.sensitivities) {
-    // ∂x_i/∂p_j, row-major (i, j): a T × nx × (nx | np) view; its units x_i's over p_j's
-    const SensitivityPlan& p = *g.sensitivities;
-    b.out.groups.push_back("/sensitivities");
-    auto ratio = [](const std::string& a, const std::string& c) {
-      if (a == c) return std::string("1");
-      if (c == "1") return a;
-      return a + "/" + (c.find_first_of(" /") != std::string::npos ? "(" + c + ")" : c);
-    };
-    const std::pair<const char*, std::pair<const std::vector<std::string>*, const std::vector<std::string>*>> parts[] = {
-        {"initial_state", {&p.state_names, &p.state_units}}, {"parameters", {&p.parameter_names, &p.parameter_units}}};
-    for (const auto& [kind, by] : parts) {
-      const auto& [names, units] = by;
-      if (std::string(kind) == "initial_state" ? !p.initial_state : p.np() == 0) continue;
-      std::vector<Column> c;
-      std::vector<std::string> all_units;
-      for (int i = 0; i < p.nx; ++i)
-        for (size_t j = 0; j < names->size(); ++j) {
-          c.push_back({std::string("sensitivities.") + kind + "." + p.state_names[size_t(i)] + "." + (*names)[j],
-                       ratio(p.state_units[size_t(i)], (*units)[j])});
-          all_units.push_back(c.back().unit);
-        }
-      b.view(std::string("/sensitivities/") + kind, c, int(names->size()), p.nx);
-      b.out.views.back().units = std::move(all_units);
-    }
-  }
-  if (!g.frames.empty()) {  // last, as append_row writes them
-    b.out.groups.push_back("/frames");
-    const std::pair<const char*, std::vector<const char*>> series[] = {{"position", {"x", "y", "z"}},
-                                                                        {"orientation", {"w", "x", "y", "z"}}};
-    for (const auto& [kind, parts] : series) {
-      const std::string unit = std::string(kind) == "orientation" ? "1" : "m";
-      std::vector<Column> c;
-      for (const int f : g.frames)
-        for (const char* x : parts) c.push_back({std::string("frames.") + kind + "." + m.frame_names[size_t(f)] + "." + x, unit});
-      b.view(std::string("/frames/") + kind, c, int(parts.size()), int(g.frames.size()));
-    }
-  }
+  if (g.momentum) momentum_views(b);
+  if (g.bodies) body_views(b, m);
+  if (g.control) control_view(b, m);
+  if (g.sensitivities) sensitivity_views(b, *g.sensitivities);
+  if (!g.frames.empty()) frame_views(b, m, g.frames);  // last, as append_row writes them
   return std::move(b.out);
 }
 

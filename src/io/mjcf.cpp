@@ -170,149 +170,133 @@ std::string ignored(const mjModel* m) {
   return out;
 }
 
-}  // namespace
-
-static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path, bool from_disk,
-                          const std::vector<ModelFile>* stored, const MjcfOptions& o);
-
-bool mjcf_available() { return true; }
-
-bool mjcf_names_files(const std::string& xml) { return mjcf_text_names_files(xml); }
-
-MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_disk, const MjcfOptions& o) {
-  return parse_mjcf_impl(xml, path, from_disk, nullptr, o);
-}
-
-MjcfModel parse_mjcf_files(const std::vector<ModelFile>& files, const std::string& path, const MjcfOptions& o) {
-  if (files.empty()) throw Error(path + ": MJCF: the run file holds no model text");
-  return parse_mjcf_impl(files[0].data, path, false, &files, o);
-}
-
-static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path, bool from_disk,
-                          const std::vector<ModelFile>* stored, const MjcfOptions& o) {
-  // NaN, infinities, negative damping: located (a run's stored files: the main text's, the
-  // <include>s' are in the compiled values checked below)
-  mjcf_detail::check_file_values(xml, path, from_disk);
-  std::vector<std::string> notes;
-  std::vector<ModelFile> handed;
+// MuJoCo's compiler on the text (compile), its warnings kept as notes; a NaN it warns of is an error
+MjModelPtr compile_noting(const std::string& xml, const std::string& path, bool from_disk,
+                          const std::vector<ModelFile>* stored, std::vector<ModelFile>& handed,
+                          std::vector<std::string>& notes) {
+  // MuJoCo's warnings and errors come to us: nothing on stdout, nothing in ./MUJOCO_LOG.TXT
+  const mjcf_detail::MujocoMessages messages;
   MjModelPtr mp;
-  {
-    // MuJoCo's warnings and errors come to us: nothing on stdout, nothing in ./MUJOCO_LOG.TXT
-    const mjcf_detail::MujocoMessages messages;
-    try {
-      mp = compile(xml, path, from_disk, stored, handed);
-    } catch (const mjcf_detail::MujocoError& e) {
-      throw Error(path + ": MJCF: MuJoCo: " + excerpt(e.message, 300));
-    }
-    for (const std::string& w : messages.warnings()) {
-      if (w.find("NaN") != std::string::npos)
-        throw Error(path + ": MJCF: MuJoCo: " + excerpt(w, 300) + " (a NaN in the file or an <include>)");
-      notes.push_back("MuJoCo: " + excerpt(w, 300));
-    }
-  }
-  const mjModel* m = mp.get();
-  mjcf_detail::check_compiled_values(m, path);
-  const Names names = unique_names(m, o.free_root);
-
-  std::vector<BodySpec> specs;
-  std::vector<int> last_spec(size_t(m->nbody), -1);  // each MuJoCo body's last spec (-1: the world)
-  std::vector<Vec3> anchor(size_t(m->nbody), Vec3::Zero());  // its last spec's origin in its frame
-  std::vector<std::pair<int, int>> coords;  // (MuJoCo joint, soadyn spec) of each joint, in order
-  for (int b = 1; b < m->nbody; ++b) {
-    const int parent = m->body_parentid[b];
-    const std::string& name = names.body[size_t(b)];
-    // b's frame in the parent's last spec frame
-    Placement X{rotation(m->body_quat + 4 * b), vec3(m->body_pos + 3 * b) - anchor[size_t(parent)]};
-    const int nj = m->body_jntnum[b];
-    Vec3 at = Vec3::Zero();  // the current spec's origin in b's frame
-    auto spec = [&](const std::string& spec_name) -> BodySpec& {
-      specs.emplace_back();
-      specs.back().name = spec_name;
-      return specs.back();
-    };
-    if (nj == 0) {
-      const bool free = o.free_root && parent == 0;
-      BodySpec& s = spec(name);
-      s.parent = last_spec[size_t(parent)];
-      s.joint = free ? JointType::Free : JointType::Fixed;
-      s.joint_name = free ? names.free[size_t(b)] : name;
-      s.placement = free ? Placement{} : X;  // a free joint's q is the pose: the file's goes into q0
-    }
-    for (int k = 0; k < nj; ++k) {
-      const int j = m->body_jntadr[b] + k;
-      const std::string& jname = names.joint[size_t(j)];
-      const Vec3 pos = m->jnt_type[j] == mjJNT_FREE ? Vec3::Zero() : vec3(m->jnt_pos + 3 * j);
-      BodySpec& s = spec(k + 1 == nj ? name : names.frame[size_t(j)]);
-      s.joint_name = jname;
-      s.parent = k == 0 ? last_spec[size_t(parent)] : int(specs.size()) - 2;
-      s.placement = k == 0 ? Placement{X.R, X.p + X.R * pos} : Placement{Mat3::Identity(), pos - at};
-      s.axis = vec3(m->jnt_axis + 3 * j);
-      switch (m->jnt_type[j]) {
-        case mjJNT_HINGE: s.joint = JointType::Revolute; break;
-        case mjJNT_SLIDE: s.joint = JointType::Prismatic; break;
-        case mjJNT_BALL: s.joint = JointType::Ball; break;
-        case mjJNT_FREE:
-          if (parent != 0 || nj != 1)
-            throw Error(path + ": joint '" + printable(jname) +
-                        "': a free joint only on a body of the worldbody, and as its only joint");
-          s.joint = JointType::Free;
-          s.parent = -1;
-          s.placement = Placement{};
-          break;
-        default: throw Error(path + ": joint '" + printable(jname) + "': unknown MuJoCo joint type");
-      }
-      if (m->jnt_limited[j] && (m->jnt_type[j] == mjJNT_HINGE || m->jnt_type[j] == mjJNT_SLIDE)) {
-        // the range, in soadyn's q (qpos − qpos0): the joint's limits (enforced with limits: true)
-        const double q0 = m->qpos0[m->jnt_qposadr[j]];
-        s.lower = m->jnt_range[2 * j] - q0;
-        s.upper = m->jnt_range[2 * j + 1] - q0;
-      }
-      coords.emplace_back(j, int(specs.size()) - 1);
-      at = pos;
-    }
-    // mass properties on the last spec: the centre of mass and principal axes (body_ipos,
-    // body_iquat) in b's frame, shifted to the spec's origin
-    BodySpec& s = specs.back();
-    const Mat3 Ri = rotation(m->body_iquat + 4 * b);
-    s.mass = m->body_mass[b];
-    s.com = vec3(m->body_ipos + 3 * b) - at;
-    s.inertia = Ri * vec3(m->body_inertia + 3 * b).asDiagonal() * Ri.transpose();
-    last_spec[size_t(b)] = int(specs.size()) - 1;
-    anchor[size_t(b)] = at;
-  }
-  if (specs.empty()) throw Error(path + ": MJCF: the worldbody has no bodies");
-
-  // <flag gravity="disable"/>: no gravity, as MuJoCo runs it
-  const Vec3 gravity = o.gravity.value_or((m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3::Zero() : vec3(m->opt.gravity));
-  const bool passive = !(m->opt.disableflags & mjDSBL_PASSIVE);  // <flag passive="disable"/>: no dampers, no springs
-  MjcfModel out;
-  out.files = std::move(handed);
   try {
-    out.model = Model::build(specs, gravity, o.inertia_check);
-  } catch (const ModelError& e) {
-    throw Error(path + ": body '" + printable(specs.at(size_t(e.spec)).name) + "': " + e.detail);
+    mp = compile(xml, path, from_disk, stored, handed);
+  } catch (const mjcf_detail::MujocoError& e) {
+    throw Error(path + ": MJCF: MuJoCo: " + excerpt(e.message, 300));
   }
-  Model& model = out.model;
-  if (const std::string what = ignored(m); !what.empty()) model.warnings.push_back("ignored: " + what);
-  for (const std::string& note : notes) model.warnings.push_back(note);
-  if (!names.renamed.empty()) {
-    std::string list;
-    for (const std::string& r : names.renamed) list += (list.empty() ? "" : ", ") + r;
-    model.warnings.push_back("generated names renamed (the file already has the name): " + list);
+  for (const std::string& w : messages.warnings()) {
+    if (w.find("NaN") != std::string::npos)
+      throw Error(path + ": MJCF: MuJoCo: " + excerpt(w, 300) + " (a NaN in the file or an <include>)");
+    notes.push_back("MuJoCo: " + excerpt(w, 300));
   }
+  return mp;
+}
 
-  // X given in MuJoCo body b's frame, as (model body, placement in its frame; −1: the world): b's
-  // last spec sits at its anchor, and that spec is a frame of the body it moves with
-  auto in_model = [&](int b, Placement X, int& body) -> Placement {
+// The specs of MuJoCo's bodies (Frames, above), in order, and where each body's last spec is.
+struct Tree {
+  std::vector<BodySpec> specs;
+  std::vector<int> last_spec;               // each MuJoCo body's last spec (-1: the world)
+  std::vector<Vec3> anchor;                 // its last spec's origin in its frame
+  std::vector<std::pair<int, int>> coords;  // (MuJoCo joint, soadyn spec) of each joint, in order
+};
+
+// spec s's joint kind from MuJoCo joint j's type (nj joints on a body whose parent is `parent`),
+// and a hinge's or slide's range in soadyn's q
+void set_joint(BodySpec& s, const mjModel* m, int j, int parent, int nj, const std::string& path) {
+  const std::string& jname = s.joint_name;
+  switch (m->jnt_type[j]) {
+    case mjJNT_HINGE: s.joint = JointType::Revolute; break;
+    case mjJNT_SLIDE: s.joint = JointType::Prismatic; break;
+    case mjJNT_BALL: s.joint = JointType::Ball; break;
+    case mjJNT_FREE:
+      if (parent != 0 || nj != 1)
+        throw Error(path + ": joint '" + printable(jname) +
+                    "': a free joint only on a body of the worldbody, and as its only joint");
+      s.joint = JointType::Free;
+      s.parent = -1;
+      s.placement = Placement{};
+      break;
+    default: throw Error(path + ": joint '" + printable(jname) + "': unknown MuJoCo joint type");
+  }
+  if (m->jnt_limited[j] && (m->jnt_type[j] == mjJNT_HINGE || m->jnt_type[j] == mjJNT_SLIDE)) {
+    // the range, in soadyn's q (qpos − qpos0): the joint's limits (enforced with limits: true)
+    const double q0 = m->qpos0[m->jnt_qposadr[j]];
+    s.lower = m->jnt_range[2 * j] - q0;
+    s.upper = m->jnt_range[2 * j + 1] - q0;
+  }
+}
+
+// MuJoCo body b's specs: a fixed (or, freed, a free) one without joints, else one per joint F_1..F_k
+void add_body(Tree& t, const mjModel* m, int b, const Names& names, const MjcfOptions& o, const std::string& path) {
+  std::vector<BodySpec>& specs = t.specs;
+  const int parent = m->body_parentid[b];
+  const std::string& name = names.body[size_t(b)];
+  // b's frame in the parent's last spec frame
+  Placement X{rotation(m->body_quat + 4 * b), vec3(m->body_pos + 3 * b) - t.anchor[size_t(parent)]};
+  const int nj = m->body_jntnum[b];
+  Vec3 at = Vec3::Zero();  // the current spec's origin in b's frame
+  auto spec = [&](const std::string& spec_name) -> BodySpec& {
+    specs.emplace_back();
+    specs.back().name = spec_name;
+    return specs.back();
+  };
+  if (nj == 0) {
+    const bool free = o.free_root && parent == 0;
+    BodySpec& s = spec(name);
+    s.parent = t.last_spec[size_t(parent)];
+    s.joint = free ? JointType::Free : JointType::Fixed;
+    s.joint_name = free ? names.free[size_t(b)] : name;
+    s.placement = free ? Placement{} : X;  // a free joint's q is the pose: the file's goes into q0
+  }
+  for (int k = 0; k < nj; ++k) {
+    const int j = m->body_jntadr[b] + k;
+    const Vec3 pos = m->jnt_type[j] == mjJNT_FREE ? Vec3::Zero() : vec3(m->jnt_pos + 3 * j);
+    BodySpec& s = spec(k + 1 == nj ? name : names.frame[size_t(j)]);
+    s.joint_name = names.joint[size_t(j)];
+    s.parent = k == 0 ? t.last_spec[size_t(parent)] : int(specs.size()) - 2;
+    s.placement = k == 0 ? Placement{X.R, X.p + X.R * pos} : Placement{Mat3::Identity(), pos - at};
+    s.axis = vec3(m->jnt_axis + 3 * j);
+    set_joint(s, m, j, parent, nj, path);
+    t.coords.emplace_back(j, int(specs.size()) - 1);
+    at = pos;
+  }
+  // mass properties on the last spec: the centre of mass and principal axes (body_ipos,
+  // body_iquat) in b's frame, shifted to the spec's origin
+  BodySpec& s = specs.back();
+  const Mat3 Ri = rotation(m->body_iquat + 4 * b);
+  s.mass = m->body_mass[b];
+  s.com = vec3(m->body_ipos + 3 * b) - at;
+  s.inertia = Ri * vec3(m->body_inertia + 3 * b).asDiagonal() * Ri.transpose();
+  t.last_spec[size_t(b)] = int(specs.size()) - 1;
+  t.anchor[size_t(b)] = at;
+}
+
+// every body's specs, parents before children (MuJoCo's body order)
+Tree body_specs(const mjModel* m, const Names& names, const MjcfOptions& o, const std::string& path) {
+  Tree t;
+  t.last_spec.assign(size_t(m->nbody), -1);
+  t.anchor.assign(size_t(m->nbody), Vec3::Zero());
+  for (int b = 1; b < m->nbody; ++b) add_body(t, m, b, names, o, path);
+  if (t.specs.empty()) throw Error(path + ": MJCF: the worldbody has no bodies");
+  return t;
+}
+
+// X given in MuJoCo body b's frame, as (model body, placement in its frame; −1: the world): b's
+// last spec sits at its anchor, and that spec is a frame of the body it moves with
+struct InModel {
+  const Model& model;
+  const Names& names;
+  const std::vector<Vec3>& anchor;
+  Placement operator()(int b, Placement X, int& body) const {
     body = -1;
     if (b == 0) return X;
     const int f = model.frame_index(names.body[size_t(b)]);
     X.p -= anchor[size_t(b)];
     body = model.frame_body[size_t(f)];
     return compose(model.frame_placement[size_t(f)], X);
-  };
+  }
+};
 
-  // sites as frames; one whose name a body or welded body already has is said, not dropped silently
+// sites as frames; one whose name a body or welded body already has is said, not dropped silently
+void add_sites(Model& model, const mjModel* m, const InModel& in_model) {
   std::string taken;
   for (int i = 0; i < m->nsite; ++i) {
     const std::string site = name_of(m, mjOBJ_SITE, i, "site");
@@ -325,9 +309,12 @@ static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path
     model.add_frame(site, body, X);
   }
   if (!taken.empty()) model.warnings.push_back("sites not kept as frames (a body has the name): " + taken);
+}
 
-  // geoms, placed as sites are; the colour by MuJoCo's rule: the geom's rgba unless it is the
-  // default and the geom has a material
+// geoms, placed as sites are; the colour by MuJoCo's rule: the geom's rgba unless it is the
+// default and the geom has a material
+std::vector<MjcfGeom> geoms(const mjModel* m, const InModel& in_model) {
+  std::vector<MjcfGeom> out;
   static const char* const kinds[] = {"plane", "hfield", "sphere", "capsule", "ellipsoid", "cylinder", "box", "mesh"};
   for (int g = 0; g < m->ngeom; ++g) {
     const int type = m->geom_type[g];
@@ -341,9 +328,14 @@ static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path
     geom.rgb = Vec3(rgba[0], rgba[1], rgba[2]);
     if (type == mjGEOM_MESH && m->geom_dataid[g] >= 0 && m->geom_dataid[g] < m->nmesh) geom.mesh = m->geom_dataid[g];
     geom.X = in_model(m->geom_bodyid[g], {rotation(m->geom_quat + 4 * g), vec3(m->geom_pos + 3 * g)}, geom.body);
-    out.geoms.push_back(geom);
+    out.push_back(geom);
   }
-  // the meshes as compiled: vertices and triangles in the frame of the geoms that use them
+  return out;
+}
+
+// the meshes as compiled: vertices and triangles in the frame of the geoms that use them
+std::vector<MjcfMesh> meshes(const mjModel* m) {
+  std::vector<MjcfMesh> out;
   for (int k = 0; k < m->nmesh; ++k) {
     MjcfMesh mesh;
     mesh.name = name_of(m, mjOBJ_MESH, k, "mesh");
@@ -351,14 +343,19 @@ static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path
     mesh.vertices.assign(v, v + 3 * size_t(m->mesh_vertnum[k]));
     const int* f = m->mesh_face + 3 * size_t(m->mesh_faceadr[k]);
     mesh.faces.assign(f, f + 3 * size_t(m->mesh_facenum[k]));
-    out.meshes.push_back(std::move(mesh));
+    out.push_back(std::move(mesh));
   }
+  return out;
+}
 
-  // the pose the file draws (q = 0 for hinges and slides), the free joints' poses, the dampers
-  // and springs the file gives its 1-DOF joints
+// the pose the file draws (q = 0 for hinges and slides), the free joints' poses, the dampers
+// and springs the file gives its 1-DOF joints (`passive`: unless <flag passive="disable"/>)
+void initial_state(MjcfModel& out, const mjModel* m, const Tree& t, const Names& names, const MjcfOptions& o,
+                   bool passive) {
+  const Model& model = out.model;
   out.q0 = model.neutral_configuration();
-  for (const auto& [j, spec_index] : coords) {
-    const int body = model.joint_index(specs[size_t(spec_index)].joint_name);
+  for (const auto& [j, spec_index] : t.coords) {
+    const int body = model.joint_index(t.specs[size_t(spec_index)].joint_name);
     if (body < 0) continue;
     const int iq = model.idx_q[size_t(body)], iv = model.idx_v[size_t(body)];
     const int type = m->jnt_type[j];
@@ -387,6 +384,63 @@ static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path
       for (int k = 0; k < 4; ++k) out.q0(iq + 3 + k) = m->body_quat[4 * b + k];
     }
   model.normalize(out.q0);
+}
+
+}  // namespace
+
+static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path, bool from_disk,
+                          const std::vector<ModelFile>* stored, const MjcfOptions& o);
+
+bool mjcf_available() { return true; }
+
+bool mjcf_names_files(const std::string& xml) { return mjcf_text_names_files(xml); }
+
+MjcfModel parse_mjcf(const std::string& xml, const std::string& path, bool from_disk, const MjcfOptions& o) {
+  return parse_mjcf_impl(xml, path, from_disk, nullptr, o);
+}
+
+MjcfModel parse_mjcf_files(const std::vector<ModelFile>& files, const std::string& path, const MjcfOptions& o) {
+  if (files.empty()) throw Error(path + ": MJCF: the run file holds no model text");
+  return parse_mjcf_impl(files[0].data, path, false, &files, o);
+}
+
+static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path, bool from_disk,
+                          const std::vector<ModelFile>* stored, const MjcfOptions& o) {
+  // NaN, infinities, negative damping: located (a run's stored files: the main text's, the
+  // <include>s' are in the compiled values checked below)
+  mjcf_detail::check_file_values(xml, path, from_disk);
+  std::vector<std::string> notes;
+  std::vector<ModelFile> handed;
+  const MjModelPtr mp = compile_noting(xml, path, from_disk, stored, handed, notes);
+  const mjModel* m = mp.get();
+  mjcf_detail::check_compiled_values(m, path);
+  const Names names = unique_names(m, o.free_root);
+  const Tree tree = body_specs(m, names, o, path);
+  const std::vector<BodySpec>& specs = tree.specs;
+
+  // <flag gravity="disable"/>: no gravity, as MuJoCo runs it
+  const Vec3 gravity = o.gravity.value_or((m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3::Zero() : vec3(m->opt.gravity));
+  const bool passive = !(m->opt.disableflags & mjDSBL_PASSIVE);  // <flag passive="disable"/>: no dampers, no springs
+  MjcfModel out;
+  out.files = std::move(handed);
+  try {
+    out.model = Model::build(specs, gravity, o.inertia_check);
+  } catch (const ModelError& e) {
+    throw Error(path + ": body '" + printable(specs.at(size_t(e.spec)).name) + "': " + e.detail);
+  }
+  Model& model = out.model;
+  if (const std::string what = ignored(m); !what.empty()) model.warnings.push_back("ignored: " + what);
+  for (const std::string& note : notes) model.warnings.push_back(note);
+  if (!names.renamed.empty()) {
+    std::string list;
+    for (const std::string& r : names.renamed) list += (list.empty() ? "" : ", ") + r;
+    model.warnings.push_back("generated names renamed (the file already has the name): " + list);
+  }
+  const InModel in_model{model, names, tree.anchor};
+  add_sites(model, m, in_model);
+  out.geoms = geoms(m, in_model);
+  out.meshes = meshes(m);
+  initial_state(out, m, tree, names, o, passive);
   return out;
 }
 

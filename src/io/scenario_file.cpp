@@ -279,12 +279,9 @@ InertiaCheck read_inertia_check(const Reader& rd, const YAML::Node& n) {
                                   did_you_mean(s, {"warn", "balance", "strict"}));
 }
 
-}  // namespace
-
-Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root,
-                        std::optional<InertiaCheck> inertia_check, const std::optional<std::string>& robot_text,
-                        const std::vector<ModelFile>* model_files) {
-  const Reader rd{path, {}};
+// The scenario's one YAML document, a mapping: a second document, a syntax error, an empty file
+// or one that is no mapping (another kind of file, named by mistake) is refused
+YAML::Node load_root(const Reader& rd, const std::string& text, const std::string& path) {
   YAML::Node root;
   try {
     // a '---' at column 0 after content always starts another document (YAML 1.2, 9.2); yaml-cpp's
@@ -315,6 +312,53 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     rd.fail(root, "scenario", "expected a mapping of a scenario's sections (bodies or model, simulation, …), got " +
                                   (root.IsScalar() ? "plain text (" + std::to_string(text.size()) + " bytes): is this a scenario file?"
                                                    : Reader::show(root)));
+  return root;
+}
+
+// The robot file `urdf:` or `model:` names (robot_key; robot_text: its text as a run file stored
+// it, model_files: an MJCF model's stored files): sc's model, robot text and files; an MJCF
+// robot's MjcfModel (its drawn pose, dampers and springs), none for a URDF
+std::optional<MjcfModel> read_robot(const Reader& rd, YAML::Node root, const char* robot_key, Scenario& sc,
+                                    const Vec3& gravity, InertiaCheck check, bool free_root,
+                                    const std::optional<std::string>& robot_text,
+                                    const std::vector<ModelFile>* model_files) {
+  const YAML::Node robot_node = root[robot_key];
+  std::optional<MjcfModel> mjcf;
+  const std::string rel = rd.string(robot_node, robot_key);
+  const std::filesystem::path p = std::filesystem::path(sc.path).parent_path() / rel;
+  const bool free = free_root || (root["free_root"] && rd.boolean(root["free_root"], "free_root"));
+  try {
+    // a URDF, or an MJCF file (MuJoCo's <mujoco>: its own gravity unless the scenario says one)
+    sc.files.push_back(p.string());
+    const std::string robot = robot_text ? *robot_text : read_text_file(p.string());
+    sc.robot_text = robot;
+    sc.robot_path = p.string();
+    if (is_mjcf_text(robot)) {
+      const std::optional<Vec3> g = root["gravity"] ? std::optional<Vec3>(gravity) : std::nullopt;
+      const bool stored = robot_text && model_files && !model_files->empty();
+      const bool from_disk = !stored && (!robot_text || mjcf_file_unchanged(p.string(), robot));
+      mjcf = stored ? parse_mjcf_files(*model_files, p.string(), {free, g, check})
+                    : parse_mjcf(robot, p.string(), from_disk, {free, g, check});
+      sc.model_files = mjcf->files;
+      if (from_disk)
+        for (std::string& f : mjcf_files(robot, p.string())) sc.files.push_back(std::move(f));
+      sc.model = mjcf->model;
+    } else {
+      sc.model = parse_urdf(robot, p.string(), free, gravity, check);
+    }
+  } catch (const Error& e) {
+    rd.fail(robot_node, robot_key, e.what());
+  }
+  return mjcf;
+}
+
+}  // namespace
+
+Scenario parse_scenario(const std::string& text, const std::string& path, bool free_root,
+                        std::optional<InertiaCheck> inertia_check, const std::optional<std::string>& robot_text,
+                        const std::vector<ModelFile>* model_files) {
+  const Reader rd{path, {}};
+  YAML::Node root = load_root(rd, text, path);
   rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "model", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits", "inertial"});
 
   Scenario sc;
@@ -339,31 +383,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
     rd.fail(robot_node, robot_key, "give either 'bodies' or '" + std::string(robot_key) + "', not both");
   std::optional<MjcfModel> mjcf;  // an MJCF robot: its drawn pose, dampers and springs
   if (robot_node) {
-    const std::string rel = rd.string(robot_node, robot_key);
-    const std::filesystem::path p = std::filesystem::path(path).parent_path() / rel;
-    const bool free = free_root || (root["free_root"] && rd.boolean(root["free_root"], "free_root"));
-    try {
-      // a URDF, or an MJCF file (MuJoCo's <mujoco>: its own gravity unless the scenario says one)
-      sc.files.push_back(p.string());
-      const std::string robot = robot_text ? *robot_text : read_text_file(p.string());
-      sc.robot_text = robot;
-      sc.robot_path = p.string();
-      if (is_mjcf_text(robot)) {
-        const std::optional<Vec3> g = root["gravity"] ? std::optional<Vec3>(gravity) : std::nullopt;
-        const bool stored = robot_text && model_files && !model_files->empty();
-        const bool from_disk = !stored && (!robot_text || mjcf_file_unchanged(p.string(), robot));
-        mjcf = stored ? parse_mjcf_files(*model_files, p.string(), {free, g, check})
-                      : parse_mjcf(robot, p.string(), from_disk, {free, g, check});
-        sc.model_files = mjcf->files;
-        if (from_disk)
-          for (std::string& f : mjcf_files(robot, p.string())) sc.files.push_back(std::move(f));
-        sc.model = mjcf->model;
-      } else {
-        sc.model = parse_urdf(robot, p.string(), free, gravity, check);
-      }
-    } catch (const Error& e) {
-      rd.fail(robot_node, robot_key, e.what());
-    }
+    mjcf = read_robot(rd, root, robot_key, sc, gravity, check, free_root, robot_text, model_files);
   } else {
     if (root["free_root"]) rd.fail(root["free_root"], "free_root", "applies to 'urdf' models; give the root a free joint");
     const BodyNodes bodies = read_bodies(rd, rd.require(root, "bodies", "scenario"));

@@ -392,16 +392,8 @@ PyMethodDef method() {
           METH_FASTCALL | METH_KEYWORDS, Fn::doc};
 }
 
-}  // namespace
-
-void bind_algorithms(py::module_& m) {
-  // CPython keeps pointers to these definitions for the life of the functions
-  static PyMethodDef defs[] = {method<UpdateKinematics>(), method<UpdateVelocities>(), method<MassMatrix>(),
-                               method<MassMatrixLiteral>(), method<Minverse>(), method<Bias>(), method<InverseDynamics>(),
-                               method<ForwardDynamics>(), method<Jacobian>(),
-                               method<IdDerivatives>(), method<FdDerivatives>(), method<KineticEnergy>(),
-                               method<PotentialEnergy>(), method<MomentumFn>()};
-  py::object module_name = m.attr("__name__");
+// body_poses: η_i and C_i^in of every body at each configuration
+void bind_body_poses(py::module_& m) {
   m.def("body_poses", [](const Model& model, const ArrayIn& qs) {
         const bool one = qs.ndim() == 1;
         if (!(one || qs.ndim() == 2) || qs.shape(qs.ndim() - 1) != model.nq)
@@ -432,9 +424,12 @@ void bind_algorithms(py::module_& m) {
 q: (nq,) or (T, nq), e.g. a Trajectory's q.  Returns new arrays of shape (N, 3) and (N, 3, 3), or
 (T, N, 3) and (T, N, 3, 3): the body frame's origin (its joint point) and its rotation body →
 inertial.  Runs without the GIL.)");
-  // for tools/bench/python_overhead.py: the same library calls in a C++ loop in this process, so
-  // the two sides are timed in adjacent windows on the same machine state (the derivative calls on
-  // the Data's own derivative arrays, as the Python functions use them)
+}
+
+// _time_cpp, for tools/bench/python_overhead.py: the same library calls in a C++ loop in this process, so
+// the two sides are timed in adjacent windows on the same machine state (the derivative calls on
+// the Data's own derivative arrays, as the Python functions use them)
+void bind_time_cpp(py::module_& m) {
   m.def("_time_cpp", [](const Model& model, PyData& d, const ArrayIn& q, const ArrayIn& v, const ArrayIn& tau,
                         const std::string& which, long calls) {
         VecX qv(model.nq), vv(model.nv), tv(model.nv);
@@ -469,6 +464,20 @@ inertial.  Runs without the GIL.)");
         }
         return std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - t0).count() / double(calls);
       }, "model"_a, "data"_a, "q"_a, "v"_a, "tau"_a, "which"_a, "calls"_a);
+}
+
+}  // namespace
+
+void bind_algorithms(py::module_& m) {
+  // CPython keeps pointers to these definitions for the life of the functions
+  static PyMethodDef defs[] = {method<UpdateKinematics>(), method<UpdateVelocities>(), method<MassMatrix>(),
+                               method<MassMatrixLiteral>(), method<Minverse>(), method<Bias>(), method<InverseDynamics>(),
+                               method<ForwardDynamics>(), method<Jacobian>(),
+                               method<IdDerivatives>(), method<FdDerivatives>(), method<KineticEnergy>(),
+                               method<PotentialEnergy>(), method<MomentumFn>()};
+  py::object module_name = m.attr("__name__");
+  bind_body_poses(m);
+  bind_time_cpp(m);
   for (PyMethodDef& def : defs) {
     PyObject* f = PyCFunction_NewEx(&def, nullptr, module_name.ptr());
     if (!f) throw py::error_already_set();

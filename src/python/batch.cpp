@@ -352,35 +352,105 @@ py::list run_states(const Scenario& sc, const SimulationSettings& settings, py::
   return out;
 }
 
+// The scene: a Model (no inputs, rk4 at dt = 1e-3 unless told), a Scenario or a scenario file
+struct Scene {
+  std::optional<Scenario> loaded;  // a scenario file's
+  const Model* model = nullptr;
+  const Inputs* inputs = nullptr;
+  RolloutSettings rs;
+};
+// `scene` read: its model, its inputs and settings (a scenario's) or none and the defaults (a Model's)
+void read_scene(const char* where, const py::object& scene, Scene& out) {
+  static const Inputs no_inputs;
+  out.inputs = &no_inputs;
+  if (py::isinstance<py::str>(scene)) out.loaded = load_scenario(scene.cast<std::string>());
+  if (out.loaded || py::isinstance<Scenario>(scene)) {
+    const Scenario& sc = out.loaded ? *out.loaded : scene.cast<const Scenario&>();
+    check_rollout_scene(sc);  // its controllers and limits: not applied, so refused
+    out.model = &sc.model;
+    out.inputs = &sc.inputs;
+    out.rs = rollout_settings(sc.simulation);
+  } else if (py::isinstance<Model>(scene)) {
+    out.model = &scene.cast<const Model&>();
+  } else {
+    throw py::type_error(std::string(where) + ": scene: expected a soadyn.Model, a soadyn.Scenario or a scenario path, got " +
+                         std::string(py::str(py::type::handle_of(scene).attr("__name__"))));
+  }
+}
+
+// a control callback control(k, s, t, y) -> (nv,) as the library calls it: τ for rollout k at step s
+ControlFn control_callback(const py::object& controls, int nv, int ny) {
+  return [fn = &controls, nv, ny](long k, long s, double t, const double* y, double* tau) {
+    py::gil_scoped_acquire gil;
+    py::array_t<double> state(ny);
+    std::memcpy(state.mutable_data(), y, sizeof(double) * size_t(ny));
+    const py::object r = (*fn)(k, s, t, state);
+    const CArray u = CArray::ensure(r);
+    if (!u || u.ndim() != 1 || u.shape(0) != nv)
+      throw Error("rollout: controls: the callback must return " + std::to_string(nv) + " numbers (nv,), got " +
+                  (u ? shape_of(u) : std::string(py::str(py::type::handle_of(r).attr("__name__")))) +
+                  " for rollout " + std::to_string(k) + ", step " + std::to_string(s));
+    for (int i = 0; i < nv; ++i)
+      if (!std::isfinite(u.data()[i])) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%g", u.data()[i]);
+        throw Error("rollout: controls: the callback returned " + std::string(value) + " at entry " + std::to_string(i) +
+                    " for rollout " + std::to_string(k) + ", step " + std::to_string(s) + ": expected finite numbers");
+      }
+    std::memcpy(tau, u.data(), sizeof(double) * size_t(nv));
+  };
+}
+
+// The controls: an array (K, T, nv) or a callable control(k, s, t, y) -> (nv,)
+struct Controls {
+  CArray U;
+  std::optional<Map> U_map;  // U's K T columns of nv
+  ControlFn callback;
+};
+// controls: None, an array (K, T, nv), or a callable control(k, s, t, y) -> (nv,); sets rs.steps (T)
+void read_controls(const py::object& controls, std::optional<long> steps, int nv, int ny, py::ssize_t K,
+                   RolloutSettings& rs, Controls& c) {
+  if (!controls.is_none() && PyCallable_Check(controls.ptr())) {
+    if (!steps) throw Error("rollout: steps: expected the number of steps T with a control callback");
+    rs.steps = *steps;
+    c.callback = control_callback(controls, nv, ny);
+  } else if (!controls.is_none()) {
+    c.U = CArray::ensure(controls);
+    const CArray& U = c.U;
+    if (!U || U.ndim() != 3 || U.shape(0) != K || U.shape(2) != nv || (steps && U.shape(1) != *steps))
+      throw Error("rollout: controls: expected shape (" + std::to_string(K) + ", " + (steps ? std::to_string(*steps) : "T") +
+                  ", " + std::to_string(nv) + ") (K rollouts × T steps × nv, K from initial_states), got " +
+                  (U ? shape_of(U) : "no array"));
+    rs.steps = long(U.shape(1));
+    c.U_map.emplace(U.data(), nv, rs.steps * K);
+    if (!c.U_map->allFinite()) {  // named by (k, s, i), as the caller indexes it
+      const auto u = U.unchecked<3>();
+      for (py::ssize_t k = 0; k < K; ++k)
+        for (py::ssize_t s = 0; s < U.shape(1); ++s)
+          for (int i = 0; i < nv; ++i)
+            if (!std::isfinite(u(k, s, i))) {
+              char value[32];
+              std::snprintf(value, sizeof value, "%g", u(k, s, i));
+              throw Error("rollout: controls[" + std::to_string(k) + ", " + std::to_string(s) + ", " + std::to_string(i) +
+                          "] = " + value + ": expected a finite number");
+            }
+    }
+  } else {
+    if (!steps) throw Error("rollout: steps: expected the number of steps T (or controls of shape (K, T, nv))");
+    rs.steps = *steps;
+  }
+}
+
 // (states, energies or None, status list, exception raised by a signal handler or None)
 py::tuple run_rollout(py::object scene, py::handle initial_states, py::object controls, std::optional<long> steps,
                       std::optional<double> dt, std::optional<std::string> method, int threads,
                       std::optional<std::string> dynamics, std::optional<double> rtol, std::optional<double> atol,
                       bool energies) {
   const char* where = "rollout";
-  // the scene: a Model (no inputs, rk4 at dt = 1e-3 unless told), a Scenario or a scenario file
-  static const Inputs no_inputs;
-  std::optional<Scenario> loaded;
-  const Model* model = nullptr;
-  const Inputs* inputs = &no_inputs;
-  RolloutSettings rs;
-  if (py::isinstance<py::str>(scene)) {
-    loaded = load_scenario(scene.cast<std::string>());
-    scene = py::none();
-  }
-  if (loaded || py::isinstance<Scenario>(scene)) {
-    const Scenario& sc = loaded ? *loaded : scene.cast<const Scenario&>();
-    check_rollout_scene(sc);  // its controllers and limits: not applied, so refused
-    model = &sc.model;
-    inputs = &sc.inputs;
-    rs = rollout_settings(sc.simulation);
-  } else if (py::isinstance<Model>(scene)) {
-    model = &scene.cast<const Model&>();
-  } else {
-    throw py::type_error(std::string(where) + ": scene: expected a soadyn.Model, a soadyn.Scenario or a scenario path, got " +
-                         std::string(py::str(py::type::handle_of(scene).attr("__name__"))));
-  }
-  const Model& m = *model;
+  Scene scn;
+  read_scene(where, scene, scn);
+  const Model& m = *scn.model;
+  RolloutSettings& rs = scn.rs;
   // the words as a scenario takes them (the table's, settings.hpp): the same refusals, on for aba
   SimulationSettings words;
   if (method) {
@@ -399,56 +469,8 @@ py::tuple run_rollout(py::object scene, py::handle initial_states, py::object co
   const int ny = m.nq + m.nv;
   py::ssize_t K = -1;
   const Arg Y0 = read_states(where, "initial_states", initial_states, ny, "nq + nv", K, "");
-  // controls: None, an array (K, T, nv), or a callable control(k, s, t, y) -> (nv,)
-  CArray U;
-  std::optional<Map> U_map;
-  ControlFn callback;
-  if (!controls.is_none() && PyCallable_Check(controls.ptr())) {
-    if (!steps) throw Error("rollout: steps: expected the number of steps T with a control callback");
-    rs.steps = *steps;
-    callback = [&controls, nv = m.nv, ny](long k, long s, double t, const double* y, double* tau) {
-      py::gil_scoped_acquire gil;
-      py::array_t<double> state(ny);
-      std::memcpy(state.mutable_data(), y, sizeof(double) * size_t(ny));
-      const py::object r = controls(k, s, t, state);
-      const CArray u = CArray::ensure(r);
-      if (!u || u.ndim() != 1 || u.shape(0) != nv)
-        throw Error("rollout: controls: the callback must return " + std::to_string(nv) + " numbers (nv,), got " +
-                    (u ? shape_of(u) : std::string(py::str(py::type::handle_of(r).attr("__name__")))) +
-                    " for rollout " + std::to_string(k) + ", step " + std::to_string(s));
-      for (int i = 0; i < nv; ++i)
-        if (!std::isfinite(u.data()[i])) {
-          char value[32];
-          std::snprintf(value, sizeof value, "%g", u.data()[i]);
-          throw Error("rollout: controls: the callback returned " + std::string(value) + " at entry " + std::to_string(i) +
-                      " for rollout " + std::to_string(k) + ", step " + std::to_string(s) + ": expected finite numbers");
-        }
-      std::memcpy(tau, u.data(), sizeof(double) * size_t(nv));
-    };
-  } else if (!controls.is_none()) {
-    U = CArray::ensure(controls);
-    if (!U || U.ndim() != 3 || U.shape(0) != K || U.shape(2) != m.nv || (steps && U.shape(1) != *steps))
-      throw Error("rollout: controls: expected shape (" + std::to_string(K) + ", " + (steps ? std::to_string(*steps) : "T") +
-                  ", " + std::to_string(m.nv) + ") (K rollouts × T steps × nv, K from initial_states), got " +
-                  (U ? shape_of(U) : "no array"));
-    rs.steps = long(U.shape(1));
-    U_map.emplace(U.data(), m.nv, rs.steps * K);
-    if (!U_map->allFinite()) {  // named by (k, s, i), as the caller indexes it
-      const auto u = U.unchecked<3>();
-      for (py::ssize_t k = 0; k < K; ++k)
-        for (py::ssize_t s = 0; s < U.shape(1); ++s)
-          for (int i = 0; i < m.nv; ++i)
-            if (!std::isfinite(u(k, s, i))) {
-              char value[32];
-              std::snprintf(value, sizeof value, "%g", u(k, s, i));
-              throw Error("rollout: controls[" + std::to_string(k) + ", " + std::to_string(s) + ", " + std::to_string(i) +
-                          "] = " + value + ": expected a finite number");
-            }
-    }
-  } else {
-    if (!steps) throw Error("rollout: steps: expected the number of steps T (or controls of shape (K, T, nv))");
-    rs.steps = *steps;
-  }
+  Controls c;
+  read_controls(controls, steps, m.nv, ny, K, rs, c);
   if (rs.steps < 0) throw Error("rollout: steps: expected T ≥ 0, got " + std::to_string(rs.steps));
   const py::ssize_t T = rs.steps;
   py::array states = new_array({K, T, ny});
@@ -462,8 +484,8 @@ py::tuple run_rollout(py::object scene, py::handle initial_states, py::object co
   nogil([&] {
     const batch::In Y(Y0.map);
     std::optional<batch::In> Uin;
-    if (U_map) Uin.emplace(*U_map);
-    report = rollout(m, *inputs, Y, Uin ? &*Uin : nullptr, callback ? &callback : nullptr, rs, S, E, &stop, poll);
+    if (c.U_map) Uin.emplace(*c.U_map);
+    report = rollout(m, *scn.inputs, Y, Uin ? &*Uin : nullptr, c.callback ? &c.callback : nullptr, rs, S, E, &stop, poll);
   });
   return py::make_tuple(states, energies ? py::object(energy) : py::none(), report.status, pending);
 }

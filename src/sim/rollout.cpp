@@ -163,12 +163,10 @@ struct Runner {
   }
 };
 
-}  // namespace
-
-RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, const batch::In* controls,
-                      const ControlFn* control, const RolloutSettings& rs, batch::Out states, batch::Out energies,
-                      const std::atomic<int>* stop, std::function<void()> poll) {
-  // every argument checked before any rollout starts
+// every argument of rollout checked before any rollout starts (the integrator's own refusals: rollout's probe)
+void check_arguments(const Model& model, const Inputs& inputs, const batch::In& Y0, const batch::In* controls,
+                     const ControlFn* control, const RolloutSettings& rs, const batch::Out& states,
+                     const batch::Out& energies) {
   const int ny = model.nq + model.nv;
   const long K = Y0.cols(), T = rs.steps;
   if (!(rs.dt > 0) || !std::isfinite(rs.dt)) throw Error("rollout: dt: expected a positive finite number");
@@ -189,6 +187,54 @@ RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, co
   }
   check_shape("states", states.rows(), states.cols(), ny, T * K, "nq + nv rows, column k·T + s");
   if (rs.energies) check_shape("energies", energies.rows(), energies.cols(), T, K, "T rows, one column per rollout");
+}
+
+// n threads, each with its own System, take the K rollouts; the calling thread polls while they work.
+// The first exception a thread throws stops the others after their current rollout and is rethrown.
+void run_threads(Runner& runner, const Model& model, const Inputs& inputs, FdMethod fd, int n, long K,
+                 std::atomic<long>& next, const std::function<void()>& poll) {
+  std::exception_ptr error;
+  std::mutex mutex;
+  std::condition_variable cv;
+  int running = n;
+  std::vector<std::thread> threads;
+  threads.reserve(size_t(n));
+  for (int w = 0; w < n; ++w)
+    threads.emplace_back([&] {
+      try {
+        System sys(model, inputs, fd);
+        runner.run(sys, {});
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!error) error = std::current_exception();
+        next = K;  // the others stop after their current rollout
+      }
+      std::lock_guard<std::mutex> lock(mutex);
+      --running;
+      cv.notify_all();
+    });
+  {
+    std::unique_lock<std::mutex> lock(mutex);
+    while (running > 0) {
+      cv.wait_for(lock, std::chrono::milliseconds(10));
+      if (poll && running > 0) {
+        lock.unlock();
+        poll();
+        lock.lock();
+      }
+    }
+  }
+  for (auto& t : threads) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace
+
+RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, const batch::In* controls,
+                      const ControlFn* control, const RolloutSettings& rs, batch::Out states, batch::Out energies,
+                      const std::atomic<int>* stop, std::function<void()> poll) {
+  check_arguments(model, inputs, Y0, controls, control, rs, states, energies);
+  const long K = Y0.cols();
   const SimulationSettings ss = simulation_settings(rs);
   const FdMethod fd = rs.dynamics;
   {
@@ -207,40 +253,7 @@ RolloutReport rollout(const Model& model, const Inputs& inputs, batch::In Y0, co
     System sys(model, inputs, fd);
     runner.run(sys, poll);
   } else {
-    // n threads take the rollouts; the calling thread polls while they work
-    std::exception_ptr error;
-    std::mutex mutex;
-    std::condition_variable cv;
-    int running = n;
-    std::vector<std::thread> threads;
-    threads.reserve(size_t(n));
-    for (int w = 0; w < n; ++w)
-      threads.emplace_back([&] {
-        try {
-          System sys(model, inputs, fd);
-          runner.run(sys, {});
-        } catch (...) {
-          std::lock_guard<std::mutex> lock(mutex);
-          if (!error) error = std::current_exception();
-          next = K;  // the others stop after their current rollout
-        }
-        std::lock_guard<std::mutex> lock(mutex);
-        --running;
-        cv.notify_all();
-      });
-    {
-      std::unique_lock<std::mutex> lock(mutex);
-      while (running > 0) {
-        cv.wait_for(lock, std::chrono::milliseconds(10));
-        if (poll && running > 0) {
-          lock.unlock();
-          poll();
-          lock.lock();
-        }
-      }
-    }
-    for (auto& t : threads) t.join();
-    if (error) std::rethrow_exception(error);
+    run_threads(runner, model, inputs, fd, n, K, next, poll);
   }
   report.completed = completed.load();
   if (stop && stop->load() != 0) {
