@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Plot a soadyn run: joint coordinates by unit, the orientation of free and ball joints, the
-controllers' torques and forces, the energy-balance error on a log axis and, for a free-floating
+controllers' torques and forces, the torques holding prescribed joints' motion, the energy-balance error on a log axis and, for a free-floating
 model, the change of momentum; the joint limits' events (/events) as dashed lines on every panel.
 
     tools/plot.py RUN.h5 [-o fig.png|.svg|.pdf] [--joints a,b] [--bins N] [--show] [--data curves.csv]
@@ -150,18 +150,29 @@ def plan(names, units, model, chosen):
             by_unit.setdefault(units[k], []).append(Curve(n, column(k)))
     for u, curves in by_unit.items():
         panels.append((f"control {'force' if u == 'N' else 'torque'} [{u}]", curves, False))
+    # the torques (forces) holding the prescribed joints' motion (/prescribed), one panel per unit
+    held = {}
+    for k, n in enumerate(names):
+        if n.startswith("prescribed."):
+            held.setdefault(units[k], []).append(Curve(n[len("prescribed."):], column(k)))
+    for u, curves in held.items():
+        panels.append((f"prescribed joints' {'force' if u == 'N' else 'torque'} [{u}]", curves, False))
 
     if "energy.total" in idx and "energy.kinetic" in idx:
         w, loss = idx.get("energy.work_inputs"), idx.get("energy.impact_loss")
-        # E − E0, less the work W of the inputs when logged, plus the energy L the joint limits'
-        # impacts took when logged: (column, sign) of each term, from the first row
+        wp = idx.get("energy.work_prescribed")
+        # E − E0, less the work W of the inputs when logged (and W_p, the prescribed joints'), plus
+        # the energy L the joint limits' impacts took when logged: (column, sign) of each term, from
+        # the first row
         terms = [(idx["energy.total"], 1.0)] + ([(w, -1.0)] if w is not None else []) + \
+            ([(wp, -1.0)] if w is not None and wp is not None else []) + \
             ([(loss, 1.0)] if w is not None and loss is not None else [])
         f = lambda b, ctx: np.abs(sum(s * (b[:, k] - ctx["row0"][k]) for k, s in terms))  # noqa: E731
         if w is None:
             label = "energy error (no work logged)\n|E − E0| / max(|E0|, max T) [1]"
         else:
-            label = f"energy-balance error\n|E − E0 − W{' + L' if loss is not None else ''}| / max(|E0|, max T) [1]"
+            label = (f"energy-balance error\n|E − E0 − W{' − W_p' if wp is not None else ''}"
+                     f"{' + L' if loss is not None else ''}| / max(|E0|, max T) [1]")
         # the scale needs the whole run's peak kinetic energy: applied after the reduction
         panels.append((label, [Curve("energy error", f, lambda y, ctx: np.maximum(y / ctx["scale"], FLOOR))], True))
 

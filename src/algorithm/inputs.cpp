@@ -2,24 +2,63 @@
 
 #include "soadyn/algorithm/table.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 namespace soadyn {
 
+namespace {
+// the quintic rest-to-rest profile's s ∈ [0, 1] and its derivatives' factors (JointSlew)
+struct SlewAt {
+  double s, span, T;
+};
+SlewAt slew_at(const JointSlew& w, double t) {
+  const double s = w.duration > 0 ? std::clamp((t - w.start) / w.duration, 0.0, 1.0) : (t < w.start ? 0.0 : 1.0);
+  return {s, w.to - w.from, w.duration};
+}
+}  // namespace
+
+// q_d = from + Δ (10 s³ − 15 s⁴ + 6 s⁵),  q̇_d = Δ/T · 30 s² (1 − s)²,  q̈_d = Δ/T² · 60 s (1 − s)(1 − 2s)
 double JointTarget::value(double t) const {
+  if (slew) {
+    const SlewAt a = slew_at(*slew, t);
+    return slew->from + a.span * a.s * a.s * a.s * (10 - 15 * a.s + 6 * a.s * a.s);
+  }
   if (table) return table->value(t);
   return constant + amplitude * std::sin(2 * std::numbers::pi * frequency * t + phase);
 }
 double JointTarget::rate(double t) const {
+  if (slew) {
+    const SlewAt a = slew_at(*slew, t);
+    return a.T > 0 ? a.span / a.T * 30 * a.s * a.s * (1 - a.s) * (1 - a.s) : 0.0;
+  }
   if (table) return table->rate(t);
   const double w = 2 * std::numbers::pi * frequency;
   return amplitude * w * std::cos(w * t + phase);
 }
 double JointTarget::acceleration(double t) const {
+  if (slew) {
+    const SlewAt a = slew_at(*slew, t);
+    return a.T > 0 ? a.span / (a.T * a.T) * 60 * a.s * (1 - a.s) * (1 - 2 * a.s) : 0.0;
+  }
   if (table) return table->acceleration(t);
   const double w = 2 * std::numbers::pi * frequency;
   return -amplitude * w * w * std::sin(w * t + phase);
+}
+
+std::vector<double> JointTarget::corners() const {
+  if (slew) return {slew->start, slew->start + slew->duration};
+  if (table) return {table->t_first(), table->t_last()};
+  return {};
+}
+
+void PrescribedInput::at(double t, double& q, double& qd, double& qdd) const {
+  if (function) {
+    function(t, q, qd, qdd);
+    return;
+  }
+  q = target.value(t), qd = target.rate(t), qdd = target.acceleration(t);
 }
 
 void Inputs::evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const {

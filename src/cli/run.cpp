@@ -247,9 +247,19 @@ void print_summary(const Scenario& sc, const SimulationSettings& s, const RunSum
   std::printf("error-test failures    %ld\n", r.stats.error_test_failures);
   std::printf("nonlinear iterations   %ld\n", r.stats.nonlinear_iterations);
   std::printf("CPU time               %.4g s\n", r.cpu_seconds);
-  std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t)| / max(|E0|, peak T),\n"
-              "                       W the work of torques and dampers\n",
-              r.final_energy_balance_error, r.max_energy_balance_error);
+  if (sc.inputs.prescribed.empty())
+    std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t)| / max(|E0|, peak T),\n"
+                "                       W the work of torques and dampers\n",
+                r.final_energy_balance_error, r.max_energy_balance_error);
+  else
+    std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t) - W_p(t)| / max(|E0|, "
+                "peak T),\n                       W the work of torques and dampers, W_p the prescribed joints' torques'\n",
+                r.final_energy_balance_error, r.max_energy_balance_error);
+  if (!sc.inputs.prescribed.empty()) {
+    std::string joints;
+    for (const PrescribedInput& p : sc.inputs.prescribed) joints += (joints.empty() ? "" : ", ") + p.joint;
+    std::printf("prescribed             %s (their torques in /prescribed)\n", joints.c_str());
+  }
   if (!r.events.empty()) {
     // the limits' events (in the run file's /events): how many, the energy the impacts took, the first
     double lost = 0;

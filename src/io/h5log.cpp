@@ -68,6 +68,8 @@ LogGroups logged_groups(const Scenario& sc, const SimulationSettings& settings, 
   LogGroups g = groups;
   g.impacts = settings.limits && sc.model.has_limits();
   g.control = groups.control || !sc.inputs.controllers.empty();
+  g.prescribed.clear();
+  for (const PrescribedInput& p : sc.inputs.prescribed) g.prescribed.push_back(p.dof);
   if (settings.sensitivities.any())
     g.sensitivities = std::make_shared<const SensitivityPlan>(plan_sensitivities(sc.model, settings.sensitivities));
   for (const std::string& name : sc.log_frames)

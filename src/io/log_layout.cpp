@@ -85,6 +85,14 @@ void control_view(Builder& b, const Model& m) {
   b.view("/control", c, m.nv);
 }
 
+// /prescribed: the torque holding each prescribed joint's motion (its DOF's v name), N m or N
+void prescribed_view(Builder& b, const Model& m, const std::vector<int>& dofs) {
+  const std::vector<std::string> vn = m.v_names(), vu = v_units(m);
+  std::vector<Column> c;
+  for (const int k : dofs) c.push_back({"prescribed." + vn[size_t(k)], vu[size_t(k)] == "rad/s" ? "N m" : "N"});
+  b.view("/prescribed", c, int(dofs.size()));
+}
+
 // /sensitivities: ∂x_i/∂p_j, row-major (i, j): a T × nx × (nx | np) view; its units x_i's over p_j's
 void sensitivity_views(Builder& b, const SensitivityPlan& p) {
   b.out.groups.push_back("/sensitivities");
@@ -140,9 +148,11 @@ Layout layout(const Model& m, const LogGroups& g) {
       b.view(std::string("/energy/") + e, {{std::string("energy.") + e, "J"}}, 0);
   }
   if (g.energy && g.impacts) b.view("/energy/impact_loss", {{"energy.impact_loss", "J"}}, 0);
+  if (g.energy && !g.prescribed.empty()) b.view("/energy/work_prescribed", {{"energy.work_prescribed", "J"}}, 0);
   if (g.momentum) momentum_views(b);
   if (g.bodies) body_views(b, m);
   if (g.control) control_view(b, m);
+  if (!g.prescribed.empty()) prescribed_view(b, m, g.prescribed);
   if (g.sensitivities) sensitivity_views(b, *g.sensitivities);
   if (!g.frames.empty()) frame_views(b, m, g.frames);  // last, as append_row writes them
   return std::move(b.out);
@@ -154,9 +164,11 @@ void append_row(const Model& m, Data& data, const LogGroups& g, const Sample& s,
   if (g.state) put(s.q), put(s.qd), put(s.qdd);
   if (g.energy) b.insert(b.end(), {s.kinetic, s.potential, s.total, s.work_inputs, s.dissipated});
   if (g.energy && g.impacts) b.push_back(s.impact_loss);
+  if (g.energy && !g.prescribed.empty()) b.push_back(s.work_prescribed);
   if (g.momentum) put(s.linear), put(s.angular);
   if (g.bodies) put(s.body_position), put(s.body_orientation), put(s.body_com);  // column-major: body by body
   if (g.control) put(s.control);
+  if (!g.prescribed.empty()) put(s.prescribed_torque);
   if (g.sensitivities) {
     // row-major (∂x_i/∂p_j at i·cols + j): the transpose's column-major storage
     if (g.sensitivities->initial_state) put(MatX(s.sensitivity_initial_state.transpose()));

@@ -37,6 +37,7 @@ void record_locations(const Reader& rd, const YAML::Node& root, Scenario& sc) {
   for (const std::string& joint : sc.model.joint_names) {
     put("initial.q." + joint, find(root, {"initial", "q", joint}));
     put("limits." + joint, find(root, {"limits", joint}));
+    put("prescribed." + joint, find(root, {"prescribed", joint}));
   }
 }
 

@@ -1,4 +1,4 @@
-// A scenario's joint limits and built-in controllers (scenarios/README.md).
+// A scenario's joint limits, built-in controllers and prescribed motion (scenarios/README.md).
 #include "scenario_reader.hpp"
 
 #include "soadyn/io/table_file.hpp"
@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <tuple>
 
 namespace soadyn::scenario_detail {
 
@@ -83,6 +84,49 @@ JointTarget read_target(const Reader& rd, const YAML::Node& n, const std::string
   if (n["frequency"]) r.frequency = rd.number(n["frequency"], field + ".frequency");
   if (n["phase"]) r.phase = rd.number(n["phase"], field + ".phase");
   return r;
+}
+
+// a prescribed joint's motion: a target's forms (read_target; `offset` for `constant`), a table of
+// at least 4 rows (q̈* from a natural cubic spline needs them), or {slew: {from, to, start, duration}}
+JointTarget read_profile(const Reader& rd, const YAML::Node& n, const std::string& field, const std::string& joint,
+                         Tables& tables) {
+  if (n.IsMap() && n["slew"]) {
+    rd.keys(n, field, {"slew"});
+    const YAML::Node w = n["slew"];
+    const std::string f = field + ".slew";
+    if (!w.IsMap()) rd.fail(w, f, "expected a map {from, to, start, duration}, got " + Reader::show(w));
+    rd.keys(w, f, {"from", "to", "start", "duration"});
+    auto slew = std::make_shared<JointSlew>();
+    slew->from = rd.number(rd.require(w, "from", f), f + ".from");
+    slew->to = rd.number(rd.require(w, "to", f), f + ".to");
+    if (w["start"]) slew->start = rd.number(w["start"], f + ".start");
+    slew->duration = rd.positive(rd.require(w, "duration", f), f + ".duration");
+    JointTarget r;
+    r.slew = std::move(slew);
+    return r;
+  }
+  if (n.IsMap() && n["table"]) {
+    const Table& t = tables.get(n["table"], field + ".table");
+    if (t.time.size() < 4)
+      rd.fail(n["table"], field + ".table", t.path + " has " + std::to_string(t.time.size()) +
+                                                " rows; a prescribed motion's q̈ needs a spline through at least 4");
+    return read_target(rd, n, field, joint, tables);
+  }
+  if (n.IsMap()) {
+    rd.keys(n, field, {"offset", "constant", "amplitude", "frequency", "phase"});
+    if (n["offset"] && n["constant"]) rd.fail(n["constant"], field + ".constant", "give offset or constant, not both");
+    JointTarget r;
+    if (n["offset"]) r.constant = rd.number(n["offset"], field + ".offset");
+    if (n["constant"]) r.constant = rd.number(n["constant"], field + ".constant");
+    if (n["amplitude"]) r.amplitude = rd.number(n["amplitude"], field + ".amplitude");
+    if (n["frequency"]) r.frequency = rd.number(n["frequency"], field + ".frequency");
+    if (n["phase"]) r.phase = rd.number(n["phase"], field + ".phase");
+    return r;
+  }
+  if (!n.IsScalar())
+    rd.fail(n, field, "expected a number, {offset, amplitude, frequency, phase}, {table, column} or {slew: {from, to, "
+                      "start, duration}}, got " + Reader::show(n));
+  return read_target(rd, n, field, joint, tables);
 }
 
 double non_negative(const Reader& rd, const YAML::Node& n, const std::string& field) {
@@ -181,6 +225,38 @@ void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, 
               "unknown controller '" + excerpt(kind) + "'" + did_you_mean(kind, {"pd", "gravity_compensation", "computed_torque"}));
     }
     out.push_back(std::move(c));
+  }
+}
+
+void read_prescribed(const Reader& rd, const YAML::Node& n, const YAML::Node& initial, const Model& m, VecX& q0,
+                     VecX& v0, std::vector<PrescribedInput>& out) {
+  if (!n.IsMap())
+    rd.fail(n, "prescribed", "expected a map from joint name to its motion, got " + Reader::show(n));
+  Tables tables(rd);
+  for (auto it = n.begin(); it != n.end(); ++it) {
+    const std::string f = "prescribed." + it->first.Scalar();
+    const int i = one_dof_joint(rd, m, it->first, "prescribed");
+    PrescribedInput p;
+    p.joint = m.joint_names[size_t(i)];
+    p.body = i, p.dof = m.idx_v[i], p.coord = m.idx_q[i];
+    p.target = read_profile(rd, it->second, f, p.joint, tables);
+    // the start is the motion's: an initial value the file gives must agree with it
+    double q = 0, qd = 0, qdd = 0;
+    p.at(0.0, q, qd, qdd);
+    for (const auto& [part, given, value] : {std::tuple{"q", &q0, q}, std::tuple{"qd", &v0, qd}}) {
+      const YAML::Node g = initial && initial[part] ? initial[part][p.joint] : YAML::Node();
+      if (g && g.IsScalar()) {
+        const double x = rd.number(g, std::string("initial.") + part + "." + p.joint);
+        if (!(std::abs(x - value) <= 1e-9 * std::max(1.0, std::abs(value))))
+          rd.fail(g, std::string("initial.") + part + "." + p.joint,
+                  "joint '" + p.joint + "' is prescribed (" + f + "), which starts it at " + Reader::show_number(value) +
+                      ", not " + Reader::show_number(x) + "; leave it out of initial: or make them agree");
+      }
+      (*given)(std::string(part) == "q" ? p.coord : p.dof) = value;
+    }
+    if (std::any_of(out.begin(), out.end(), [&](const PrescribedInput& o) { return o.body == i; }))
+      rd.fail(it->first, f, "joint '" + p.joint + "' is prescribed twice");
+    out.push_back(std::move(p));
   }
 }
 

@@ -163,6 +163,10 @@ Model build_located(const Reader& rd, const BodyNodes& bodies, const Vec3& gravi
 void read_limits(const Reader& rd, const YAML::Node& n, Model& m);
 void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0,
                       std::vector<ControllerInput>& out);
+// `prescribed: {joint: motion}` (1-DOF joints): each joint's motion, and its start into q0 and v0,
+// where `initial` (the file's initial:, may be undefined) must agree with it
+void read_prescribed(const Reader& rd, const YAML::Node& n, const YAML::Node& initial, const Model& m, VecX& q0,
+                     VecX& v0, std::vector<PrescribedInput>& out);
 
 // scenario_sensitivity.cpp: `simulation: sensitivities: {initial_state, parameters}`, the bodies
 // checked against the model's

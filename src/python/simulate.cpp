@@ -16,6 +16,7 @@
 #include <csignal>
 #include <cstdio>
 #include <exception>
+#include <memory>
 
 namespace soadyn::python {
 
@@ -76,8 +77,73 @@ ControlFunction python_controller(const py::object& f, const Model& model, py::o
   };
 }
 
-py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std::optional<std::string>& output,
-              const py::object& controller) {
+// A Python motion f(t) -> (q, qd, qdd) as a prescribed joint's function: the GIL taken for the
+// call only; an exception it raises (kept in `raised`) or a result that is not three finite
+// numbers ends the run there, as a controller's does.
+std::function<void(double, double&, double&, double&)> python_motion(const py::object& callable,
+                                                                     const std::string& joint, py::object& raised) {
+  // held by a shared pointer, so that copies of the function made without the GIL touch no
+  // reference count; the last one lets go of the callable with the GIL
+  std::shared_ptr<py::object> held(new py::object(callable), [](py::object* o) {
+    py::gil_scoped_acquire gil;
+    delete o;
+  });
+  return [held, joint, &raised](double t, double& q, double& qd, double& qdd) {
+    py::gil_scoped_acquire gil;
+    const py::object& f = *held;
+    char at[32];
+    std::snprintf(at, sizeof at, "%.9g", t);
+    std::string why;
+    try {
+      const py::tuple out = py::tuple(f(t));
+      if (out.size() == 3) {
+        q = out[0].cast<double>(), qd = out[1].cast<double>(), qdd = out[2].cast<double>();
+        if (std::isfinite(q) && std::isfinite(qd) && std::isfinite(qdd)) return;
+        why = "prescribed motion of joint '" + joint + "' returned a non-finite value at t = " + at + " s";
+      } else {
+        why = "prescribed motion of joint '" + joint + "' returned " + std::to_string(out.size()) +
+              " values at t = " + at + " s; expected (q, qd, qdd)";
+      }
+    } catch (py::error_already_set& e) {
+      raised = e.value();
+      throw SimulationError("the prescribed motion of joint '" + joint + "' raised at t = " + at + " s: " + e.what(), t);
+    } catch (const py::cast_error&) {
+      why = "prescribed motion of joint '" + joint + "' returned something other than (q, qd, qdd) at t = " + at + " s";
+    }
+    raised = py::handle(error_type)(why);
+    throw SimulationError(why, t);
+  };
+}
+
+// scene with the caller's prescribed joints: {joint: f(t) -> (q, qd, qdd)} over the scene's own
+// (a joint the scene prescribes too takes the caller's); each joint's start from f(0)
+Scenario with_prescribed(const Scenario& scene, const py::dict& prescribed, py::object& raised) {
+  Scenario sc = scene;
+  const Model& m = sc.model;
+  for (const auto& [key, f] : prescribed) {
+    const std::string joint = py::str(key);
+    const int i = m.joint_index(joint);
+    if (i < 0) throw Error("prescribed: no joint named '" + joint + "'" + did_you_mean(joint, m.joint_names));
+    if (m.nv_i[i] != 1 || m.nq_i[i] != 1)
+      throw Error("prescribed: joint '" + joint + "' is " + std::string(to_string(m.joint_type[i])) +
+                  "; prescribed motion is for 1-DOF joints (revolute, prismatic, helical)");
+    if (!PyCallable_Check(f.ptr())) throw Error("prescribed: joint '" + joint + "': expected a callable f(t) -> (q, qd, qdd)");
+    std::erase_if(sc.inputs.prescribed, [&](const PrescribedInput& p) { return p.body == i; });
+    PrescribedInput p;
+    p.joint = joint, p.body = i, p.dof = m.idx_v[i], p.coord = m.idx_q[i];
+    p.function = python_motion(py::reinterpret_borrow<py::object>(f), joint, raised);
+    double q = 0, qd = 0, qdd = 0;
+    p.at(0.0, q, qd, qdd);  // the GIL is held: the start, checked now
+    sc.q0(p.coord) = q, sc.v0(p.dof) = qd;
+    sc.inputs.prescribed.push_back(std::move(p));
+  }
+  return sc;
+}
+
+py::tuple run(const Scenario& scene, const SimulationSettings& settings, const std::optional<std::string>& output,
+              const py::object& controller, const py::object& prescribed) {
+  py::object raised = py::none();  // the controller's or a prescribed motion's exception
+  const Scenario sc = prescribed.is_none() ? scene : with_prescribed(scene, prescribed.cast<py::dict>(), raised);
   // the run as C++'s simulate(sc, options) does it: everything checked before any file is touched
   SimulateOptions o;
   o.settings = settings;
@@ -86,7 +152,6 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
   o.stop = &stop;
   py::object pending = py::none();
   o.poll = signal_poll(stop, pending);
-  py::object raised = py::none();  // the controller's exception
   if (!controller.is_none()) o.controller = python_controller(controller, sc.model, raised);
   Trajectory tr;
   {
@@ -107,7 +172,11 @@ py::tuple run(const Scenario& sc, const SimulationSettings& settings, const std:
                   "body_orientation"_a = owned(std::move(tr.body_orientation), {T, nb, 4}),
                   "body_com"_a = owned(std::move(tr.body_com), {T, nb, 3}),
                   "linear_momentum"_a = owned(std::move(tr.linear_momentum), {T, 3}),
-                  "angular_momentum"_a = owned(std::move(tr.angular_momentum), {T, 3}));
+                  "angular_momentum"_a = owned(std::move(tr.angular_momentum), {T, 3}),
+                  "work_prescribed"_a = owned(std::move(tr.work_prescribed)),
+                  "prescribed_torque"_a =
+                      owned(std::move(tr.prescribed_torque), {T, py::ssize_t(tr.prescribed_joints.size())}),
+                  "prescribed_joints"_a = tr.prescribed_joints);
   if (settings.sensitivities.any()) {
     // (T, nx, nx) and (T, nx, np), with the names of x and π (sensitivity.hpp)
     const SensitivityPlan plan = plan_sensitivities(sc.model, settings.sensitivities);
@@ -170,6 +239,7 @@ std::function<void()> signal_poll(std::atomic<int>& stop, py::object& pending) {
 
 void bind_simulate(py::module_& m) {
   m.def("_simulate", &run, "scene"_a, "settings"_a, "output"_a = py::none(), "controller"_a = py::none(),
+        "prescribed"_a = py::none(),
         "The run behind soadyn.simulate: (arrays, summary, exception from a signal handler or the controller, or None, "
         "warnings).");
 }

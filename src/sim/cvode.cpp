@@ -35,7 +35,7 @@ int free(SUNLinearSolver S) {
 }  // namespace
 
 SUNLinearSolver make(const System& sys, SUNContext ctx) {
-  auto c = std::make_unique<Content>(Content{NewtonSolver(sys.model, sys.nquad)});
+  auto c = std::make_unique<Content>(Content{NewtonSolver(sys)});
   SUNLinearSolver S = SUNLinSolNewEmpty(ctx);
   if (!S) return nullptr;
   S->ops->gettype = type;

@@ -116,7 +116,7 @@ class Cvode : public Integrator {
       if (!nls_) throw Error("CVODE: could not allocate the fixed-point solver");
       check(CVodeSetNonlinearSolver(mem, nls_.get()), "CVodeSetNonlinearSolver");
     }
-    if (project && sys.model.has_quaternions()) {
+    if (project && !sys.quaternions().empty()) {
       projection_ = CVodeSetProjFn(mem, &Cvode::project) == CV_SUCCESS;
       error_message_.clear();
     }
@@ -163,7 +163,7 @@ class Cvode : public Integrator {
   }
 
   std::string quaternion_handling() const override {
-    if (!sys_.model.has_quaternions()) return "none";
+    if (sys_.quaternions().empty()) return "none";
     return projection_ ? "CVODE projection (CVodeSetProjFn) onto the unit quaternion"
                        : "normalized in the dynamics and at every output (CVODE projection needs BDF)";
   }
@@ -219,7 +219,7 @@ class Cvode : public Integrator {
   void take_state(double tn, double& t, VecX& y) const {
     t = tn;
     y = map(y_.get());
-    if (!projection_) sys_.model.normalize(y.head(sys_.model.nq));
+    if (!projection_) sys_.normalize(y.head(sys_.nq_state()));
   }
 
   // the schedule's root functions, registered with CVODE once (CVodeRootInit): only crossings from
@@ -310,14 +310,10 @@ class Cvode : public Integrator {
   // unit quaternions: corr = normalized − current; the error's component along the quaternion removed
   static int project(double, N_Vector ycur, N_Vector corr, double, N_Vector err, void* user) {
     auto* self = static_cast<Cvode*>(user);
-    const Model& m = self->sys_.model;
     auto y = map(ycur);
     auto c = map(corr);
     c.setZero();
-    for (int i = 0; i < m.nbodies; ++i) {
-      const int offset = joint_quaternion(m, i);
-      if (offset < 0) continue;
-      const int k = m.idx_q[i] + offset;
+    for (const int k : self->sys_.quaternions()) {
       const Eigen::Vector4d quat = y.segment<4>(k);
       const double n = quat.norm();
       if (!(n > 0) || !std::isfinite(n)) return 1;

@@ -106,7 +106,7 @@ class FixedStep : public Integrator {
     return s;
   }
   std::string quaternion_handling() const override {
-    return sys_.model.has_quaternions() ? "renormalized after each step" : "none";
+    return sys_.quaternions().empty() ? "none" : "renormalized after each step";
   }
 
  protected:
@@ -123,16 +123,16 @@ class FixedStep : public Integrator {
     prev_ = y;
     step(t, h, y);
     ++stats_.steps;
-    sys_.model.normalize(y.head(sys_.model.nq));
+    sys_.normalize(y.head(sys_.nq_state()));
   }
   void check(double t, double h, const VecX& y) const {
     if (first_non_finite(y) < 0) return;
     // worst DOF: the largest velocity in the last finite state, the one blowing up
     Eigen::Index worst = 0;
-    prev_.segment(sys_.model.nq, sys_.model.nv).cwiseAbs().maxCoeff(&worst);
+    prev_.segment(sys_.nq_state(), sys_.nv_state()).cwiseAbs().maxCoeff(&worst);
     std::ostringstream os;
     os << "unstable at t = " << t << " s: the state is not finite after a step of " << h << " s; worst DOF "
-       << sys_.component_name(sys_.model.nq + int(worst)) << " = " << prev_(sys_.model.nq + worst) << " before it";
+       << sys_.component_name(sys_.nq_state() + int(worst)) << " = " << prev_(sys_.nq_state() + worst) << " before it";
     throw SimulationError(os.str(), t);
   }
 
@@ -156,11 +156,11 @@ class SemiImplicitEuler : public FixedStep {
   // Symplectic when 𝓜 is constant; with 𝓜(q) the velocity is not the canonical momentum and the
   // map is not symplectic (its energy error grows secularly, test_integrators)
   void step(double t, double h, VecX& y) override {
-    const int nq = sys_.model.nq, nv = sys_.model.nv;
+    const int nq = sys_.nq_state(), nv = sys_.nv_state();
     f(t, y, k1_);
     y.segment(nq, nv) += h * k1_.segment(nq, nv);
     y.tail(sys_.nquad) += h * k1_.tail(sys_.nquad);
-    sys_.model.qdot(y.head(nq), y.segment(nq, nv), k2_.head(nq));
+    sys_.qdot(y.head(nq), y.segment(nq, nv), k2_.head(nq));
     y.head(nq) += h * k2_.head(nq);
   }
 };
@@ -301,7 +301,7 @@ class ImplicitMidpoint : public FixedStep {
         analytic_(settings.jacobian == Jacobian::Analytic),
         full_(settings.newton == Newton::Full),
         J_(s.size(), s.size()),
-        newton_(s.model, s.nquad),
+        newton_(s),
         delta_(s.size()) {
     if (analytic_) s.prepare_jacobian();  // sized here, so no step allocates
   }
@@ -424,6 +424,8 @@ std::unique_ptr<Integrator> make_integrator(Method method, System& system, const
   const IntegratorInfo& info = find_integrator(method);
   if (info.refuses)
     if (const std::string why = info.refuses(system.model); !why.empty()) throw Error(why);
+  if (method == Method::SymplecticEuler && system.has_prescribed())
+    throw Error("symplectic-euler does not take prescribed motion; use rk4, implicit-midpoint or cvode-adams / cvode-bdf");
   return info.make(system, settings, t0, y0);
 }
 

@@ -1,4 +1,5 @@
 #include "soadyn/sim/newton_solver.hpp"
+#include "soadyn/sim/system.hpp"
 
 namespace soadyn {
 
@@ -11,30 +12,37 @@ bool regular(const LU& lu) {
 }
 }  // namespace
 
-NewtonSolver::NewtonSolver(const Model& m, int nquad)
-    : nq_(m.nq),
-      nv_(m.nv),
+NewtonSolver::NewtonSolver(int nq, int nv, int nquad)
+    : nq_(nq),
+      nv_(nv),
       nw_(nquad),
-      n_(m.nq + m.nv + nquad),
-      joint_of_q_(m.nq),
+      n_(nq + nv + nquad),
+      joint_of_q_(nq),
       J_(MatX::Zero(n_, n_)),
-      G_(MatX::Zero(m.nq, m.nv)),
+      G_(MatX::Zero(nq, nv)),
       S_(n_, n_),
-      lu_s_(m.nv),
+      lu_s_(nv),
       lu_full_(n_),
-      y_(m.nq),
-      r_(m.nv),
+      y_(nq),
+      r_(nv),
       x_(n_) {
-  blocks_.resize(m.nbodies);
-  for (int i = 0; i < m.nbodies; ++i) {
-    blocks_[i].iq = m.idx_q[i];
-    blocks_[i].mq = m.nq_i[i];
-    blocks_[i].iv = m.idx_v[i];
-    blocks_[i].nv = m.nv_i[i];
-    for (int k = 0; k < m.nq_i[i]; ++k) joint_of_q_[m.idx_q[i] + k] = i;
-  }
-  unit_.reserve(m.nq);
-  general_.reserve(m.nbodies);
+  unit_.reserve(nq);
+}
+
+// one joint's block: its q entries [iq, iq + mq) and v entries [iv, iv + nv) in y
+void NewtonSolver::add_joint(int iq, int mq, int iv, int nv) {
+  const int b = int(blocks_.size());
+  blocks_.push_back(Block{iq, mq, iv, nv, true, {}});
+  for (int k = 0; k < mq; ++k) joint_of_q_[size_t(iq + k)] = b;
+  general_.reserve(blocks_.size());
+}
+
+NewtonSolver::NewtonSolver(const Model& m, int nquad) : NewtonSolver(m.nq, m.nv, nquad) {
+  for (int i = 0; i < m.nbodies; ++i) add_joint(m.idx_q[i], m.nq_i[i], m.idx_v[i], m.nv_i[i]);
+}
+
+NewtonSolver::NewtonSolver(const System& sys) : NewtonSolver(sys.nq_state(), sys.nv_state(), sys.nquad) {
+  for (const System::StateJoint& j : sys.state_joints()) add_joint(j.iq, j.mq, j.iv, j.nv);
 }
 
 // J has the structure of the header, entry by entry: in the q rows only the joint's own columns

@@ -86,6 +86,35 @@ void check_limits(const Scenario& sc, const SimulationSettings& s) {
   }
 }
 
+// prescribed motion (Inputs::prescribed): the methods and features that take it, and no limit
+// enforced on a joint whose motion is given
+void check_prescribed(const Scenario& sc, const SimulationSettings& s) {
+  const std::vector<PrescribedInput>& pres = sc.inputs.prescribed;
+  if (pres.empty()) return;
+  const std::string scene = sc.path.empty() ? "" : sc.path + ": ";
+  const Model& m = sc.model;
+  for (const PrescribedInput& p : pres)
+    if (p.body < 0 || p.body >= m.nbodies || m.nv_i[p.body] != 1 || m.nq_i[p.body] != 1)
+      throw Error(scene + "prescribed: joint '" + p.joint + "' is not a 1-DOF joint of the model");
+  if (s.method == Method::SymplecticEuler)
+    throw Error(scene + "symplectic-euler does not take prescribed motion (the free joints' momenta change with the "
+                "given motion); use rk4, implicit-midpoint or cvode-adams / cvode-bdf");
+  if (s.limits && m.has_limits()) {
+    for (const PrescribedInput& p : pres) {
+      const int k = p.dof;
+      const auto it = sc.locations.find("prescribed." + p.joint);
+      const std::string where = it == sc.locations.end() ? scene : it->second + ": ";
+      if (std::isfinite(m.lower[size_t(k)]) || std::isfinite(m.upper[size_t(k)]))
+        throw Error(where + "prescribed: joint '" + p.joint + "' has limits, and limits: true would enforce them on a "
+                    "motion that is given; drop its limits or set limits: false");
+    }
+    throw Error(scene + "limits: true is not available with prescribed motion yet (the limits' events act on the full "
+                "state); set limits: false");
+  }
+  if (s.sensitivities.any())
+    throw Error(scene + "sensitivities are not available with prescribed motion yet");
+}
+
 // what the settings allow but make a run other than written: a tick off the steps, a step longer
 // than the run or the output interval, one output interval, a tolerance below double precision
 std::vector<std::string> run_warnings(const SimulationSettings& s) {
@@ -120,6 +149,7 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
     throw Error("simulation settings: control_dt must be 0 (continuous) or a positive finite number, got " + short_number(s.control_dt));
   if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty()) throw Error("simulation settings: " + p);
   check_sensitivities(sc, s, false);
+  check_prescribed(sc, s);
   return run_warnings(s);
 }
 

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace soadyn::detail {
 
@@ -41,7 +42,7 @@ void EnergyBooks::on_sample(const Sample& s) {
   if (!started_) E0_ = s.total + s.impact_loss, started_ = true;
   peak_T_ = std::max(peak_T_, s.kinetic);
   const double scale = std::max({std::abs(E0_), peak_T_, 1e-300});
-  last_ = std::abs(s.total - E0_ - s.work_inputs + s.impact_loss) / scale;
+  last_ = std::abs(s.total - E0_ - s.work_inputs - s.work_prescribed + s.impact_loss) / scale;
   max_ = std::max(max_, last_);
 }
 
@@ -118,7 +119,13 @@ Scheduler::Scheduler(System& sys, const SimulationSettings& s, ControlFunction l
       control_dt_(s.control_dt),
       outputs_(long(soadyn::output_count(s))),
       law_(std::move(law)),
-      observers_(observers) {}
+      observers_(observers) {
+  for (const PrescribedInput& p : sys.inputs.prescribed)
+    for (const double c : p.target.corners())
+      if (c > 0 && c < t_end_) corners_.push_back(c);
+  std::sort(corners_.begin(), corners_.end());
+  corners_.erase(std::unique(corners_.begin(), corners_.end()), corners_.end());
+}
 
 void Scheduler::add(EventKind& kind) {
   kinds_.push_back(&kind);
@@ -143,20 +150,29 @@ double Scheduler::energy_lost() const {
   return lost;
 }
 
+namespace {
+bool same_time(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(1.0, std::abs(b)); }
+}  // namespace
+
 Schedule::Stop Scheduler::next_stop(double t_out) {
-  if (!law_) return {t_out, false};
-  // the next tick t_k = k · control_dt: t_out itself within rounding, or before it
-  const double next = double(ticks_) * control_dt_;
-  if (std::abs(next - t_out) <= 1e-12 * std::max(1.0, t_out)) return {t_out, true};
+  // the next tick t_k = k · control_dt or the next corner: t_out itself within rounding, or before it
+  const double tick = law_ ? double(ticks_) * control_dt_ : std::numeric_limits<double>::infinity();
+  const double corner = next_corner_ < corners_.size() ? corners_[next_corner_] : std::numeric_limits<double>::infinity();
+  const double next = std::min(tick, corner);
+  if (same_time(next, t_out)) return {t_out, true};
   if (next < t_out) return {next, true};
   return {t_out, false};
 }
 
 void Scheduler::at_stop(double t, VecX& y) {
+  // a corner: only the restart that follows
+  while (next_corner_ < corners_.size() && (corners_[next_corner_] < t || same_time(corners_[next_corner_], t)))
+    ++next_corner_;
+  if (!law_ || !same_time(double(ticks_) * control_dt_, t)) return;
   // τ_c(t_k, q, v), held until the next tick
-  const Model& m = sys_.model;
   sys_.control.setZero();
-  law_(t, y.head(m.nq), y.segment(m.nq, m.nv), sys_.control);
+  sys_.expand(t, y.data());  // the model's q and v at (t, y)
+  law_(t, sys_.q, sys_.v, sys_.control);
   ++ticks_;
 }
 

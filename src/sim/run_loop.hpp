@@ -40,7 +40,7 @@ class Observers {
   std::vector<LoopObserver*> list_;
 };
 
-// The energy balance's error at each sample, |E(t) − E(0) − W(t) + L(t)| / max(|E(0)|, peak T),
+// The energy balance's error at each sample, |E(t) − E(0) − W(t) − W_p(t) + L(t)| / max(|E(0)|, peak T),
 // E(0) the first sample's (before any impact there: the energy it took is in L); its maximum and
 // last value go into the summary.
 class EnergyBooks : public LoopObserver {
@@ -127,7 +127,8 @@ class LimitEvents : public EventKind {
 
 // The run's schedule: the output grid (outputs every output_interval, the last at t_end), the
 // control ticks of a sampled controller (τ_c(t_k, q, v) held in System::control from tick
-// k = t / control_dt on) and the events of its event kinds, whose root functions it lays end to end.
+// k = t / control_dt on), the corners of prescribed motions and the events of its event kinds,
+// whose root functions it lays end to end.
 class Scheduler : public Schedule {
  public:
   // `law`: the sampled controller (empty: none, or continuous); each event goes to `observers`
@@ -144,7 +145,7 @@ class Scheduler : public Schedule {
 
   Stop next_stop(double t_out) override;
   void at_stop(double t, VecX& y) override;
-  bool exact_stops() const override { return bool(law_); }
+  bool exact_stops() const override { return bool(law_) || !corners_.empty(); }
   int root_count() const override { return nroots_; }
   void roots(double t, const double* y, double* g) override;
   void at_roots(double t, VecX& y, const std::vector<int>& which) override;
@@ -161,6 +162,11 @@ class Scheduler : public Schedule {
   std::vector<int> offsets_;  // kinds_[j]'s first root function
   int nroots_ = 0;
   long ticks_ = 0;            // control ticks taken: the next one at ticks_ · control_dt
+  // the prescribed motions' corners after t = 0 (JointTarget::corners), in order: the steps end
+  // at each (the integrator restarts there, so that no step strides over a slew that has not
+  // begun), next_corner_ the next one ahead
+  std::vector<double> corners_;
+  size_t next_corner_ = 0;
   std::vector<int> which_;    // one kind's roots, at_roots' scratch
   long events_here_ = 0;      // events in a row at t_events_, time not advancing
   double t_events_ = -1.0;

@@ -30,18 +30,24 @@ Sample observe(System& sys, double t, const VecX& y) {
   Data& d = sys.data;
   Sample s;
   s.t = t;
-  s.q = y.head(m.nq);
-  s.qd = y.segment(m.nq, m.nv);
-  const VecX& q = s.q;
-  if (sys.nquad > 0) {
-    s.work_inputs = y(m.nq + m.nv);
-    s.dissipated = y(m.nq + m.nv + 1);
-  }
-  // q̈ as the integrator sees it: inputs, controllers, joints held at a limit (rhs does the
-  // kinematics and velocities; not counted as the integrator's work)
+  // q̈ as the integrator sees it: inputs, controllers, joints held at a limit, prescribed motion
+  // (rhs does the kinematics and velocities; not counted as the integrator's work)
   VecX ydot(sys.size());
   sys.rhs(t, y.data(), ydot.data());
   --sys.rhs_evals;
+  // the model's q and v: the state's, and the prescribed joints' from their motion at t
+  s.q = sys.q;
+  s.qd = sys.v;
+  const VecX& q = s.q;
+  const int w = sys.nq_state() + sys.nv_state();
+  if (sys.nquad > 0) {
+    s.work_inputs = y(w);
+    s.dissipated = y(w + 1);
+  }
+  if (sys.nquad > 2) {
+    s.work_prescribed = y(w + 2);
+    s.prescribed_torque = sys.prescribed_tau;
+  }
   s.qdd = d.qdd;
   s.control = sys.feedback_tau;
   if (sys.controlled) s.control += sys.control;
@@ -182,7 +188,7 @@ Run::Run(const Scenario& sc, const SimulationSettings& s, ControlFunction contro
   } else if (m.has_limits()) {
     watch.emplace(m);
   }
-  m.normalize(y.head(m.nq));
+  sys.normalize(y.head(sys.nq_state()));
   if (s.sensitivities.any()) {
     SensitivityIntegrator si = make_sensitivity_integrator(sys, s, plan_sensitivities(m, s.sensitivities), t, y);
     integrator = std::move(si.integrator);

@@ -13,38 +13,95 @@
 
 namespace soadyn {
 
+namespace {
+std::vector<int> prescribed_bodies(const Model& m, const Inputs& in) {
+  std::vector<int> bodies;
+  for (const PrescribedInput& p : in.prescribed) {
+    if (p.body < 0 || p.body >= m.nbodies || m.nv_i[p.body] != 1 || m.nq_i[p.body] != 1)
+      throw Error("prescribed motion: joint '" + p.joint + "' is not a 1-DOF joint of the model");
+    bodies.push_back(p.body);
+  }
+  return bodies;
+}
+}  // namespace
+
 System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
     : model(m),
       inputs(in),
       method(fd),
-      nquad(in.does_work() || control_work ? 2 : 0),
+      nquad(!in.prescribed.empty() ? 3 : in.does_work() || control_work ? 2 : 0),
       data(m),
       q(m.nq),
       v(m.nv),
       tau(m.nv),
       qd(m.nq),
+      qdd_given(VecX::Zero(m.nv)),
+      tau_hybrid(VecX::Zero(m.nv)),
+      prescribed_tau(VecX::Zero(Eigen::Index(in.prescribed.size()))),
       control(VecX::Zero(m.nv)),
       feedback_tau(VecX::Zero(m.nv)),
       control_work(control_work),
-      eval_y_(VecX::Zero(m.nq + m.nv + nquad)),
-      y_work_(m.nq + m.nv + nquad),
-      f0_(m.nq + m.nv + nquad),
-      f1_(m.nq + m.nv + nquad),
+      locked_(m, prescribed_bodies(m, in)),
+      nq_state_(m.nq - locked_.nv_locked),
+      nv_state_(m.nv - locked_.nv_locked),
+      eval_y_(VecX::Zero(size())),
+      y_work_(size()),
+      f0_(size()),
+      f1_(size()),
       dP_(m.nv),
-      dD_(m.nv) {}
+      dD_(m.nv) {
+  // the state's layout: every joint not prescribed, in the tree's order
+  for (int i = 0; i < m.nbodies; ++i) {
+    if (locked_.locked[size_t(i)]) continue;
+    const StateJoint sj{int(q_index_.size()), m.nq_i[i], int(v_index_.size()), m.nv_i[i]};
+    if (const int k = joint_quaternion(m, i); k >= 0) quaternions_.push_back(sj.iq + k);
+    for (int c = 0; c < m.nq_i[i]; ++c) q_index_.push_back(m.idx_q[i] + c);
+    for (int c = 0; c < m.nv_i[i]; ++c) v_index_.push_back(m.idx_v[i] + c);
+    state_joints_.push_back(sj);
+  }
+}
 
 VecX System::state(const VecX& q0, const VecX& v0) const {
   VecX y = VecX::Zero(size());
-  y.head(model.nq) = q0;
-  y.segment(model.nq, model.nv) = v0;
+  for (int k = 0; k < nq_state_; ++k) y(k) = q0(q_index_[size_t(k)]);
+  for (int k = 0; k < nv_state_; ++k) y(nq_state_ + k) = v0(v_index_[size_t(k)]);
   return y;
+}
+
+void System::normalize(Eigen::Ref<VecX> q_state) const {
+  for (const int k : quaternions_) q_state.segment<4>(k).normalize();
+}
+
+void System::qdot(const Eigen::Ref<const VecX>& q_state, const Eigen::Ref<const VecX>& v_state, Eigen::Ref<VecX> out) {
+  if (!has_prescribed()) {
+    model.qdot(q_state, v_state, out);
+    return;
+  }
+  // joint by joint: the prescribed ones' entries (1-DOF: q̇ = v) play no part in the others'
+  for (int k = 0; k < nq_state_; ++k) q(q_index_[size_t(k)]) = q_state(k);
+  for (int k = 0; k < nv_state_; ++k) v(v_index_[size_t(k)]) = v_state(k);
+  model.qdot(q, v, qd);
+  for (int k = 0; k < nq_state_; ++k) out(k) = qd(q_index_[size_t(k)]);
+}
+
+void System::expand(double t, const double* y) {
+  linearized_ = false;  // q and v no longer those of data's evaluation
+  evaluated_ = false;
+  if (!has_prescribed()) {
+    q = Eigen::Map<const VecX>(y, model.nq);
+    v = Eigen::Map<const VecX>(y + model.nq, model.nv);
+    return;
+  }
+  for (int k = 0; k < nq_state_; ++k) q(q_index_[size_t(k)]) = y[k];
+  for (int k = 0; k < nv_state_; ++k) v(v_index_[size_t(k)]) = y[nq_state_ + k];
+  // q*, q̇*, q̈* at t
+  for (const PrescribedInput& p : inputs.prescribed) p.at(t, q(p.coord), v(p.dof), qdd_given(p.dof));
 }
 
 void System::at_state(double t, const double* y) {
   linearized_ = false;  // data is about to hold another evaluation
   evaluated_ = false;
-  q = Eigen::Map<const VecX>(y, model.nq);
-  v = Eigen::Map<const VecX>(y + model.nq, model.nv);
+  expand(t, y);
   update_kinematics(model, data, q);
   update_velocities(model, data, v);
   inputs.evaluate(t, q, v, tau);
@@ -59,6 +116,13 @@ void System::at_state(double t, const double* y) {
 void System::rhs(double t, const double* y, double* ydot) {
   ++rhs_evals;
   at_state(t, y);
+  if (has_prescribed()) {
+    rhs_prescribed(t, ydot);
+    evaluated_ = true;
+    eval_t_ = t;
+    eval_y_ = Eigen::Map<const VecX>(y, size());
+    return;
+  }
   forward_dynamics(model, data, tau, method);
   if (constraint) constraint->constrain(*this);  // held DOFs: their constraint forces
   model.qdot(q, v, qd);
@@ -77,6 +141,27 @@ void System::rhs(double t, const double* y, double* ydot) {
   eval_y_ = Eigen::Map<const VecX>(y, size());
 }
 
+// ẏ = [q̇_f; q̈_f; P; D; P_p]: q̈_f and τ_p by the hybrid dynamics; P_p = Σ τ_p q̇*, τ_p the
+// holding τ less the joint's own inputs (the motor's torque)
+void System::rhs_prescribed(double t, double* ydot) {
+  hybrid_dynamics(model, data, locked_, tau, qdd_given, tau_hybrid);
+  model.qdot(q, v, qd);
+  for (int k = 0; k < nq_state_; ++k) ydot[k] = qd(q_index_[size_t(k)]);
+  for (int k = 0; k < nv_state_; ++k) ydot[nq_state_ + k] = data.qdd(v_index_[size_t(k)]);
+  const Inputs::Power p = inputs.power(t, v);
+  double controller = 0.0, held = 0.0;
+  if (control_work) controller = feedback_tau.dot(v) + (controlled ? control.dot(v) : 0.0);
+  for (size_t j = 0; j < inputs.prescribed.size(); ++j) {
+    const int k = inputs.prescribed[j].dof;
+    prescribed_tau(Eigen::Index(j)) = tau_hybrid(k) - tau(k);
+    held += prescribed_tau(Eigen::Index(j)) * v(k);
+  }
+  const int w = nq_state_ + nv_state_;
+  ydot[w] = p.inputs + controller;
+  ydot[w + 1] = p.dissipated;
+  ydot[w + 2] = held;
+}
+
 bool System::holds_rhs_at(double t, const double* y) const {
   return evaluated_ && t == eval_t_ && Eigen::Map<const VecX>(y, size()) == eval_y_;
 }
@@ -92,6 +177,10 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   const int nq = model.nq, nv = model.nv;
   prepare_jacobian();
   at_state(t, y);
+  if (has_prescribed()) {
+    jacobian_prescribed(t, J);
+    return;
+  }
   // q̈, ∂q̈/∂q (along the tangent), ∂q̈/∂v with the inputs' terms, and 𝓜⁻¹: O(N²)
   forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
   const MatX& dq = derivatives->dqdd_dq;
@@ -110,7 +199,40 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   }
 }
 
+// ∂f/∂y of the free joints' state: the model's blocks (q̇'s joint by joint, the hybrid dynamics'
+// ∂q̈/∂q chained to the coordinates, ∂q̈/∂v), then the state's rows and columns of them.  W_p's row is
+// left zero: it feeds nothing back, and Newton converges on it with the rest
+void System::jacobian_prescribed(double t, Eigen::Ref<MatX> J) {
+  const int nq = model.nq, nv = model.nv, nqs = nq_state_, nvs = nv_state_;
+  if (Jqq_.rows() != nq) Jqq_.resize(nq, nq), Jqv_.resize(nq, nv), Jvq_.resize(nv, nq);
+  hybrid_dynamics_derivatives(model, data, locked_, v, tau, qdd_given, *derivatives, tau_hybrid, &inputs, solve_work_);
+  Jqq_.setZero(), Jqv_.setZero(), Jvq_.setZero();
+  qdot_jacobian(model, q, v, Jqq_, Jqv_);
+  add_times_tangent(model, q, derivatives->dqdd_dq, Jvq_);
+  const MatX& dv = derivatives->dqdd_dv;
+  J.setZero();
+  for (int c = 0; c < nqs; ++c) {
+    const int qc = q_index_[size_t(c)];
+    for (int r = 0; r < nqs; ++r) J(r, c) = Jqq_(q_index_[size_t(r)], qc);
+    for (int r = 0; r < nvs; ++r) J(nqs + r, c) = Jvq_(v_index_[size_t(r)], qc);
+  }
+  for (int c = 0; c < nvs; ++c) {
+    const int vc = v_index_[size_t(c)];
+    for (int r = 0; r < nqs; ++r) J(r, nqs + c) = Jqv_(q_index_[size_t(r)], vc);
+    for (int r = 0; r < nvs; ++r) J(nqs + r, nqs + c) = dv(v_index_[size_t(r)], vc);
+  }
+  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v) on the free DOFs' columns
+  inputs.power_derivatives(t, v, dP_, dD_);
+  if (control_work && controlled) dP_ += control;
+  for (int c = 0; c < nvs; ++c) {
+    J(nqs + nvs, nqs + c) = dP_(v_index_[size_t(c)]);
+    J(nqs + nvs + 1, nqs + c) = dD_(v_index_[size_t(c)]);
+  }
+}
+
 long System::linearize(double t, const double* y) {
+  if (has_prescribed())
+    throw Error("the forward sensitivities and the adjoint are not available with prescribed motion yet");
   prepare_jacobian();
   const int n = size();
   if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
@@ -203,10 +325,14 @@ void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {
 }
 
 std::string System::component_name(int k) const {
-  if (k == model.nq + model.nv && nquad > 0) return "the inputs' work W (quadrature)";
-  if (k == model.nq + model.nv + 1 && nquad > 0) return "the dampers' dissipated energy D (quadrature)";
-  const bool is_q = k < model.nq;
-  const int idx = is_q ? k : k - model.nq;
+  const int w = nq_state_ + nv_state_;
+  if (k == w && nquad > 0) return "the inputs' work W (quadrature)";
+  if (k == w + 1 && nquad > 0) return "the dampers' dissipated energy D (quadrature)";
+  if (k == w + 2 && nquad > 2) return "the prescribed joints' work W_p (quadrature)";
+  const bool is_q = k < nq_state_;
+  const int at = is_q ? k : k - nq_state_;
+  if (at < 0 || at >= (is_q ? nq_state_ : nv_state_)) return "component " + std::to_string(k);
+  const int idx = is_q ? q_index_[size_t(at)] : v_index_[size_t(at)];
   const std::vector<std::string> names = is_q ? model.q_names() : model.v_names();
   if (idx < 0 || idx >= int(names.size())) return "component " + std::to_string(k);
   return "joint '" + names[idx] + "' (" + (is_q ? "q" : "qd") + ")";

@@ -47,6 +47,8 @@ void TrajectoryRecorder::on_sample(const Sample& s) {
   work_.push_back(s.work_inputs);
   dissipated_.push_back(s.dissipated);
   impact_loss_.push_back(s.impact_loss);
+  work_prescribed_.push_back(s.work_prescribed);
+  append(prescribed_torque_, s.prescribed_torque.data(), s.prescribed_torque.size());
   append(control_, s.control.data(), s.control.size());
   append(linear_, s.linear.data(), 3);
   append(angular_, s.angular.data(), 3);
@@ -73,7 +75,7 @@ void TrajectoryRecorder::on_finish(const RunSummary& r) {
   if (next_) next_->on_finish(r);
 }
 
-Trajectory TrajectoryRecorder::take(const Model& m) {
+Trajectory TrajectoryRecorder::take(const Model& m, const std::vector<PrescribedInput>& prescribed) {
   Trajectory tr;
   const Eigen::Index T = Eigen::Index(t_.size()), N = m.nbodies;
   const Eigen::Index nx0 = T > 0 ? Eigen::Index(dx_dx0_.size()) / T : 0, nxp = T > 0 ? Eigen::Index(dx_dpi_.size()) / T : 0;
@@ -87,6 +89,9 @@ Trajectory TrajectoryRecorder::take(const Model& m) {
   tr.work_inputs = column(work_);
   tr.dissipated = column(dissipated_);
   tr.impact_loss = column(impact_loss_);
+  tr.work_prescribed = column(work_prescribed_);
+  tr.prescribed_torque = rows(prescribed_torque_, T, Eigen::Index(prescribed.size()));
+  for (const PrescribedInput& p : prescribed) tr.prescribed_joints.push_back(p.joint);
   tr.control = rows(control_, T, T > 0 ? Eigen::Index(control_.size()) / T : m.nv);
   tr.linear_momentum = rows(linear_, T, 3);
   tr.angular_momentum = rows(angular_, T, 3);
@@ -108,6 +113,8 @@ Sample Trajectory::sample(Eigen::Index k) const {
   s.qdd = qdd.row(k).transpose();
   s.kinetic = kinetic_energy(k), s.potential = potential_energy(k), s.total = total_energy(k);
   s.work_inputs = work_inputs(k), s.dissipated = dissipated(k), s.impact_loss = impact_loss(k);
+  if (work_prescribed.size() == t.size()) s.work_prescribed = work_prescribed(k);
+  if (prescribed_torque.cols() > 0) s.prescribed_torque = prescribed_torque.row(k).transpose();
   s.control = control.row(k).transpose();
   s.linear = linear_momentum.row(k).transpose();
   s.angular = angular_momentum.row(k).transpose();
@@ -133,8 +140,9 @@ VecX Trajectory::energy_error() const {
 
 VecX Trajectory::balance_error() const {
   if (size() == 0) return VecX();
-  // (E − E(0) − W + L) / max(|E(0)|, peak T)
-  return (total_energy.array() - total_energy(0) - work_inputs.array() + impact_loss.array()) /
+  // (E − E(0) − W − W_p + L) / max(|E(0)|, peak T)
+  const VecX wp = work_prescribed.size() == size() ? work_prescribed : VecX::Zero(size());
+  return (total_energy.array() - total_energy(0) - work_inputs.array() - wp.array() + impact_loss.array()) /
          energy_scale(total_energy, kinetic_energy).array();
 }
 

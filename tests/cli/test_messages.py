@@ -112,6 +112,31 @@ class Messages(unittest.TestCase):
         self.assertIn("… (100004 bytes)' is named twice", err)
         self.assertLess(len(err), 600)
 
+    def test_bad_prescribed_motion_is_refused_in_one_line(self):
+        """prescribed: an unknown joint, a multi-DOF one, a table too short for q̈, an initial value
+        that disagrees, limits enforced on it, a misspelt key: each at its file's line and field"""
+        self.write("short.csv", "t,shoulder\n0,0\n1,0.5\n2,1\n")
+        ball = ARM.replace("type: revolute, name: elbow, axis: [0, 1, 0]", "type: ball, name: elbow")
+        cases = [
+            (ARM + "prescribed: {wrist: 0.5}\n", "p.yaml:16:14: prescribed: no joint named 'wrist'"),
+            (ball + "prescribed: {elbow: 0.5}\n", "p.yaml:16:14: prescribed: acts on 1-DOF joints"),
+            (ARM + "prescribed: {shoulder: {table: short.csv}}\n",
+             "p.yaml:16:32: prescribed.shoulder.table: "),
+            (ARM + "initial: {q: {shoulder: 0.2}}\nprescribed: {shoulder: {slew: {from: 0, to: 1, duration: 2}}}\n",
+             "p.yaml:16:25: initial.q.shoulder: joint 'shoulder' is prescribed (prescribed.shoulder), which starts it at 0, not 0.2"),
+            (ARM + "limits: {shoulder: [-1, 1]}\nprescribed: {shoulder: 0.5}\nsimulation: {limits: true}\n",
+             "p.yaml:17:24: prescribed: joint 'shoulder' has limits"),
+            (ARM + "prescribed: {shoulder: {slew: {from: 0, to: 1, time: 2}}}\n",
+             "p.yaml:16:48: prescribed.shoulder.slew: unknown key 'time'"),
+        ]
+        for text, want in cases:
+            self.write("p.yaml", text)
+            err = self.refused("run", "p.yaml", "-o", "out.h5")
+            self.assertIn(want, err)
+            self.assertFalse(os.path.exists(os.path.join(self.dir, "out.h5")))
+        self.assertIn("rows; a prescribed motion's q̈ needs a spline through at least 4",
+                      (self.write("p.yaml", cases[2][0]), self.refused("inspect", "p.yaml"))[1])
+
     def test_each_refused_combination_names_its_file_line_and_field(self):
         cases = [
             # a start beyond a joint's limit: at initial.q.J

@@ -1,9 +1,11 @@
 // Time per call against N, chains and binary trees: 𝓜 literal, composite, and from q alone (the
 // local-frame route), bias after [kin] + [vel] and from (q, v) alone (the body-axes route), inverse
-// dynamics, each forward-dynamics route, one full right-hand side.
+// dynamics, each forward-dynamics route, one full right-hand side, and the hybrid dynamics with a
+// quarter or a half of the joints prescribed.
 #include "models.hpp"
 
 #include "soadyn/algorithm/algorithms.hpp"
+#include "soadyn/algorithm/hybrid.hpp"
 #include "soadyn/sim/integrators.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 
@@ -107,6 +109,26 @@ template <bool B, FdMethod M> void Forward(benchmark::State& st) {
   });
 }
 
+// the same right-hand side with every `Every`-th joint prescribed (q̈ given there, τ solved): the
+// hybrid dynamics (hybrid.hpp), to set beside rhs_on on the same model
+template <bool B, int Every> void Hybrid(benchmark::State& st) {
+  Fixture f(int(st.range(0)), B);
+  std::vector<int> bodies;
+  for (int i = Every - 1; i < f.model.nbodies; i += Every) bodies.push_back(i);
+  const PrescribedJoints pj(f.model, bodies);
+  VecX tau_out(f.model.nv);
+  for (auto _ : st) {
+    update_kinematics(f.model, f.data, f.q);
+    update_velocities(f.model, f.data, f.v);
+    hybrid_dynamics(f.model, f.data, pj, f.tau, f.qdd, tau_out);
+    benchmark::DoNotOptimize(f.data.qdd.data());
+    benchmark::DoNotOptimize(tau_out.data());
+    benchmark::ClobberMemory();
+  }
+  st.counters["N"] = double(st.range(0));
+  st.counters["prescribed"] = double(bodies.size());
+}
+
 // one step of a fixed-step method, h = 1 ms, on the chain (O(N) route inside).  A method that
 // cannot take the step (symplectic-euler's Newton not converging on a long chain) is a row marked
 // failed with the integrator's reason (report.py lists it under "Not timed"), and the run goes on.
@@ -164,6 +186,8 @@ BENCHMARK(Inverse<false>)->Name("chain/inverse")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::Dense>)->Name("chain/rhs_dense")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::Sparse>)->Name("chain/rhs_sparse")->Apply(sizes);
 BENCHMARK(Forward<false, FdMethod::ArticulatedBody>)->Name("chain/rhs_on")->Apply(sizes);
+BENCHMARK(Hybrid<false, 4>)->Name("chain/rhs_hybrid_quarter")->Apply(sizes);
+BENCHMARK(Hybrid<false, 2>)->Name("chain/rhs_hybrid_half")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, euler, "euler")->Name("chain/step_euler")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, symplectic_euler, "symplectic-euler")->Name("chain/step_symplectic_euler")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, rk4, "rk4")->Name("chain/step_rk4")->Apply(sizes);
@@ -177,6 +201,7 @@ BENCHMARK(Inverse<true>)->Name("tree/inverse")->Apply(tree_sizes);
 BENCHMARK(Forward<true, FdMethod::Dense>)->Name("tree/rhs_dense")->Apply(tree_sizes);
 BENCHMARK(Forward<true, FdMethod::Sparse>)->Name("tree/rhs_sparse")->Apply(tree_sizes);
 BENCHMARK(Forward<true, FdMethod::ArticulatedBody>)->Name("tree/rhs_on")->Apply(tree_sizes);
+BENCHMARK(Hybrid<true, 4>)->Name("tree/rhs_hybrid_quarter")->Apply(tree_sizes);
 
 namespace soadyn::bench {
 void register_peers();  // bench_peers.cpp

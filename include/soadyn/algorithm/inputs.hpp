@@ -4,6 +4,7 @@
 
 #include "soadyn/multibody/types.hpp"
 
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -36,14 +37,36 @@ struct DamperInput {
 };
 
 // A joint's reference q_d(t) = constant + amplitude · sin(2π frequency t + phase), with its rate
-// and acceleration (a controller's target); or, when `table` is set, the cubic spline through a
-// tabulated column (table.hpp), the other fields then unused.
+// and acceleration (a controller's target, a prescribed joint's motion); or, when `table` is set,
+// the cubic spline through a tabulated column (table.hpp); or, when `slew` is set, a rest-to-rest
+// move from `from` to `to` over [start, start + duration], the quintic
+//   q_d = from + (to − from) (10 s³ − 15 s⁴ + 6 s⁵),  s = (t − start) / duration clamped to [0, 1],
+// whose rate and acceleration are zero at both ends (the other fields then unused).
+struct JointSlew {
+  double from = 0.0, to = 0.0, start = 0.0, duration = 1.0;
+};
 struct JointTarget {
   double constant = 0.0, amplitude = 0.0, frequency = 0.0, phase = 0.0;
   std::shared_ptr<const CubicSpline> table;
+  std::shared_ptr<const JointSlew> slew;
   double value(double t) const;
   double rate(double t) const;
   double acceleration(double t) const;
+  // the times where the motion's q̈ or its rate of change jumps (a slew's start and end, a
+  // table's first and last rows): an integrator's steps should end there
+  std::vector<double> corners() const;
+};
+
+// A joint whose motion is given (hybrid dynamics, hybrid.hpp): a 1-DOF joint following `target`,
+// or, when `function` is set, the caller's (q*, q̇*, q̈*)(t) (Python's prescribed=).  Its τ is
+// whatever holds that motion; the system (system.hpp) leaves its q and v out of the state.
+struct PrescribedInput {
+  std::string joint;
+  int body = -1, dof = -1, coord = -1;  // its body, its index into v and into q
+  JointTarget target;
+  std::function<void(double t, double& q, double& qd, double& qdd)> function;
+  // q*, q̇*, q̈* at t
+  void at(double t, double& q, double& qd, double& qdd) const;
 };
 
 // A built-in controller (controller.hpp computes it), each DOF's torque clamped to ±max_torque and,
@@ -66,6 +89,7 @@ struct Inputs {
   std::vector<SpringInput> springs;
   std::vector<DamperInput> dampers;
   std::vector<ControllerInput> controllers;  // evaluated by controller.hpp, not by evaluate()
+  std::vector<PrescribedInput> prescribed;   // joints whose motion is given (system.hpp), not by evaluate()
   bool empty() const { return torques.empty() && springs.empty() && dampers.empty(); }
   // τ(t, q, v): the generalized force the inputs apply
   void evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const;

@@ -56,6 +56,9 @@ class CubicSpline {
     double t = 0.0;
   };
   Swing swing() const;
+  // the first and last knots' times: outside them the end values are held (q̇ and q̈ jump there)
+  double t_first() const { return t_(0); }
+  double t_last() const { return t_(t_.size() - 1); }
 
  private:
   // k of the interval [t_k, t_{k+1}] holding t

@@ -92,6 +92,9 @@ struct LogGroups {
   bool impacts = false, control = false;
   // set by H5Log from settings.sensitivities (not part of parse() and str()): what /sensitivities holds
   std::shared_ptr<const SensitivityPlan> sensitivities = nullptr;
+  // set by H5Log from the scenario's prescribed joints (not part of parse() and str()): their DOFs,
+  // whose holding torques /prescribed logs (and, with energy, their work /energy/work_prescribed)
+  std::vector<int> prescribed = {};
   // "state,energy,momentum,bodies" (any subset, any order; "all"); throws soadyn::Error naming
   // the bad item
   static LogGroups parse(const std::string& text);

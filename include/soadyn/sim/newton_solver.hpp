@@ -24,10 +24,14 @@
 
 namespace soadyn {
 
+class System;
+
 class NewtonSolver {
  public:
   // the layout of y: the model's q and v, then nquad quadratures
   NewtonSolver(const Model& model, int nquad);
+  // the layout of a System's state (its free joints' q and v, then its quadratures)
+  explicit NewtonSolver(const System& system);
   // J = ∂f/∂y (n×n, n = nq + nv + nquad), copied; whether it has the structure above
   bool set_jacobian(const Eigen::Ref<const MatX>& J);
   // factors I − γJ for the J last set; false when it is singular (a zero or non-finite pivot)
@@ -46,6 +50,8 @@ class NewtonSolver {
     Eigen::PartialPivLU<SmallMat> lu;  // of P_i otherwise
   };
   bool has_structure() const;
+  NewtonSolver(int nq, int nv, int nquad);
+  void add_joint(int iq, int mq, int iv, int nv);
 
   int nq_, nv_, nw_, n_;
   std::vector<Block> blocks_;

@@ -21,6 +21,11 @@ struct Sample {
   // D(t) ≥ 0 the dampers' share, dissipated; both integrated by the integrator (System), so
   // E(t) − E(0) = W(t) up to its error
   double work_inputs = 0.0, dissipated = 0.0;
+  // prescribed motion (Inputs::prescribed): W_p(t), the work of the torques that hold the given
+  // motion since t = 0 (so E(t) − E(0) = W(t) + W_p(t) − L(t)), and those torques at t, one per
+  // prescribed joint in Inputs::prescribed's order (N·m or N; empty without prescribed motion)
+  double work_prescribed = 0.0;
+  VecX prescribed_torque;
   // L(t): the kinetic energy joint-limit impacts took since t = 0 (limits.hpp), so that
   // E(t) − E(0) = W(t) − L(t); and the controllers' τ_c at t (nv; zero without one)
   double impact_loss = 0.0;
@@ -44,7 +49,7 @@ struct RunSummary {
   std::string status = "running";     // "completed", "interrupted by SIGINT at t = …", or the error
   double t_reached = 0.0;
   bool completed = false;
-  // the energy-balance error |E(t) − E(0) − W(t) + L(t)| / max(|E(0)|, peak T): its maximum over the
+  // the energy-balance error |E(t) − E(0) − W(t) − W_p(t) + L(t)| / max(|E(0)|, peak T): its maximum over the
   // samples and its value at the last one (W ≡ 0 without torques or dampers: the energy error)
   double max_energy_balance_error = 0.0;
   double final_energy_balance_error = 0.0;

@@ -5,6 +5,7 @@
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/sim/controller.hpp"
 #include "soadyn/algorithm/derivatives.hpp"
+#include "soadyn/algorithm/hybrid.hpp"
 #include "soadyn/algorithm/inputs.hpp"
 
 #include <optional>
@@ -26,13 +27,42 @@ class Constraint {
 // do work (torques or dampers), by two quadratures the integrator advances with the rest:
 // W = ∫ P dt, the work of the inputs, and D = ∫ Σ c q̇² dt ≥ 0, the part the dampers dissipated
 // (Inputs::power).  Nothing feeds back from them into q and v.
+//
+// Prescribed motion (inputs.prescribed): those joints' q, q̇, q̈ are functions of t, so the state
+// holds the free joints' q and v alone (nq_state, nv_state: the model's q and v with the prescribed
+// joints' entries left out, in the model's order), q̈_f and the prescribed joints' τ come from the
+// hybrid dynamics (hybrid.hpp, O(N)), and a third quadrature W_p = ∫ τ_p · q̇* dt counts the work of
+// the torques τ_p that hold the prescribed motion (beyond the joints' own inputs), so that
+// E(t) − E(0) = W + W_p − D.
 class System {
  public:
   // control_work: a controller acts (feedback or control), so W has the quadratures and counts it
   System(const Model& model, const Inputs& inputs, FdMethod method, bool control_work = false);
-  int size() const { return model.nq + model.nv + nquad; }
-  // [q; v; 0 …]: the state at the start of a run (the quadratures start at zero)
+  int size() const { return nq_state_ + nv_state_ + nquad; }
+  // the state's q and v sizes: the model's, less the prescribed joints'
+  int nq_state() const { return nq_state_; }
+  int nv_state() const { return nv_state_; }
+  bool has_prescribed() const { return locked_.any(); }
+  // the state's q and v entries as indices into the model's q and v
+  const std::vector<int>& q_index() const { return q_index_; }
+  const std::vector<int>& v_index() const { return v_index_; }
+  // where each quaternion starts in the state (free and ball joints)
+  const std::vector<int>& quaternions() const { return quaternions_; }
+  // one joint's entries in the state: its q (iq, mq) and v (iv, nv); the free joints' in the tree's order
+  struct StateJoint {
+    int iq, mq, iv, nv;
+  };
+  const std::vector<StateJoint>& state_joints() const { return state_joints_; }
+  // the state's quaternions made unit (q_state: the state's nq_state q entries)
+  void normalize(Eigen::Ref<VecX> q_state) const;
+  // q̇ = T̄(q) v for the state's q and v (nq_state, nv_state) into out (nq_state)
+  void qdot(const Eigen::Ref<const VecX>& q_state, const Eigen::Ref<const VecX>& v_state, Eigen::Ref<VecX> out);
+  // [q; v; 0 …]: the state at the start of a run from the model's q0, v0 (the prescribed joints'
+  // entries left out; the quadratures start at zero)
   VecX state(const VecX& q0, const VecX& v0) const;
+  // the model's q and v at (t, y) into q, v (the prescribed joints' from their motion at t, their q̈*
+  // into qdd_given); with nothing prescribed, y's
+  void expand(double t, const double* y);
   // ẏ = [q̇(q, v); q̈; P; D]; counts evaluations
   void rhs(double t, const double* y, double* ydot);
   // q, v and [kin], [vel] at y, and τ: the inputs', the held control's and the feedback controller's
@@ -64,6 +94,7 @@ class System {
   // also move along τ by them: their q̈ rows gain ∂q̈/∂τ F = 𝓜⁻¹ F (∂q̈/∂π = −𝓜⁻¹ Y, sensitivity.cpp).
   // The MatX form sizes out; the Ref form writes into out as it is (size() × S's columns), so
   // that CVODES' own vectors can be S and out without a copy
+  // Neither is defined with prescribed motion (they throw soadyn::Error).
   long linearize(double t, const double* y);
   void linearized_times(const MatX& S, MatX& out, const MatX* forces = nullptr);
   void linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces = nullptr);
@@ -78,10 +109,14 @@ class System {
   const Model& model;
   const Inputs& inputs;
   FdMethod method;
-  int nquad;  // 2 (W, D) when the inputs do work, else 0
+  int nquad;  // 2 (W, D) when the inputs do work, 3 (W, D, W_p) with prescribed motion, else 0
   Data data;
   std::optional<DerivativeData> derivatives;  // jacobian's workspace, made on first use
   VecX q, v, tau, qd;
+  // prescribed motion: q̈* (nv, the prescribed entries set by expand), the hybrid dynamics' τ (nv:
+  // the inputs' on free DOFs, the holding one on prescribed), and τ_p, the prescribed joints' τ
+  // beyond their inputs (one per inputs.prescribed), at the last evaluation
+  VecX qdd_given, tau_hybrid, prescribed_tau;
   // an external generalized force added to the inputs' τ while `controlled` (rollout.hpp: a
   // control held over each step); it depends on neither q nor v, so ∂f/∂y is unchanged
   VecX control;
@@ -101,6 +136,13 @@ class System {
  private:
   // linearized_times' q̇ rows and δ = T(q) S_q when a joint holds a quaternion
   void linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out);
+  void rhs_prescribed(double t, double* ydot);
+  void jacobian_prescribed(double t, Eigen::Ref<MatX> J);
+  PrescribedJoints locked_;
+  int nq_state_, nv_state_;
+  std::vector<int> q_index_, v_index_, quaternions_;
+  std::vector<StateJoint> state_joints_;
+  MatX Jqq_, Jqv_, Jvq_;            // jacobian_prescribed: the model's q̇ and q̈ blocks before the state's are taken
   bool evaluated_ = false;         // rhs's state (eval_t_, eval_y_) is still data's
   double eval_t_ = 0.0;
   VecX eval_y_;

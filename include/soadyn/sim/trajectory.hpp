@@ -19,6 +19,9 @@ struct Trajectory {
   SampleRows q, v, qdd;                      // (T × nq), (T × nv): v the note's q̇ (free joint: [ω; ṗ], inertial)
   VecX kinetic_energy, potential_energy, total_energy;  // (T) J; potential includes joint springs
   VecX work_inputs, dissipated, impact_loss; // (T) J: W(t), the dampers' D(t) ≥ 0, the impacts' L(t)
+  VecX work_prescribed;                      // (T) J: W_p(t), the prescribed joints' torques' work (zeros without)
+  SampleRows prescribed_torque;              // (T × prescribed joints) N m or N: the torques holding their motion
+  std::vector<std::string> prescribed_joints;  // their names, in prescribed_torque's column order
   SampleRows control;                        // (T × nv) the controllers' τ_c, zeros without one
   SampleRows linear_momentum, angular_momentum;  // (T × 3), about the inertial origin
   SampleRows body_position, body_com;        // (T × 3N) inertial, m
@@ -35,7 +38,7 @@ struct Trajectory {
   Sample sample(Eigen::Index k) const;
   // (E(t) − E(0)) / max(|E(0)|, peak T so far), (T): the energy's drift
   VecX energy_error() const;
-  // (E(t) − E(0) − W(t) + L(t)) / max(|E(0)|, peak T so far), (T): what the summary's figures take
+  // (E(t) − E(0) − W(t) − W_p(t) + L(t)) / max(|E(0)|, peak T so far), (T): what the summary's figures take
   VecX balance_error() const;
 };
 
@@ -48,12 +51,14 @@ class TrajectoryRecorder : public RunObserver {
   void on_event(const LimitEvent& e) override;
   void on_progress(const RunSummary& r) override;
   void on_finish(const RunSummary& r) override;
-  // the samples so far as columns (the recorder is left empty)
-  Trajectory take(const Model& model);
+  // the samples so far as columns (the recorder is left empty); `prescribed` names the prescribed
+  // joints' columns (Inputs::prescribed)
+  Trajectory take(const Model& model, const std::vector<PrescribedInput>& prescribed = {});
 
  private:
   RunObserver* next_;
   std::vector<double> t_, q_, v_, qdd_, kinetic_, potential_, total_, work_, dissipated_, impact_loss_, control_,
+      work_prescribed_, prescribed_torque_,
       linear_, angular_, position_, orientation_, com_, dx_dx0_, dx_dpi_;
 };
 

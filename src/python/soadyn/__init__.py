@@ -151,7 +151,7 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
              newton: Optional[str] = None, max_step: Optional[float] = None, max_steps: Optional[int] = None,
              limits: Optional[bool] = None, restitution: Optional[float] = None, control_dt: Optional[float] = None,
              output: Optional[str] = None, controller: Optional[Callable] = None,
-             sensitivities: Optional[dict] = None) -> Trajectory:
+             sensitivities: Optional[dict] = None, prescribed: Optional[dict] = None) -> Trajectory:
     """Simulate a scenario and return its Trajectory: 𝓜(q) q̈ = τ(t, q, q̇) − bias(q, q̇) from (q0, v0).
 
     scene: a Scenario or the path of a scenario file.  Each keyword left None keeps the scene's
@@ -172,6 +172,10 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
     simulation: sensitivities: otherwise): forward sensitivities by CVODES, in .sensitivities (a
     Sensitivities: initial_state (T, nx, nx), parameters (T, nx, np), their names); CVODE methods only,
     no controller, no enforced joint limits (soadyn.Error otherwise).
+    prescribed: {"joint": f} with f(t) -> (q, qd, qdd): the joint (1-DOF) follows that motion
+    (over the scene's own prescribed: for it), its start taken from f(0); the run solves the other
+    joints' q̈ and the torques that hold the motion (hybrid dynamics), in .prescribed_torque
+    (T, joints) with .prescribed_joints their names.  The GIL is taken for each call.
 
     The integration runs without the GIL.  A run that fails midway does not raise: the summary
     says how it ended and the trajectory holds every sample up to then.  Ctrl-C (or any Python
@@ -187,7 +191,7 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
                               max_steps=max_steps, limits=limits, restitution=restitution, control_dt=control_dt,
                               sensitivities=sensitivities))
     arrays, summary, interrupt, warns = _soadyn._simulate(scene, s, None if output is None else str(output),
-                                                          controller)
+                                                          controller, prescribed)
     for w in warns:  # e.g. an rtol below what double precision can deliver
         _warnings.warn(w, RuntimeWarning, stacklevel=2)
     if summary["stiffness_hint"]:  # said once; also in the Trajectory's summary

@@ -130,6 +130,12 @@ class Trajectory:
     control: Optional[np.ndarray] = None
     # simulation: sensitivities (simulate and read_log): a Sensitivities, None without them
     sensitivities: Optional[Sensitivities] = None
+    # prescribed motion: the torques (N m or N) that hold the prescribed joints' motion (T, joints),
+    # those joints' names, and W_p (T,), the torques' work since t = 0 (E − E(0) = W + W_p − L);
+    # (T, 0), [] and zeros without prescribed joints
+    prescribed_torque: Optional[np.ndarray] = None
+    prescribed_joints: List[str] = field(default_factory=list)
+    work_prescribed: Optional[np.ndarray] = None
 
     ARRAYS = ("t", "q", "v", "qdd", "kinetic_energy", "potential_energy", "total_energy", "work_inputs", "dissipated",
               "linear_momentum", "angular_momentum", "body_position", "body_orientation", "body_com")
@@ -149,14 +155,16 @@ class Trajectory:
 
     @property
     def balance_error(self) -> np.ndarray:
-        """(E(t) − E(0) − W(t)) / max(|E(0)|, peak T so far), shape (T,): W the inputs' work; the
-        summary's figures are taken from it (equal to energy_error without torques or dampers)."""
+        """(E(t) − E(0) − W(t) − W_p(t) + L(t)) / max(|E(0)|, peak T so far), shape (T,): W the inputs'
+        work, W_p the prescribed joints' torques', L the impacts' loss; the summary's figures are
+        taken from it (equal to energy_error without torques, dampers, prescribed motion or limits)."""
         E, T = self.total_energy, self.kinetic_energy
         if len(E) == 0:
             return E.copy()
         scale = np.maximum(np.maximum(abs(E[0]), np.maximum.accumulate(T)), 1e-300)
         lost = 0.0 if self.impact_loss is None else self.impact_loss
-        return (E - E[0] - self.work_inputs + lost) / scale
+        held = 0.0 if self.work_prescribed is None else self.work_prescribed
+        return (E - E[0] - self.work_inputs - held + lost) / scale
 
     def __repr__(self) -> str:
         s = self.summary
@@ -266,6 +274,12 @@ def read_log(path: str) -> Trajectory:
             initial_state=logged.get("/sensitivities/initial_state"), parameters=logged.get("/sensitivities/parameters"),
             state_names=c["state_names"], state_units=c["state_units"],
             parameter_names=c["parameter_names"], parameter_units=c["parameter_units"])
+    # /prescribed (T, joints) with the joints from its columns' names, and W_p; as simulate gives
+    # them ((T, 0), zeros) when the run prescribed nothing
+    held = [n[len("prescribed."):] for n in c["column_names"] if n.startswith("prescribed.")]
+    prescribed_torque = logged.get("/prescribed", np.zeros((T, 0)))
+    work_prescribed = logged.get("/energy/work_prescribed", np.zeros(T) if logged_energy else None)
     return Trajectory(**arrays, summary=summary, joint_names=c["joint_names"], parents=c["parents"],
                       scenario=c["scenario"], frames=frames, impact_loss=impact_loss, control=control,
-                      sensitivities=sensitivities)
+                      sensitivities=sensitivities, prescribed_torque=prescribed_torque, prescribed_joints=held,
+                      work_prescribed=work_prescribed)

@@ -1,0 +1,197 @@
+// Hybrid dynamics (hybrid.hpp): the articulated-body recursion (articulated.cpp) with the
+// prescribed joints locked at their known acceleration.
+#include "soadyn/algorithm/hybrid.hpp"
+#include "soadyn/algorithm/algorithms.hpp"
+#include "multibody/articulated_inertia.hpp"
+#include "joint_inertial.hpp"
+
+#include <Eigen/Cholesky>
+
+namespace soadyn {
+
+PrescribedJoints::PrescribedJoints(const Model& model, const std::vector<int>& bodies)
+    : locked(size_t(model.nbodies), 0) {
+  for (const int i : bodies) {
+    if (i < 0 || i >= model.nbodies) throw Error("PrescribedJoints: no body " + std::to_string(i));
+    if (!locked[size_t(i)]) nv_locked += model.nv_i[i];
+    locked[size_t(i)] = 1;
+  }
+}
+
+namespace {
+
+// U_i = P_i G_i, 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ and, below a parent, P⁺_i = P_i − U_i 𝒟_i⁻¹ U_iᵀ in place
+// (as articulated.cpp's factor step)
+template <class J>
+void free_factor(const Model& model, Data& data, int i) {
+  auto& ab = data.work.articulated;
+  const int vi = model.idx_v[i], p = model.parent[i];
+  Mat6& P = ab.P[i];
+  if constexpr (J::nv == 1) {
+    Vec6 U;
+    inertial::times<J>(P, data.G, vi, U);
+    const double Dinv = 1.0 / data.G.col(vi).dot(U);
+    ab.U1.col(i) = U;
+    ab.Dinv1(i) = Dinv;
+    if (p >= 0) articulated_inertia::remove_column(P, U, Dinv);
+  } else {
+    Eigen::Matrix<double, 6, J::nv> U;
+    inertial::times<J>(P, data.G, vi, U);
+    const Eigen::Matrix<double, J::nv, J::nv> joint_inertia = data.G.middleCols<J::nv>(vi).transpose() * U;
+    ab.U[i] = U;
+    ab.Dinv[i] = articulated_inertia::joint_inertia_inverse<J::nv>(joint_inertia);
+    if (p >= 0) P.noalias() -= (U * ab.Dinv[i]) * U.transpose();
+  }
+}
+
+// tip to base at body i.  Free: the factor step, u_i = τ_i − G_iᵀ z_i and z⁺ = z + P⁺ 𝔞 + U 𝒟⁻¹ u.
+// Prescribed: U_i = 0, 𝒟_i⁻¹ = 0 (locked), P⁺ = P and z⁺ = z + P (𝔞 + G q̈*).  Then at the parent
+// P_p += D_iᵀ P⁺ D_i, z_p += D_iᵀ z⁺.  P_i itself is kept whole at a prescribed joint (τ_i needs it).
+template <class J>
+void backward_step(const Model& model, Data& data, bool locked, const VecX& tau, const VecX& qdd_given, int i) {
+  auto& ab = data.work.articulated;
+  const int vi = model.idx_v[i], p = model.parent[i];
+  Vec6 za = ab.z.col(i);
+  if (locked) {
+    if constexpr (J::nv == 1) {
+      ab.U1.col(i).setZero();
+      ab.Dinv1(i) = 0.0;
+    } else {
+      ab.U[i] = Eigen::Matrix<double, 6, J::nv>::Zero();
+      ab.Dinv[i] = Eigen::Matrix<double, J::nv, J::nv>::Zero();
+    }
+    ab.u.segment<J::nv>(vi).setZero();
+    if (p < 0) return;
+    Vec3 gw, gu;
+    inertial::motion<J>(data.G, vi, qdd_given.data() + vi, gw, gu);
+    Vec6 a = data.coriolis.col(i);
+    a.head<3>() += gw;
+    a.tail<3>() += gu;
+    za.noalias() += ab.P[i] * a;
+  } else {
+    free_factor<J>(model, data, i);
+    double gz[J::nv];
+    inertial::project<J>(data.G, vi, ab.z.col(i).head<3>(), ab.z.col(i).tail<3>(), gz);
+    for (int c = 0; c < J::nv; ++c) ab.u(vi + c) = tau(vi + c) - gz[c];
+    if (p < 0) return;
+    za.noalias() += ab.P[i] * data.coriolis.col(i);
+    if constexpr (J::nv == 1) {
+      za += (ab.u(vi) * ab.Dinv1(i)) * ab.U1.col(i);
+    } else {
+      za.noalias() += ab.U[i] * (ab.Dinv[i] * ab.u.segment<J::nv>(vi));
+    }
+  }
+  articulated_inertia::add_to_parent(ab.P[p], ab.P[i], data.d.col(i));
+  const Vec3 zf = za.tail<3>();
+  ab.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
+  ab.z.col(p).tail<3>() += zf;
+}
+
+// base to tip at body i: A' = D_i A_p + 𝔞_i.  Free: q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A').  Prescribed:
+// q̈_i = q̈*_i, then τ_i = G_iᵀ (P_i A_i + z_i).  Both: A_i = A' + G_i q̈_i.
+template <class J>
+void forward_step(const Model& model, Data& data, bool locked, const VecX& qdd_given, VecX& tau_out, int i) {
+  auto& ab = data.work.articulated;
+  const int vi = model.idx_v[i], p = model.parent[i];
+  Vec6 A = data.coriolis.col(i);
+  if (p >= 0) {
+    const Vec3 wp = data.A.col(p).head<3>();
+    A.head<3>() += wp;
+    A.tail<3>() += data.A.col(p).tail<3>() + wp.cross(Vec3(data.d.col(i)));
+  }
+  if (locked) {
+    data.qdd.segment<J::nv>(vi) = qdd_given.segment<J::nv>(vi);
+  } else if constexpr (J::nv == 1) {
+    data.qdd(vi) = ab.Dinv1(i) * (ab.u(vi) - ab.U1.col(i).dot(A));
+  } else {
+    data.qdd.segment<J::nv>(vi).noalias() = ab.Dinv[i] * (ab.u.segment<J::nv>(vi) - ab.U[i].transpose() * A);
+  }
+  Vec3 gw, gu;
+  inertial::motion<J>(data.G, vi, data.qdd.data() + vi, gw, gu);
+  A.head<3>() += gw;
+  A.tail<3>() += gu;
+  data.A.col(i) = A;
+  if (locked) {
+    const Vec6 f = ab.P[i] * A + ab.z.col(i);
+    inertial::project<J>(data.G, vi, f.head<3>(), f.tail<3>(), tau_out.data() + vi);
+  }
+}
+
+void check_sizes(const Model& model, const Data& data, const PrescribedJoints& pj, const VecX& tau,
+                 const VecX& qdd_given, const char* where) {
+  data.check(model, where, "tau", tau.size(), model.nv);
+  data.check(model, where, "qdd_given", qdd_given.size(), model.nv);
+  if (int(pj.locked.size()) != model.nbodies)
+    throw Error(std::string(where) + ": the prescribed joints were set up for another model (" +
+                std::to_string(pj.locked.size()) + " bodies, not " + std::to_string(model.nbodies) + ")");
+  data.require(where, true);
+}
+
+}  // namespace
+
+void hybrid_dynamics(const Model& model, Data& data, const PrescribedJoints& pj, const VecX& tau, const VecX& qdd_given,
+                     VecX& tau_out) {
+  check_sizes(model, data, pj, tau, qdd_given, "hybrid_dynamics");
+  if (tau_out.size() != model.nv) tau_out.resize(model.nv);
+  tau_out = tau;
+  auto& ab = data.work.articulated;
+  // tip to base: articulated inertias P_i = M_i and bias forces z_i = 𝔟_i, then the children's
+  for (int i = 0; i < model.nbodies; ++i) {
+    const SpatialInertia& M = data.inertia[i];
+    articulated_inertia::set_inertia(ab.P[i], M.I, M.h, M.m);
+    ab.z.col(i) = data.gyroscopic.col(i);
+  }
+  for (int i = model.nbodies - 1; i >= 0; --i)
+    visit_joint(model, i, [&](const auto& j) {
+      backward_step<std::decay_t<decltype(j)>>(model, data, pj.locked[size_t(i)] != 0, tau, qdd_given, i);
+    });
+  // base to tip: q̈ at the free joints, τ at the prescribed ones
+  for (int i = 0; i < model.nbodies; ++i)
+    visit_joint(model, i, [&](const auto& j) {
+      forward_step<std::decay_t<decltype(j)>>(model, data, pj.locked[size_t(i)] != 0, qdd_given, tau_out, i);
+    });
+}
+
+void hybrid_dynamics_derivatives(const Model& model, Data& data, const PrescribedJoints& pj, const VecX& v,
+                                 const VecX& tau, const VecX& qdd_given, DerivativeData& dd, VecX& tau_out,
+                                 const Inputs* inputs, MatX& work) {
+  hybrid_dynamics(model, data, pj, tau, qdd_given, tau_out);
+  // ∂ID/∂x at (q, v, q̈ hybrid), then ∂τ_in/∂x − ∂ID/∂x
+  inverse_dynamics_derivatives(model, data, v, data.qdd, dd);
+  dd.dqdd_dq = -dd.dtau_dq;
+  dd.dqdd_dv = -dd.dtau_dv;
+  if (inputs) inputs->add_derivatives(dd.dqdd_dq, dd.dqdd_dv);
+  // 𝓜_ff⁻¹ on the free rows, zero on the prescribed ones (the locked factor)
+  articulated_solve(model, data, dd.dqdd_dq, work);
+  articulated_solve(model, data, dd.dqdd_dv, work);
+}
+
+void hybrid_dynamics_dense(const Model& model, Data& data, const PrescribedJoints& pj, const VecX& tau,
+                           const VecX& qdd_given, VecX& tau_out) {
+  check_sizes(model, data, pj, tau, qdd_given, "hybrid_dynamics_dense");
+  mass_matrix(model, data);
+  bias_forces(model, data);
+  std::vector<int> f, p;  // the free and the prescribed DOFs
+  for (int k = 0; k < model.nv; ++k) (pj.dof_locked(model, k) ? p : f).push_back(k);
+  const int nf = int(f.size()), np = int(p.size());
+  MatX Mff(nf, nf), Mfp(nf, np);
+  VecX rhs(nf), qp(np);
+  for (int b = 0; b < np; ++b) qp(b) = qdd_given(p[size_t(b)]);
+  for (int a = 0; a < nf; ++a) {
+    for (int b = 0; b < nf; ++b) Mff(a, b) = data.M(f[size_t(a)], f[size_t(b)]);
+    for (int b = 0; b < np; ++b) Mfp(a, b) = data.M(f[size_t(a)], p[size_t(b)]);
+    rhs(a) = tau(f[size_t(a)]) - data.bias(f[size_t(a)]);
+  }
+  // 𝓜_ff q̈_f = τ_f − bias_f − 𝓜_fp q̈*_p
+  rhs -= Mfp * qp;
+  const VecX qf = Mff.llt().solve(rhs);
+  data.qdd.resize(model.nv);
+  for (int a = 0; a < nf; ++a) data.qdd(f[size_t(a)]) = qf(a);
+  for (int b = 0; b < np; ++b) data.qdd(p[size_t(b)]) = qp(b);
+  // τ_p = (𝓜 q̈ + bias)_p
+  tau_out = tau;
+  const VecX full = data.M * data.qdd + data.bias;
+  for (int b = 0; b < np; ++b) tau_out(p[size_t(b)]) = full(p[size_t(b)]);
+}
+
+}  // namespace soadyn
