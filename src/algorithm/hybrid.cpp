@@ -3,6 +3,7 @@
 #include "soadyn/algorithm/hybrid.hpp"
 #include "soadyn/algorithm/algorithms.hpp"
 #include "multibody/articulated_inertia.hpp"
+#include "articulated_factor.hpp"
 #include "joint_inertial.hpp"
 
 #include <Eigen/Cholesky>
@@ -19,30 +20,6 @@ PrescribedJoints::PrescribedJoints(const Model& model, const std::vector<int>& b
 }
 
 namespace {
-
-// U_i = P_i G_i, 𝒟_i⁻¹ = (G_iᵀ U_i)⁻¹ and, below a parent, P⁺_i = P_i − U_i 𝒟_i⁻¹ U_iᵀ in place
-// (as articulated.cpp's factor step)
-template <class J>
-void free_factor(const Model& model, Data& data, int i) {
-  auto& ab = data.work.articulated;
-  const int vi = model.idx_v[i], p = model.parent[i];
-  Mat6& P = ab.P[i];
-  if constexpr (J::nv == 1) {
-    Vec6 U;
-    inertial::times<J>(P, data.G, vi, U);
-    const double Dinv = 1.0 / data.G.col(vi).dot(U);
-    ab.U1.col(i) = U;
-    ab.Dinv1(i) = Dinv;
-    if (p >= 0) articulated_inertia::remove_column(P, U, Dinv);
-  } else {
-    Eigen::Matrix<double, 6, J::nv> U;
-    inertial::times<J>(P, data.G, vi, U);
-    const Eigen::Matrix<double, J::nv, J::nv> joint_inertia = data.G.middleCols<J::nv>(vi).transpose() * U;
-    ab.U[i] = U;
-    ab.Dinv[i] = articulated_inertia::joint_inertia_inverse<J::nv>(joint_inertia);
-    if (p >= 0) P.noalias() -= (U * ab.Dinv[i]) * U.transpose();
-  }
-}
 
 // tip to base at body i.  Free: the factor step, u_i = τ_i − G_iᵀ z_i and z⁺ = z + P⁺ 𝔞 + U 𝒟⁻¹ u.
 // Prescribed: U_i = 0, 𝒟_i⁻¹ = 0 (locked), P⁺ = P and z⁺ = z + P (𝔞 + G q̈*).  Then at the parent
@@ -69,7 +46,7 @@ void backward_step(const Model& model, Data& data, bool locked, const VecX& tau,
     a.tail<3>() += gu;
     za.noalias() += ab.P[i] * a;
   } else {
-    free_factor<J>(model, data, i);
+    detail::articulated_factor_step<J>(model, data, i);
     double gz[J::nv];
     inertial::project<J>(data.G, vi, ab.z.col(i).head<3>(), ab.z.col(i).tail<3>(), gz);
     for (int c = 0; c < J::nv; ++c) ab.u(vi + c) = tau(vi + c) - gz[c];

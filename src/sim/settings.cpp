@@ -3,7 +3,6 @@
 #include "soadyn/sim/settings.hpp"
 
 #include "soadyn/algorithm/algorithms.hpp"
-#include "soadyn/sim/integrators.hpp"
 #include "soadyn/multibody/text.hpp"
 #include "soadyn/multibody/types.hpp"
 

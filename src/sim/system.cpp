@@ -1,10 +1,8 @@
 // The system the integrators step (system.hpp): ẏ = f(t, y) for a model with its inputs and
 // controllers, its Jacobian ∂f/∂y by the analytic derivatives (and by forward differences), and the
 // Jacobian applied to columns without forming it.
-#include "soadyn/sim/integrators.hpp"
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
-#include "soadyn/sim/limits.hpp"
 #include "soadyn/multibody/configuration.hpp"
 #include "soadyn/sim/system.hpp"
 

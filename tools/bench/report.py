@@ -166,6 +166,13 @@ def main():
         if f"{group}/rhs_on" in series:
             lines.append(f"- {group}: O(N) route faster than dense from N = {crossover(series[group + '/rhs_on'], series[group + '/rhs_dense'])}, "
                          f"than tree-sparse from N = {crossover(series[group + '/rhs_on'], series[group + '/rhs_sparse'])}")
+        # prescribed motion: the hybrid dynamics against forward dynamics on the same model, per N
+        for part in ("quarter", "half"):
+            h, on = series.get(f"{group}/rhs_hybrid_{part}", {}), series.get(f"{group}/rhs_on", {})
+            ratios = [h[n] / on[n] for n in sorted(set(h) & set(on)) if on[n] > 0]
+            if ratios:
+                lines.append(f"- {group}: hybrid dynamics with a {part} of the joints prescribed, "
+                             f"{min(ratios):.2f}–{max(ratios):.2f} of the O(N) forward dynamics' time (rhs_on)")
     lines.append("")
     with open(os.path.join(args.out, "bench.md"), "w") as f:
         f.write("\n".join(lines))

@@ -17,7 +17,6 @@
 // system.hpp).  Fixed-step methods have no root finding: check_run refuses them with limits on.
 #pragma once
 
-#include "soadyn/sim/integrators.hpp"
 #include "soadyn/sim/system.hpp"
 
 #include <string>
