@@ -21,53 +21,39 @@ PrescribedJoints::PrescribedJoints(const Model& model, const std::vector<int>& b
 
 namespace {
 
-// tip to base at body i.  Free: the factor step, u_i = τ_i − G_iᵀ z_i and z⁺ = z + P⁺ 𝔞 + U 𝒟⁻¹ u.
-// Prescribed: U_i = 0, 𝒟_i⁻¹ = 0 (locked), P⁺ = P and z⁺ = z + P (𝔞 + G q̈*).  Then at the parent
-// P_p += D_iᵀ P⁺ D_i, z_p += D_iᵀ z⁺.  P_i itself is kept whole at a prescribed joint (τ_i needs it).
+// tip to base at a prescribed body i: U_i = 0, 𝒟_i⁻¹ = 0 (locked), P⁺ = P and z⁺ = z + P (𝔞 + G q̈*),
+// then at the parent P_p += D_iᵀ P⁺ D_i, z_p += D_iᵀ z⁺; P_i itself is kept whole (τ_i needs it).
+// A free body takes aba's own step (articulated_factor.hpp).
 template <class J>
-void backward_step(const Model& model, Data& data, bool locked, const VecX& tau, const VecX& qdd_given, int i) {
+[[gnu::noinline]] void locked_backward_step(const Model& model, Data& data, const VecX& qdd_given, int i) {
   auto& ab = data.work.articulated;
   const int vi = model.idx_v[i], p = model.parent[i];
-  Vec6 za = ab.z.col(i);
-  if (locked) {
-    if constexpr (J::nv == 1) {
-      ab.U1.col(i).setZero();
-      ab.Dinv1(i) = 0.0;
-    } else {
-      ab.U[i] = Eigen::Matrix<double, 6, J::nv>::Zero();
-      ab.Dinv[i] = Eigen::Matrix<double, J::nv, J::nv>::Zero();
-    }
-    ab.u.segment<J::nv>(vi).setZero();
-    if (p < 0) return;
-    Vec3 gw, gu;
-    inertial::motion<J>(data.G, vi, qdd_given.data() + vi, gw, gu);
-    Vec6 a = data.coriolis.col(i);
-    a.head<3>() += gw;
-    a.tail<3>() += gu;
-    za.noalias() += ab.P[i] * a;
+  if constexpr (J::nv == 1) {
+    ab.U1.col(i).setZero();
+    ab.Dinv1(i) = 0.0;
   } else {
-    detail::articulated_factor_step<J>(model, data, i);
-    double gz[J::nv];
-    inertial::project<J>(data.G, vi, ab.z.col(i).head<3>(), ab.z.col(i).tail<3>(), gz);
-    for (int c = 0; c < J::nv; ++c) ab.u(vi + c) = tau(vi + c) - gz[c];
-    if (p < 0) return;
-    za.noalias() += ab.P[i] * data.coriolis.col(i);
-    if constexpr (J::nv == 1) {
-      za += (ab.u(vi) * ab.Dinv1(i)) * ab.U1.col(i);
-    } else {
-      za.noalias() += ab.U[i] * (ab.Dinv[i] * ab.u.segment<J::nv>(vi));
-    }
+    ab.U[i] = Eigen::Matrix<double, 6, J::nv>::Zero();
+    ab.Dinv[i] = Eigen::Matrix<double, J::nv, J::nv>::Zero();
   }
+  ab.u.segment<J::nv>(vi).setZero();
+  if (p < 0) return;
+  Vec3 gw, gu;
+  inertial::motion<J>(data.G, vi, qdd_given.data() + vi, gw, gu);
+  Vec6 a = data.coriolis.col(i);
+  a.head<3>() += gw;
+  a.tail<3>() += gu;
+  Vec6 za = ab.z.col(i);
+  za.noalias() += ab.P[i] * a;
   articulated_inertia::add_to_parent(ab.P[p], ab.P[i], data.d.col(i));
   const Vec3 zf = za.tail<3>();
   ab.z.col(p).head<3>() += za.head<3>() + Vec3(data.d.col(i)).cross(zf);
   ab.z.col(p).tail<3>() += zf;
 }
 
-// base to tip at body i: A' = D_i A_p + 𝔞_i.  Free: q̈_i = 𝒟⁻¹ (u_i − U_iᵀ A').  Prescribed:
-// q̈_i = q̈*_i, then τ_i = G_iᵀ (P_i A_i + z_i).  Both: A_i = A' + G_i q̈_i.
+// base to tip at a prescribed body i: A_i = D_i A_p + 𝔞_i + G_i q̈*_i, q̈_i = q̈*_i and
+// τ_i = G_iᵀ (P_i A_i + z_i).  A free body takes aba's own step.
 template <class J>
-void forward_step(const Model& model, Data& data, bool locked, const VecX& qdd_given, VecX& tau_out, int i) {
+[[gnu::noinline]] void locked_forward_step(const Model& model, Data& data, const VecX& qdd_given, VecX& tau_out, int i) {
   auto& ab = data.work.articulated;
   const int vi = model.idx_v[i], p = model.parent[i];
   Vec6 A = data.coriolis.col(i);
@@ -76,22 +62,14 @@ void forward_step(const Model& model, Data& data, bool locked, const VecX& qdd_g
     A.head<3>() += wp;
     A.tail<3>() += data.A.col(p).tail<3>() + wp.cross(Vec3(data.d.col(i)));
   }
-  if (locked) {
-    data.qdd.segment<J::nv>(vi) = qdd_given.segment<J::nv>(vi);
-  } else if constexpr (J::nv == 1) {
-    data.qdd(vi) = ab.Dinv1(i) * (ab.u(vi) - ab.U1.col(i).dot(A));
-  } else {
-    data.qdd.segment<J::nv>(vi).noalias() = ab.Dinv[i] * (ab.u.segment<J::nv>(vi) - ab.U[i].transpose() * A);
-  }
+  data.qdd.segment<J::nv>(vi) = qdd_given.segment<J::nv>(vi);
   Vec3 gw, gu;
   inertial::motion<J>(data.G, vi, data.qdd.data() + vi, gw, gu);
   A.head<3>() += gw;
   A.tail<3>() += gu;
   data.A.col(i) = A;
-  if (locked) {
-    const Vec6 f = ab.P[i] * A + ab.z.col(i);
-    inertial::project<J>(data.G, vi, f.head<3>(), f.tail<3>(), tau_out.data() + vi);
-  }
+  const Vec6 f = ab.P[i] * A + ab.z.col(i);
+  inertial::project<J>(data.G, vi, f.head<3>(), f.tail<3>(), tau_out.data() + vi);
 }
 
 void check_sizes(const Model& model, const Data& data, const PrescribedJoints& pj, const VecX& tau,
@@ -120,12 +98,16 @@ void hybrid_dynamics(const Model& model, Data& data, const PrescribedJoints& pj,
   }
   for (int i = model.nbodies - 1; i >= 0; --i)
     visit_joint(model, i, [&](const auto& j) {
-      backward_step<std::decay_t<decltype(j)>>(model, data, pj.locked[size_t(i)] != 0, tau, qdd_given, i);
+      using J = std::decay_t<decltype(j)>;
+      if (pj.locked[size_t(i)]) locked_backward_step<J>(model, data, qdd_given, i);
+      else detail::aba_backward_step<J>(model, data, tau, i);
     });
   // base to tip: q̈ at the free joints, τ at the prescribed ones
   for (int i = 0; i < model.nbodies; ++i)
     visit_joint(model, i, [&](const auto& j) {
-      forward_step<std::decay_t<decltype(j)>>(model, data, pj.locked[size_t(i)] != 0, qdd_given, tau_out, i);
+      using J = std::decay_t<decltype(j)>;
+      if (pj.locked[size_t(i)]) locked_forward_step<J>(model, data, qdd_given, tau_out, i);
+      else detail::aba_forward_step<J>(model, data, i);
     });
 }
 
