@@ -15,6 +15,7 @@
 #include "soadyn/multibody/text.hpp"
 #include "soadyn/multibody/configuration.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -133,13 +134,16 @@ std::vector<Eigen::Index> decimate(const VecX& t, double fps, long max_frames, d
 }
 
 // names of the q coordinates, for the joint plot: the joint's name, and the joint type's label of
-// each coordinate when it has several (pivot.qw, bus.x, ...)
-std::vector<std::string> coordinate_names(const Model& m) {
+// each coordinate when it has several (pivot.qw, bus.x, ...); a joint whose motion the run
+// prescribed is marked so
+std::vector<std::string> coordinate_names(const Model& m, const std::vector<std::string>& prescribed) {
   std::vector<std::string> names;
   for (int i = 0; i < m.nbodies; ++i) {
     const JointTraits& tr = joint_traits(m.joint_type[i]);
+    const bool given = std::find(prescribed.begin(), prescribed.end(), m.joint_names[i]) != prescribed.end();
     for (int k = 0; k < m.nq_i[i]; ++k)
-      names.push_back(m.joint_names[i] + (m.nq_i[i] > 1 ? "." + std::string(tr.q_labels.at(k)) : std::string()));
+      names.push_back(m.joint_names[i] + (m.nq_i[i] > 1 ? "." + std::string(tr.q_labels.at(k)) : std::string()) +
+                      (given ? " [prescribed]" : ""));
   }
   return names;
 }
@@ -282,15 +286,17 @@ Poses poses(const Model& m, const view::RunFile& run, const view::Look& look, co
 std::string energy_json(const view::RunFile& run, const view::RunModel& rm, const std::vector<Eigen::Index>& keep) {
   if (!run.total.size()) return "null";
   const bool balance = run.work.size() > 0, impacts = run.impact_loss.size() > 0;
+  const bool held = run.work_prescribed.size() > 0;  // W_p, the prescribed joints' torques' work
   const auto L = [&](Eigen::Index k) { return impacts ? run.impact_loss(k) : 0.0; };
+  const auto Wp = [&](Eigen::Index k) { return held ? run.work_prescribed(k) : 0.0; };
   const double E0 = run.total(0) + L(0);
   const double scale = std::max({std::abs(E0), run.kinetic.size() ? run.kinetic.maxCoeff() : 0.0, 1e-300});
   std::vector<float> err(keep.size());
   for (size_t f = 0; f < keep.size(); ++f)
-    err[f] = float((run.total(keep[f]) - E0 - (balance ? run.work(keep[f]) : 0.0) + L(keep[f])) / scale);
+    err[f] = float((run.total(keep[f]) - E0 - (balance ? run.work(keep[f]) : 0.0) - Wp(keep[f]) + L(keep[f])) / scale);
   return "{\"error\":" + base64(err) + ",\"E0\":" + num(E0) + ",\"scale\":" + num(scale) +
          ",\"work_inputs\":" + (rm.has_work_inputs ? "true" : "false") + ",\"balance\":" + (balance ? "true" : "false") +
-         ",\"impacts\":" + (impacts ? "true" : "false") + "}";
+         ",\"impacts\":" + (impacts ? "true" : "false") + ",\"prescribed\":" + (held ? "true" : "false") + "}";
 }
 
 // the joint limits' events, for the timeline: time, joint, side, kind and velocities
@@ -426,7 +432,7 @@ int run_view(const ViewOptions& o) {
       ",\"gravity\":" + vec(m.gravity) + ",\"bodies\":" + bodies_json(m, look) + ",\"world_visuals\":" + shapes(look.world_visuals) +
       ",\"world_meshes\":" + std::to_string(look.world_meshes) + ",\"bounds\":{\"min\":" + vec(P.lo) + ",\"max\":" + vec(P.hi) +
       "},\"frames\":{\"n\":" + std::to_string(K) + ",\"nb\":" + std::to_string(N) + ",\"t\":" + base64(P.times) +
-      ",\"pose\":" + base64(P.body) + ",\"rule\":" + quote(rule) + "},\"coords\":" + string_list(coordinate_names(m)) +
+      ",\"pose\":" + base64(P.body) + ",\"rule\":" + quote(rule) + "},\"coords\":" + string_list(coordinate_names(m, run.prescribed)) +
       ",\"coord_units\":" + string_list(coordinate_units(m)) + ",\"meshes\":" + M.list + ",\"nq\":" + std::to_string(m.nq) +
       ",\"q\":" + base64(P.q) + ",\"energy\":" + energy_json(run, rm, keep) + ",\"events\":" + events_json(run, m) +
       ",\"named_frames\":" + named_frames_json(m, run, logged, P) + "}";

@@ -31,6 +31,8 @@ struct RunFile {
   VecX work;                             // T: the inputs' work W(t) (empty in files before layout 3)
   std::vector<std::string> frame_names;  // the frames a scenario's log: frames: logged (/frames/names)
   VecX impact_loss;                      // T: L(t), the energy the limits' impacts took (empty without limits)
+  VecX work_prescribed;                  // T: W_p(t), the prescribed joints' torques' work (empty without them)
+  std::vector<std::string> prescribed;   // the joints whose motion was prescribed (/prescribed's columns)
   std::vector<std::string> v_names;      // /model v_names (empty if the file has none)
   std::vector<RunEvent> events;          // the joint limits' events (/events, run_file.hpp), in time order
 };

@@ -32,13 +32,16 @@ RunFile read_run(const std::string& path) {
   r.time = c.values("/time").col(0);
   r.q = c.values("/q");
   for (auto [name, out] : {std::pair{"/energy/kinetic", &r.kinetic}, {"/energy/total", &r.total},
-                           {"/energy/work_inputs", &r.work}, {"/energy/impact_loss", &r.impact_loss}})
+                           {"/energy/work_inputs", &r.work}, {"/energy/impact_loss", &r.impact_loss},
+                           {"/energy/work_prescribed", &r.work_prescribed}})
     if (const RunSeries* s = c.find(name)) *out = s->values.col(0);
   if (c.rows() == 0) throw Error(path + ": the run logged no samples");
   for (Eigen::Index k = 1; k < c.rows(); ++k)
     if (!(r.time(k) >= r.time(k - 1))) throw Error(path + ": /time decreases at row " + std::to_string(k));
   r.joint_names = c.joint_names;
   r.v_names = c.v_names;
+  for (const std::string& n : c.column_names)
+    if (n.rfind("prescribed.", 0) == 0) r.prescribed.push_back(n.substr(11));
   r.events = c.events;
   r.frame_names = c.frame_names;
   return r;
@@ -47,7 +50,7 @@ RunFile read_run(const std::string& path) {
 void keep_rows(RunFile& run, Eigen::Index rows) {
   run.time.conservativeResize(rows);
   run.q.conservativeResize(rows, Eigen::NoChange);
-  for (VecX* s : {&run.kinetic, &run.total, &run.work, &run.impact_loss})
+  for (VecX* s : {&run.kinetic, &run.total, &run.work, &run.impact_loss, &run.work_prescribed})
     if (s->size()) s->conservativeResize(rows);
 }
 

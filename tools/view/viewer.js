@@ -233,7 +233,9 @@
     plotEnergy.y = decode(RUN.energy.error, Float32Array);
     const L = RUN.energy.impacts;
     document.getElementById('energy-title').textContent = RUN.energy.balance
-      ? 'energy-balance error (E \u2212 E\u2080 \u2212 W' + (L ? ' + L' : '') + ') / max(|E\u2080|, peak T), W the work of torques and dampers' +
+      ? 'energy-balance error (E \u2212 E\u2080 \u2212 W' + (RUN.energy.prescribed ? ' \u2212 W_p' : '') + (L ? ' + L' : '') +
+        ') / max(|E\u2080|, peak T), W the work of torques and dampers' +
+        (RUN.energy.prescribed ? ', W_p the prescribed joints\u2019 torques\u2019' : '') +
         (L ? ', L the energy the limits\u2019 impacts took' : '')
       : 'energy error (E \u2212 E\u2080) / max(|E\u2080|, peak T)' + (RUN.energy.work_inputs ? ': inputs do work, E is not conserved' : '');
   } else {
