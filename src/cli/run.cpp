@@ -248,12 +248,12 @@ void print_summary(const Scenario& sc, const SimulationSettings& s, const RunSum
   std::printf("nonlinear iterations   %ld\n", r.stats.nonlinear_iterations);
   std::printf("CPU time               %.4g s\n", r.cpu_seconds);
   if (sc.inputs.prescribed.empty())
-    std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t)| / max(|E0|, peak T),\n"
+    std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t)| / max(|E0|, peak T, peak |W|),\n"
                 "                       W the work of torques and dampers\n",
                 r.final_energy_balance_error, r.max_energy_balance_error);
   else
     std::printf("energy balance error   %.3g (final; max over the run %.3g): |E(t) - E(0) - W(t) - W_p(t)| / max(|E0|, "
-                "peak T),\n                       W the work of torques and dampers, W_p the prescribed joints' torques'\n",
+                "peak T, peak |W|, peak |W_p|),\n                       W the work of torques and dampers, W_p the prescribed joints' torques'\n",
                 r.final_energy_balance_error, r.max_energy_balance_error);
   if (!sc.inputs.prescribed.empty()) {
     std::string joints;

@@ -71,7 +71,7 @@ LogGroups logged_groups(const Scenario& sc, const SimulationSettings& settings, 
   g.prescribed.clear();
   for (const PrescribedInput& p : sc.inputs.prescribed) g.prescribed.push_back(p.dof);
   if (settings.sensitivities.any())
-    g.sensitivities = std::make_shared<const SensitivityPlan>(plan_sensitivities(sc.model, settings.sensitivities));
+    g.sensitivities = std::make_shared<const SensitivityPlan>(plan_sensitivities(sc.model, settings.sensitivities, sc.inputs.prescribed));
   for (const std::string& name : sc.log_frames)
     if (const int f = sc.model.frame_index(name); f >= 0 && std::find(g.frames.begin(), g.frames.end(), f) == g.frames.end())
       g.frames.push_back(f);

@@ -179,7 +179,7 @@ py::tuple run(const Scenario& scene, const SimulationSettings& settings, const s
                   "prescribed_joints"_a = tr.prescribed_joints);
   if (settings.sensitivities.any()) {
     // (T, nx, nx) and (T, nx, np), with the names of x and π (sensitivity.hpp)
-    const SensitivityPlan plan = plan_sensitivities(sc.model, settings.sensitivities);
+    const SensitivityPlan plan = plan_sensitivities(sc.model, settings.sensitivities, sc.inputs.prescribed);
     const py::ssize_t nx = plan.nx;
     arrays["sensitivity_initial_state"] =
         plan.initial_state ? py::object(owned(std::move(tr.sensitivity_initial_state), {T, nx, nx})) : py::object(py::none());

@@ -371,6 +371,9 @@ CostGradient gradient(const Scenario& sc, const SimulationSettings& settings, co
   check_run(sc, s);
   if (!wrt.any()) throw Error("gradient: nothing to differentiate (initial_state false, no parameters)");
   check_sensitivities(sc, s, false);
+  if (!sc.inputs.prescribed.empty())
+    throw Error((sc.path.empty() ? "" : sc.path + ": ") + "gradient: the adjoint does not take prescribed motion yet; "
+                "use the forward sensitivities (simulation.sensitivities), which do");
   if (!cost.running && !cost.terminal) throw Error("gradient: the cost has neither a running nor a terminal part");
   const SensitivityPlan plan = plan_sensitivities(m, wrt);
   System sys(m, sc.inputs, s.dynamics);

@@ -5,6 +5,7 @@
 #include "soadyn/sim/limits.hpp"
 #include "soadyn/sim/newton_solver.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 #include <cmath>
@@ -176,6 +177,14 @@ class SemiImplicitEuler : public FixedStep {
 // R'(w) = 𝓜(q) − h P(w)ᵀ − h ∂τ_in/∂v: Newton with the analytic derivatives (derivatives.hpp).
 // The state stays y = [q; v], so p = 𝓜(q) v at the start of a step and v⁺⁺ = 𝓜(q⁺)⁻¹ p⁺ at its end.
 // Only where q̇ = v (no quaternion: revolute, prismatic and planar joints) are (q, p) canonical.
+//
+// Prescribed motion: the same map for the free coordinates of the time-dependent Lagrangian
+// L(q_f, q̇_f, t) = L(q_f, q*(t), q̇_f, q̇*(t)), i.e. the variational integrator of
+// L_d(q_k, q_k+1) = h L(q_k, (q_k+1 − q_k)/h): w's prescribed entries are the discrete velocity
+// (q*(t + h) − q*(t))/h, Newton solves the free rows R_f(w_f) = 0, p_f = (𝓜 v)_f at both ends with
+// v's prescribed entries q̇*(t), q̇*(t + h) (v⁺⁺_f = 𝓜_ff⁻¹ (p⁺_f − 𝓜_fp q̇*(t + h))), and the
+// prescribed rows' residual R_p(w), its discrete momentum replaced by the continuous one reached,
+// is the impulse h τ_p that holds the motion, its work W_p += h τ_p · w_p.
 class SymplecticEuler : public FixedStep {
  public:
   SymplecticEuler(System& s, double dt, double t0)
@@ -194,7 +203,9 @@ class SymplecticEuler : public FixedStep {
         J_(s.model.nv, s.model.nv),
         dq_(s.model.nv, s.model.nv),
         dv_(s.model.nv, s.model.nv),
-        lu_(s.model.nv) {}
+        lu_(s.model.nv) {
+    for (const PrescribedInput& p : s.inputs.prescribed) prescribed_.push_back(p.dof);
+  }
 
   static std::string refuses(const Model& m) {
     if (!m.has_quaternions()) return "";
@@ -211,18 +222,64 @@ class SymplecticEuler : public FixedStep {
 
   void step(double t, double h, VecX& y) override {
     const Model& m = sys_.model;
-    const int nq = m.nq, nv = m.nv;
-    q_ = y.head(nq);
-    auto v = y.segment(nq, nv);
+    const int nq = sys_.nq_state(), nv = sys_.nv_state();
+    // the model's q and v at t (the prescribed joints' from their motion)
+    sys_.expand(t, y.data());
+    q_ = sys_.q;
     // at q: kinematics, 𝓜, p = 𝓜 v, g = bias(q, 0)
     update_kinematics(m, data_, q_);
     mass_matrix(m, data_);
-    p_.noalias() = data_.M * v;
+    p_.noalias() = data_.M * sys_.v;
     update_velocities(m, data_, zero_);
     bias_forces(m, data_);
     g_ = data_.bias;
-    // Newton on R(w) = 0 from w = v
-    w_ = v;
+    // Newton on R_f(w) = 0 from w = v, w_p = (q*(t + h) − q*(t))/h
+    w_ = sys_.v;
+    for (const PrescribedInput& p : sys_.inputs.prescribed) {
+      double qn = 0, vn = 0, an = 0;
+      p.at(t + h, qn, vn, an);
+      w_(p.dof) = (qn - q_(p.coord)) / h;
+    }
+    solve(t, h);
+    // quadratures at v⁺ (right rectangle, as the damping in the momentum update)
+    if (sys_.nquad > 0) {
+      const Inputs::Power pw = sys_.inputs.power(t, w_);
+      y(nq + nv) += h * pw.inputs;
+      y(nq + nv + 1) += h * pw.dissipated;
+    }
+    // p⁺ = 𝓜(q) v⁺, q⁺ = q + h v⁺ (q̇ = v on these joints), v⁺⁺ = 𝓜(q⁺)⁻¹ p⁺
+    p_.noalias() = data_.M * w_;
+    const std::vector<int>& fv = sys_.v_index();
+    for (int k = 0; k < nv; ++k) y(k) += h * w_(fv[size_t(k)]);
+    sys_.expand(t + h, y.data());
+    update_kinematics(m, data_, sys_.q);
+    mass_matrix(m, data_);
+    if (prescribed_.empty()) {
+      ltdl_factor(m, data_);
+      ltdl_solve(m, data_, p_);
+      y.segment(nq, nv) = p_;
+      return;
+    }
+    // v⁺⁺_f = 𝓜_ff⁻¹ (p⁺_f − 𝓜_fp q̇*(t + h))
+    VecX& b = delta_;
+    b = p_;
+    for (const int k : prescribed_) b.noalias() -= data_.M.col(k) * sys_.v(k);
+    y.segment(nq, nv) = data_.M(fv, fv).llt().solve(b(fv));
+    // W_p += h τ_p · w_p, the holding impulse h τ_p = p_p(t + h) − p_p(t) − h (∂L/∂q_p + τ_in,p)(q, w):
+    // R_p(w) with (𝓜(q) w)_p, the discrete momentum (p⁺'s free rows alone are the state's), replaced
+    // by the momentum p_p(t + h) = (𝓜(q⁺) v⁺⁺)_p of the state reached
+    if (sys_.nquad > 2) {
+      for (int k = 0; k < nv; ++k) sys_.v(fv[size_t(k)]) = y(nq + k);
+      double held = 0;
+      for (const int k : prescribed_) held += (r_(k) - p_(k) + data_.M.row(k).dot(sys_.v)) * w_(k);
+      y(nq + nv + 2) += held;
+    }
+  }
+
+  // Newton on R(w) = 0, the free rows (all rows when nothing is prescribed); leaves R(w) at the
+  // last iterate in r_
+  void solve(double t, double h) {
+    const std::vector<int>& fv = sys_.v_index();
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0;; ++it) {
       ++stats_.nonlinear_iterations;
@@ -236,12 +293,20 @@ class SymplecticEuler : public FixedStep {
       dq_.setZero();
       dv_.setZero();
       sys_.inputs.add_derivatives(dq_, dv_);
-      // R'(w) = 𝓜 − h P(w)ᵀ − h ∂τ_in/∂v
+      // R'(w) = 𝓜 − h P(w)ᵀ − h ∂τ_in/∂v, its free rows and columns
       J_ = data_.M - h * dd_.dtau_dq.transpose() - h * dv_;
-      lu_.compute(J_);
-      delta_.noalias() = lu_.solve(r_);
-      w_ -= delta_;
-      const double size = delta_.norm(), scale = std::max(1.0, w_.norm());
+      double size = 0, scale = 1;
+      if (prescribed_.empty()) {
+        lu_.compute(J_);
+        delta_.noalias() = lu_.solve(r_);
+        w_ -= delta_;
+        size = delta_.norm();
+      } else {
+        const VecX d = J_(fv, fv).partialPivLu().solve(r_(fv));
+        w_(fv) -= d;
+        size = d.norm();
+      }
+      scale = std::max(1.0, w_.norm());
       if (!std::isfinite(size)) break;  // the state check reports it
       if (size <= 1e-14 * scale) break;
       // quadratic convergence: once a correction stops shrinking it has reached rounding
@@ -254,21 +319,6 @@ class SymplecticEuler : public FixedStep {
       }
       previous = size;
     }
-    // quadratures at v⁺ (right rectangle, as the damping in the momentum update)
-    if (sys_.nquad > 0) {
-      const Inputs::Power pw = sys_.inputs.power(t, w_);
-      y(nq + nv) += h * pw.inputs;
-      y(nq + nv + 1) += h * pw.dissipated;
-    }
-    // p⁺ = 𝓜(q) v⁺, q⁺ = q + h v⁺, v⁺⁺ = 𝓜(q⁺)⁻¹ p⁺
-    p_.noalias() = data_.M * w_;
-    y.head(nq) += h * w_;
-    q_ = y.head(nq);
-    update_kinematics(m, data_, q_);
-    mass_matrix(m, data_);
-    ltdl_factor(m, data_);
-    ltdl_solve(m, data_, p_);
-    v = p_;
   }
 
   Model free_;  // the model with gravity off: P(w) from inverse dynamics' derivatives
@@ -277,6 +327,7 @@ class SymplecticEuler : public FixedStep {
   VecX q_, w_, p_, g_, r_, tau_, delta_, zero_;
   MatX J_, dq_, dv_;
   Eigen::PartialPivLU<MatX> lu_;
+  std::vector<int> prescribed_;  // the prescribed joints' DOFs
 };
 
 class RK4 : public FixedStep {
@@ -424,8 +475,6 @@ std::unique_ptr<Integrator> make_integrator(Method method, System& system, const
   const IntegratorInfo& info = find_integrator(method);
   if (info.refuses)
     if (const std::string why = info.refuses(system.model); !why.empty()) throw Error(why);
-  if (method == Method::SymplecticEuler && system.has_prescribed())
-    throw Error("symplectic-euler does not take prescribed motion; use rk4, implicit-midpoint or cvode-adams / cvode-bdf");
   return info.make(system, settings, t0, y0);
 }
 

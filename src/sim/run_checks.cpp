@@ -67,7 +67,7 @@ void check_limits(const Scenario& sc, const SimulationSettings& s) {
   }
   const Model& m = sc.model;
   try {
-    JointLimits(m, s.restitution).check_inside(sc.q0);
+    JointLimits(m, s.restitution, sc.inputs.prescribed).check_inside(sc.q0);
   } catch (const Error& e) {
     // the first 1-DOF joint outside its range (the one check_inside names), where the file gives
     // its start, else its range, else limits: true
@@ -96,9 +96,6 @@ void check_prescribed(const Scenario& sc, const SimulationSettings& s) {
   for (const PrescribedInput& p : pres)
     if (p.body < 0 || p.body >= m.nbodies || m.nv_i[p.body] != 1 || m.nq_i[p.body] != 1)
       throw Error(scene + "prescribed: joint '" + p.joint + "' is not a 1-DOF joint of the model");
-  if (s.method == Method::SymplecticEuler)
-    throw Error(scene + "symplectic-euler does not take prescribed motion (the free joints' momenta change with the "
-                "given motion); use rk4, implicit-midpoint or cvode-adams / cvode-bdf");
   if (s.limits && m.has_limits()) {
     for (const PrescribedInput& p : pres) {
       const int k = p.dof;
@@ -108,11 +105,7 @@ void check_prescribed(const Scenario& sc, const SimulationSettings& s) {
         throw Error(where + "prescribed: joint '" + p.joint + "' has limits, and limits: true would enforce them on a "
                     "motion that is given; drop its limits or set limits: false");
     }
-    throw Error(scene + "limits: true is not available with prescribed motion yet (the limits' events act on the full "
-                "state); set limits: false");
   }
-  if (s.sensitivities.any())
-    throw Error(scene + "sensitivities are not available with prescribed motion yet");
 }
 
 // what the settings allow but make a run other than written: a tick off the steps, a step longer

@@ -40,9 +40,9 @@ class Observers {
   std::vector<LoopObserver*> list_;
 };
 
-// The energy balance's error at each sample, |E(t) − E(0) − W(t) − W_p(t) + L(t)| / max(|E(0)|, peak T),
-// E(0) the first sample's (before any impact there: the energy it took is in L); its maximum and
-// last value go into the summary.
+// The energy balance's error at each sample, |E(t) − E(0) − W(t) − W_p(t) + L(t)|, E(0) the first
+// sample's (before any impact there: the energy it took is in L); its maximum and last value go into
+// the summary relative to the run's energy scale so far, max(|E(0)|, peak T, peak |W|, peak |W_p|).
 class EnergyBooks : public LoopObserver {
  public:
   void on_sample(const Sample& s) override;
@@ -52,7 +52,7 @@ class EnergyBooks : public LoopObserver {
  private:
   void write(RunSummary& r) const;
   bool started_ = false;
-  double E0_ = 0.0, peak_T_ = 0.0, max_ = 0.0, last_ = 0.0;
+  double E0_ = 0.0, scale_ = 0.0, max_ = 0.0, last_ = 0.0;  // max_, last_: J, before scaling
 };
 
 // Limits off on a model with limits: the first sample past each 1-DOF joint's bound, said in one

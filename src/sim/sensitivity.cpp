@@ -44,13 +44,16 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       // the dynamics and at every output instead, and its change along itself is no tangent increment
       : Cvode(s.method == Method::CvodeBdf, sys, s, t0, y0, false), plan_(plan), ns_(plan.nx0() + plan.np()) {
     const Model& m = sys.model;
-    const int n = sys.size(), nv = m.nv, nq = m.nq;
+    const int n = sys.size(), nv = sys.nv_state(), nq = sys.nq_state();
     if (ns_ == 0) throw Error("sensitivities: nothing to differentiate (initial_state false, no parameters)");
+    if (plan.nx != 2 * nv) throw Error("sensitivities: the plan's state (" + std::to_string(plan.nx) +
+                                       ") is not the system's (" + std::to_string(2 * nv) + "): plan it with the prescribed joints");
     sys.prepare_jacobian();
     S_ = MatX::Zero(n, ns_);
     // s(0): a tangent increment of q₀ moves the coordinates by P δ; one of v₀ moves v; π moves nothing
+    // (the state's q and v: the free joints' when some are prescribed)
     if (plan.initial_state) {
-      S_.block(0, 0, nq, nv) = tangent_to_coordinates(m, y0.head(nq));
+      S_.block(0, 0, nq, nv) = sys.coordinates_of_tangent(t0, y0.data());
       S_.block(nq, nv, nv, nv).setIdentity();
     }
     S0_ = S_;
@@ -94,11 +97,10 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
   CvodeSensitivity& operator=(const CvodeSensitivity&) = delete;
 
   void sensitivities(double t, MatX& dx_dx0, MatX& dx_dpi) override {
-    const Model& m = sys_.model;
+    const int nq = sys_.nq_state(), nv = sys_.nv_state();
     void* mem = mem_.get();
     long steps = 0;
     check(CVodeGetNumSteps(mem, &steps), "CVodeGetNumSteps");
-    VecX q;
     if (steps == 0 && before_.steps == 0) {  // the start: what CVodeSensInit was given
       S_ = S0_;
       N_VScale(1.0, y_.get(), y_out_.get());
@@ -107,11 +109,10 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
       check(CVodeGetDky(mem, t, 0, y_out_.get()), "CVodeGetDky");
       for (int k = 0; k < ns_; ++k) S_.col(k) = map(yS_[k]);
     }
-    q = map(y_out_.get()).head(m.nq);
     // rows to the tangent: δ = T(q) s_q; v's rows as they are
-    MatX X(2 * m.nv, ns_);
-    X.bottomRows(m.nv) = S_.middleRows(m.nq, m.nv);
-    tangent_times(m, q, S_.topRows(m.nq), X.topRows(m.nv));
+    MatX X(2 * nv, ns_);
+    X.bottomRows(nv) = S_.middleRows(nq, nv);
+    sys_.tangent_of(t, N_VGetArrayPointer(y_out_.get()), S_.topRows(nq), X.topRows(nv));
     dx_dx0 = X.leftCols(plan_.nx0());
     dx_dpi = X.rightCols(plan_.np());
   }
@@ -179,10 +180,15 @@ class CvodeSensitivity : public cvode_impl::Cvode, public SensitivitySource {
 
 }  // namespace
 
-SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s) {
+SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s, const std::vector<PrescribedInput>& prescribed) {
   SensitivityPlan plan;
   plan.initial_state = s.initial_state;
-  plan.nx = 2 * m.nv;
+  // the state's DOFs: the prescribed joints' motion is given, not a state
+  std::vector<char> given(size_t(m.nv), 0);
+  for (const PrescribedInput& p : prescribed)
+    if (p.dof >= 0 && p.dof < m.nv) given[size_t(p.dof)] = 1;
+  const int nv_state = m.nv - int(std::count(given.begin(), given.end(), 1));
+  plan.nx = 2 * nv_state;
   const bool all = std::find(s.parameters.begin(), s.parameters.end(), "all") != s.parameters.end();
   if (all && s.parameters.size() > 1)
     throw Error("sensitivities: parameters: expected 'all' or a list of body names, not both");
@@ -204,8 +210,10 @@ SensitivityPlan plan_sensitivities(const Model& m, const SensitivitySettings& s)
   std::vector<std::string> vu;
   for (int i = 0; i < m.nbodies; ++i)
     for (const auto& u : joint_traits(m.joint_type[i]).v_units) vu.emplace_back(u);
-  for (int k = 0; k < m.nv; ++k) plan.state_names.push_back("q." + vn[size_t(k)]), plan.state_units.push_back(without_rate(vu[size_t(k)]));
-  for (int k = 0; k < m.nv; ++k) plan.state_names.push_back("qd." + vn[size_t(k)]), plan.state_units.push_back(vu[size_t(k)]);
+  for (int k = 0; k < m.nv; ++k)
+    if (!given[size_t(k)]) plan.state_names.push_back("q." + vn[size_t(k)]), plan.state_units.push_back(without_rate(vu[size_t(k)]));
+  for (int k = 0; k < m.nv; ++k)
+    if (!given[size_t(k)]) plan.state_names.push_back("qd." + vn[size_t(k)]), plan.state_units.push_back(vu[size_t(k)]);
   for (const int b : plan.bodies)
     for (int j = 0; j < kParametersPerBody; ++j) {
       plan.parameter_names.push_back(m.body_names[size_t(b)] + "." + kParameterNames[j]);
@@ -228,7 +236,7 @@ void check_sensitivities(const Scenario& sc, const SimulationSettings& s, bool h
   if (s.limits && sc.model.has_limits())
     throw Error(why + "enforced joint limits (simulation.limits: true) are events where the state jumps, not differentiated: "
                 "set limits: false");
-  plan_sensitivities(sc.model, s.sensitivities);
+  plan_sensitivities(sc.model, s.sensitivities, sc.inputs.prescribed);
 }
 
 SensitivityIntegrator make_sensitivity_integrator(System& system, const SimulationSettings& settings,

@@ -181,7 +181,7 @@ Run::Run(const Scenario& sc, const SimulationSettings& s, ControlFunction contro
   if (law && !sampled) sys.feedback = law;
   sys.controlled = sampled;
   if (s.limits && m.has_limits()) {
-    limits.emplace(m, s.restitution);
+    limits.emplace(m, s.restitution, sc.inputs.prescribed);
     sys.constraint = &*limits;
     limit_events.emplace(*limits, sys);
     scheduler.add(*limit_events);
@@ -190,7 +190,7 @@ Run::Run(const Scenario& sc, const SimulationSettings& s, ControlFunction contro
   }
   sys.normalize(y.head(sys.nq_state()));
   if (s.sensitivities.any()) {
-    SensitivityIntegrator si = make_sensitivity_integrator(sys, s, plan_sensitivities(m, s.sensitivities), t, y);
+    SensitivityIntegrator si = make_sensitivity_integrator(sys, s, plan_sensitivities(m, s.sensitivities, sc.inputs.prescribed), t, y);
     integrator = std::move(si.integrator);
     sensitivities = si.source;
   } else {

@@ -143,6 +143,7 @@ void System::rhs(double t, const double* y, double* ydot) {
 // holding τ less the joint's own inputs (the motor's torque)
 void System::rhs_prescribed(double t, double* ydot) {
   hybrid_dynamics(model, data, locked_, tau, qdd_given, tau_hybrid);
+  if (constraint) constraint->constrain(*this);  // held DOFs: their constraint forces (and the holding τ's share)
   model.qdot(q, v, qd);
   for (int k = 0; k < nq_state_; ++k) ydot[k] = qd(q_index_[size_t(k)]);
   for (int k = 0; k < nv_state_; ++k) ydot[nq_state_ + k] = data.qdd(v_index_[size_t(k)]);
@@ -158,6 +159,13 @@ void System::rhs_prescribed(double t, double* ydot) {
   ydot[w] = p.inputs + controller;
   ydot[w + 1] = p.dissipated;
   ydot[w + 2] = held;
+}
+
+void System::dynamics(const VecX& tau_in) {
+  if (has_prescribed())
+    hybrid_dynamics(model, data, locked_, tau_in, qdd_given, tau_hybrid);
+  else
+    forward_dynamics(model, data, tau_in, method);
 }
 
 bool System::holds_rhs_at(double t, const double* y) const {
@@ -229,16 +237,20 @@ void System::jacobian_prescribed(double t, Eigen::Ref<MatX> J) {
 }
 
 long System::linearize(double t, const double* y) {
-  if (has_prescribed())
-    throw Error("the forward sensitivities and the adjoint are not available with prescribed motion yet");
   prepare_jacobian();
   const int n = size();
   if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
   // [kin], [vel], τ, q̈ and the articulated-body factor: rhs's when it has just evaluated this very
   // (t, y) by that route without constraints (CVODES evaluates f at each iterate before the
   // sensitivities' right-hand side there, and at the state it has converged before the staggered
-  // corrector), else evaluated here
-  if (!(method == FdMethod::ArticulatedBody && !constraint && holds_rhs_at(t, y))) {
+  // corrector), else evaluated here.  With prescribed motion the hybrid dynamics' q̈ and its factor
+  // with those joints locked (rhs's own route)
+  if (has_prescribed()) {
+    if (!holds_rhs_at(t, y)) {
+      at_state(t, y);
+      hybrid_dynamics(model, data, locked_, tau, qdd_given, tau_hybrid);
+    }
+  } else if (!(method == FdMethod::ArticulatedBody && !constraint && holds_rhs_at(t, y))) {
     at_state(t, y);
     forward_dynamics(model, data, tau, FdMethod::ArticulatedBody);
   }
@@ -262,13 +274,42 @@ void System::linearized_times(const MatX& S, MatX& out, const MatX* forces) {
 
 void System::linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces) {
   if (!linearized_) throw Error("System::linearized_times: no state linearized since the last evaluation");
-  const double t = lin_t_;
-  const int nq = model.nq, nv = model.nv;
+  const int nq = model.nq, nv = model.nv, w = nq_state_ + nv_state_;
   const Eigen::Index ns = S.cols();
   if (forces && (forces->rows() != nv || forces->cols() > ns))
     throw Error("System::linearized_times: forces: expected " + std::to_string(nv) + " rows and at most as many columns as S");
   if (S.rows() != size() || out.rows() != size() || out.cols() != ns)
     throw Error("System::linearized_times: expected S and out of " + std::to_string(size()) + " rows and the same columns");
+  if (!has_prescribed()) {
+    model_times(S.topRows(nq + nv), out.topRows(nq + nv), forces);
+  } else {
+    // S's rows in the model's layout, the prescribed joints' zero (their q and v are functions of t
+    // alone), the model's products, and the free joints' rows of them: the locked factor gives
+    // q̈_f's rows 𝓜_ff⁻¹ (…)_f
+    if (Sm_.rows() != nq + nv || Sm_.cols() != ns) Sm_.resize(nq + nv, ns), Om_.resize(nq + nv, ns);
+    Sm_.setZero();
+    for (int k = 0; k < nq_state_; ++k) Sm_.row(q_index_[size_t(k)]) = S.row(k);
+    for (int k = 0; k < nv_state_; ++k) Sm_.row(nq + v_index_[size_t(k)]) = S.row(nq_state_ + k);
+    model_times(Sm_, Om_, forces);
+    for (int k = 0; k < nq_state_; ++k) out.row(k) = Om_.row(q_index_[size_t(k)]);
+    for (int k = 0; k < nv_state_; ++k) out.row(nq_state_ + k) = Om_.row(nq + v_index_[size_t(k)]);
+  }
+  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v); W_p's row left zero, as in jacobian (it feeds
+  // nothing back, and the sensitivities reported are q's and v's)
+  if (nquad > 0) {
+    const auto s_v = has_prescribed() ? Eigen::Ref<const MatX>(Sm_.bottomRows(nv)) : Eigen::Ref<const MatX>(S.middleRows(nq, nv));
+    inputs.power_derivatives(lin_t_, v, dP_, dD_);
+    if (control_work && controlled) dP_ += control;
+    out.row(w).noalias() = dP_.transpose() * s_v;
+    out.row(w + 1).noalias() = dD_.transpose() * s_v;
+    if (nquad > 2) out.row(w + 2).setZero();
+  }
+}
+
+// out = (∂[q̇; q̈]/∂[q; v]) S in the model's layout (nq + nv rows each)
+void System::model_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces) {
+  const int nq = model.nq, nv = model.nv;
+  const Eigen::Index ns = S.cols();
   if (delta_.rows() != nv || delta_.cols() != ns) delta_.resize(nv, ns), W_.resize(nv, ns);
   const auto s_v = S.middleRows(nq, nv);
   // q̇'s rows, and S's q rows on the tangent: δ = T(q) s_q (q itself when no joint holds a quaternion)
@@ -286,18 +327,30 @@ void System::linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, co
   if (forces) W_.rightCols(forces->cols()) += *forces;
   articulated_solve(model, data, W_, solve_work_);
   out.middleRows(nq, nv) = W_;
-  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v)
-  if (nquad > 0) {
-    inputs.power_derivatives(t, v, dP_, dD_);
-    if (control_work && controlled) dP_ += control;
-    out.row(nq + nv).noalias() = dP_.transpose() * s_v;
-    out.row(nq + nv + 1).noalias() = dD_.transpose() * s_v;
-  }
 }
 
 void System::linearized_solve(Eigen::Ref<MatX> X) {
   if (!linearized_) throw Error("System::linearized_solve: no state linearized since the last evaluation");
   articulated_solve(model, data, X, solve_work_);
+}
+
+MatX System::coordinates_of_tangent(double t, const double* y) {
+  expand(t, y);
+  const MatX P = tangent_to_coordinates(model, q);
+  if (!has_prescribed()) return P;
+  return P(q_index_, v_index_);  // block diagonal by joint, and the prescribed joints' blocks are 1 × 1
+}
+
+void System::tangent_of(double t, const double* y, Eigen::Ref<const MatX> Sq, Eigen::Ref<MatX> out) {
+  expand(t, y);
+  if (!has_prescribed()) {
+    tangent_times(model, q, Sq, out);
+    return;
+  }
+  MatX full = MatX::Zero(model.nq, Sq.cols()), d(model.nv, Sq.cols());
+  for (int k = 0; k < nq_state_; ++k) full.row(q_index_[size_t(k)]) = Sq.row(k);
+  tangent_times(model, q, full, d);
+  for (int k = 0; k < nv_state_; ++k) out.row(k) = d.row(v_index_[size_t(k)]);
 }
 
 void System::linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out) {

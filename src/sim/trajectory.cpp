@@ -23,15 +23,13 @@ VecX column(std::vector<double>& flat) {
   return out;
 }
 
-// max(|E(0)|, peak T so far) at each sample: the scale of the energy errors
-VecX energy_scale(const VecX& E, const VecX& T) {
-  VecX scale(E.size());
-  double peak = 0.0;
-  for (Eigen::Index k = 0; k < E.size(); ++k) {
-    peak = std::max(peak, T(k));
-    scale(k) = std::max({std::abs(E(0)), peak, 1e-300});
-  }
-  return scale;
+// the run's energy scale: max(|E(0)|, peak T, peak |W|, peak |W_p|) over all of it (a run from rest
+// with E(0) = 0 is measured against the energy its inputs and given motions bring in)
+double energy_scale(const VecX& E, const VecX& T, const VecX& W, const VecX& Wp) {
+  double scale = std::max(std::abs(E(0)), T.maxCoeff());
+  if (W.size() > 0) scale = std::max(scale, W.cwiseAbs().maxCoeff());
+  if (Wp.size() > 0) scale = std::max(scale, Wp.cwiseAbs().maxCoeff());
+  return std::max(scale, 1e-300);
 }
 
 }  // namespace
@@ -135,15 +133,15 @@ Sample Trajectory::sample(Eigen::Index k) const {
 VecX Trajectory::energy_error() const {
   if (size() == 0) return VecX();
   // (E − E(0)) / max(|E(0)|, peak T)
-  return (total_energy.array() - total_energy(0)) / energy_scale(total_energy, kinetic_energy).array();
+  return (total_energy.array() - total_energy(0)) / energy_scale(total_energy, kinetic_energy, VecX(), VecX());
 }
 
 VecX Trajectory::balance_error() const {
   if (size() == 0) return VecX();
-  // (E − E(0) − W − W_p + L) / max(|E(0)|, peak T)
+  // (E − E(0) − W − W_p + L) / max(|E(0)|, peak T, peak |W|, peak |W_p|)
   const VecX wp = work_prescribed.size() == size() ? work_prescribed : VecX::Zero(size());
   return (total_energy.array() - total_energy(0) - work_inputs.array() - wp.array() + impact_loss.array()) /
-         energy_scale(total_energy, kinetic_energy).array();
+         energy_scale(total_energy, kinetic_energy, work_inputs, wp);
 }
 
 }  // namespace soadyn

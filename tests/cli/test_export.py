@@ -309,6 +309,22 @@ class RealRun(Base):
                              ("rad", "m", "rad/s", "J"))
         self.assertAlmostEqual(col["q.left"][0], 0.3, delta=1e-15)  # the scenario's initial state
 
+    def test_a_prescribed_runs_holding_force_and_its_work(self):
+        """the crane's trolley follows its slew: its drive's force (/prescribed) and W_p
+        (/energy/work_prescribed) are columns of their own, named and in N and J"""
+        run = self.path("crane.h5")
+        p = subprocess.run([SOADYN, "run", os.path.join(ROOT, "scenarios", "crane_slew.yaml"), "--t-end", "8",
+                            "-q", "-o", run], capture_output=True, text=True, timeout=300)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.ok(run, "--csv", self.path("crane.csv"), "--columns", "prescribed,energy.work_prescribed")
+        header, data = read_csv(self.path("crane.csv"))
+        self.assertEqual(header, ["time [s]", "prescribed.trolley [N]", "energy.work_prescribed [J]"])
+        with h5py.File(run, "r") as f:
+            self.assertTrue(same(data[:, 1], f["prescribed"][:, 0]))
+            self.assertTrue(same(data[:, 2], f["energy/work_prescribed"][:]))
+        # the trolley's drive pushes while it accelerates: a force of the order of (150 + 500) kg × q̈*
+        self.assertGreater(np.abs(data[:, 1]).max(), 100.0)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

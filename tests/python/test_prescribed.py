@@ -112,3 +112,24 @@ def test_the_three_scenes():
     at = np.searchsorted(arm.t, table[:, 0] - 1e-12)
     np.testing.assert_allclose(arm.q[at, 0], table[:, 1], rtol=0, atol=1e-12)
     assert abs(arm.balance_error).max() < 1e-8
+
+
+def test_sensitivities_of_the_free_joints_with_a_driven_cart():
+    """the run's sensitivities are the pole's alone (the cart's motion is given), and its ∂x/∂x₀
+    agrees with a difference of two runs"""
+    sc = soadyn.parse_scenario(CART, "cart.yaml")
+    a = 1.5
+    drive = {"slide": lambda t: (0.5 * a * t * t, a * t, a)}
+    traj = soadyn.simulate(sc, prescribed=drive, sensitivities={"initial_state": True, "parameters": ["pole"]})
+    sens = traj.sensitivities
+    assert sens.state_names == ["q.hinge", "qd.hinge"], sens.state_names
+    assert sens.initial_state.shape == (len(traj.t), 2, 2)
+    assert sens.parameters.shape == (len(traj.t), 2, 10)
+    # ∂θ(T)/∂θ₀ by a central difference of whole runs from θ₀ ± h
+    h = 1e-5
+    ends = []
+    for sign in (1, -1):
+        moved = soadyn.parse_scenario(CART.replace("simulation:", f"initial: {{q: {{hinge: {sign * h}}}}}\nsimulation:"),
+                                      "cart.yaml")
+        ends.append(soadyn.simulate(moved, prescribed=drive).q[-1, 1])
+    assert sens.initial_state[-1, 0, 0] == pytest.approx((ends[0] - ends[1]) / (2 * h), rel=1e-5)

@@ -45,7 +45,9 @@ struct LimitEvent {
 
 class JointLimits : public Constraint {
  public:
-  JointLimits(const Model& model, double restitution);
+  // the limits of the 1-DOF joints not in `prescribed` (Inputs::prescribed: their motion is given,
+  // and the state, whose indices the root functions read, leaves them out)
+  JointLimits(const Model& model, double restitution, const std::vector<PrescribedInput>& prescribed = {});
   int count() const { return int(sides_.size()); }  // root functions, one per finite bound
   // q beyond a bound (past rounding): soadyn::Error naming the joint
   void check_inside(const VecX& q) const;
@@ -62,7 +64,9 @@ class JointLimits : public Constraint {
 
  private:
   struct Side {
-    int dof, coord, sign;  // sign σ: +1 lower, −1 upper
+    int dof, coord;  // the model's v and q index
+    int sv, sq;      // the state's (System::v_index, q_index)
+    int sign;        // σ: +1 lower, −1 upper
     double bound;
   };
   // an impact on side s (v into it): the impulse, the hold when slow; appends its events
@@ -76,8 +80,8 @@ class JointLimits : public Constraint {
   std::vector<Side> sides_;
   std::vector<int> held_;  // held sides
   VecX lambda_;            // their constraint forces at the last constrain()
-  VecX qdd0_, tau_, ydot_, y_;
-  MatX W_, cols_;
+  VecX qdd0_, hold0_, tau_, ydot_, y_;
+  MatX W_, cols_, hold_cols_;
   double lost_ = 0.0;
 };
 

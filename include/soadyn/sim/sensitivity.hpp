@@ -35,7 +35,7 @@ namespace soadyn {
 struct SensitivityPlan {
   bool initial_state = false;
   std::vector<int> bodies;  // the bodies whose 10 parameters each are differentiated, in model order
-  int nx = 0;               // 2 nv
+  int nx = 0;               // 2 nv, the prescribed joints' DOFs left out (their motion is given)
   int nx0() const { return initial_state ? nx : 0; }
   int np() const { return kParametersPerBody * int(bodies.size()); }
   // names: x's ("q.<v name>" along the tangent, "qd.<v name>"), the parameters' ("<body>.m",
@@ -46,9 +46,11 @@ struct SensitivityPlan {
 // P = ∂q/∂δ (nq × nv), how the coordinates move along a tangent increment δ at q:
 // tangent_to_coordinates (configuration.hpp)
 
-// The plan for `settings` on `model`; throws soadyn::Error naming an unknown body (with the nearest
-// name) or "all" mixed with names.
-SensitivityPlan plan_sensitivities(const Model& model, const SensitivitySettings& settings);
+// The plan for `settings` on `model` with `prescribed` joints (Inputs::prescribed: the state, and x,
+// leave their DOFs out); throws soadyn::Error naming an unknown body (with the nearest name) or "all"
+// mixed with names.
+SensitivityPlan plan_sensitivities(const Model& model, const SensitivitySettings& settings,
+                                   const std::vector<PrescribedInput>& prescribed = {});
 
 // Throws soadyn::Error (one line) when a run of sc with settings cannot have sensitivities: a
 // fixed-step method, controllers, enforced joint limits, sampled control.

@@ -49,8 +49,9 @@ struct RunSummary {
   std::string status = "running";     // "completed", "interrupted by SIGINT at t = …", or the error
   double t_reached = 0.0;
   bool completed = false;
-  // the energy-balance error |E(t) − E(0) − W(t) − W_p(t) + L(t)| / max(|E(0)|, peak T): its maximum over the
-  // samples and its value at the last one (W ≡ 0 without torques or dampers: the energy error)
+  // the energy-balance error |E(t) − E(0) − W(t) − W_p(t) + L(t)| / max(|E(0)|, peak T, peak |W|, peak |W_p|),
+  // the run's energy scale: its maximum over the samples and its value at the last one (W ≡ 0
+  // without torques or dampers: the energy error)
   double max_energy_balance_error = 0.0;
   double final_energy_balance_error = 0.0;
   std::vector<LimitEvent> events;     // joint-limit events, in time order (settings.limits)

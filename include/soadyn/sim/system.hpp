@@ -68,6 +68,10 @@ class System {
   // q, v and [kin], [vel] at y, and τ: the inputs', the held control's and the feedback controller's
   // (rhs, jacobian and jacobian_times begin with it)
   void at_state(double t, const double* y);
+  // data.qdd for the generalized force tau_in at the state at_state left: the hybrid dynamics' with
+  // prescribed motion (tau_hybrid then its τ, the holding one on the prescribed DOFs), forward
+  // dynamics by `method` otherwise (Constraint's columns, limits.cpp)
+  void dynamics(const VecX& tau_in);
   // whether data holds rhs's evaluation at exactly (t, y), nothing evaluated since: [kin], [vel], τ,
   // q̈ and the factor of `method` (the forward sensitivities start from it at the state CVODES has
   // just converged, sensitivity.cpp)
@@ -94,12 +98,19 @@ class System {
   // also move along τ by them: their q̈ rows gain ∂q̈/∂τ F = 𝓜⁻¹ F (∂q̈/∂π = −𝓜⁻¹ Y, sensitivity.cpp).
   // The MatX form sizes out; the Ref form writes into out as it is (size() × S's columns), so
   // that CVODES' own vectors can be S and out without a copy
-  // Neither is defined with prescribed motion (they throw soadyn::Error).
+  // With prescribed motion, S and out are in the state's layout, q̈_f's rows 𝓜_ff⁻¹ (…)_f by the
+  // hybrid dynamics' locked factor, and W_p's row zero (it feeds nothing back).
   long linearize(double t, const double* y);
   void linearized_times(const MatX& S, MatX& out, const MatX* forces = nullptr);
   void linearized_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces = nullptr);
-  // X ← 𝓜⁻¹ X (nv rows) by the articulated-body factor linearize left in data (O(N) per column)
+  // X ← 𝓜⁻¹ X (nv rows) by the articulated-body factor linearize left in data (O(N) per column;
+  // with prescribed motion 𝓜_ff⁻¹ on the free rows, 0 on the prescribed ones)
   void linearized_solve(Eigen::Ref<MatX> X);
+  // the state's coordinates along the tangent at (t, y): ∂q_state/∂δ (nq_state × nv_state,
+  // tangent_to_coordinates of the free joints), and δ = T(q) S_q for columns S_q of the state's
+  // q rows (nq_state × k) into out (nv_state × k).  Both set q and v to (t, y)'s (expand)
+  MatX coordinates_of_tangent(double t, const double* y);
+  void tangent_of(double t, const double* y, Eigen::Ref<const MatX> Sq, Eigen::Ref<MatX> out);
   void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
   void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
@@ -138,6 +149,7 @@ class System {
   void linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out);
   void rhs_prescribed(double t, double* ydot);
   void jacobian_prescribed(double t, Eigen::Ref<MatX> J);
+  void model_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces);
   PrescribedJoints locked_;
   int nq_state_, nv_state_;
   std::vector<int> q_index_, v_index_, quaternions_;
@@ -153,6 +165,7 @@ class System {
   // scratch, each the workspace of the method named
   VecX y_work_, f0_, f1_;          // jacobian_dq
   MatX delta_, W_;                 // linearized_times: S's q rows on the tangent; the forces
+  MatX Sm_, Om_;                   // linearized_times with prescribed motion: S and out in the model's layout
   MatX solve_work_;                // articulated_solve's (prepare_jacobian)
   VecX dP_, dD_;                   // jacobian, linearized_times: ∂Ẇ/∂v, ∂Ḋ/∂v (the quadratures' rows)
 };

@@ -36,9 +36,10 @@ struct Trajectory {
   Eigen::Index size() const { return t.size(); }
   // sample k as simulate() observed it
   Sample sample(Eigen::Index k) const;
-  // (E(t) − E(0)) / max(|E(0)|, peak T so far), (T): the energy's drift
+  // (E(t) − E(0)) / max(|E(0)|, peak T over the run), (T): the energy's drift
   VecX energy_error() const;
-  // (E(t) − E(0) − W(t) − W_p(t) + L(t)) / max(|E(0)|, peak T so far), (T): what the summary's figures take
+  // (E(t) − E(0) − W(t) − W_p(t) + L(t)) / max(|E(0)|, peak T, peak |W|, peak |W_p|) over the run, (T):
+  // what the summary's figures take
   VecX balance_error() const;
 };
 

@@ -11,8 +11,9 @@ class RunSummary:
 
     status is "completed", "interrupted by SIGINT at t = …", or the error that ended the run
     (completed is then False and t_reached the time of the last sample).  The energy-balance errors
-    are max |E(t) − E(0) − W(t)| / max(|E(0)|, peak T) over the samples (W the work of the torques
-    and dampers, zero without them), and that ratio at the last one.
+    are max |E(t) − E(0) − W(t) − W_p(t) + L(t)| over the samples relative to the run's energy scale
+    max(|E(0)|, peak T, peak |W|, peak |W_p|) (W the work of the torques and dampers, zero without
+    them; W_p the prescribed joints'; L the impacts' loss), and that ratio at the last one.
     """
     method: str
     status: str
@@ -64,7 +65,8 @@ class FramePoses:
 class Sensitivities:
     """A run's forward sensitivities (CVODES, under its error control), at every sample:
     initial_state (T, nx, nx), ∂x(t)/∂x₀, and parameters (T, nx, np), ∂x(t)/∂π (None when not
-    asked for), with x = [q along the tangent; v] (nx = 2 nv; a free root's q increment is
+    asked for), with x = [q along the tangent; v] (nx = 2 nv, the prescribed joints' DOFs left
+    out: their motion is given; a free root's q increment is
     [δθ; δp], the attitude turned about inertial axes, a ball's δθ in the child's axes) and π the
     inertial parameters of the bodies named (10 each: m, m c, the inertia about the body frame's
     origin, as soadyn.parameters orders them).  state_names, parameter_names and their SI units."""
@@ -145,26 +147,25 @@ class Trajectory:
 
     @property
     def energy_error(self) -> np.ndarray:
-        """(E(t) − E(0)) / max(|E(0)|, peak T so far), shape (T,): the drift the summary's figures
+        """(E(t) − E(0)) / max(|E(0)|, peak T over the run), shape (T,): the drift the summary's figures
         are taken from."""
         E, T = self.total_energy, self.kinetic_energy
         if len(E) == 0:
             return E.copy()
-        scale = np.maximum(np.maximum(abs(E[0]), np.maximum.accumulate(T)), 1e-300)
-        return (E - E[0]) / scale
+        return (E - E[0]) / energy_scale(E, T)
 
     @property
     def balance_error(self) -> np.ndarray:
-        """(E(t) − E(0) − W(t) − W_p(t) + L(t)) / max(|E(0)|, peak T so far), shape (T,): W the inputs'
-        work, W_p the prescribed joints' torques', L the impacts' loss; the summary's figures are
-        taken from it (equal to energy_error without torques, dampers, prescribed motion or limits)."""
+        """(E(t) − E(0) − W(t) − W_p(t) + L(t)) / the run's energy scale max(|E(0)|, peak T, peak |W|,
+        peak |W_p|), shape (T,): W the inputs' work, W_p the prescribed joints' torques', L the
+        impacts' loss; the summary's figures are taken from it (equal to energy_error without
+        torques, dampers, prescribed motion or limits)."""
         E, T = self.total_energy, self.kinetic_energy
         if len(E) == 0:
             return E.copy()
-        scale = np.maximum(np.maximum(abs(E[0]), np.maximum.accumulate(T)), 1e-300)
         lost = 0.0 if self.impact_loss is None else self.impact_loss
-        held = 0.0 if self.work_prescribed is None else self.work_prescribed
-        return (E - E[0] - self.work_inputs - held + lost) / scale
+        held = np.zeros_like(E) if self.work_prescribed is None else self.work_prescribed
+        return (E - E[0] - self.work_inputs - held + lost) / energy_scale(E, T, self.work_inputs, held)
 
     def __repr__(self) -> str:
         s = self.summary
@@ -177,17 +178,23 @@ def summary_from_dict(d: dict) -> RunSummary:
     return RunSummary(**{f.name: d[f.name] for f in fields(RunSummary)})
 
 
+def energy_scale(E: np.ndarray, T: np.ndarray, *work: np.ndarray) -> float:
+    """the run's energy scale max(|E(0)|, peak T, peak |W| of each work), as simulate() measures the
+    energy balance against (a run from rest with E(0) = 0 against the energy brought in)"""
+    scale = max(abs(float(E[0])), float(np.max(T)))
+    for W in work:
+        if len(W):
+            scale = max(scale, float(np.max(np.abs(W))))
+    return max(scale, 1e-300)
+
+
 def balance_errors(total: np.ndarray, kinetic: np.ndarray, work: np.ndarray, lost: np.ndarray):
-    """(max, final) relative energy-balance error, as simulate() accumulates them sample by sample
-    (only for files from before /solver kept them)"""
+    """(max, final) relative energy-balance error, as simulate() gives them (only for files from
+    before /solver kept them)"""
     if len(total) == 0:
         return 0.0, 0.0
-    E0, peak, worst, last = float(total[0]), 0.0, 0.0, 0.0
-    for E, T, W, L in zip(total.tolist(), kinetic.tolist(), work.tolist(), lost.tolist()):
-        peak = max(peak, T)
-        last = abs(E - E0 - W + L) / max(abs(E0), peak, 1e-300)
-        worst = max(worst, last)
-    return worst, last
+    r = np.abs(total - total[0] - work + lost) / energy_scale(total, kinetic, work)
+    return float(r.max()), float(r[-1])
 
 
 def _events(c: dict) -> List[dict]:
