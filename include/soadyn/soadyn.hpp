@@ -22,6 +22,7 @@
 #include "soadyn/algorithm/fd_method.hpp"
 #include "soadyn/algorithm/frames.hpp"
 #include "soadyn/algorithm/hybrid.hpp"
+#include "soadyn/algorithm/loops.hpp"
 #include "soadyn/algorithm/inputs.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/algorithm/operators.hpp"

@@ -48,12 +48,14 @@ void check_body(const Model& model, const char* where, int body) {
                 std::to_string(body));
 }
 
-// the frame at the current [kin] state: R = C_b X.R, p = η_b + C_b X.p
-Placement place(const Model& model, const Data& data, int frame) {
-  const int b = model.frame_body[frame];
-  const Placement& X = model.frame_placement[frame];
+// the frame X on body b at the current [kin] state: R = C_b X.R, p = η_b + C_b X.p
+Placement place_on(const Data& data, int b, const Placement& X) {
   if (b < 0) return X;
   return {data.R[b] * X.R, Vec3(data.eta.col(b)) + data.R[b] * X.p};
+}
+
+Placement place(const Model& model, const Data& data, int frame) {
+  return place_on(data, model.frame_body[frame], model.frame_placement[frame]);
 }
 
 // ω and ṗ of the body's point p: ṗ = η̇_b + ω_b × (p − η_b)   (zero on the world)
@@ -121,9 +123,19 @@ Placement frame_placement(const Model& model, const Data& data, int frame) {
 
 Vec6 frame_velocity(const Model& model, const Data& data, int frame, Reference reference) {
   check_frame(model, "frame_velocity", frame);
-  const Placement X = place(model, data, frame);
+  return body_frame_velocity(model, data, model.frame_body[frame], model.frame_placement[frame], reference);
+}
+
+Placement body_frame_placement(const Model& model, const Data& data, int body, const Placement& X) {
+  check_body(model, "body_frame_placement", body);
+  return place_on(data, body, X);
+}
+
+Vec6 body_frame_velocity(const Model& model, const Data& data, int body, const Placement& on_body, Reference reference) {
+  check_body(model, "body_frame_velocity", body);
+  const Placement X = place_on(data, body, on_body);
   Vec3 w, pd;
-  point_velocity(data, model.frame_body[frame], X.p, w, pd);
+  point_velocity(data, body, X.p, w, pd);
   to_reference(reference, X, w, pd);
   Vec6 out;
   out << w, pd;
@@ -158,6 +170,12 @@ void frame_jacobian(const Model& model, const Data& data, int frame, Reference r
   point_columns(model, data, model.frame_body[frame], place(model, data, frame), reference, J);
 }
 
+void body_frame_jacobian(const Model& model, const Data& data, int body, const Placement& on_body, Reference reference,
+                         MatX& J) {
+  check_body(model, "body_frame_jacobian", body);
+  point_columns(model, data, body, place_on(data, body, on_body), reference, J);
+}
+
 void frame_jacobian(const Model& model, Data& data, const VecX& q, int frame, Reference reference, MatX& J) {
   check_frame(model, "frame_jacobian", frame);
   update_frames_to(model, data, q, model.frame_body[frame]);
@@ -166,8 +184,13 @@ void frame_jacobian(const Model& model, Data& data, const VecX& q, int frame, Re
 
 void frame_jacobian_dot_times_v(const Model& model, const Data& data, int frame, Reference reference, Vec6& out) {
   check_frame(model, "frame_jacobian_dot_times_v", frame);
-  const int b = model.frame_body[frame];
-  const Placement X = place(model, data, frame);
+  body_frame_jacobian_dot_times_v(model, data, model.frame_body[frame], model.frame_placement[frame], reference, out);
+}
+
+void body_frame_jacobian_dot_times_v(const Model& model, const Data& data, int b, const Placement& on_body,
+                                     Reference reference, Vec6& out) {
+  check_body(model, "body_frame_jacobian_dot_times_v", b);
+  const Placement X = place_on(data, b, on_body);
   Vec3 w, pd, alpha, pdd;
   point_velocity(data, b, X.p, w, pd);
   detail::point_acceleration(model, data, b, X.p, nullptr, alpha, pdd);

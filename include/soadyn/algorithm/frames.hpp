@@ -71,6 +71,14 @@ void frame_jacobian(const Model& model, Data& data, const VecX& q, int frame, Re
 // local_world_aligned [α; p̈] (the classical one), so that J q̈ + J̇ v is the derivative of J v
 void frame_jacobian_dot_times_v(const Model& model, const Data& data, int frame, Reference reference, Vec6& out);
 
+// The same for a frame given by its body (−1: the world, where it stays put) and its placement on
+// it rather than by a frame index (a loop constraint's frames, loops.hpp)
+Placement body_frame_placement(const Model& model, const Data& data, int body, const Placement& on_body);
+Vec6 body_frame_velocity(const Model& model, const Data& data, int body, const Placement& on_body, Reference reference);
+void body_frame_jacobian(const Model& model, const Data& data, int body, const Placement& on_body, Reference reference,
+                         MatX& J);
+void body_frame_jacobian_dot_times_v(const Model& model, const Data& data, int body, const Placement& on_body,
+                                     Reference reference, Vec6& out);
 // [kin] J, 3×nv: ṗ = J v for the point at `point` of body `body` (body frame coordinates)
 void point_jacobian(const Model& model, const Data& data, int body, const Vec3& point, MatX& J);
 
