@@ -116,7 +116,7 @@ class Cvode : public Integrator {
       if (!nls_) throw Error("CVODE: could not allocate the fixed-point solver");
       check(CVodeSetNonlinearSolver(mem, nls_.get()), "CVodeSetNonlinearSolver");
     }
-    if (project && !sys.quaternions().empty()) {
+    if (project && (!sys.quaternions().empty() || sys.has_loops())) {
       projection_ = CVodeSetProjFn(mem, &Cvode::project) == CV_SUCCESS;
       error_message_.clear();
     }
@@ -206,6 +206,16 @@ class Cvode : public Integrator {
       std::string why = flag_name(flag);
       if (!error_message_.empty()) why += ": " + error_message_;
       fail(t, why);
+    }
+    // loops without CVODE's projection (Adams): the output projected onto the manifold, and CVODE
+    // restarted there once its state has drifted from it by more than 100 atol
+    if (!projection_ && sys_.has_loops() && first_non_finite(y) < 0) {
+      projected_ = y;
+      if (sys_.project(projected_)) {
+        const bool drifted = (projected_ - y).cwiseAbs().maxCoeff() > 100 * atol_;
+        y = projected_;
+        if (drifted) restart(t, y);
+      }
     }
     if (const int bad = first_non_finite(y); bad >= 0) {
       char at[32];
@@ -307,17 +317,25 @@ class Cvode : public Integrator {
     }
   }
 
-  // unit quaternions: corr = normalized − current; the error's component along the quaternion removed
+  // unit quaternions: corr = normalized − current; the error's component along the quaternion
+  // removed.  With loops, corr = System::project's − current (q onto the closure, v onto K v = 0),
+  // and the error's components across the loops' manifold removed too
   static int project(double, N_Vector ycur, N_Vector corr, double, N_Vector err, void* user) {
     auto* self = static_cast<Cvode*>(user);
     auto y = map(ycur);
     auto c = map(corr);
     c.setZero();
+    if (self->sys_.has_loops()) {
+      self->projected_ = y;
+      if (!self->sys_.project(self->projected_)) return 1;  // recoverable: CVODE retries with a smaller step
+      c = self->projected_ - y;
+      if (err) self->sys_.project_error(map(err));
+    }
     for (const int k : self->sys_.quaternions()) {
       const Eigen::Vector4d quat = y.segment<4>(k);
       const double n = quat.norm();
       if (!(n > 0) || !std::isfinite(n)) return 1;
-      c.segment<4>(k) = quat / n - quat;
+      if (!self->sys_.has_loops()) c.segment<4>(k) = quat / n - quat;
       if (err) {
         auto e = map(err);
         const Eigen::Vector4d u = quat / n;
@@ -359,6 +377,7 @@ class Cvode : public Integrator {
   long max_steps_;
   double rtol_, atol_;
   bool projection_ = false;
+  VecX projected_;  // project's: the state projected onto the loops' manifold
   IntegratorStats before_;  // the counters of the run before the last restart
   const Schedule* rooted_ = nullptr;  // the schedule whose roots CVODE watches (nroots_ of them)
   int nroots_ = 0;

@@ -124,7 +124,12 @@ class FixedStep : public Integrator {
     prev_ = y;
     step(t, h, y);
     ++stats_.steps;
-    sys_.normalize(y.head(sys_.nq_state()));
+    // the quaternions unit, and the loops closed (q and v projected onto their manifold)
+    if (!sys_.project(y) && first_non_finite(y) < 0) {
+      std::ostringstream os;
+      os << "the closed loops could not be closed again after the step at t = " << t + h << " s (a singular configuration?)";
+      throw SimulationError(os.str(), t + h);
+    }
   }
   void check(double t, double h, const VecX& y) const {
     if (first_non_finite(y) < 0) return;

@@ -108,6 +108,30 @@ void check_prescribed(const Scenario& sc, const SimulationSettings& s) {
   }
 }
 
+// closed loops (Inputs::loops): their bodies, and the features that do not take them yet, each
+// refused in one line at the scenario's loops: (or the setting's line)
+void check_loops(const Scenario& sc, const SimulationSettings& s) {
+  const std::vector<LoopConstraint>& loops = sc.inputs.loops;
+  if (loops.empty()) return;
+  const std::string scene = sc.path.empty() ? "" : sc.path + ": ";
+  const auto it = sc.locations.find("loops");
+  const std::string where = it == sc.locations.end() ? scene : it->second + ": ";
+  const Model& m = sc.model;
+  for (const LoopConstraint& c : loops) {
+    if (c.body_a < -1 || c.body_a >= m.nbodies || c.body_b < -1 || c.body_b >= m.nbodies || c.body_a == c.body_b)
+      throw Error(where + "loops: '" + c.name + "' must join two different bodies of the model (or one and the world)");
+    if (c.type == LoopType::Distance && !(c.distance > 0))
+      throw Error(where + "loops: '" + c.name + "': a distance loop needs a length > 0");
+  }
+  const auto refuse = [&](const std::string& what) {
+    throw Error(where + "loops: " + what + " is not available with closed loops yet");
+  };
+  if (!sc.inputs.prescribed.empty()) refuse("prescribed motion");
+  if (s.limits && m.has_limits()) refuse("limits: true");
+  if (s.sensitivities.any()) refuse("simulation.sensitivities");
+  if (s.method == Method::SymplecticEuler) refuse("symplectic-euler (use rk4, implicit-midpoint or a CVODE method)");
+}
+
 // what the settings allow but make a run other than written: a tick off the steps, a step longer
 // than the run or the output interval, one output interval, a tolerance below double precision
 std::vector<std::string> run_warnings(const SimulationSettings& s) {
@@ -143,6 +167,7 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty()) throw Error("simulation settings: " + p);
   check_sensitivities(sc, s, false);
   check_prescribed(sc, s);
+  check_loops(sc, s);
   return run_warnings(s);
 }
 

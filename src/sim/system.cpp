@@ -6,6 +6,8 @@
 #include "soadyn/multibody/configuration.hpp"
 #include "soadyn/sim/system.hpp"
 
+#include <Eigen/QR>
+
 #include <cmath>
 #include <string>
 
@@ -40,6 +42,7 @@ System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
       feedback_tau(VecX::Zero(m.nv)),
       control_work(control_work),
       locked_(m, prescribed_bodies(m, in)),
+      loops_(m, in.loops),
       nq_state_(m.nq - locked_.nv_locked),
       nv_state_(m.nv - locked_.nv_locked),
       eval_y_(VecX::Zero(size())),
@@ -48,6 +51,8 @@ System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
       f1_(size()),
       dP_(m.nv),
       dD_(m.nv) {
+  if (!in.loops.empty() && !in.prescribed.empty())
+    throw Error("closed loops and prescribed motion together are not available yet: drop one of them");
   // the state's layout: every joint not prescribed, in the tree's order
   for (int i = 0; i < m.nbodies; ++i) {
     if (locked_.locked[size_t(i)]) continue;
@@ -121,7 +126,10 @@ void System::rhs(double t, const double* y, double* ydot) {
     eval_y_ = Eigen::Map<const VecX>(y, size());
     return;
   }
-  forward_dynamics(model, data, tau, method);
+  if (has_loops())
+    loop_forward_dynamics(model, data, inputs.loops, v, tau, loops_);  // the loops' multipliers with q̈
+  else
+    forward_dynamics(model, data, tau, method);
   if (constraint) constraint->constrain(*this);  // held DOFs: their constraint forces
   model.qdot(q, v, qd);
   Eigen::Map<VecX>(ydot, model.nq) = qd;
@@ -162,7 +170,9 @@ void System::rhs_prescribed(double t, double* ydot) {
 }
 
 void System::dynamics(const VecX& tau_in) {
-  if (has_prescribed())
+  if (has_loops())
+    loop_forward_dynamics(model, data, inputs.loops, v, tau_in, loops_);
+  else if (has_prescribed())
     hybrid_dynamics(model, data, locked_, tau_in, qdd_given, tau_hybrid);
   else
     forward_dynamics(model, data, tau_in, method);
@@ -182,6 +192,11 @@ void System::jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   ++jac_evals;
   const int nq = model.nq, nv = model.nv;
   prepare_jacobian();
+  if (has_loops()) {  // the loops' multipliers are not differentiated: ∂f/∂y by differences
+    --jac_evals;
+    jacobian_dq(t, y, J);
+    return;
+  }
   at_state(t, y);
   if (has_prescribed()) {
     jacobian_prescribed(t, J);
@@ -237,6 +252,7 @@ void System::jacobian_prescribed(double t, Eigen::Ref<MatX> J) {
 }
 
 long System::linearize(double t, const double* y) {
+  if (has_loops()) throw Error("the forward sensitivities are not available with closed loops yet");
   prepare_jacobian();
   const int n = size();
   if (linearized_ && t == lin_t_ && Eigen::Map<const VecX>(y, n) == lin_y_) return linearizations_;
@@ -332,6 +348,48 @@ void System::model_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const M
 void System::linearized_solve(Eigen::Ref<MatX> X) {
   if (!linearized_) throw Error("System::linearized_solve: no state linearized since the last evaluation");
   articulated_solve(model, data, X, solve_work_);
+}
+
+bool System::project(Eigen::Ref<VecX> y) {
+  normalize(y.head(nq_state_));
+  if (!has_loops()) return true;
+  linearized_ = false;  // data is about to hold the projection's states
+  evaluated_ = false;
+  const int nq = model.nq, nv = model.nv;
+  q = y.head(nq);
+  v = y.segment(nq, nv);
+  // q onto φ(q) = 0: Gauss–Newton along the tangent, δ = −K⁺ φ (of minimum norm), q ← q ⊕ δ
+  bool closed = false;
+  for (int it = 0; it < 20 && !closed; ++it) {
+    update_kinematics(model, data, q);
+    update_velocities(model, data, v);
+    loop_rows(model, data, inputs.loops, loops_);
+    closed = loops_.phi.cwiseAbs().maxCoeff() <= kLoopClosure;
+    if (closed) break;
+    const VecX step = -Eigen::CompleteOrthogonalDecomposition<MatX>(loops_.K).solve(loops_.phi);
+    q = model.integrate(q, step, 1.0);
+    normalize(q);
+  }
+  if (!closed) return false;
+  // v onto K v = 0: v ← v − K⁺ K v
+  projector_.compute(loops_.K);
+  v -= projector_.solve(VecX(loops_.K * v));
+  y.head(nq) = q;
+  y.segment(nq, nv) = v;
+  return true;
+}
+
+void System::project_error(Eigen::Ref<VecX> err) const {
+  if (!has_loops()) return;
+  // the error's components across the manifold removed, K's rows at the last projection: v's
+  // always, q's where q's coordinates are the tangent's (no quaternion)
+  const int nq = model.nq, nv = model.nv;
+  auto ev = err.segment(nq, nv);
+  ev -= projector_.solve(VecX(loops_.K * ev));
+  if (!model.has_quaternions()) {
+    auto eq = err.head(nq);
+    eq -= projector_.solve(VecX(loops_.K * eq));
+  }
 }
 
 MatX System::coordinates_of_tangent(double t, const double* y) {

@@ -2,6 +2,7 @@
 // every right-hand-side call.  Plain numerics: no file format is involved here.
 #pragma once
 
+#include "soadyn/algorithm/loops.hpp"
 #include "soadyn/multibody/types.hpp"
 
 #include <functional>
@@ -90,6 +91,7 @@ struct Inputs {
   std::vector<DamperInput> dampers;
   std::vector<ControllerInput> controllers;  // evaluated by controller.hpp, not by evaluate()
   std::vector<PrescribedInput> prescribed;   // joints whose motion is given (system.hpp), not by evaluate()
+  std::vector<LoopConstraint> loops;         // closed loops on the tree (loops.hpp, system.hpp), not by evaluate()
   bool empty() const { return torques.empty() && springs.empty() && dampers.empty(); }
   // τ(t, q, v): the generalized force the inputs apply
   void evaluate(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau) const;

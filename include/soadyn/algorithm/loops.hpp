@@ -66,6 +66,9 @@ void loop_rows(const Model& model, const Data& data, const std::vector<LoopConst
 // [kin] φ(q) alone (assembly, projection): ld.phi
 void loop_closure(const Model& model, const Data& data, const std::vector<LoopConstraint>& loops, LoopData& ld);
 
+// A loop closed to this (m, or rad for the angular rows): the projections' target
+inline constexpr double kLoopClosure = 1e-12;
+
 // The rank tolerance: singular values of A below this times the largest are dropped (their
 // directions take no force: dependent rows)
 inline constexpr double kLoopRankTolerance = 1e-10;

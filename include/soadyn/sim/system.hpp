@@ -8,6 +8,8 @@
 #include "soadyn/algorithm/hybrid.hpp"
 #include "soadyn/algorithm/inputs.hpp"
 
+#include <Eigen/QR>
+
 #include <optional>
 #include <string>
 
@@ -43,6 +45,17 @@ class System {
   int nq_state() const { return nq_state_; }
   int nv_state() const { return nv_state_; }
   bool has_prescribed() const { return locked_.any(); }
+  // closed loops (inputs.loops): q̈ by loop_forward_dynamics, their multipliers and rows at the
+  // last evaluation in loop_data()
+  bool has_loops() const { return loops_.m > 0; }
+  const LoopData& loop_data() const { return loops_; }
+  // y onto the manifold the state lives on: the quaternions unit and, with loops, q onto φ(q) = 0
+  // (Gauss–Newton along the tangent, steps of minimum norm, to kLoopClosure) and v onto K v = 0
+  // (v − K⁺ K v).  False when the closure is not reached in 20 iterations (a singular or
+  // unreachable configuration).  project_error removes from an error estimate (CVODE's) its
+  // components across the manifold, with K at the last projection.
+  bool project(Eigen::Ref<VecX> y);
+  void project_error(Eigen::Ref<VecX> err) const;
   // the state's q and v entries as indices into the model's q and v
   const std::vector<int>& q_index() const { return q_index_; }
   const std::vector<int>& v_index() const { return v_index_; }
@@ -151,6 +164,8 @@ class System {
   void jacobian_prescribed(double t, Eigen::Ref<MatX> J);
   void model_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces);
   PrescribedJoints locked_;
+  LoopData loops_;
+  Eigen::CompleteOrthogonalDecomposition<MatX> projector_;  // K's at the last projection
   int nq_state_, nv_state_;
   std::vector<int> q_index_, v_index_, quaternions_;
   std::vector<StateJoint> state_joints_;

@@ -1,0 +1,65 @@
+// A planar four-bar closed by a hinge, at a closed configuration and moving on its loop: shared by
+// the loop tests of the algorithm (test_loops) and of a run (test_loops_run).
+#pragma once
+
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/algorithm/loops.hpp"
+#include "soadyn/multibody/model.hpp"
+
+#include <Eigen/LU>
+
+#include <cmath>
+#include <vector>
+
+namespace soadyn::test {
+
+// a planar four-bar in the xy plane: crank (ground pivot O, length 0.3), coupler (1.0), rocker
+// (ground pivot at x = 0.9, length 0.8), the coupler's end hinged to the rocker's about z; closed
+// at crank angle θ (the open branch), moving at crank rate ω
+struct FourBar {
+  Model model;
+  std::vector<LoopConstraint> loops;
+  VecX q, v;
+};
+
+inline FourBar four_bar(double theta, double omega) {
+  const double a = 0.3, b = 1.0, c = 0.8, g = 0.9;
+  std::vector<BodySpec> s(3);
+  const char* names[] = {"crank", "coupler", "rocker"};
+  const double len[] = {a, b, c};
+  for (int i = 0; i < 3; ++i) {
+    s[size_t(i)].name = names[i];
+    s[size_t(i)].mass = 1.0 + 0.5 * i;
+    s[size_t(i)].com = Vec3(len[i] / 2, 0, 0);
+    s[size_t(i)].inertia = Vec3(0.001, s[size_t(i)].mass * len[i] * len[i] / 12, s[size_t(i)].mass * len[i] * len[i] / 12).asDiagonal();
+  }
+  s[1].parent = 0, s[1].placement.p = Vec3(a, 0, 0);
+  s[2].placement.p = Vec3(g, 0, 0);
+  FourBar f;
+  f.model = Model::build(s, Vec3(0, -9.81, 0));
+  LoopConstraint hinge;
+  hinge.name = "closing";
+  hinge.type = LoopType::Hinge;
+  hinge.body_a = 1, hinge.at_a.p = Vec3(b, 0, 0);
+  hinge.body_b = 2, hinge.at_b.p = Vec3(c, 0, 0);
+  f.loops.push_back(hinge);
+  // the joint C where |C − B| = b and |C − D| = c, B the crank's end, D the rocker's pivot
+  const Eigen::Vector2d B(a * std::cos(theta), a * std::sin(theta)), D(g, 0);
+  const double r = (D - B).norm(), x = (b * b - c * c + r * r) / (2 * r), y = std::sqrt(b * b - x * x);
+  const Eigen::Vector2d u = (D - B) / r, C = B + x * u + y * Eigen::Vector2d(-u.y(), u.x());
+  const double coupler = std::atan2(C.y() - B.y(), C.x() - B.x()), rocker = std::atan2(C.y(), C.x() - g);
+  f.q = Eigen::Vector3d(theta, coupler - theta, rocker);
+  // v in K's null space with the crank at ω
+  Data d(f.model);
+  update_kinematics(f.model, d, f.q);
+  update_velocities(f.model, d, VecX::Zero(3));
+  LoopData ld(f.model, f.loops);
+  loop_rows(f.model, d, f.loops, ld);
+  Eigen::FullPivLU<MatX> lu(ld.K);
+  lu.setThreshold(1e-10);
+  const MatX kernel = lu.kernel();
+  f.v = kernel.col(0) * (omega / kernel(0, 0));
+  return f;
+}
+
+}  // namespace soadyn::test
