@@ -2,7 +2,8 @@
 // the exponential map stays unit over 10⁴ steps with nothing renormalizing it; euler and
 // semi-implicit-euler are exactly q ⊕ h v; each method's order measured on the heavy top (ball
 // joint) and the tumbling T-handle (free joint), configurations compared on the group; the implicit
-// midpoint rule on the group is symmetric (a step from (q⁺, −v⁺) returns to (q, −v)).
+// midpoint rule on the group is symmetric (a step from (q⁺, −v⁺) returns to (q, −v)); the Jacobian on
+// the tangent its Newton iterations use, against differences along the group.
 #include "soadyn/io/scenario_file.hpp"
 #include "soadyn/multibody/configuration.hpp"
 #include "soadyn/sim/simulate.hpp"
@@ -177,6 +178,71 @@ TEST(LieGroupImplicitMidpoint, SymmetricStepReturns) {
     e << difference(m, y0.head(m.nq), y.head(m.nq)), y.segment(m.nq, m.nv) - y0.segment(m.nq, m.nv);
     EXPECT_LE(e.norm(), 1e-12) << scene;
   }
+}
+
+// ∂f/∂(δ, v, W) on the tangent (System::tangent_jacobian) by central differences of System::rhs
+// along q ⊕ ±ε e_c (the δ columns) and y ± ε e_c (the others); the q rows are [0 e 0]
+MatX central_tangent_jacobian(System& sys, double t, const VecX& y, double eps = 1e-6) {
+  const int nq = sys.nq_state(), n = sys.nv_state(), m = sys.size(), nt = sys.tangent_size();
+  MatX J = MatX::Zero(nt, nt);
+  J.block(0, n, n, n).setIdentity();
+  VecX yp = y, ym = y, fp(m), fm(m);
+  for (int c = 0; c < nt; ++c) {
+    if (c < n) {
+      const VecX e = VecX::Unit(n, c);
+      sys.integrate(y.head(nq), e, eps, yp.head(nq));
+      sys.integrate(y.head(nq), e, -eps, ym.head(nq));
+    } else {
+      yp(nq + c - n) += eps;
+      ym(nq + c - n) -= eps;
+    }
+    sys.rhs(t, yp.data(), fp.data());
+    sys.rhs(t, ym.data(), fm.data());
+    J.col(c).tail(nt - n) = (fp - fm).tail(m - nq) / (2 * eps);
+    yp = y, ym = y;
+  }
+  return J;
+}
+
+// the analytic tangent Jacobian and its forward differences against central differences along the
+// group: random trees with ball joints and a free root, springs, dampers and torques (the
+// quadratures' rows), and the antenna slew's reduced layout (the gimbal prescribed; W_p's row
+// left zero by design)
+TEST(SystemTangentJacobian, AgainstCentralDifferencesAlongTheGroup) {
+  const TreeOptions cases[] = {
+      {.n = 10, .branching = 0.5, .prismatic = 0.2, .ball = 0.3, .planar = 0.2, .free_root = true},
+      {.n = 6, .branching = 0.0, .ball = 0.6},
+  };
+  int k = 0;
+  for (const TreeOptions& o : cases) {
+    Rng rng(31 + k++);
+    const Model model = random_model(rng, o);
+    Inputs in;
+    for (int i = 0; i < model.nbodies; ++i)
+      if (model.nv_i[i] == 1) {
+        in.springs.push_back({model.joint_names[i], model.idx_v[i], model.idx_q[i], rng.uniform(5, 500), rng.uniform()});
+        in.dampers.push_back({model.joint_names[i], model.idx_v[i], rng.uniform(0.5, 20)});
+      }
+    System sys(model, in, FdMethod::ArticulatedBody);
+    const VecX y = sys.state(random_q(rng, model), random_v(rng, model, 2.0));
+    MatX J(sys.tangent_size(), sys.tangent_size()), Jdq(sys.tangent_size(), sys.tangent_size());
+    sys.tangent_jacobian(0.7, y.data(), J);
+    sys.tangent_jacobian_dq(0.7, y.data(), Jdq);
+    const MatX ref = central_tangent_jacobian(sys, 0.7, y);
+    EXPECT_TRUE(near_rel(J, ref, 2e-6)) << "case " << k;
+    EXPECT_TRUE(near_rel(Jdq, ref, 1e-4)) << "case " << k;
+  }
+  const Scenario sc = load_scenario(kDir + "antenna_slew.yaml");
+  System sys(sc.model, sc.inputs, FdMethod::ArticulatedBody);
+  ASSERT_TRUE(sys.has_prescribed());
+  Rng rng(5);
+  const VecX y = sys.state(sc.q0, sc.v0 + random_v(rng, sc.model, 0.5));
+  MatX J(sys.tangent_size(), sys.tangent_size());
+  sys.tangent_jacobian(12.0, y.data(), J);  // mid-slew
+  // W_p's row is left zero (it feeds nothing back, as System::jacobian's): the rows above it
+  const int rows = sys.tangent_size() - 1;
+  EXPECT_TRUE(near_rel(J.topRows(rows), central_tangent_jacobian(sys, 12.0, y).topRows(rows), 2e-6));
+  EXPECT_TRUE(J.bottomRows(1).isZero(0.0));
 }
 
 }  // namespace
