@@ -179,8 +179,9 @@ class RKMK4 : public TangentStep {
 // (test_integrators measures its energy: level on the scenes there).  Newton on the tangent-layout
 // unknown X = [u; V; W⁺]:
 //   G(X) = X − [0; v; W] − h g(y_m),  y_m = [q ⊕ u/2; (v + V)/2; (W + W⁺)/2],  g = [v_m; q̈_m; Ẇ_m],
-// with G' ≈ e − (h/2) ∂g/∂(δ, v, W) at y_m (System::tangent_jacobian; dropping dexp's O(|u|) part of
-// ∂(q ⊕ u/2)/∂u), solved by its structure (NewtonSolver's tangent layout).  Full Newton: G' at every
+// with G' = e − (h/2) ∂g/∂(δ, v, W) at y_m (System::tangent_jacobian), its δ columns chained to u by
+// ∂δ_m/∂(u/2) = dexp_{u/2} (System::times_increment_jacobian), solved by its structure (NewtonSolver's
+// tangent layout).  Full Newton: G' at every
 // iterate, from X = [0; v; W] (its first iterate is the linearly implicit midpoint step, itself
 // A-stable).  Simplified: G' once per step, at the explicit-Euler predictor's midpoint.
 class ImplicitMidpoint : public TangentStep {
@@ -191,7 +192,8 @@ class ImplicitMidpoint : public TangentStep {
         full_(settings.newton == Newton::Full),
         J_(s.tangent_size(), s.tangent_size()),
         newton_(s, NewtonSolver::Layout::Tangent),
-        delta_(s.tangent_size()) {
+        delta_(s.tangent_size()),
+        half_u_(s.nv_state()) {
     if (analytic_) s.prepare_jacobian();  // sized here, so no step allocates
   }
 
@@ -210,13 +212,13 @@ class ImplicitMidpoint : public TangentStep {
       rate(z_, y, k1_, r4_);
       X += h * r4_;
       midpoint(y, X);
-      factor(tm, h);
+      factor(tm, h, X);
     }
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 50; ++it) {
       ++stats_.nonlinear_iterations;
       midpoint(y, X);
-      if (full_) factor(tm, h);
+      if (full_) factor(tm, h, X);
       // −G(X) = x0 + h g(y_m) − X
       f(tm, tmp_, k3_);
       G.head(nv_) = tmp_.segment(nq_, nv_);
@@ -250,13 +252,15 @@ class ImplicitMidpoint : public TangentStep {
     tmp_.tail(nv_ + nw_) = 0.5 * (y.tail(nv_ + nw_) + X.tail(nv_ + nw_));
   }
 
-  // G' = e − (h/2) ∂g/∂(δ, v, W) at tmp_ (the midpoint), factored by its structure (NewtonSolver:
-  // an nv×nv Schur complement, the q rows being [0 e 0] on the tangent)
-  void factor(double tm, double h) {
+  // G' = e − (h/2) ∂g/∂(δ, v, W) at tmp_ (the midpoint q ⊕ u/2), the δ columns times dexp_{u/2},
+  // factored by its structure (NewtonSolver: an nv×nv Schur complement, the q rows being [0 e 0])
+  void factor(double tm, double h, const VecX& X) {
     if (analytic_)
       sys_.tangent_jacobian(tm, tmp_.data(), J_);
     else
       sys_.tangent_jacobian_dq(tm, tmp_.data(), J_);
+    half_u_ = 0.5 * X.head(nv_);
+    sys_.times_increment_jacobian(half_u_, J_.bottomLeftCorner(nv_ + nw_, nv_));
     ++stats_.jac_evals;
     newton_.set_jacobian(J_);
     factored_ = newton_.factor(0.5 * h);
@@ -266,7 +270,7 @@ class ImplicitMidpoint : public TangentStep {
   MatX J_;
   NewtonSolver newton_;
   bool factored_ = false;
-  VecX delta_;
+  VecX delta_, half_u_;
 };
 
 }  // namespace

@@ -341,6 +341,26 @@ void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {
   }
 }
 
+// A_j ← A_j M_j⁻¹ for each state joint j holding a quaternion, M_j = dexp⁻¹_{u_j} column by column
+void System::times_increment_jacobian(const Eigen::Ref<const VecX>& u, Eigen::Ref<MatX> A) const {
+  for (const StateJoint& j : state_joints_)
+    visit_joint(model, j.body, [&](const auto& kind) {
+      using J = std::decay_t<decltype(kind)>;
+      if constexpr (!J::euclidean) {
+        Eigen::Matrix<double, J::nv, J::nv> M;
+        for (int c = 0; c < J::nv; ++c) {
+          const Eigen::Matrix<double, J::nv, 1> e = Eigen::Matrix<double, J::nv, 1>::Unit(c);
+          kind.increment_rate(u.data() + j.iv, e.data(), M.col(c).data());
+        }
+        const Eigen::Matrix<double, J::nv, J::nv> D = M.inverse();
+        for (Eigen::Index r = 0; r < A.rows(); ++r) {  // row by row: no temporary on the heap
+          const Eigen::Matrix<double, 1, J::nv> a = A.row(r).template segment<J::nv>(j.iv) * D;
+          A.row(r).template segment<J::nv>(j.iv) = a;
+        }
+      }
+    });
+}
+
 void System::tangent_jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
   ++jac_evals;
   const int n = nv_state_;

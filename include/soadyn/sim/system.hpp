@@ -64,6 +64,10 @@ class System {
   // out = dexp⁻¹_u(v_state) joint by joint (u, out: nv_state): the rate of the increment u for which
   // q0 ⊕ u moves at v_state (configuration.hpp's increment_rate)
   void increment_rate(const Eigen::Ref<const VecX>& u, const Eigen::Ref<const VecX>& v_state, Eigen::Ref<VecX> out) const;
+  // A ← A dexp_u joint by joint (A: nv_state columns along the tangent at q0 ⊕ u): the columns
+  // along the increment u instead, dexp_u being the inverse of increment_rate's map (a joint
+  // without a quaternion's columns unchanged)
+  void times_increment_jacobian(const Eigen::Ref<const VecX>& u, Eigen::Ref<MatX> A) const;
   // q̇ = T̄(q) v for the state's q and v (nq_state, nv_state) into out (nq_state)
   void qdot(const Eigen::Ref<const VecX>& q_state, const Eigen::Ref<const VecX>& v_state, Eigen::Ref<VecX> out);
   // [q; v; 0 …]: the state at the start of a run from the model's q0, v0 (the prescribed joints'
