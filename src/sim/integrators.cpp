@@ -3,7 +3,6 @@
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/sim/limits.hpp"
-#include "soadyn/sim/newton_solver.hpp"
 
 #include "fixed_step.hpp"
 
