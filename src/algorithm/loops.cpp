@@ -33,6 +33,34 @@ int loop_rows(LoopType t) {
   return 0;
 }
 
+namespace {
+const std::vector<const char*>& row_parts(LoopType t) {
+  static const std::vector<const char*> point = {"x", "y", "z"}, hinge = {"x", "y", "z", "n1", "n2"},
+                                        weld = {"x", "y", "z", "rx", "ry", "rz"}, distance = {"tension"};
+  switch (t) {
+    case LoopType::Point: return point;
+    case LoopType::Hinge: return hinge;
+    case LoopType::Weld: return weld;
+    case LoopType::Distance: return distance;
+  }
+  return point;
+}
+}  // namespace
+
+std::vector<std::string> loop_row_names(const std::vector<LoopConstraint>& loops) {
+  std::vector<std::string> out;
+  for (const LoopConstraint& c : loops)
+    for (const char* part : row_parts(c.type)) out.push_back(c.name + "." + part);
+  return out;
+}
+
+std::vector<std::string> loop_row_units(const std::vector<LoopConstraint>& loops) {
+  std::vector<std::string> out;
+  for (const LoopConstraint& c : loops)
+    for (int r = 0; r < loop_rows(c.type); ++r) out.push_back(r >= 3 ? "N m" : "N");
+  return out;
+}
+
 LoopData::LoopData(const Model& model, const std::vector<LoopConstraint>& loops) {
   for (size_t l = 0; l < loops.size(); ++l)
     for (int r = 0; r < loop_rows(loops[l].type); ++r) row_loop.push_back(int(l));

@@ -70,6 +70,8 @@ LogGroups logged_groups(const Scenario& sc, const SimulationSettings& settings, 
   g.control = groups.control || !sc.inputs.controllers.empty();
   g.prescribed.clear();
   for (const PrescribedInput& p : sc.inputs.prescribed) g.prescribed.push_back(p.dof);
+  g.loop_rows = loop_row_names(sc.inputs.loops);
+  g.loop_units = loop_row_units(sc.inputs.loops);
   if (settings.sensitivities.any())
     g.sensitivities = std::make_shared<const SensitivityPlan>(plan_sensitivities(sc.model, settings.sensitivities, sc.inputs.prescribed));
   for (const std::string& name : sc.log_frames)

@@ -153,6 +153,14 @@ Layout layout(const Model& m, const LogGroups& g) {
   if (g.bodies) body_views(b, m);
   if (g.control) control_view(b, m);
   if (!g.prescribed.empty()) prescribed_view(b, m, g.prescribed);
+  if (!g.loop_rows.empty()) {
+    // /loops/force: λ row by row; /loops/closure: the largest |φ|
+    b.out.groups.push_back("/loops");
+    std::vector<Column> c;
+    for (size_t r = 0; r < g.loop_rows.size(); ++r) c.push_back({"loops.force." + g.loop_rows[r], g.loop_units[r]});
+    b.view("/loops/force", c, int(c.size()));
+    b.view("/loops/closure", {{"loops.closure", "m"}}, 0);
+  }
   if (g.sensitivities) sensitivity_views(b, *g.sensitivities);
   if (!g.frames.empty()) frame_views(b, m, g.frames);  // last, as append_row writes them
   return std::move(b.out);
@@ -169,6 +177,7 @@ void append_row(const Model& m, Data& data, const LogGroups& g, const Sample& s,
   if (g.bodies) put(s.body_position), put(s.body_orientation), put(s.body_com);  // column-major: body by body
   if (g.control) put(s.control);
   if (!g.prescribed.empty()) put(s.prescribed_torque);
+  if (!g.loop_rows.empty()) put(s.loop_force), b.push_back(s.loop_closure);
   if (g.sensitivities) {
     // row-major (∂x_i/∂p_j at i·cols + j): the transpose's column-major storage
     if (g.sensitivities->initial_state) put(MatX(s.sensitivity_initial_state.transpose()));

@@ -41,7 +41,8 @@ inline constexpr const char* kViewPaths[] = {
     "/time", "/q", "/qd", "/qdd", "/energy/kinetic", "/energy/potential", "/energy/total", "/energy/work_inputs",
     "/energy/dissipated", "/energy/impact_loss", "/momentum/linear", "/momentum/angular", "/bodies/position",
     "/bodies/orientation", "/bodies/com", "/control", "/frames/position", "/frames/orientation",
-    "/sensitivities/initial_state", "/sensitivities/parameters", "/energy/work_prescribed", "/prescribed"};
+    "/sensitivities/initial_state", "/sensitivities/parameters", "/energy/work_prescribed", "/prescribed",
+    "/loops/force", "/loops/closure"};
 
 // "/energy/kinetic" → "energy.kinetic"
 inline std::string column_stem(const std::string& view_path) {

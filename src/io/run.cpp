@@ -87,7 +87,7 @@ Trajectory simulate(const Scenario& sc, const SimulateOptions& o) {
   log.reset();  // closes the file before anyone may read it
   lock.reset();
 
-  Trajectory tr = recorder.take(sc.model, sc.inputs.prescribed);
+  Trajectory tr = recorder.take(sc.model, sc.inputs.prescribed, sc.inputs.loops);
   tr.summary = std::move(summary);
   warnings.insert(warnings.end(), tr.summary.warnings.begin(), tr.summary.warnings.end());
   tr.warnings = std::move(warnings);

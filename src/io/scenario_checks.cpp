@@ -34,6 +34,7 @@ void record_locations(const Reader& rd, const YAML::Node& root, Scenario& sc) {
   };
   put("simulation.limits", find(root, {"simulation", "limits"}));
   put("simulation.sensitivities", find(root, {"simulation", "sensitivities"}));
+  put("loops", find(root, {"loops"}));
   for (const std::string& joint : sc.model.joint_names) {
     put("initial.q." + joint, find(root, {"initial", "q", joint}));
     put("limits." + joint, find(root, {"limits", joint}));

@@ -359,7 +359,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
                         const std::vector<ModelFile>* model_files) {
   const Reader rd{path, {}};
   YAML::Node root = load_root(rd, text, path);
-  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "model", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits", "inertial", "prescribed"});
+  rd.keys(root, "scenario", {"name", "description", "gravity", "bodies", "urdf", "model", "free_root", "frames", "log", "inertia_check", "initial", "simulation", "inputs", "limits", "inertial", "prescribed", "loops"});
 
   Scenario sc;
   sc.path = path;
@@ -406,6 +406,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   if (root["prescribed"])
     scenario_detail::read_prescribed(rd, root["prescribed"], root["initial"], sc.model, sc.q0, sc.v0, sc.inputs.prescribed);
   if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.q0, sc.inputs);
+  if (root["loops"]) scenario_detail::read_loops(rd, root["loops"], root["initial"], sc.model, sc.q0, sc.v0, sc.inputs.loops);
   sc.files.insert(sc.files.end(), rd.files_read.begin(), rd.files_read.end());
   scenario_detail::record_locations(rd, root, sc);
   return sc;

@@ -167,6 +167,11 @@ void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, con
 // where `initial` (the file's initial:, may be undefined) must agree with it
 void read_prescribed(const Reader& rd, const YAML::Node& n, const YAML::Node& initial, const Model& m, VecX& q0,
                      VecX& v0, std::vector<PrescribedInput>& out);
+// scenario_loops.cpp: `loops: [{type, a, at_a, b, at_b, axis, …}]`, and the initial state closed
+// on them (assembled: q by Newton on the loops' closure, the joints `initial` names held; v
+// projected onto K v = 0, its named joints held)
+void read_loops(const Reader& rd, const YAML::Node& n, const YAML::Node& initial, const Model& m, VecX& q0, VecX& v0,
+                std::vector<LoopConstraint>& out);
 
 // scenario_sensitivity.cpp: `simulation: sensitivities: {initial_state, parameters}`, the bodies
 // checked against the model's

@@ -30,6 +30,11 @@ VecX difference(const Model& model, const VecX& q0, const VecX& q1) {
   return v;
 }
 
+// r_i = dexp⁻¹_{u_i}(v_i)
+void increment_rate(const Model& model, const VecX& u, const VecX& v, Eigen::Ref<VecX> out) {
+  for_each_joint(model, [&](const auto& j, int, int iv) { j.increment_rate(u.data() + iv, v.data() + iv, out.data() + iv); });
+}
+
 // T = diag(T_i(q_i))
 MatX tangent_map(const Model& model, const VecX& q) {
   MatX T = MatX::Zero(model.nv, model.nq);

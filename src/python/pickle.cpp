@@ -283,6 +283,9 @@ py::tuple scenario_state(const py::object& self) {
   f["springs"] = springs;
   f["dampers"] = dampers;
   f["controllers"] = sc.inputs.controllers.size();
+  // prescribed motions and loops, like controllers, are read again from the text (their tables)
+  f["prescribed"] = sc.inputs.prescribed.size();
+  f["loops"] = sc.inputs.loops.size();
   f["log_frames"] = sc.log_frames;
   f["files"] = sc.files;  // the files it was read from: never a run's output
   py::list model_files;  // an MJCF model's files as handed to MuJoCo: stored in its runs' files (/model_files)
@@ -343,10 +346,20 @@ Scenario scenario_from_state(const py::object& state) {
   sc.log_frames = r.as<std::vector<std::string>>("log_frames");
   for (const auto& name : sc.log_frames)
     if (m.frame_index(name) < 0) r.refuse("log_frames", "a frame the model does not have");
-  if (r.as<size_t>("controllers") > 0)  // from the text, where its tables are
-    sc.inputs.controllers =
-        parse_scenario(sc.text, sc.path, false, std::nullopt,
-                       sc.robot_text.empty() ? std::nullopt : std::optional<std::string>(sc.robot_text)).inputs.controllers;
+  // controllers, prescribed motions and loops from the text, where their tables are (the counts
+  // absent from older states: none)
+  const auto count = [&](const char* key) { return r.fields.contains(key) ? r.as<size_t>(key) : size_t(0); };
+  const size_t controllers = count("controllers"), prescribed = count("prescribed"), loops = count("loops");
+  if (controllers + prescribed + loops > 0) {
+    Scenario text = parse_scenario(sc.text, sc.path, false, std::nullopt,
+                                   sc.robot_text.empty() ? std::nullopt : std::optional<std::string>(sc.robot_text));
+    if (text.inputs.controllers.size() != controllers || text.inputs.prescribed.size() != prescribed ||
+        text.inputs.loops.size() != loops)
+      r.refuse("text", "its controllers, prescribed motions or loops are not the state's");
+    sc.inputs.controllers = std::move(text.inputs.controllers);
+    sc.inputs.prescribed = std::move(text.inputs.prescribed);
+    sc.inputs.loops = std::move(text.inputs.loops);
+  }
   return sc;
 }
 

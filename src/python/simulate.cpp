@@ -176,7 +176,9 @@ py::tuple run(const Scenario& scene, const SimulationSettings& settings, const s
                   "work_prescribed"_a = owned(std::move(tr.work_prescribed)),
                   "prescribed_torque"_a =
                       owned(std::move(tr.prescribed_torque), {T, py::ssize_t(tr.prescribed_joints.size())}),
-                  "prescribed_joints"_a = tr.prescribed_joints);
+                  "prescribed_joints"_a = tr.prescribed_joints,
+                  "loop_forces"_a = owned(std::move(tr.loop_force), {T, py::ssize_t(tr.loop_rows.size())}),
+                  "loop_rows"_a = tr.loop_rows, "loop_closure"_a = owned(std::move(tr.loop_closure)));
   if (settings.sensitivities.any()) {
     // (T, nx, nx) and (T, nx, np), with the names of x and π (sensitivity.hpp)
     const SensitivityPlan plan = plan_sensitivities(sc.model, settings.sensitivities, sc.inputs.prescribed);

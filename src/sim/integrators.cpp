@@ -3,7 +3,8 @@
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/sim/limits.hpp"
-#include "soadyn/sim/newton_solver.hpp"
+
+#include "fixed_step.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -55,121 +56,6 @@ void Integrator::advance(double t_out, double& t, VecX& y) {
 }
 
 namespace {
-
-// Fixed-step methods: steps of exactly dt, step k ending at t0 + k·dt; a span that is not a whole
-// number of steps ends with one shorter step (count_steps).
-class FixedStep : public Integrator {
- public:
-  FixedStep(System& s, double dt, double t0)
-      : sys_(s), dt_(dt), k1_(s.size()), k2_(s.size()), k3_(s.size()), k4_(s.size()), tmp_(s.size()), prev_(s.size()), t0_(t0), t_reported_(t0) {}
-
-  bool step_to(double t_out, double& t, VecX& y) override {
-    // the grid t0 + k·dt goes on from where the last call left it; a caller that moved t, or a last
-    // shorter step, starts a new one at t
-    if (t != t_reported_) {
-      t0_ = t;
-      k_ = 0;
-    }
-    const StepCount n = count_steps(t_out - t0_, dt_);
-    const long whole = long(n.whole);
-    while (k_ < whole) {
-      if (stop_requested()) {  // t < t_out: the run ends here
-        t_reported_ = t;
-        return false;
-      }
-      take(t0_ + double(k_) * dt_, dt_, y);  // from the grid's time (t may be the caller's t_out)
-      ++k_;
-      t = t0_ + double(k_) * dt_;
-      check(t, dt_, y);
-    }
-    // t_out within rounding of the grid (count_steps): it is where the steps ended, and the time
-    // reported (the grid itself goes on from t0 + k·dt)
-    if (!n.partial && k_ == whole) t = t_out;
-    if (n.partial && k_ == whole && t < t_out) {
-      if (stop_requested()) {
-        t_reported_ = t;
-        return false;
-      }
-      const double tk = t0_ + double(k_) * dt_, h = t_out - tk;
-      take(tk, h, y);
-      t = t_out;
-      t0_ = t_out;
-      k_ = 0;
-      check(t, h, y);
-    }
-    t_reported_ = t;
-    return false;
-  }
-
-  IntegratorStats stats() const override {
-    IntegratorStats s = stats_;
-    s.rhs_evals = sys_.rhs_evals;
-    return s;
-  }
-  std::string quaternion_handling() const override {
-    return sys_.quaternions().empty() ? "none" : "renormalized after each step";
-  }
-
- protected:
-  virtual void step(double t, double h, VecX& y) = 0;
-  void f(double t, const VecX& y, VecX& out) { sys_.rhs(t, y.data(), out.data()); }
-
-  System& sys_;
-  double dt_;
-  VecX k1_, k2_, k3_, k4_, tmp_, prev_;
-  IntegratorStats stats_;
-
- private:
-  void take(double t, double h, VecX& y) {
-    prev_ = y;
-    step(t, h, y);
-    ++stats_.steps;
-    // the quaternions unit, and the loops closed (q and v projected onto their manifold)
-    if (!sys_.project(y) && first_non_finite(y) < 0) {
-      std::ostringstream os;
-      os << "the closed loops could not be closed again after the step at t = " << t + h << " s (a singular configuration?)";
-      throw SimulationError(os.str(), t + h);
-    }
-  }
-  void check(double t, double h, const VecX& y) const {
-    if (first_non_finite(y) < 0) return;
-    // worst DOF: the largest velocity in the last finite state, the one blowing up
-    Eigen::Index worst = 0;
-    prev_.segment(sys_.nq_state(), sys_.nv_state()).cwiseAbs().maxCoeff(&worst);
-    std::ostringstream os;
-    os << "unstable at t = " << t << " s: the state is not finite after a step of " << h << " s; worst DOF "
-       << sys_.component_name(sys_.nq_state() + int(worst)) << " = " << prev_(sys_.nq_state() + worst) << " before it";
-    throw SimulationError(os.str(), t);
-  }
-
-  double t0_;           // the grid's origin
-  long k_ = 0;          // steps taken on it
-  double t_reported_;   // the t the last call returned (a caller passing another starts a new grid)
-};
-
-class Euler : public FixedStep {
-  using FixedStep::FixedStep;
-  // y ← y + h f(t, y)
-  void step(double t, double h, VecX& y) override {
-    f(t, y, k1_);
-    y += h * k1_;
-  }
-};
-
-class SemiImplicitEuler : public FixedStep {
-  using FixedStep::FixedStep;
-  // v ← v + h q̈(q, v);  q ← q + h q̇(q, v⁺);  quadratures W, D ← + h (P, D)(q, v) (left rectangle).
-  // Symplectic when 𝓜 is constant; with 𝓜(q) the velocity is not the canonical momentum and the
-  // map is not symplectic (its energy error grows secularly, test_integrators)
-  void step(double t, double h, VecX& y) override {
-    const int nq = sys_.nq_state(), nv = sys_.nv_state();
-    f(t, y, k1_);
-    y.segment(nq, nv) += h * k1_.segment(nq, nv);
-    y.tail(sys_.nquad) += h * k1_.tail(sys_.nquad);
-    sys_.qdot(y.head(nq), y.segment(nq, nv), k2_.head(nq));
-    y.head(nq) += h * k2_.head(nq);
-  }
-};
 
 // Symplectic Euler for H(q, p) = ½ pᵀ 𝓜(q)⁻¹ p + V(q) in the canonical momenta p = 𝓜(q) v, V the
 // gravity and spring potential, the other inputs (torques, dampers) as forcing Q(t, v).  The variant
@@ -335,96 +221,6 @@ class SymplecticEuler : public FixedStep {
   std::vector<int> prescribed_;  // the prescribed joints' DOFs
 };
 
-class RK4 : public FixedStep {
-  using FixedStep::FixedStep;
-  // classical: y ← y + h/6 (k1 + 2 k2 + 2 k3 + k4)
-  void step(double t, double h, VecX& y) override {
-    f(t, y, k1_);
-    tmp_ = y + 0.5 * h * k1_;
-    f(t + 0.5 * h, tmp_, k2_);
-    tmp_ = y + 0.5 * h * k2_;
-    f(t + 0.5 * h, tmp_, k3_);
-    tmp_ = y + h * k3_;
-    f(t + h, tmp_, k4_);
-    y += h / 6.0 * (k1_ + 2.0 * k2_ + 2.0 * k3_ + k4_);
-  }
-};
-
-class ImplicitMidpoint : public FixedStep {
- public:
-  ImplicitMidpoint(System& s, const SimulationSettings& settings, double t0)
-      : FixedStep(s, settings.dt, t0),
-        analytic_(settings.jacobian == Jacobian::Analytic),
-        full_(settings.newton == Newton::Full),
-        J_(s.size(), s.size()),
-        newton_(s),
-        delta_(s.size()) {
-    if (analytic_) s.prepare_jacobian();  // sized here, so no step allocates
-  }
-
- private:
-  // y⁺ = y + h f(t + h/2, (y + y⁺)/2), symmetric but in (q, v), so not symplectic where 𝓜 depends
-  // on q (test_integrators measures its energy: level on the scenes there).  Newton on
-  // G(Y) = Y − y − h f(t + h/2, (y + Y)/2), with G'(Y) = e − h/2 ∂f/∂y at the midpoint.  Full
-  // Newton: G' at every iterate, starting from Y = y (its first iterate is the linearly implicit
-  // midpoint step, itself A-stable).  Simplified: G' once per step, at the explicit-Euler predictor.
-  void step(double t, double h, VecX& y) override {
-    const double tm = t + 0.5 * h;
-    VecX& Y = k2_;
-    if (full_) {
-      Y = y;
-    } else {
-      f(t, y, k1_);
-      Y = y + h * k1_;  // explicit Euler predictor
-      tmp_ = 0.5 * (y + Y);
-      factor(tm, h);
-    }
-    double previous = std::numeric_limits<double>::infinity();
-    for (int it = 0; it < 50; ++it) {
-      ++stats_.nonlinear_iterations;
-      tmp_ = 0.5 * (y + Y);
-      if (full_) factor(tm, h);
-      f(tm, tmp_, k3_);
-      k4_ = -(Y - y - h * k3_);
-      if (factored_) newton_.solve(k4_, delta_);
-      else delta_.setConstant(std::numeric_limits<double>::quiet_NaN());  // singular G': no step
-      Y += delta_;
-      if (!delta_.allFinite()) break;
-      const double size = delta_.norm(), scale = std::max(1.0, Y.norm());
-      if (size <= 1e-13 * scale) break;
-      // full Newton converges quadratically: once it stops shrinking it has reached rounding
-      if (full_ && size <= 1e-9 * scale && size >= 0.5 * previous) break;
-      if (full_ && it == 49) {
-        std::ostringstream os;
-        os << "implicit midpoint: full Newton did not converge at t = " << t << " s with a step of " << h
-           << " s (last correction " << size << ")";
-        throw SimulationError(os.str(), t);
-      }
-      previous = size;
-    }
-    y = Y;
-  }
-
-  // G' = e − (h/2) ∂f/∂y at tmp_ (the midpoint), factored by its structure as BDF's Newton matrix
-  // is (NewtonSolver: an nv×nv Schur complement; a difference-quotient J, whose q̇ = v rows are not
-  // exactly the identity, takes the dense LU of the whole matrix)
-  void factor(double tm, double h) {
-    if (analytic_)
-      sys_.jacobian(tm, tmp_.data(), J_);
-    else
-      sys_.jacobian_dq(tm, tmp_.data(), J_);
-    ++stats_.jac_evals;
-    newton_.set_jacobian(J_);
-    factored_ = newton_.factor(0.5 * h);
-  }
-
-  bool analytic_, full_;
-  MatX J_;
-  NewtonSolver newton_;
-  bool factored_ = false;
-  VecX delta_;
-};
-
 }  // namespace
 
 const std::vector<IntegratorInfo>& integrators() {
@@ -438,21 +234,21 @@ const std::vector<IntegratorInfo>& integrators() {
        "SUNDIALS CVODE, BDF with Newton and a direct solver (stiff)", false, 0, false, 24, nullptr,
        [](System& sys, S s, double t0, const VecX& y0) { return make_cvode(true, sys, s, t0, y0); }},
       {Method::Euler, to_string(Method::Euler),
-       "explicit Euler, order 1", true, 1, false, 0, nullptr,
-       [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<Euler>(sys, s.dt, t0); }},
+       "explicit Euler, order 1; free and ball joints on the group (q ⊕ h v)", true, 1, false, 0, nullptr,
+       [](System& sys, S s, double t0, const VecX&) -> P { return make_euler(sys, s.dt, t0); }},
       {Method::SemiImplicitEuler, to_string(Method::SemiImplicitEuler),
-       "v then q, order 1; not symplectic where the mass matrix depends on q", true, 1, false, 0,
-       nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SemiImplicitEuler>(sys, s.dt, t0); }},
+       "v then q ⊕ h v, order 1; not symplectic where the mass matrix depends on q", true, 1, false, 0,
+       nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return make_semi_implicit_euler(sys, s.dt, t0); }},
       {Method::SymplecticEuler, to_string(Method::SymplecticEuler),
        "symplectic Euler in the momenta p = M(q) v by Newton, order 1, symplectic (no free or ball joints)",
        true, 1, true, 12, &SymplecticEuler::refuses,
        [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<SymplecticEuler>(sys, s.dt, t0); }},
       {Method::Rk4, to_string(Method::Rk4),
-       "classical Runge–Kutta, order 4", true, 4, false, 0, nullptr,
-       [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<RK4>(sys, s.dt, t0); }},
+       "Runge–Kutta–Munthe-Kaas: classical Runge–Kutta on the group, order 4", true, 4, false, 0, nullptr,
+       [](System& sys, S s, double t0, const VecX&) -> P { return make_rk4(sys, s.dt, t0); }},
       {Method::ImplicitMidpoint, to_string(Method::ImplicitMidpoint),
-       "implicit midpoint rule in (q, v) by Newton, order 2, symmetric and A-stable", true, 2, false, 24,
-       nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return std::make_unique<ImplicitMidpoint>(sys, s, t0); }},
+       "implicit midpoint rule, q ⊕ h v on the group, by Newton, order 2, symmetric and A-stable", true, 2, false, 24,
+       nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return make_implicit_midpoint(sys, s, t0); }},
   };
   return table;
 }

@@ -41,8 +41,11 @@ NewtonSolver::NewtonSolver(const Model& m, int nquad) : NewtonSolver(m.nq, m.nv,
   for (int i = 0; i < m.nbodies; ++i) add_joint(m.idx_q[i], m.nq_i[i], m.idx_v[i], m.nv_i[i]);
 }
 
-NewtonSolver::NewtonSolver(const System& sys) : NewtonSolver(sys.nq_state(), sys.nv_state(), sys.nquad) {
-  for (const System::StateJoint& j : sys.state_joints()) add_joint(j.iq, j.mq, j.iv, j.nv);
+NewtonSolver::NewtonSolver(const System& sys, Layout layout)
+    : NewtonSolver(layout == Layout::Tangent ? sys.nv_state() : sys.nq_state(), sys.nv_state(), sys.nquad) {
+  for (const System::StateJoint& j : sys.state_joints())
+    if (layout == Layout::Tangent) add_joint(j.iv, j.nv, j.iv, j.nv);
+    else add_joint(j.iq, j.mq, j.iv, j.nv);
 }
 
 // J has the structure of the header, entry by entry: in the q rows only the joint's own columns

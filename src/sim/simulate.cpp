@@ -48,6 +48,10 @@ Sample observe(System& sys, double t, const VecX& y) {
     s.work_prescribed = y(w + 2);
     s.prescribed_torque = sys.prescribed_tau;
   }
+  if (sys.has_loops()) {
+    s.loop_force = sys.loop_data().lambda;
+    s.loop_closure = sys.loop_data().phi.cwiseAbs().maxCoeff();
+  }
   s.qdd = d.qdd;
   s.control = sys.feedback_tau;
   if (sys.controlled) s.control += sys.control;

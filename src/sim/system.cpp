@@ -56,7 +56,7 @@ System::System(const Model& m, const Inputs& in, FdMethod fd, bool control_work)
   // the state's layout: every joint not prescribed, in the tree's order
   for (int i = 0; i < m.nbodies; ++i) {
     if (locked_.locked[size_t(i)]) continue;
-    const StateJoint sj{int(q_index_.size()), m.nq_i[i], int(v_index_.size()), m.nv_i[i]};
+    const StateJoint sj{int(q_index_.size()), m.nq_i[i], int(v_index_.size()), m.nv_i[i], i};
     if (const int k = joint_quaternion(m, i); k >= 0) quaternions_.push_back(sj.iq + k);
     for (int c = 0; c < m.nq_i[i]; ++c) q_index_.push_back(m.idx_q[i] + c);
     for (int c = 0; c < m.nv_i[i]; ++c) v_index_.push_back(m.idx_v[i] + c);
@@ -72,7 +72,26 @@ VecX System::state(const VecX& q0, const VecX& v0) const {
 }
 
 void System::normalize(Eigen::Ref<VecX> q_state) const {
+  ++normalizations;
   for (const int k : quaternions_) q_state.segment<4>(k).normalize();
+}
+
+// out_j = q_j ⊕ h v_j for each state joint j, by its kind
+void System::integrate(const Eigen::Ref<const VecX>& q_state, const Eigen::Ref<const VecX>& v_state, double h,
+                       Eigen::Ref<VecX> out) const {
+  for (const StateJoint& j : state_joints_)
+    visit_joint(model, j.body, [&](const auto& kind) {
+      kind.integrate(q_state.data() + j.iq, v_state.data() + j.iv, h, out.data() + j.iq);
+    });
+}
+
+// out_j = dexp⁻¹_{u_j}(v_j) for each state joint j, by its kind
+void System::increment_rate(const Eigen::Ref<const VecX>& u, const Eigen::Ref<const VecX>& v_state,
+                            Eigen::Ref<VecX> out) const {
+  for (const StateJoint& j : state_joints_)
+    visit_joint(model, j.body, [&](const auto& kind) {
+      kind.increment_rate(u.data() + j.iv, v_state.data() + j.iv, out.data() + j.iv);
+    });
 }
 
 void System::qdot(const Eigen::Ref<const VecX>& q_state, const Eigen::Ref<const VecX>& v_state, Eigen::Ref<VecX> out) {
@@ -430,6 +449,84 @@ void System::jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {
     rhs(t, y_work_.data(), f1_.data());
     J.col(c) = (f1_ - f0_) / e;
     y_work_(c) = keep;
+  }
+}
+
+// A_j ← A_j M_j⁻¹ for each state joint j holding a quaternion, M_j = dexp⁻¹_{u_j} column by column
+void System::times_increment_jacobian(const Eigen::Ref<const VecX>& u, Eigen::Ref<MatX> A) const {
+  for (const StateJoint& j : state_joints_)
+    visit_joint(model, j.body, [&](const auto& kind) {
+      using J = std::decay_t<decltype(kind)>;
+      if constexpr (!J::euclidean) {
+        Eigen::Matrix<double, J::nv, J::nv> M;
+        for (int c = 0; c < J::nv; ++c) {
+          const Eigen::Matrix<double, J::nv, 1> e = Eigen::Matrix<double, J::nv, 1>::Unit(c);
+          kind.increment_rate(u.data() + j.iv, e.data(), M.col(c).data());
+        }
+        const Eigen::Matrix<double, J::nv, J::nv> D = M.inverse();
+        for (Eigen::Index r = 0; r < A.rows(); ++r) {  // row by row: no temporary on the heap
+          const Eigen::Matrix<double, 1, J::nv> a = A.row(r).template segment<J::nv>(j.iv) * D;
+          A.row(r).template segment<J::nv>(j.iv) = a;
+        }
+      }
+    });
+}
+
+void System::tangent_jacobian(double t, const double* y, Eigen::Ref<MatX> J) {
+  ++jac_evals;
+  const int n = nv_state_;
+  prepare_jacobian();
+  at_state(t, y);
+  // ∂q̈/∂δ (along the tangent) and ∂q̈/∂v of the model, with the inputs' terms: O(N²)
+  if (has_prescribed())
+    hybrid_dynamics_derivatives(model, data, locked_, v, tau, qdd_given, *derivatives, tau_hybrid, &inputs, solve_work_);
+  else
+    forward_dynamics_derivatives(model, data, v, tau, *derivatives, &inputs);
+  const MatX &dq = derivatives->dqdd_dq, &dv = derivatives->dqdd_dv;
+  J.setZero();
+  // δ̇ = v
+  J.block(0, n, n, n).setIdentity();
+  // the state's rows and columns of ∂q̈/∂δ and ∂q̈/∂v
+  for (int c = 0; c < n; ++c) {
+    const int vc = v_index_[size_t(c)];
+    for (int r = 0; r < n; ++r) {
+      J(n + r, c) = dq(v_index_[size_t(r)], vc);
+      J(n + r, n + c) = dv(v_index_[size_t(r)], vc);
+    }
+  }
+  // the quadratures' rows: Ẇ = P(t, v), Ḋ = D(v) (W_p's left zero, as jacobian_prescribed's)
+  if (nquad > 0) {
+    inputs.power_derivatives(t, v, dP_, dD_);
+    if (control_work && controlled) dP_ += control;
+    for (int c = 0; c < n; ++c) {
+      J(2 * n, n + c) = dP_(v_index_[size_t(c)]);
+      J(2 * n + 1, n + c) = dD_(v_index_[size_t(c)]);
+    }
+  }
+}
+
+void System::tangent_jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J) {
+  ++jac_evals;
+  const int nqs = nq_state_, n = nv_state_, m = size();
+  y_work_ = Eigen::Map<const VecX>(y, m);
+  rhs(t, y_work_.data(), f0_.data());
+  J.setZero();
+  J.block(0, n, n, n).setIdentity();
+  // column c of δ: q ⊕ ε e_c; of v and the quadratures: y + ε e
+  for (int c = 0; c < n + m - nqs; ++c) {
+    const bool turn = c < n;
+    const int at = turn ? 0 : nqs + (c - n);
+    const double e = 1e-7 * (turn ? 1.0 : std::max(1.0, std::abs(y_work_(at))));
+    if (turn) {
+      f1_.head(n).setZero();  // the direction e_c (f1_ then takes rhs's output)
+      f1_(c) = 1.0;
+      integrate(Eigen::Map<const VecX>(y, nqs), f1_.head(n), e, y_work_.head(nqs));
+    } else {
+      y_work_(at) += e;
+    }
+    rhs(t, y_work_.data(), f1_.data());
+    J.col(c).tail(m - nqs) = (f1_ - f0_).tail(m - nqs) / e;
+    y_work_ = Eigen::Map<const VecX>(y, m);
   }
 }
 

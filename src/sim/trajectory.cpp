@@ -47,6 +47,8 @@ void TrajectoryRecorder::on_sample(const Sample& s) {
   impact_loss_.push_back(s.impact_loss);
   work_prescribed_.push_back(s.work_prescribed);
   append(prescribed_torque_, s.prescribed_torque.data(), s.prescribed_torque.size());
+  append(loop_force_, s.loop_force.data(), s.loop_force.size());
+  loop_closure_.push_back(s.loop_closure);
   append(control_, s.control.data(), s.control.size());
   append(linear_, s.linear.data(), 3);
   append(angular_, s.angular.data(), 3);
@@ -73,7 +75,8 @@ void TrajectoryRecorder::on_finish(const RunSummary& r) {
   if (next_) next_->on_finish(r);
 }
 
-Trajectory TrajectoryRecorder::take(const Model& m, const std::vector<PrescribedInput>& prescribed) {
+Trajectory TrajectoryRecorder::take(const Model& m, const std::vector<PrescribedInput>& prescribed,
+                                    const std::vector<LoopConstraint>& loops) {
   Trajectory tr;
   const Eigen::Index T = Eigen::Index(t_.size()), N = m.nbodies;
   const Eigen::Index nx0 = T > 0 ? Eigen::Index(dx_dx0_.size()) / T : 0, nxp = T > 0 ? Eigen::Index(dx_dpi_.size()) / T : 0;
@@ -90,6 +93,9 @@ Trajectory TrajectoryRecorder::take(const Model& m, const std::vector<Prescribed
   tr.work_prescribed = column(work_prescribed_);
   tr.prescribed_torque = rows(prescribed_torque_, T, Eigen::Index(prescribed.size()));
   for (const PrescribedInput& p : prescribed) tr.prescribed_joints.push_back(p.joint);
+  tr.loop_rows = loop_row_names(loops);
+  tr.loop_force = rows(loop_force_, T, Eigen::Index(tr.loop_rows.size()));
+  tr.loop_closure = column(loop_closure_);
   tr.control = rows(control_, T, T > 0 ? Eigen::Index(control_.size()) / T : m.nv);
   tr.linear_momentum = rows(linear_, T, 3);
   tr.angular_momentum = rows(angular_, T, 3);
@@ -113,6 +119,8 @@ Sample Trajectory::sample(Eigen::Index k) const {
   s.work_inputs = work_inputs(k), s.dissipated = dissipated(k), s.impact_loss = impact_loss(k);
   if (work_prescribed.size() == t.size()) s.work_prescribed = work_prescribed(k);
   if (prescribed_torque.cols() > 0) s.prescribed_torque = prescribed_torque.row(k).transpose();
+  if (loop_force.cols() > 0) s.loop_force = loop_force.row(k).transpose();
+  if (loop_closure.size() == t.size()) s.loop_closure = loop_closure(k);
   s.control = control.row(k).transpose();
   s.linear = linear_momentum.row(k).transpose();
   s.angular = angular_momentum.row(k).transpose();

@@ -137,6 +137,33 @@ class Messages(unittest.TestCase):
         self.assertIn("rows; a prescribed motion's q̈ needs a spline through at least 4",
                       (self.write("p.yaml", cases[2][0]), self.refused("inspect", "p.yaml"))[1])
 
+    def test_bad_loops_are_refused_in_one_line(self):
+        """loops: an unknown body, an unknown type, a loop from a body to itself, an axis on a point
+        loop, a loop no initial state closes, and a feature that does not take loops: each at its
+        line and field, nothing written"""
+        root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+        with open(os.path.join(root, "scenarios", "four_bar.yaml")) as f:
+            four = f.read()
+        head = four[:four.index("loops:")]
+        tail = four[four.index("initial:"):]
+        loop = "loops:\n  - {type: hinge, a: coupler, at_a: [1.0, 0, 0], b: rocker, at_b: [0.8, 0, 0]}\n"
+        cases = [
+            (head + loop.replace("b: rocker", "b: rockr") + tail, "loops[0].b: no body or frame named 'rockr'"),
+            (head + loop.replace("type: hinge", "type: slider") + tail, "loops[0].type: expected point, hinge, weld or distance"),
+            (head + loop.replace("b: rocker", "b: coupler") + tail, "loops[0]: a and b are the same body"),
+            (head + loop.replace("type: hinge", "type: point").replace("at_b: [0.8, 0, 0]", "at_b: [0.8, 0, 0], axis: [0, 0, 1]") + tail,
+             "loops[0].axis: only a hinge has an axis"),
+            (head + loop.replace("at_b: [0.8, 0, 0]", "at_b: [5.0, 0, 0]") + tail, "loops: the initial state cannot be closed on the loops"),
+            (head + loop + tail.replace("method: cvode-adams", "method: symplectic-euler"),
+             "loops: symplectic-euler (use rk4, implicit-midpoint or a CVODE method) is not available with closed loops yet"),
+        ]
+        for text, want in cases:
+            self.write("l.yaml", text)
+            err = self.refused("run", "l.yaml", "-o", "out.h5")
+            self.assertIn(want, err)
+            self.assertIn("l.yaml:", err)
+            self.assertFalse(os.path.exists(os.path.join(self.dir, "out.h5")))
+
     def test_each_refused_combination_names_its_file_line_and_field(self):
         cases = [
             # a start beyond a joint's limit: at initial.q.J

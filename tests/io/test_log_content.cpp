@@ -33,7 +33,7 @@ bool starts(const std::string& s, const std::string& prefix) { return s.rfind(pr
 // by the joint's first q index and the label's place in its traits, "bodies.<kind>.<body>.<c>" by
 // the body's index, and so on.  NaN for a name that means nothing.
 double value_by_name(const Model& m, const Sample& x, const std::string& name,
-                     const std::vector<PrescribedInput>& prescribed = {}) {
+                     const std::vector<PrescribedInput>& prescribed = {}, const std::vector<std::string>& loop_rows = {}) {
   const double nan = std::nan("");
   if (name == "time") return x.t;
   for (const auto& [prefix, of_q] : {std::pair{"q.", true}, {"qd.", false}, {"qdd.", false}}) {
@@ -61,6 +61,10 @@ double value_by_name(const Model& m, const Sample& x, const std::string& name,
   // the prescribed joints' holding torques, in the scenario's order (Inputs::prescribed)
   for (size_t j = 0; j < prescribed.size(); ++j)
     if (name == "prescribed." + prescribed[j].joint) return x.prescribed_torque(Eigen::Index(j));
+  // the loops' multipliers, row by row (loop_row_names), and the closure
+  if (name == "loops.closure") return x.loop_closure;
+  for (size_t r = 0; r < loop_rows.size(); ++r)
+    if (name == "loops.force." + loop_rows[r]) return x.loop_force(Eigen::Index(r));
   if (starts(name, "control.")) {
     const std::vector<std::string> vn = m.v_names();
     for (int k = 0; k < m.nv; ++k)
@@ -119,17 +123,18 @@ TEST(LogContent, EveryColumnNameLeadsToItsNumberInEveryScenario) {
     int wrong = 0;
     for (size_t j = 0; j < names.size(); ++j)
       for (size_t k = 0; k < x.size(); ++k) {
-        const double want = value_by_name(sc.model, x[k], names[j], sc.inputs.prescribed);
+        const double want = value_by_name(sc.model, x[k], names[j], sc.inputs.prescribed, loop_row_names(sc.inputs.loops));
         if (!(t.at(k, j) == want) && wrong++ < 5) ADD_FAILURE() << names[j] << " row " << k << ": " << t.at(k, j) << " vs " << want;
       }
     EXPECT_EQ(wrong, 0);
     // and every number the sample holds has a column: q, q̇, q̈, 5 energies, 6 momenta, 10 per body,
     // the impacts' loss with limits on, the controllers' τ with controllers, the prescribed joints'
-    // torques and their work with prescribed motion
+    // torques and their work with prescribed motion, the loops' multipliers and closure with loops
     const Model& m = sc.model;
     const size_t impacts = s.limits && m.has_limits() ? 1 : 0, control = sc.inputs.controllers.empty() ? 0 : size_t(m.nv);
     const size_t held = sc.inputs.prescribed.empty() ? 0 : sc.inputs.prescribed.size() + 1;
-    EXPECT_EQ(names.size(), size_t(1 + m.nq + 2 * m.nv + 5 + 6 + 10 * m.nbodies) + impacts + control + held);
+    const size_t loops = sc.inputs.loops.empty() ? 0 : loop_row_names(sc.inputs.loops).size() + 1;  // λ rows, closure
+    EXPECT_EQ(names.size(), size_t(1 + m.nq + 2 * m.nv + 5 + 6 + 10 * m.nbodies) + impacts + control + held + loops);
     std::filesystem::remove(out);
   }
 }

@@ -106,6 +106,35 @@ TEST(JointSpace, TangentMapAndQdotAgainstDifferencesOfIntegrate) {
         kind);
 }
 
+// u̇ = dexp⁻¹_u(v): q0 ⊕ u(t) moves at v when u moves at the increment rate, i.e. the central
+// difference of (q0 ⊕ (u ± h r)) ⊖ (q0 ⊕ u) in h is v; for turns from 10⁻³ rad (the series) to 2.5 rad
+TEST(JointSpace, IncrementRateMovesTheIncrementedConfigurationAtV) {
+  std::mt19937_64 gen(2029);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  const double h = 1e-6;
+  for (const JointModel& kind : every_kind())
+    std::visit(
+        [&](const auto& j) {
+          using J = std::decay_t<decltype(j)>;
+          for (const double size : {1e-3, 0.1, 1.0, 2.5}) {
+            const VecX q0 = random_of(j, gen);
+            VecX u(J::nv), v(J::nv), r(J::nv);
+            for (int c = 0; c < J::nv; ++c) u(c) = uni(gen), v(c) = uni(gen);
+            u *= size / u.norm();
+            j.increment_rate(u.data(), v.data(), r.data());
+            VecX qu(J::nq), qp(J::nq), qm(J::nq), dp(J::nv), dm(J::nv);
+            const VecX up = u + h * r, um = u - h * r;
+            j.integrate(q0.data(), u.data(), 1.0, qu.data());
+            j.integrate(q0.data(), up.data(), 1.0, qp.data());
+            j.integrate(q0.data(), um.data(), 1.0, qm.data());
+            j.difference(qu.data(), qp.data(), dp.data());
+            j.difference(qu.data(), qm.data(), dm.data());
+            EXPECT_TRUE(near_rel((dp - dm) / (2 * h), v, 1e-8)) << kind_name(kind) << " |u| = " << size;
+          }
+        },
+        kind);
+}
+
 TEST(JointSpace, QdotJacobianAgainstDifferences) {
   std::mt19937_64 gen(2028);
   std::uniform_real_distribution<double> u(-2, 2);

@@ -44,6 +44,12 @@ struct LoopConstraint {
   double distance = 0.0;
 };
 
+// Each row's name "<loop>.<part>" (point: x y z; hinge: x y z n1 n2; weld: x y z rx ry rz;
+// distance: tension) and its multiplier's unit (N, or N m for the angular rows): a run file's
+// /loops/force columns
+std::vector<std::string> loop_row_names(const std::vector<LoopConstraint>& loops);
+std::vector<std::string> loop_row_units(const std::vector<LoopConstraint>& loops);
+
 // Scratch and results of the loop functions for one model and one set of loops.
 struct LoopData {
   LoopData() = default;

@@ -95,6 +95,9 @@ struct LogGroups {
   // set by H5Log from the scenario's prescribed joints (not part of parse() and str()): their DOFs,
   // whose holding torques /prescribed logs (and, with energy, their work /energy/work_prescribed)
   std::vector<int> prescribed = {};
+  // set by H5Log from the scenario's loops (not part of parse() and str()): /loops/force's columns
+  // (loop_row_names, loop_row_units) and /loops/closure; empty without loops
+  std::vector<std::string> loop_rows = {}, loop_units = {};
   // "state,energy,momentum,bodies" (any subset, any order; "all"); throws soadyn::Error naming
   // the bad item
   static LogGroups parse(const std::string& text);

@@ -3,6 +3,8 @@
 //
 //   q ⊕ h v     integrate            the configuration reached by moving at v for h
 //   q1 ⊖ q0     difference           the v with q0 ⊕ v = q1 (nv)
+//   dexp⁻¹_u v  increment_rate       u̇ for q(t) = q0 ⊕ u(t) moving at v (nv): Lie-group integrators'
+//                                    local coordinates (integrators.hpp)
 //   T(q)        tangent_map          dδ = T dq (nv×nq, block diagonal): the tangent increment of dq
 //   T̄(q)        Model::qdot          q̇ = T̄(q) v
 //   ∂q̇/∂q, ∂q̇/∂v  qdot_jacobian      of q̇ = T̄(q) v (nq×nq, nq×nv, block diagonal)
@@ -30,6 +32,11 @@ void integrate(const Model& model, const VecX& q, const VecX& v, double h, Eigen
 
 // q1 ⊖ q0 (nv): q0 ⊕ (q1 ⊖ q0) = q1, a quaternion by its shorter turn
 VecX difference(const Model& model, const VecX& q0, const VecX& q1);
+
+// out = dexp⁻¹_u(v) joint by joint (u, v, out: nv), the increment's rate: q0 ⊕ u(t) moves at v
+// when u̇ = out.  v itself where the joint has no quaternion; a quaternion's turn by the closed form
+// (joint_space.hpp), valid for turns |u| < 2π
+void increment_rate(const Model& model, const VecX& u, const VecX& v, Eigen::Ref<VecX> out);
 
 // T(q), nv×nq
 MatX tangent_map(const Model& model, const VecX& q);

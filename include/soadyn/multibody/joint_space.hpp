@@ -8,6 +8,8 @@
 //   velocity(q, qd, v)          v from q̇ (a quaternion's rate along itself ignored)
 //   tangent(q)                  T(q) (nv×nq): dδ = T dq, the tangent increment a change dq makes
 //   qdot_jacobian(q, v, dq, dv) ∂q̇/∂q (nq×nq) and ∂q̇/∂v (nq×nv) of qdot
+//   increment_rate(u, v, r)     r = u̇ = dexp⁻¹_u(v): the rate of the increment u of q(t) = q0 ⊕ u(t)
+//                               moving at v (Lie-group integrators' local coordinates, exact)
 //   neutral(q), random(rng, q)  zero coordinates, identity quaternion / uniform coordinates in
 //                               [−π, π], a uniformly random unit quaternion
 //   nq, nv, quaternion          sizes; offset of a unit quaternion [w x y z] in q, or −1
@@ -22,6 +24,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <cmath>
 #include <numbers>
 #include <random>
 
@@ -54,6 +57,26 @@ template <class S>
 inline Vec3T<S> rotation_log(const Eigen::Quaternion<S>& Q) {
   const Eigen::AngleAxis<S> aa(Q.normalized());
   return aa.angle() * aa.axis();
+}
+
+// dexp⁻¹_u(w) on so(3) (the inverse of the exponential map's derivative; Iserles, Munthe-Kaas,
+// Nørsett and Zanna, Acta Numerica 2000):  for exp(u(t)) ⊗ Q0 turning at w (inertial, left)
+//   u̇ = w − ½ u × w + c(θ) u × (u × w),   c(θ) = (1 − (θ/2) cot(θ/2)) / θ²,  θ = |u| < 2π,
+// and for Q0 ⊗ exp(u(t)) turning at w in its own axes (right), the same with + ½ u × w.
+// c by its series 1/12 + θ²/720 + θ⁴/30240 where θ is small (the closed form cancels there)
+template <class S>
+inline Vec3T<S> rotation_increment_rate(const Vec3T<S>& u, const Vec3T<S>& w, bool right) {
+  using std::sqrt, std::tan;
+  const S t2 = u.squaredNorm();
+  S c;
+  if (t2 < S(1e-4)) {
+    c = S(1) / S(12) + t2 * (S(1) / S(720) + t2 / S(30240));
+  } else {
+    const S t = sqrt(t2);
+    c = (S(1) - S(0.5) * t / tan(S(0.5) * t)) / t2;
+  }
+  const Vec3T<S> uw = u.cross(w);
+  return w + (right ? S(0.5) : S(-0.5)) * uw + c * u.cross(uw);
 }
 
 // a uniformly random unit quaternion (four normal deviates, normalized)
@@ -92,6 +115,10 @@ struct VectorSpace {
   template <class S>
   static void qdot_jacobian(const S*, const S*, Eigen::Matrix<S, n, n>& dq, Eigen::Matrix<S, n, n>& dv) {
     dq.setZero(), dv.setIdentity();
+  }
+  template <class S>
+  static void increment_rate(const S*, const S* v, S* r) {
+    for (int k = 0; k < n; ++k) r[k] = v[k];
   }
   template <class S>
   static void neutral(S* q) {
@@ -147,6 +174,12 @@ struct Rotation {
   template <class S>
   static Eigen::Matrix<S, 3, 4> tangent(const S* q) {
     return quaternion_tangent(q, false);
+  }
+  // Q0 ⊗ exp(u): u̇ = dexp⁻¹_{−u}(ω)
+  template <class S>
+  static void increment_rate(const S* u, const S* v, S* r) {
+    const Vec3T<S> w = rotation_increment_rate(Vec3T<S>(u[0], u[1], u[2]), Vec3T<S>(v[0], v[1], v[2]), true);
+    r[0] = w[0], r[1] = w[1], r[2] = w[2];
   }
   // Q̇ = ½ Q ⊗ [0; ω]: linear in Q and in ω
   template <class S>
@@ -205,6 +238,13 @@ struct RigidMotion {
     T.template block<3, 4>(0, 3) = quaternion_tangent(q + 3, true);
     T.template block<3, 3>(3, 0).setIdentity();
     return T;
+  }
+  // [exp(u_ω) ⊗ Q0, p0 + u_p]: u̇_ω = dexp⁻¹_{u_ω}(ω), u̇_p = η̇
+  template <class S>
+  static void increment_rate(const S* u, const S* v, S* r) {
+    const Vec3T<S> w = rotation_increment_rate(Vec3T<S>(u[0], u[1], u[2]), Vec3T<S>(v[0], v[1], v[2]), false);
+    r[0] = w[0], r[1] = w[1], r[2] = w[2];
+    for (int k = 3; k < 6; ++k) r[k] = v[k];
   }
   // ṗ = η̇;  Q̇ = ½ [0; ω] ⊗ Q
   template <class S>

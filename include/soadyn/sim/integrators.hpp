@@ -6,19 +6,23 @@
 //                        analytic (System::jacobian) with I − γJ solved by its structure through an
 //                        nv×nv Schur complement (NewtonSolver), or CVODE's difference quotients and
 //                        its dense LU
-//   euler                explicit Euler (order 1)
+//   euler                explicit Euler, q ← q ⊕ h v, v ← v + h q̈(q, v) (order 1)
 //   semi-implicit-euler  v ← v + h q̈(q, v), then q ← q ⊕ h v (order 1).  Symplectic only where 𝓜 is
 //                        constant: with 𝓜(q) the update in velocities is not a symplectic map
 //   symplectic-euler     symplectic Euler in the canonical momenta p = 𝓜(q) v (order 1, symplectic):
 //                        p⁺ = p − h ∂H/∂q(q, p⁺) by Newton, then q⁺ = q + h 𝓜(q)⁻¹ p⁺.  Models
 //                        without quaternions (revolute, prismatic, planar joints), where q̇ = v
-//   rk4                  classical Runge–Kutta (order 4)
-//   implicit-midpoint    y ← y + h f((y + y⁺)/2), Newton iterations (order 2, symmetric, A-stable; in
-//                        (q, v), so not symplectic where 𝓜 depends on q): the one fixed-step baseline
-//                        that stays stable on stiff scenes.  Full Newton (the Jacobian at every
-//                        iterate, from y) or simplified (once per step, at the explicit-Euler predictor)
-// Free roots keep a unit quaternion: CVODE projects it (CVodeSetProjFn); fixed-step methods
-// renormalize after each step.
+//   rk4                  Runge–Kutta–Munthe-Kaas: classical RK4 on the increment z of q0 ⊕ z, whose
+//                        rate is dexp⁻¹_z(v) (order 4; the classical method where no joint holds a
+//                        quaternion)
+//   implicit-midpoint    q ← q ⊕ h v_m, v ← v + h q̈(q ⊕ (h/2) v_m, v_m), v_m = (v + v⁺)/2, Newton
+//                        iterations on the tangent (order 2, symmetric, A-stable; not symplectic where
+//                        𝓜 depends on q): the one fixed-step baseline that stays stable on stiff
+//                        scenes.  Full Newton (the Jacobian at every iterate, from y) or simplified
+//                        (once per step, at the explicit-Euler predictor)
+// Free and ball joints keep a unit quaternion: CVODE projects it (CVodeSetProjFn); the fixed-step
+// methods move it on the group, q ⊕ δ by the exponential map (configuration.hpp), so it is unit by
+// construction and never renormalized after a step (fixed_step.hpp).
 //
 // Fixed steps.  Step k of a fixed-step method ends at t0 + k·dt, k an integer (times are never
 // accumulated).  A span T is round(T/dt) steps when T/dt is that whole number to within rounding

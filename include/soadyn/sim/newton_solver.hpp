@@ -30,8 +30,11 @@ class NewtonSolver {
  public:
   // the layout of y: the model's q and v, then nquad quadratures
   NewtonSolver(const Model& model, int nquad);
-  // the layout of a System's state (its free joints' q and v, then its quadratures)
-  explicit NewtonSolver(const System& system);
+  // the layout of a System's state (its free joints' q and v, then its quadratures), or its
+  // tangent layout (System::tangent_jacobian: each joint's nv increments δ in place of its q, so
+  // J_qq = 0 and J_qv = e, every block on the x_q = y + γ x_v route)
+  enum class Layout { Coordinates, Tangent };
+  explicit NewtonSolver(const System& system, Layout layout = Layout::Coordinates);
   // J = ∂f/∂y (n×n, n = nq + nv + nquad), copied; whether it has the structure above
   bool set_jacobian(const Eigen::Ref<const MatX>& J);
   // factors I − γJ for the J last set; false when it is singular (a zero or non-finite pivot)

@@ -29,7 +29,7 @@ enum class Method {
   Euler,              // "euler": explicit Euler, fixed steps
   SemiImplicitEuler,  // "semi-implicit-euler": v, then q, fixed steps
   SymplecticEuler,    // "symplectic-euler": symplectic Euler in the momenta, fixed steps
-  Rk4,                // "rk4": classical Runge–Kutta, fixed steps
+  Rk4,                // "rk4": classical Runge–Kutta on the group (Munthe-Kaas), fixed steps
   ImplicitMidpoint    // "implicit-midpoint": implicit midpoint rule by Newton, fixed steps
 };
 // ∂f/∂y for cvode-bdf and implicit-midpoint

@@ -26,6 +26,11 @@ struct Sample {
   // prescribed joint in Inputs::prescribed's order (N·m or N; empty without prescribed motion)
   double work_prescribed = 0.0;
   VecX prescribed_torque;
+  // closed loops (Inputs::loops): their multipliers λ at t, one per row (loop_row_names; N or N m),
+  // the force each loop's frame B exerts on A along its rows' directions, and the largest closure
+  // error |φ| (m or rad); empty and 0 without loops
+  VecX loop_force;
+  double loop_closure = 0.0;
   // L(t): the kinetic energy joint-limit impacts took since t = 0 (limits.hpp), so that
   // E(t) − E(0) = W(t) − L(t); and the controllers' τ_c at t (nv; zero without one)
   double impact_loss = 0.0;

@@ -64,10 +64,23 @@ class System {
   // one joint's entries in the state: its q (iq, mq) and v (iv, nv); the free joints' in the tree's order
   struct StateJoint {
     int iq, mq, iv, nv;
+    int body;  // its body in the model
   };
   const std::vector<StateJoint>& state_joints() const { return state_joints_; }
-  // the state's quaternions made unit (q_state: the state's nq_state q entries)
+  // the state's quaternions made unit (q_state: the state's nq_state q entries); counts its calls
   void normalize(Eigen::Ref<VecX> q_state) const;
+  mutable long normalizations = 0;
+  // out = q_state ⊕ h v_state joint by joint (configuration.hpp's ⊕ for each state joint: a free or
+  // ball joint's quaternion turned by the exponential map, unit by construction); out may be q_state
+  void integrate(const Eigen::Ref<const VecX>& q_state, const Eigen::Ref<const VecX>& v_state, double h,
+                 Eigen::Ref<VecX> out) const;
+  // out = dexp⁻¹_u(v_state) joint by joint (u, out: nv_state): the rate of the increment u for which
+  // q0 ⊕ u moves at v_state (configuration.hpp's increment_rate)
+  void increment_rate(const Eigen::Ref<const VecX>& u, const Eigen::Ref<const VecX>& v_state, Eigen::Ref<VecX> out) const;
+  // A ← A dexp_u joint by joint (A: nv_state columns along the tangent at q0 ⊕ u): the columns
+  // along the increment u instead, dexp_u being the inverse of increment_rate's map (a joint
+  // without a quaternion's columns unchanged)
+  void times_increment_jacobian(const Eigen::Ref<const VecX>& u, Eigen::Ref<MatX> A) const;
   // q̇ = T̄(q) v for the state's q and v (nq_state, nv_state) into out (nq_state)
   void qdot(const Eigen::Ref<const VecX>& q_state, const Eigen::Ref<const VecX>& v_state, Eigen::Ref<VecX> out);
   // [q; v; 0 …]: the state at the start of a run from the model's q0, v0 (the prescribed joints'
@@ -127,6 +140,13 @@ class System {
   void prepare_jacobian();
   // ∂f/∂y by forward differences of rhs (size() extra evaluations, counted as RHS evaluations)
   void jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
+  // ∂f/∂(δ, v, W…) on the tangent (tangent_size() square): f's rows [δ̇; q̈; P…] with δ̇ = v, the
+  // columns along a tangent increment δ of q (q ⊕ δ) rather than along the coordinates, so that
+  // the q rows are [0 e 0] and J_vq = ∂q̈/∂δ.  Analytic (the derivatives' ∂q̈/∂δ and ∂q̈/∂v, as
+  // jacobian) or by forward differences of rhs along q ⊕ ε e_c and v + ε e_c (tangent_jacobian_dq)
+  int tangent_size() const { return 2 * nv_state_ + nquad; }
+  void tangent_jacobian(double t, const double* y, Eigen::Ref<MatX> J);
+  void tangent_jacobian_dq(double t, const double* y, Eigen::Ref<MatX> J);
   // the name of component k of y ("theta2 (q)", "bus.wz (v)", "the inputs' work W")
   std::string component_name(int k) const;
 

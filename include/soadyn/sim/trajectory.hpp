@@ -22,6 +22,9 @@ struct Trajectory {
   VecX work_prescribed;                      // (T) J: W_p(t), the prescribed joints' torques' work (zeros without)
   SampleRows prescribed_torque;              // (T × prescribed joints) N m or N: the torques holding their motion
   std::vector<std::string> prescribed_joints;  // their names, in prescribed_torque's column order
+  SampleRows loop_force;                     // (T × loop rows) N or N m: the loops' multipliers λ (0 columns without loops)
+  VecX loop_closure;                         // (T) the largest closure error |φ| (zeros without loops)
+  std::vector<std::string> loop_rows;        // loop_force's columns, "<loop>.<part>" (loop_row_names)
   SampleRows control;                        // (T × nv) the controllers' τ_c, zeros without one
   SampleRows linear_momentum, angular_momentum;  // (T × 3), about the inertial origin
   SampleRows body_position, body_com;        // (T × 3N) inertial, m
@@ -54,12 +57,13 @@ class TrajectoryRecorder : public RunObserver {
   void on_finish(const RunSummary& r) override;
   // the samples so far as columns (the recorder is left empty); `prescribed` names the prescribed
   // joints' columns (Inputs::prescribed)
-  Trajectory take(const Model& model, const std::vector<PrescribedInput>& prescribed = {});
+  Trajectory take(const Model& model, const std::vector<PrescribedInput>& prescribed = {},
+                  const std::vector<LoopConstraint>& loops = {});
 
  private:
   RunObserver* next_;
   std::vector<double> t_, q_, v_, qdd_, kinetic_, potential_, total_, work_, dissipated_, impact_loss_, control_,
-      work_prescribed_, prescribed_torque_,
+      work_prescribed_, prescribed_torque_, loop_force_, loop_closure_,
       linear_, angular_, position_, orientation_, com_, dx_dx0_, dx_dpi_;
 };
 

@@ -138,6 +138,13 @@ class Trajectory:
     prescribed_torque: Optional[np.ndarray] = None
     prescribed_joints: List[str] = field(default_factory=list)
     work_prescribed: Optional[np.ndarray] = None
+    # closed loops: their multipliers λ (T, rows), N or N m, the force along each row's direction
+    # (loop_rows: "<loop>.<part>", part x y z for the points' coincidence, n1 n2 a hinge's axes,
+    # rx ry rz a weld's turn, tension a distance's), and the largest closure error |φ| (T,);
+    # (T, 0), [] and zeros without loops
+    loop_forces: Optional[np.ndarray] = None
+    loop_rows: List[str] = field(default_factory=list)
+    loop_closure: Optional[np.ndarray] = None
 
     ARRAYS = ("t", "q", "v", "qdd", "kinetic_energy", "potential_energy", "total_energy", "work_inputs", "dissipated",
               "linear_momentum", "angular_momentum", "body_position", "body_orientation", "body_com")
@@ -286,7 +293,11 @@ def read_log(path: str) -> Trajectory:
     held = [n[len("prescribed."):] for n in c["column_names"] if n.startswith("prescribed.")]
     prescribed_torque = logged.get("/prescribed", np.zeros((T, 0)))
     work_prescribed = logged.get("/energy/work_prescribed", np.zeros(T) if logged_energy else None)
+    # /loops/force (T, rows) with the rows from its columns' names, and /loops/closure
+    rows = [n[len("loops.force."):] for n in c["column_names"] if n.startswith("loops.force.")]
+    loop_forces = logged.get("/loops/force", np.zeros((T, 0)))
+    loop_closure = logged.get("/loops/closure", np.zeros(T))
     return Trajectory(**arrays, summary=summary, joint_names=c["joint_names"], parents=c["parents"],
                       scenario=c["scenario"], frames=frames, impact_loss=impact_loss, control=control,
                       sensitivities=sensitivities, prescribed_torque=prescribed_torque, prescribed_joints=held,
-                      work_prescribed=work_prescribed)
+                      work_prescribed=work_prescribed, loop_forces=loop_forces, loop_rows=rows, loop_closure=loop_closure)
