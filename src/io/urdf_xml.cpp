@@ -99,7 +99,8 @@ void check_tree(const tinyxml2::XMLElement* robot, const Index& idx) {
     if (end[0] == end[1]) throw Error(at + ": link '" + end[1] + "' is its own parent");
     if (parent_of.count(end[1]))
       throw Error(at + ": link '" + end[1] + "' already has a parent joint (line " +
-                  std::to_string(parent_of[end[1]].second) + "); a URDF is a tree");
+                  std::to_string(parent_of[end[1]].second) + "); a URDF is a tree: drop this joint and close the loop "
+                  "from a scenario's loops: (scenarios/README.md, Closed loops)");
     parent_of[end[1]] = {end[0], e->GetLineNum()};
   }
   // no cycle: walk up from every link until a link known to reach a root; O(N) walks in all

@@ -211,6 +211,8 @@ TEST(BadUrdf, CyclesAndTwoParents) {
               HasSubstr("cycle in the links"));
   EXPECT_THAT(urdf_error("<robot name=\"r\">\n" + links + j("j1", "a", "c") + j("j2", "b", "c") + "</robot>"),
               HasSubstr("robot.urdf:6: joint 'j2': link 'c' already has a parent joint (line 5)"));
+  EXPECT_THAT(urdf_error("<robot name=\"r\">\n" + links + j("j1", "a", "c") + j("j2", "b", "c") + "</robot>"),
+              HasSubstr("close the loop from a scenario's loops:"));
 }
 
 TEST(BadUrdf, UnsupportedJointType) {
