@@ -7,7 +7,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
-#include <Eigen/SVD>
 
 #include <cmath>
 
@@ -178,22 +177,13 @@ void loop_rows(const Model& model, const Data& data, const std::vector<LoopConst
 namespace {
 
 // λ of minimum norm for A λ = b by a complete orthogonal decomposition with the loops' rank
-// tolerance; records the rank and the kept conditioning
+// tolerance; records the rank
 void solve_multipliers(LoopData& ld, const VecX& b) {
   Eigen::CompleteOrthogonalDecomposition<MatX> cod(ld.A.rows(), ld.A.cols());
-  const double largest = ld.A.cwiseAbs().maxCoeff();
   cod.setThreshold(kLoopRankTolerance);
   cod.compute(ld.A);
   ld.rank = int(cod.rank());
   ld.lambda = cod.solve(b);
-  // the conditioning of what was kept: its smallest singular value over the largest
-  if (ld.m > 0 && largest > 0) {
-    const Eigen::JacobiSVD<MatX> svd(ld.A);
-    const VecX& s = svd.singularValues();
-    ld.conditioning = ld.rank > 0 ? s(ld.rank - 1) / s(0) : 0.0;
-  } else {
-    ld.conditioning = 0.0;
-  }
 }
 
 }  // namespace

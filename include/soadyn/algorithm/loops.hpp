@@ -62,7 +62,6 @@ struct LoopData {
   MatX MinvKt;       // nv × m: 𝓜⁻¹ Kᵀ
   MatX A;            // m × m: K 𝓜⁻¹ Kᵀ
   int rank = 0;      // A's rank at the last solve
-  double conditioning = 0.0;  // A's smallest kept singular value over its largest, at the last solve
   std::vector<int> row_loop;  // the loop of each row
   MatX J_a, J_b, work;        // 6 × nv each; articulated_solve's workspace
 };
