@@ -13,17 +13,22 @@
 
 namespace soadyn::test {
 
-// a planar four-bar in the xy plane: crank (ground pivot O, length 0.3), coupler (1.0), rocker
-// (ground pivot at x = 0.9, length 0.8), the coupler's end hinged to the rocker's about z; closed
-// at crank angle θ (the open branch), moving at crank rate ω
+// a planar four-bar in the xy plane: crank (ground pivot O, length a), coupler (b), rocker (ground
+// pivot at x = g, length c), the coupler's end hinged to the rocker's about z; link i of mass
+// 1 + i/2 with its centre of mass halfway, Izz = m L²/12; closed at crank angle θ (the open
+// branch), moving at crank rate ω.  The default shape is a crank-rocker.
+struct FourBarShape {
+  double a = 0.3, b = 1.0, c = 0.8, g = 0.9;
+  Vec3 gravity = Vec3(0, -9.81, 0);
+};
 struct FourBar {
   Model model;
   std::vector<LoopConstraint> loops;
   VecX q, v;
 };
 
-inline FourBar four_bar(double theta, double omega) {
-  const double a = 0.3, b = 1.0, c = 0.8, g = 0.9;
+inline FourBar four_bar(double theta, double omega, const FourBarShape& shape = {}) {
+  const double a = shape.a, b = shape.b, c = shape.c, g = shape.g;
   std::vector<BodySpec> s(3);
   const char* names[] = {"crank", "coupler", "rocker"};
   const double len[] = {a, b, c};
@@ -36,7 +41,7 @@ inline FourBar four_bar(double theta, double omega) {
   s[1].parent = 0, s[1].placement.p = Vec3(a, 0, 0);
   s[2].placement.p = Vec3(g, 0, 0);
   FourBar f;
-  f.model = Model::build(s, Vec3(0, -9.81, 0));
+  f.model = Model::build(s, shape.gravity);
   LoopConstraint hinge;
   hinge.name = "closing";
   hinge.type = LoopType::Hinge;

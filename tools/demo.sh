@@ -2,13 +2,15 @@
 # The main job: install what is missing, build in Release, then for each of the note's four
 # examples and the two ball-joint scenes print its mass matrix at the initial state; simulate those
 # and the scenes where methods break (stiff arm, driven pendulum, tumbling T-handle, flexible
-# satellite) and the prescribed-motion scenes (antenna slew, crane, arm replay) with CVODE (writing out/<scenario>.h5), print a table of the runs and plot them
+# satellite), the prescribed-motion scenes (antenna slew, crane, arm replay) and the closed-loop
+# scenes (four-bar, slider-crank, Delta robot) with CVODE (writing out/<scenario>.h5), print a table of the runs and plot them
 # (out/<scenario>.png).  Builds the soadyn executable only (tools/test.sh builds the rest).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/setup.sh --demo
 scenarios=(pendulum_on_cart double_pendulum satellite_two_arrays three_link_arm spherical_pendulum heavy_top)
-runs=("${scenarios[@]}" stiff_arm driven_pendulum tumbling_t_handle flexible_satellite antenna_slew crane_slew arm_replay)
+runs=("${scenarios[@]}" stiff_arm driven_pendulum tumbling_t_handle flexible_satellite antenna_slew crane_slew arm_replay
+  four_bar slider_crank delta_robot)
 
 for s in "${scenarios[@]}"; do
   echo

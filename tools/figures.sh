@@ -15,7 +15,8 @@ tools/work_precision.py
 tools/stability.py
 mkdir -p out
 for s in pendulum_on_cart double_pendulum satellite_two_arrays three_link_arm stiff_arm spherical_pendulum heavy_top \
-  driven_pendulum tumbling_t_handle flexible_satellite arm_control_limits panda_gripper antenna_slew crane_slew arm_replay; do
+  driven_pendulum tumbling_t_handle flexible_satellite arm_control_limits panda_gripper antenna_slew crane_slew arm_replay \
+  four_bar slider_crank delta_robot; do
   build/soadyn run "scenarios/$s.yaml" -q -o "out/$s.h5"
   tools/plot.py "out/$s.h5" -o "tools/results/run_$s.png"
 done

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Plot a soadyn run: joint coordinates by unit, the orientation of free and ball joints, the
-controllers' torques and forces, the torques holding prescribed joints' motion, the energy-balance error on a log axis and, for a free-floating
+controllers' torques and forces, the torques holding prescribed joints' motion, the closed loops' forces and closure, the energy-balance error on a log axis and, for a free-floating
 model, the change of momentum; the joint limits' events (/events) as dashed lines on every panel.
 
     tools/plot.py RUN.h5 [-o fig.png|.svg|.pdf] [--joints a,b] [--bins N] [--show] [--data curves.csv]
@@ -157,6 +157,17 @@ def plan(names, units, model, chosen):
             held.setdefault(units[k], []).append(Curve(n[len("prescribed."):], column(k)))
     for u, curves in held.items():
         panels.append((f"prescribed joints' {'force' if u == 'N' else 'torque'} [{u}]", curves, False))
+    # the closed loops' forces λ (/loops/force), one panel per unit, and their closure |φ| (log axis)
+    forces = {}
+    for k, n in enumerate(names):
+        if n.startswith("loops.force."):
+            forces.setdefault(units[k], []).append(Curve(n[len("loops.force."):], column(k)))
+    for u, curves in forces.items():
+        panels.append((f"loop {'forces' if u == 'N' else 'torques'} λ [{u}]", curves, False))
+    if "loops.closure" in idx:
+        k = idx["loops.closure"]
+        panels.append((f"loop closure |φ| [{units[k]}]",
+                       [Curve("closure", lambda b, ctx, k=k: np.maximum(np.abs(b[:, k]), FLOOR))], True))
 
     if "energy.total" in idx and "energy.kinetic" in idx:
         w, loss = idx.get("energy.work_inputs"), idx.get("energy.impact_loss")

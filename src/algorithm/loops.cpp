@@ -9,6 +9,7 @@
 #include <Eigen/QR>
 
 #include <cmath>
+#include <utility>
 
 namespace soadyn {
 
@@ -177,16 +178,47 @@ void loop_rows(const Model& model, const Data& data, const std::vector<LoopConst
 namespace {
 
 // λ of minimum norm for A λ = b by a complete orthogonal decomposition with the loops' rank
-// tolerance; records the rank
+// tolerance; records the rank and the margin (the smallest kept pivot of the complete orthogonal
+// factor T over the largest column pivot)
 void solve_multipliers(LoopData& ld, const VecX& b) {
   Eigen::CompleteOrthogonalDecomposition<MatX> cod(ld.A.rows(), ld.A.cols());
   cod.setThreshold(kLoopRankTolerance);
   cod.compute(ld.A);
   ld.rank = int(cod.rank());
+  ld.margin = ld.rank > 0 ? cod.matrixT().diagonal().head(ld.rank).cwiseAbs().minCoeff() / std::abs(cod.maxPivot()) : 0.0;
   ld.lambda = cod.solve(b);
 }
 
+// the rank and margin of one loop's diagonal block of A
+std::pair<int, double> block_rank(const LoopData& ld, int loop) {
+  std::vector<int> rows;
+  for (int r = 0; r < ld.m; ++r)
+    if (ld.row_loop[size_t(r)] == loop) rows.push_back(r);
+  Eigen::CompleteOrthogonalDecomposition<MatX> cod(ld.A(rows, rows));
+  cod.setThreshold(kLoopRankTolerance);
+  const int rank = int(cod.rank());
+  const double margin = rank > 0 ? cod.matrixT().diagonal().head(rank).cwiseAbs().minCoeff() / std::abs(cod.maxPivot()) : 0.0;
+  return {rank, margin};
+}
+
 }  // namespace
+
+std::vector<int> loop_ranks(const LoopData& ld, int nloops) {
+  std::vector<int> out;
+  for (int l = 0; l < nloops; ++l) out.push_back(block_rank(ld, l).first);
+  return out;
+}
+
+std::vector<int> singular_loops(const LoopData& ld, const std::vector<int>& first_rank) {
+  std::vector<int> out;
+  for (int l = 0; l < int(first_rank.size()); ++l) {
+    const auto [rank, margin] = block_rank(ld, l);
+    if (rank < first_rank[size_t(l)] || (rank > 0 && margin < kLoopSingular)) out.push_back(l);
+  }
+  if (out.empty())
+    for (int l = 0; l < int(first_rank.size()); ++l) out.push_back(l);
+  return out;
+}
 
 void loop_forward_dynamics(const Model& model, Data& data, const std::vector<LoopConstraint>& loops, const VecX& v,
                            const VecX& tau, LoopData& ld, double stabilize) {
@@ -245,7 +277,7 @@ VecX loop_inverse_dynamics(const Model& model, Data& data, const std::vector<Loo
     cod.setThreshold(kLoopRankTolerance);
     if (cod.rank() < Eigen::Index(passive.size()))
       throw Error("loop_inverse_dynamics: the loops leave " + std::to_string(passive.size() - size_t(cod.rank())) +
-                  " passive DOF(s) free: give more actuated DOFs or more loops");
+                  " passive DOF(s) free: too few actuated DOFs or loops, or a singular configuration (a dead point)");
     const VecX qp = cod.solve(VecX(-ld.kdot - ld.K * qa));
     for (size_t j = 0; j < passive.size(); ++j) qdd(passive[j]) = qp(Eigen::Index(j));
   }

@@ -227,7 +227,9 @@ void print_summary(const Scenario& sc, const SimulationSettings& s, const RunSum
                    const std::string& out) {
   const std::string method(to_string(s.method));
   std::printf("scenario               %s\n", sc.path.c_str());
-  const std::string newton(to_string(s.newton)), jacobian(to_string(s.jacobian));
+  const std::string newton(to_string(s.newton));
+  // with closed loops the multipliers are not differentiated: ∂f/∂y by differences (system.hpp)
+  const std::string jacobian = sc.inputs.loops.empty() ? std::string(to_string(s.jacobian)) : "difference";
   if (s.method == Method::ImplicitMidpoint)
     std::printf("method                 %s (dt %g s, %s Newton, %s Jacobian)\n", method.c_str(), s.dt, newton.c_str(),
                 jacobian.c_str());

@@ -3,6 +3,7 @@
 
 #include "soadyn/io/table_file.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -209,6 +210,7 @@ void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, 
           if (m.nv_i[i] == 1 && table.column(m.joint_names[size_t(i)]) >= 0) {
             c.targets[size_t(m.idx_v[i])].table = tables.spline(t, f + ".targets", m.joint_names[size_t(i)], nullptr);
             ++found;
+            c.actuated.push_back(m.idx_v[i]);
           }
         if (!found)
           rd.fail(t, f + ".targets", table.path + " has no column named as a joint of the model");
@@ -218,6 +220,7 @@ void read_controllers(const Reader& rd, const YAML::Node& list, const Model& m, 
           const int i = one_dof_joint(rd, m, it->first, f + ".targets");
           c.targets[size_t(m.idx_v[i])] =
               read_target(rd, it->second, f + ".targets." + it->first.Scalar(), m.joint_names[size_t(i)], tables);
+          if (std::find(c.actuated.begin(), c.actuated.end(), m.idx_v[i]) == c.actuated.end()) c.actuated.push_back(m.idx_v[i]);
         }
       }
     } else {

@@ -406,7 +406,12 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   if (root["prescribed"])
     scenario_detail::read_prescribed(rd, root["prescribed"], root["initial"], sc.model, sc.q0, sc.v0, sc.inputs.prescribed);
   if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.q0, sc.inputs);
-  if (root["loops"]) scenario_detail::read_loops(rd, root["loops"], root["initial"], sc.model, sc.q0, sc.v0, sc.inputs.loops);
+  if (root["loops"]) {
+    const VecX q_file = sc.q0, v_file = sc.v0;
+    scenario_detail::read_loops(rd, root["loops"], root["initial"], sc.model, sc.q0, sc.v0, sc.inputs.loops);
+    if (std::string note = scenario_detail::assembly_note(sc.model, q_file, v_file, sc.q0, sc.v0); !note.empty())
+      sc.notes.push_back(std::move(note));
+  }
   sc.files.insert(sc.files.end(), rd.files_read.begin(), rd.files_read.end());
   scenario_detail::record_locations(rd, root, sc);
   return sc;

@@ -4,6 +4,7 @@
 
 #include "soadyn/algorithm/frames.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/multibody/configuration.hpp"
 #include "soadyn/sim/scenario.hpp"
 
 #include <Eigen/Geometry>
@@ -128,6 +129,19 @@ void read_loops(const Reader& rd, const YAML::Node& n, const YAML::Node& initial
     const VecX correction = Eigen::CompleteOrthogonalDecomposition<MatX>(ld.K(Eigen::all, moving)).solve(VecX(ld.K * v0));
     for (size_t j = 0; j < moving.size(); ++j) v0(moving[j]) -= correction(Eigen::Index(j));
   }
+}
+
+std::string assembly_note(const Model& m, const VecX& q_file, const VecX& v_file, const VecX& q0, const VecX& v0) {
+  // the largest move of each, δ = q0 ⊖ q_file along the tangent, and its joint
+  const VecX dq = difference(m, q_file, q0), dv = v0 - v_file;
+  Eigen::Index kq = 0, kv = 0;
+  const double mq = dq.size() ? dq.cwiseAbs().maxCoeff(&kq) : 0.0, mv = dv.size() ? dv.cwiseAbs().maxCoeff(&kv) : 0.0;
+  if (mq <= 1e-12 && mv <= 1e-12) return "";
+  const auto joint_of = [&](Eigen::Index k) { return m.joint_names[size_t(m.dof_body[size_t(k)])]; };
+  std::string out = "loops: the initial state was assembled onto the loops";
+  if (mq > 1e-12) out += ": q moved by up to " + Reader::show_number(mq) + " (joint '" + joint_of(kq) + "')";
+  if (mv > 1e-12) out += std::string(mq > 1e-12 ? ", " : ": ") + "v by up to " + Reader::show_number(mv) + " (joint '" + joint_of(kv) + "')";
+  return out + "; the joints initial.q and initial.qd name were held";
 }
 
 }  // namespace soadyn::scenario_detail

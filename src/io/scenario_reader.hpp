@@ -172,6 +172,9 @@ void read_prescribed(const Reader& rd, const YAML::Node& n, const YAML::Node& in
 // projected onto K v = 0, its named joints held)
 void read_loops(const Reader& rd, const YAML::Node& n, const YAML::Node& initial, const Model& m, VecX& q0, VecX& v0,
                 std::vector<LoopConstraint>& out);
+// what the assembly did to the file's initial state (q_file, v_file → q0, v0), in one line for the
+// run to say ("" when it moved nothing)
+std::string assembly_note(const Model& m, const VecX& q_file, const VecX& v_file, const VecX& q0, const VecX& v0);
 
 // scenario_sensitivity.cpp: `simulation: sensitivities: {initial_state, parameters}`, the bodies
 // checked against the model's

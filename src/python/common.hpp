@@ -102,5 +102,6 @@ void bind_adjoint(py::module_& m);  // Cost, _tracking_cost, _gradient (adjoint.
 void bind_pickle(py::module_& m);  // after bind_model: pickle and deepcopy of Model and Data (pickle.cpp)
 void bind_identify(py::module_& m);  // soadyn._identify (identify.cpp)
 void bind_run_file(py::module_& m);  // soadyn._read_run_file (run_file.cpp), behind read_log
+void bind_loops(py::module_& m);  // after bind_model: Scenario.loop_rows, loop_forward_dynamics, loop_inverse_dynamics (loops.cpp)
 
 }  // namespace soadyn::python

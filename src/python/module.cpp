@@ -218,4 +218,5 @@ PYBIND11_MODULE(_soadyn, m) {
   sp::bind_pickle(m);
   sp::bind_identify(m);
   sp::bind_run_file(m);
+  sp::bind_loops(m);
 }

@@ -3,17 +3,22 @@
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 
+#include <Eigen/QR>
+
 #include <algorithm>
 
 namespace soadyn {
 
-BuiltinControllers::BuiltinControllers(const Model& model, std::vector<ControllerInput> controllers)
+BuiltinControllers::BuiltinControllers(const Model& model, std::vector<ControllerInput> controllers,
+                                       const std::vector<LoopConstraint>& loops)
     : model_(model),
       controllers_(std::move(controllers)),
       data_(model),
       zero_(VecX::Zero(model.nv)),
       a_(VecX::Zero(model.nv)),
-      part_(VecX::Zero(model.nv)) {
+      part_(VecX::Zero(model.nv)),
+      loops_(loops),
+      loop_data_(model, loops) {
   for (const ControllerInput& c : controllers_) {
     VecX b = VecX::Constant(model.nv, c.max_torque);
     if (c.at_effort)
@@ -40,6 +45,14 @@ void BuiltinControllers::operator()(double t, const VecX& q, const VecX& v, Eige
         update_velocities(model_, data_, zero_);
         inverse_dynamics(model_, data_, zero_);
         part_ = data_.tau;
+        if (!loops_.empty()) {
+          // less what the loops carry: τ = g − Kᵀ λ, λ of least squares
+          loop_rows(model_, data_, loops_, loop_data_);
+          const MatX Kt = loop_data_.K.transpose();
+          Eigen::CompleteOrthogonalDecomposition<MatX> cod(Kt);
+          cod.setThreshold(kLoopRankTolerance);
+          part_ -= Kt * cod.solve(part_);
+        }
         break;
       case Kind::ComputedTorque: {
         // τ = 𝓜(q) (q̈_d + K_d ė + K_p e) + bias(q, q̇) by inverse dynamics at the commanded q̈
@@ -50,8 +63,15 @@ void BuiltinControllers::operator()(double t, const VecX& q, const VecX& v, Eige
         }
         update_kinematics(model_, data_, q);
         update_velocities(model_, data_, v);
-        inverse_dynamics(model_, data_, a_);
-        part_ = data_.tau;
+        if (loops_.empty()) {
+          inverse_dynamics(model_, data_, a_);
+          part_ = data_.tau;
+        } else {
+          // the actuators' q̈ commanded, the passive DOFs' from the loops: τ on the actuators
+          for (int k = 0; k < model_.nv; ++k)
+            if (std::find(c.actuated.begin(), c.actuated.end(), k) == c.actuated.end()) a_(k) = 0.0;
+          part_ = loop_inverse_dynamics(model_, data_, loops_, c.actuated, a_, loop_data_);
+        }
         break;
       }
     }

@@ -1,6 +1,8 @@
 // check_run (simulate.hpp): what a run refuses before any output, and what it warns of.
 #include "soadyn/sim/simulate.hpp"
 
+#include "soadyn/algorithm/kinematics.hpp"
+#include "soadyn/algorithm/loops.hpp"
 #include "soadyn/sim/sensitivity.hpp"
 #include "soadyn/multibody/text.hpp"
 
@@ -109,10 +111,11 @@ void check_prescribed(const Scenario& sc, const SimulationSettings& s) {
 }
 
 // closed loops (Inputs::loops): their bodies, and the features that do not take them yet, each
-// refused in one line at the scenario's loops: (or the setting's line)
-void check_loops(const Scenario& sc, const SimulationSettings& s) {
+// refused in one line at the scenario's loops: (or the setting's line); a start at a singular
+// configuration refused, and rows that depend on the others said once
+std::vector<std::string> check_loops(const Scenario& sc, const SimulationSettings& s) {
   const std::vector<LoopConstraint>& loops = sc.inputs.loops;
-  if (loops.empty()) return;
+  if (loops.empty()) return {};
   const std::string scene = sc.path.empty() ? "" : sc.path + ": ";
   const auto it = sc.locations.find("loops");
   const std::string where = it == sc.locations.end() ? scene : it->second + ": ";
@@ -130,6 +133,36 @@ void check_loops(const Scenario& sc, const SimulationSettings& s) {
   if (s.limits && m.has_limits()) refuse("limits: true");
   if (s.sensitivities.any()) refuse("simulation.sensitivities");
   if (s.method == Method::SymplecticEuler) refuse("symplectic-euler (use rk4, implicit-midpoint or a CVODE method)");
+  // the rows at the initial state: A = K 𝓜⁻¹ Kᵀ's rank and margin (loops.hpp)
+  if (sc.q0.size() != m.nq || sc.v0.size() != m.nv || !sc.q0.allFinite() || !sc.v0.allFinite()) return {};
+  Data d(m);
+  LoopData ld(m, loops);
+  update_kinematics(m, d, sc.q0);
+  update_velocities(m, d, sc.v0);
+  loop_forward_dynamics(m, d, loops, sc.v0, VecX::Zero(m.nv), ld);
+  if (ld.margin < kLoopSingular)
+    throw Error(where + "loops: the initial state is at a singular configuration of the loops (a dead point: their rows' margin " +
+                short_number(ld.margin) + "): start the mechanism off it");
+  // computed torque actuates the joints its targets name: they must determine the rest
+  for (size_t i = 0; i < sc.inputs.controllers.size(); ++i) {
+    const ControllerInput& c = sc.inputs.controllers[i];
+    if (c.kind != ControllerInput::Kind::ComputedTorque) continue;
+    const std::string f = "inputs.controllers[" + std::to_string(i) + "]";
+    if (c.actuated.empty())
+      throw Error(where + f + ": with closed loops, computed_torque actuates the joints its targets name: name them");
+    VecX qdd = VecX::Zero(m.nv);
+    try {
+      loop_inverse_dynamics(m, d, loops, c.actuated, qdd, ld);
+    } catch (const Error& e) {
+      throw Error(where + f + ": " + e.what());
+    }
+  }
+  std::vector<std::string> notes = sc.notes;
+  if (ld.rank == ld.m) return notes;
+  notes.push_back("loops: " + std::to_string(ld.m) + " constraint rows of rank " + std::to_string(ld.rank) + ": " +
+          std::to_string(ld.m - ld.rank) + " depend on the others (a planar mechanism's out-of-plane rows, say); " +
+          "the loop forces are the ones of minimum norm");
+  return notes;
 }
 
 // what the settings allow but make a run other than written: a tick off the steps, a step longer
@@ -167,8 +200,9 @@ std::vector<std::string> check_run(const Scenario& sc, const SimulationSettings&
   if (const std::string p = control_ticks_problem(s.t_end, s.control_dt); !p.empty()) throw Error("simulation settings: " + p);
   check_sensitivities(sc, s, false);
   check_prescribed(sc, s);
-  check_loops(sc, s);
-  return run_warnings(s);
+  std::vector<std::string> warnings = check_loops(sc, s);
+  for (std::string& w : run_warnings(s)) warnings.push_back(std::move(w));
+  return warnings;
 }
 
 }  // namespace soadyn

@@ -3,7 +3,11 @@
 
 #include "stiffness.hpp"
 
+#include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/multibody/text.hpp"
+
+#include <Eigen/LU>
+#include <Eigen/QR>
 
 #include <algorithm>
 #include <cmath>
@@ -196,6 +200,48 @@ void Scheduler::at_roots(double t, VecX& y, const std::vector<int>& which) {
       if (r >= lo && r < hi) which_.push_back(r - lo);
     if (!which_.empty()) report(kinds_[j]->at_roots(t, y, which_));
   }
+}
+
+LoopSingularity::LoopSingularity(System& sys)
+    : sys_(sys), data_(sys.model), ld_(sys.model, sys.inputs.loops), ydot_(sys.size()) {}
+
+void LoopSingularity::rows_at(const double* y) {
+  // the state's q is the model's (loops and prescribed motion are not taken together)
+  update_kinematics(sys_.model, data_, Eigen::Map<const VecX>(y, sys_.model.nq));
+  update_velocities(sys_.model, data_, VecX::Zero(sys_.model.nv));
+  loop_rows(sys_.model, data_, sys_.inputs.loops, ld_);
+}
+
+void LoopSingularity::choose(const double* y) {
+  rows_at(y);
+  // the independent rows by pivoted QR of Kᵀ, then as many columns by pivoted QR of those rows
+  Eigen::ColPivHouseholderQR<MatX> by_rows(ld_.K.transpose());
+  by_rows.setThreshold(kLoopRankTolerance);
+  const int r = int(by_rows.rank());
+  rows_.assign(by_rows.colsPermutation().indices().data(), by_rows.colsPermutation().indices().data() + r);
+  const MatX Kr = ld_.K(rows_, Eigen::all);
+  Eigen::ColPivHouseholderQR<MatX> by_cols(Kr);
+  cols_.assign(by_cols.colsPermutation().indices().data(), by_cols.colsPermutation().indices().data() + r);
+}
+
+void LoopSingularity::roots(double, const double* y, double* g) {
+  rows_at(y);
+  // det K[r, c] over the rows' norms: scale-free, its sign the block's orientation
+  const MatX block = ld_.K(rows_, cols_);
+  double scale = 1.0;
+  for (const int i : rows_) scale *= std::max(ld_.K.row(i).norm(), 1e-300);
+  g[0] = rows_.empty() ? 1.0 : block.determinant() / scale;
+}
+
+std::vector<LimitEvent> LoopSingularity::start(double, VecX& y) {
+  choose(y.data());
+  return {};
+}
+
+std::vector<LimitEvent> LoopSingularity::at_roots(double t, VecX& y, const std::vector<int>&) {
+  sys_.rhs(t, y.data(), ydot_.data());  // a dead point: its check throws, naming t and the loop
+  choose(y.data());                     // else another block serves from here
+  return {};
 }
 
 void Scheduler::report(const std::vector<LimitEvent>& events) {

@@ -125,6 +125,33 @@ class LimitEvents : public EventKind {
   System& sys_;
 };
 
+// A dead point of the closed loops (loops.hpp) as an event, for the methods that locate events
+// (CVODE): g = det K[r, c] / Π |K[r_i, :]|, the square block of K's rows r and columns c (as many
+// as A's rank, picked by pivoted QR: the best-conditioned block) chosen at the start and again at
+// each root.  Its sign changes where that block turns singular: at a dead point, where every
+// such block does (K loses rank: at the root, located to CVODE's precision, System::rhs's check
+// stops the run naming t and the loop), or where another block would serve (picked there, the
+// run goes on).  Without it the steps stride over a dead point (A's margin falls as the square of
+// the distance to it).
+class LoopSingularity : public EventKind {
+ public:
+  explicit LoopSingularity(System& sys);
+  int count() const override { return 1; }
+  void roots(double t, const double* y, double* g) override;
+  std::vector<LimitEvent> start(double t, VecX& y) override;
+  std::vector<LimitEvent> at_roots(double t, VecX& y, const std::vector<int>& which) override;
+  double energy_lost() const override { return 0.0; }
+
+ private:
+  void rows_at(const double* y);  // K at y's q into ld_
+  void choose(const double* y);   // rows_ and cols_ at y
+  System& sys_;
+  Data data_;
+  LoopData ld_;
+  std::vector<int> rows_, cols_;
+  VecX ydot_;
+};
+
 // The run's schedule: the output grid (outputs every output_interval, the last at t_end), the
 // control ticks of a sampled controller (τ_c(t_k, q, v) held in System::control from tick
 // k = t / control_dt on), the corners of prescribed motions and the events of its event kinds,

@@ -119,7 +119,7 @@ std::string at_time(double t) {
 
 // the control law: the scenario's built-in controllers and the caller's, summed
 ControlFunction control_law(const Scenario& sc, std::optional<BuiltinControllers>& builtin, ControlFunction controller) {
-  if (!sc.inputs.controllers.empty()) builtin.emplace(sc.model, sc.inputs.controllers);
+  if (!sc.inputs.controllers.empty()) builtin.emplace(sc.model, sc.inputs.controllers, sc.inputs.loops);
   return sum_controllers({builtin ? ControlFunction(std::ref(*builtin)) : ControlFunction{}, std::move(controller)},
                          sc.model.nv);
 }
@@ -158,6 +158,7 @@ struct Run {
   bool sampled;
   std::optional<JointLimits> limits;
   std::optional<LimitEvents> limit_events;
+  std::optional<LoopSingularity> loop_singularity;
   double t = 0.0;
   VecX y, y0;
   std::unique_ptr<Integrator> integrator;
@@ -191,6 +192,10 @@ Run::Run(const Scenario& sc, const SimulationSettings& s, ControlFunction contro
     scheduler.add(*limit_events);
   } else if (m.has_limits()) {
     watch.emplace(m);
+  }
+  if (sys.has_loops() && !is_fixed_step(s.method)) {  // dead points located as events by CVODE
+    loop_singularity.emplace(sys);
+    scheduler.add(*loop_singularity);
   }
   sys.normalize(y.head(sys.nq_state()));
   if (s.sensitivities.any()) {

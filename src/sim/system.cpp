@@ -5,8 +5,10 @@
 #include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/multibody/configuration.hpp"
 #include "soadyn/sim/system.hpp"
+#include "soadyn/sim/integrators.hpp"
 
 #include <cmath>
+#include <sstream>
 #include <string>
 
 namespace soadyn {
@@ -120,9 +122,10 @@ void System::rhs(double t, const double* y, double* ydot) {
     eval_y_ = Eigen::Map<const VecX>(y, size());
     return;
   }
-  if (has_loops())
+  if (has_loops()) {
     loop_forward_dynamics(model, data, inputs.loops, v, tau, loops_);  // the loops' multipliers with q̈
-  else
+    check_loop_rank(t);
+  } else
     forward_dynamics(model, data, tau, method);
   if (constraint) constraint->constrain(*this);  // held DOFs: their constraint forces
   model.qdot(q, v, qd);
@@ -161,6 +164,29 @@ void System::rhs_prescribed(double t, double* ydot) {
   ydot[w] = p.inputs + controller;
   ydot[w + 1] = p.dissipated;
   ydot[w + 2] = held;
+}
+
+void System::check_loop_rank(double t) {
+  if (loop_first_rank_ < 0) {
+    loop_first_rank_ = loops_.rank;
+    loop_block_rank_ = loop_ranks(loops_, int(inputs.loops.size()));
+  }
+  if (loops_.rank >= loop_first_rank_ && loops_.margin >= kLoopSingular) return;
+  // a dead point: the rows that held the motion no longer determine it
+  std::string names;
+  const std::vector<int> which = singular_loops(loops_, loop_block_rank_);
+  for (size_t k = 0; k < which.size(); ++k)
+    names += std::string(k == 0 ? "" : k + 1 == which.size() ? " and " : ", ") + "'" + inputs.loops[size_t(which[k])].name + "'";
+  std::ostringstream os;
+  os << "closed loop" << (which.size() > 1 ? "s " : " ") << names << " at a singular configuration (a dead point) at t = "
+     << t << " s: " << (which.size() > 1 ? "their" : "its") << " constraint rows lose rank (" << loop_first_rank_
+     << " at the start, ";
+  if (loops_.rank < loop_first_rank_)
+    os << loops_.rank << " here";
+  else
+    os << "here the smallest pivot " << loops_.margin << " of the largest";
+  os << "), so the loops no longer determine the motion";
+  throw SimulationError(os.str(), t);
 }
 
 void System::dynamics(const VecX& tau_in) {

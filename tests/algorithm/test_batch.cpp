@@ -233,9 +233,17 @@ TEST(Batch, SmallBatchStaysOnTheCallingThread) {
   });
   EXPECT_EQ(other.load(), 0);
   pool.worth_a_thread = 0.0;
-  pool.run(kStates, [&](batch::Pool::Worker&, long, long) {
-    if (std::this_thread::get_id() != caller) ++other;
-    std::this_thread::sleep_for(std::chrono::microseconds(200));  // long enough for the other to start
+  std::atomic<bool> waited{false};
+  pool.run(kStates, [&](batch::Pool::Worker&, long begin, long) {
+    if (std::this_thread::get_id() != caller) {
+      ++other;
+      return;
+    }
+    std::this_thread::sleep_for(std::chrono::microseconds(200));  // the probe (from state 0): worth a thread
+    // the caller's first share after the probe waits (up to 10 s) for the other thread to take
+    // one: on a loaded machine it may start late, and a fixed pause lost that race
+    if (begin > 0 && !waited.exchange(true))
+      for (int i = 0; i < 100000 && other.load() == 0; ++i) std::this_thread::sleep_for(std::chrono::microseconds(100));
   });
   EXPECT_GT(other.load(), 0);
 }

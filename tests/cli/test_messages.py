@@ -164,6 +164,51 @@ class Messages(unittest.TestCase):
             self.assertIn("l.yaml:", err)
             self.assertFalse(os.path.exists(os.path.join(self.dir, "out.h5")))
 
+    def test_a_dead_point_stops_the_run_with_exit_3_naming_t_and_the_loop(self):
+        """a parallelogram four-bar (crank = rocker, coupler = ground) turning at 2 rad/s from π/2
+        reaches its change point, every link on the ground line, at t = π/4: the run stops there with
+        exit 3 and one line naming the loop and t, its file keeping the rows before it (never NaN)"""
+        text = """name: parallelogram
+bodies:
+  - name: crank
+    joint: {type: revolute, name: crank, axis: [0, 0, 1]}
+    mass: 1.0
+    com: [0.15, 0, 0]
+    inertia: [0.001, 0.0075, 0.0075]
+  - name: coupler
+    parent: crank
+    joint: {type: revolute, name: coupler, axis: [0, 0, 1]}
+    origin: {xyz: [0.3, 0, 0]}
+    mass: 1.5
+    com: [0.45, 0, 0]
+    inertia: [0.001, 0.1, 0.1]
+  - name: rocker
+    joint: {type: revolute, name: rocker, axis: [0, 0, 1]}
+    origin: {xyz: [0.9, 0, 0]}
+    mass: 1.0
+    com: [0.15, 0, 0]
+    inertia: [0.001, 0.0075, 0.0075]
+loops:
+  - {name: closing, type: hinge, a: coupler, at_a: [0.9, 0, 0], b: rocker, at_b: [0.3, 0, 0]}
+initial:
+  q: {crank: 1.5707963267948966, coupler: -1.5707963267948966, rocker: 1.5707963267948966}
+  qd: {crank: 2.0}
+simulation: {t_end: 2.0, method: cvode-bdf, rtol: 1.0e-10, atol: 1.0e-12}
+"""
+        self.write("p.yaml", text)
+        p = subprocess.run([SOADYN, "run", "p.yaml", "-o", "out.h5", "--quiet"], capture_output=True, timeout=120, cwd=self.dir)
+        err = p.stderr.decode("utf-8")
+        self.assertEqual(p.returncode, 3, err[:500])
+        self.assertIn("closed loop 'closing' at a singular configuration (a dead point) at t = 0.78", err)
+        self.assertNotIn("nan", err.lower())
+        import h5py
+        import numpy as np
+        with h5py.File(os.path.join(self.dir, "out.h5"), "r") as f:
+            t = f["time"][:]
+            self.assertGreater(len(t), 10)
+            self.assertLess(t[-1], np.pi / 4 + 1e-6)
+            self.assertTrue(np.all(np.isfinite(f["/loops/force"][:])))
+
     def test_each_refused_combination_names_its_file_line_and_field(self):
         cases = [
             # a start beyond a joint's limit: at initial.q.J

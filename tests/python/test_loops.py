@@ -63,3 +63,44 @@ def test_a_pickled_scene_keeps_its_loops_and_its_prescribed_motion():
     a, b = soadyn.simulate(crane, t_end=2.0), soadyn.simulate(pickle.loads(pickle.dumps(crane)), t_end=2.0)
     assert b.prescribed_joints == ["trolley"]
     np.testing.assert_array_equal(a.prescribed_torque, b.prescribed_torque)
+
+
+DELTA = os.path.join(ROOT, "scenarios", "delta_robot.yaml")
+
+
+def test_the_delta_robots_motor_torques_by_constrained_inverse_dynamics():
+    """The Delta robot's three loops from Python: at states of a run, the motors' torques that
+    make the logged motion (loop_inverse_dynamics, the motors actuated) are those the run's
+    computed-torque controller applied; forward dynamics with the loops under them gives the motion
+    back, every joint's q̈, and the same loop forces"""
+    sc = soadyn.load_scenario(DELTA)
+    assert sc.loop_rows == [f"wrist{i}.{c}" for i in range(3) for c in "xyz"]
+    assert sc.loop_units == ["N"] * 9
+    with pytest.warns(RuntimeWarning, match="assembled onto the loops"):
+        traj = soadyn.simulate(sc, t_end=0.5)
+    assert traj.summary.completed, traj.summary.status
+    motors = ["motor0", "motor1", "motor2"]
+    dofs = [sc.model.joint_names.index(m) for m in motors]  # one DOF per body, in body order
+    for k in range(0, len(traj.t), 20):
+        q, v, qdd = traj.q[k], traj.v[k], traj.qdd[k]
+        wanted = np.zeros(sc.model.nv)
+        wanted[dofs] = qdd[dofs]
+        tau, lam, full = soadyn.loop_inverse_dynamics(sc, q, v, wanted, actuated=motors)
+        np.testing.assert_allclose(full, qdd, rtol=0, atol=1e-7 * max(1.0, abs(qdd).max()))
+        np.testing.assert_allclose(tau, traj.control[k], rtol=0, atol=1e-7 * max(1.0, abs(tau).max()))
+        assert abs(tau[dofs]).max() > 0.1 and np.count_nonzero(tau) == 3
+        back, lam2 = soadyn.loop_forward_dynamics(sc, q, v, tau)
+        np.testing.assert_allclose(back, qdd, rtol=0, atol=1e-7 * max(1.0, abs(qdd).max()))
+        np.testing.assert_allclose(lam2, lam, rtol=0, atol=1e-7 * max(1.0, abs(lam).max()))
+
+
+def test_constrained_inverse_dynamics_refuses_too_few_actuators_and_a_scene_without_loops():
+    sc = soadyn.load_scenario(DELTA)
+    traj = soadyn.simulate(sc, t_end=0.01)
+    with pytest.raises(soadyn.Error, match="passive DOF"):
+        soadyn.loop_inverse_dynamics(sc, traj.q[0], traj.v[0], np.zeros(sc.model.nv), actuated=["motor0"])
+    with pytest.raises(KeyError, match="motr0"):
+        soadyn.loop_inverse_dynamics(sc, traj.q[0], traj.v[0], np.zeros(sc.model.nv), actuated=["motr0"])
+    cart = soadyn.load_scenario(os.path.join(ROOT, "scenarios", "pendulum_on_cart.yaml"))
+    with pytest.raises(soadyn.Error, match="has no closed loops"):
+        soadyn.loop_forward_dynamics(cart, cart.q0, cart.v0)

@@ -173,6 +173,26 @@ def main():
             if ratios:
                 lines.append(f"- {group}: hybrid dynamics with a {part} of the joints prescribed, "
                              f"{min(ratios):.2f}–{max(ratios):.2f} of the O(N) forward dynamics' time (rhs_on)")
+        # closed loops: the chain closed by a point loop at its tip against the open chain, per N
+        h, on = series.get(f"{group}/rhs_loop_tip", {}), series.get(f"{group}/rhs_on", {})
+        ratios = {n: h[n] / on[n] for n in sorted(set(h) & set(on)) if on[n] > 0}
+        if ratios:
+            lines.append(f"- {group}: closed by one point loop at the tip (3 rows), " +
+                         ", ".join(f"N={n} {r:.2f}" for n, r in ratios.items()) + " × the open tree's forward dynamics (rhs_on)")
+    # the closed-loop scenes: constrained forward dynamics against the same tree without its loops
+    scenes = [("four_bar", "four-bar (1 hinge loop, 5 rows)"), ("delta", "Delta robot (3 point loops, 9 rows)")]
+    rows = []
+    for key, title in scenes:
+        tree, closed = series.get(f"loops/{key}_tree", {}), series.get(f"loops/{key}_closed", {})
+        dense, inverse = series.get(f"loops/{key}_dense", {}), series.get(f"loops/{key}_inverse", {})
+        for n in sorted(set(tree) & set(closed)):
+            extra = [f"{d[n]:.0f}" if n in d else "" for d in (dense, inverse)]
+            rows.append(f"| {title} | {n} | {tree[n]:.0f} | {closed[n]:.0f} | {closed[n] / tree[n]:.2f} | "
+                        f"{extra[0]} | {extra[1]} |")
+    if rows:
+        lines += ["", "## Closed loops: ns per right-hand side", "",
+                  "| scene | bodies | tree alone | with its loops | ratio | dense saddle point | constrained inverse dynamics |",
+                  "|---|---|---|---|---|---|---|"] + rows
     lines.append("")
     with open(os.path.join(args.out, "bench.md"), "w") as f:
         f.write("\n".join(lines))

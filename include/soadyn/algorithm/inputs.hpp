@@ -80,6 +80,8 @@ struct ControllerInput {
   enum class Kind { Pd, GravityCompensation, ComputedTorque } kind = Kind::Pd;
   std::vector<int> dofs, coords;    // pd: its joint; computed_torque: every DOF (coords: into q)
   std::vector<JointTarget> targets; // one per dof (pd, computed_torque)
+  std::vector<int> actuated;        // computed_torque: the DOFs its targets name; with closed loops the
+                                    // actuators (the rest passive, moved by the loops)
   double kp = 0.0, kd = 0.0;        // 1/s², 1/s for computed_torque; N·m/rad, N·m·s/rad for pd
   double max_torque = std::numeric_limits<double>::infinity();
   bool at_effort = false;

@@ -62,6 +62,8 @@ struct LoopData {
   MatX MinvKt;       // nv × m: 𝓜⁻¹ Kᵀ
   MatX A;            // m × m: K 𝓜⁻¹ Kᵀ
   int rank = 0;      // A's rank at the last solve
+  double margin = 1; // A's smallest kept pivot over its largest at the last solve (1 with no rows):
+                     // it falls towards 0 as the loops near a singular configuration (a dead point)
   std::vector<int> row_loop;  // the loop of each row
   MatX J_a, J_b, work;        // 6 × nv each; articulated_solve's workspace
 };
@@ -77,6 +79,19 @@ inline constexpr double kLoopClosure = 1e-12;
 // The rank tolerance: singular values of A below this times the largest are dropped (their
 // directions take no force: dependent rows)
 inline constexpr double kLoopRankTolerance = 1e-10;
+
+// A run stops at a singular configuration of its loops (a dead point, where their rows lose rank
+// and the motion is not determined by them) when A's margin falls below this or its rank below the
+// run's first (LoopData::margin; A's pivots go as the square of the distance to the dead point, so
+// this is about 1e-4 rad from it)
+inline constexpr double kLoopSingular = 1e-8;
+
+// The loops whose own rows are singular at the last solve (A's diagonal block of each alone below
+// the rank `first_rank` gave them, or its margin below kLoopSingular); every loop when no one
+// alone is (the loops together are)
+std::vector<int> singular_loops(const LoopData& ld, const std::vector<int>& first_rank);
+// each loop's own rank (its diagonal block of A) at the last solve: singular_loops' reference
+std::vector<int> loop_ranks(const LoopData& ld, int nloops);
 
 // [kin][vel] q̈ of the tree closed by the loops under τ at velocity v (the one [vel] holds), into
 // data.qdd; λ into ld.lambda.  Uses forward_dynamics' articulated-body route and leaves its factor

@@ -10,6 +10,7 @@
 
 #include "soadyn/multibody/data.hpp"
 #include "soadyn/algorithm/inputs.hpp"
+#include "soadyn/algorithm/loops.hpp"
 #include "soadyn/multibody/model.hpp"
 
 #include <functional>
@@ -23,9 +24,16 @@ using ControlFunction = std::function<void(double t, const VecX& q, const VecX& 
 // The built-in controllers of ControllerInput, summed, each one's torque saturated.  Owns the Data
 // its inverse dynamics needs (gravity compensation, computed torque), so it never touches the
 // integrator's; one instance per run (not thread-safe).
+//
+// With closed loops (`loops`, loops.hpp) the inverse dynamics is the loops': computed torque
+// actuates the DOFs its targets name (ControllerInput::actuated), their q̈ commanded, the passive
+// DOFs' q̈ from the loops (K q̈ = −k̇), τ from loop_inverse_dynamics (zero on the passive DOFs);
+// gravity compensation is the joint torque of least norm that holds the mechanism still,
+// τ = g − Kᵀ λ with λ = argmin |g − Kᵀ λ| (gravity less what the loops carry).
 class BuiltinControllers {
  public:
-  BuiltinControllers(const Model& model, std::vector<ControllerInput> controllers);
+  BuiltinControllers(const Model& model, std::vector<ControllerInput> controllers,
+                     const std::vector<LoopConstraint>& loops = {});
   void operator()(double t, const VecX& q, const VecX& v, Eigen::Ref<VecX> tau);
 
  private:
@@ -34,6 +42,8 @@ class BuiltinControllers {
   std::vector<VecX> bound_;  // each controller's clamp, per DOF: max_torque, and the effort if asked
   Data data_;
   VecX zero_, a_, part_;
+  std::vector<LoopConstraint> loops_;
+  LoopData loop_data_;
 };
 
 // A function calling each of `parts` (the non-empty ones) and summing their torques; empty when all are.

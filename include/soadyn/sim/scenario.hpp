@@ -37,6 +37,9 @@ struct Scenario {
   // (simulation.limits, simulation.sensitivities, initial.q.J, limits.J): check_run names it when
   // a setting, however it was given (the file, --method, Python), makes the run refuse
   std::map<std::string, std::string> locations;
+  // what reading the file did that a run says before it starts (check_run's warnings, once the run
+  // is not refused): the initial state assembled onto the loops
+  std::vector<std::string> notes;
 };
 
 }  // namespace soadyn

@@ -49,6 +49,9 @@ class System {
   // last evaluation in loop_data()
   bool has_loops() const { return loops_.m > 0; }
   const LoopData& loop_data() const { return loops_; }
+  // the loops' dependent rows at the first evaluation (m − rank of A; a planar four-bar closed by
+  // a hinge: 3): λ is of minimum norm along them.  -1 before the first evaluation.
+  int loop_dependent_rows() const { return loop_first_rank_ < 0 ? -1 : loops_.m - loop_first_rank_; }
   // y onto the manifold the state lives on: the quaternions unit and, with loops, q onto φ(q) = 0
   // (Gauss–Newton along the tangent, steps of minimum norm, to kLoopClosure) and v onto K v = 0
   // (v − K⁺ K v).  False when the closure is not reached in 20 iterations (a singular or
@@ -181,10 +184,15 @@ class System {
   // linearized_times' q̇ rows and δ = T(q) S_q when a joint holds a quaternion
   void linearized_tangent_rows(const Eigen::Ref<const MatX>& S, Eigen::Ref<MatX>& out);
   void rhs_prescribed(double t, double* ydot);
+  // after each loop solve: the loops' rank and margin against the first evaluation's; a
+  // SimulationError naming t and the loop at a singular configuration (kLoopSingular)
+  void check_loop_rank(double t);
   void jacobian_prescribed(double t, Eigen::Ref<MatX> J);
   void model_times(Eigen::Ref<const MatX> S, Eigen::Ref<MatX> out, const MatX* forces);
   PrescribedJoints locked_;
   LoopData loops_;
+  int loop_first_rank_ = -1;            // A's rank at the first evaluation
+  std::vector<int> loop_block_rank_;    // each loop's own rank there (singular_loops)
   Eigen::CompleteOrthogonalDecomposition<MatX> projector_;  // K's at the last projection
   int nq_state_, nv_state_;
   std::vector<int> q_index_, v_index_, quaternions_;

@@ -91,6 +91,7 @@ from ._soadyn import (centroidal_inertia, centroidal_momentum, centroidal_moment
                       operational_space_inertia, point_jacobian)
 from ._soadyn import (forward_dynamics_parameter_derivative, parameters, regressor,  # regressor.hpp
                       with_parameters)
+from ._soadyn import loop_forward_dynamics, loop_inverse_dynamics  # loops.hpp
 from . import _soadyn
 from ._soadyn import Cost, batch
 from ._trajectory import FramePoses, Gradient, RunSummary, Sensitivities, Trajectory, read_log, summary_from_dict
@@ -104,6 +105,7 @@ __all__ = [
     "com", "com_jacobian", "com_velocity", "coriolis_matrix", "frame_acceleration", "frame_jacobian",
     "frame_jacobian_dot_times_v", "frame_placement", "frame_velocity", "operational_space_inertia", "point_jacobian",
     "forward_dynamics_parameter_derivative", "parameters", "regressor", "with_parameters",
+    "loop_forward_dynamics", "loop_inverse_dynamics",
     "Cost", "Gradient", "gradient", "tracking_cost",
     "DYNAMICS", "JOINT_TYPES", "METHODS", "Data", "Error", "FramePoses", "Inputs", "Model", "RunSummary", "Scenario", "Sensitivities", "SimulationSettings", "Trajectory", "__version__",
     "bias", "id_derivatives", "fd_derivatives",  # deprecated: bias_forces, inverse_/forward_dynamics_derivatives
