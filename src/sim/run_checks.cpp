@@ -96,6 +96,12 @@ void check_prescribed(const Scenario& sc, const SimulationSettings& s) {
   for (const PrescribedInput& p : pres)
     if (p.body < 0 || p.body >= m.nbodies || m.nv_i[p.body] != 1 || m.nq_i[p.body] != 1)
       throw Error(scene + "prescribed: joint '" + p.joint + "' is not a 1-DOF joint of the model");
+  if (s.method == Method::Variational) {
+    const auto it = sc.locations.find("simulation.method");
+    throw Error((it == sc.locations.end() ? scene : it->second + ": ") +
+                "method: variational does not take prescribed motion yet; use symplectic-euler (symplectic, "
+                "no free or ball joints), rk4 or implicit-midpoint");
+  }
   if (s.limits && m.has_limits()) {
     for (const PrescribedInput& p : pres) {
       const int k = p.dof;
@@ -130,6 +136,7 @@ void check_loops(const Scenario& sc, const SimulationSettings& s) {
   if (s.limits && m.has_limits()) refuse("limits: true");
   if (s.sensitivities.any()) refuse("simulation.sensitivities");
   if (s.method == Method::SymplecticEuler) refuse("symplectic-euler (use rk4, implicit-midpoint or a CVODE method)");
+  if (s.method == Method::Variational) refuse("variational (use rk4, implicit-midpoint or a CVODE method)");
 }
 
 // what the settings allow but make a run other than written: a tick off the steps, a step longer
