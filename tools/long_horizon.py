@@ -2,7 +2,9 @@
 """The satellite over 1000 s (issue 61's table): for each method, the CPU time of the run, the largest
 |E(t) - E(0)| / |E(0)| and the largest |L(t) - L(0)| / |L(0)| (angular momentum about the inertial
 origin, the vector's change over its norm), each run by `soadyn run` (build/soadyn) and read back
-from its file.  Writes tools/results/long_horizon.md (a Markdown table) and prints it.
+from its file; then the CPU per step of variational against rk4 on the satellite and on the
+50-DOF humanoid (tools/humanoid_urdf.py, free root, a seeded random q̇, gravity, 0.5 s at 1 ms).
+Writes tools/results/long_horizon.md (Markdown tables) and prints it.
 
     tools/long_horizon.py [--t-end 1000] [--scene satellite_two_arrays] [--out tools/results/long_horizon.md]
 """
@@ -26,26 +28,64 @@ RUNS = [
     ("semi-implicit-euler, dt 0.01", "semi-implicit-euler", ["--dt", "0.01"]),
     ("variational, dt 0.1", "variational", ["--dt", "0.1"]),
     ("variational, dt 0.01", "variational", ["--dt", "0.01"]),
+    # the bus's own linear velocity zeroed: the satellite stays within ~10 m of the origin, where the
+    # algorithms' quantities about the origin carry less rounding
+    ("variational, dt 0.1, bus not translating", "variational",
+     ["--dt", "0.1", "--qd", "0.01,0.02,0.05,0,0,0,0.1,-0.05"]),
 ]
+
+
+def soadyn_run(model, out, method, t_end, output_dt, options):
+    """`soadyn run`: (CPU s, steps, Newton iterations, status) or (None, …, its last error line)"""
+    cmd = [SOADYN, "run", model, "-o", out, "--method", method, "--t-end", str(t_end), "--output-dt", str(output_dt),
+           "--log", "energy,momentum"] + options
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        return None, None, None, (p.stderr or p.stdout).strip().splitlines()[-1]
+    number = lambda name: float(re.search(name + r"\s+([0-9.eE+-]+)", p.stdout).group(1))
+    return (number("CPU time"), number("steps"), number("nonlinear iterations"),
+            re.search(r"status\s+(.*)", p.stdout).group(1))
 
 
 def run(scene, method, options, t_end):
     """(CPU s, max |ΔE|/|E0|, max |ΔL|/|L0|, the run's status line)"""
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "run.h5")
-        cmd = [SOADYN, "run", os.path.join(ROOT, "scenarios", scene + ".yaml"), "-o", out, "--method", method,
-               "--t-end", str(t_end), "--output-dt", "1", "--log", "energy,momentum"] + options
-        p = subprocess.run(cmd, capture_output=True, text=True)
-        if p.returncode != 0:
-            return None, None, None, (p.stderr or p.stdout).strip().splitlines()[-1]
-        cpu = float(re.search(r"CPU time\s+([0-9.eE+-]+)", p.stdout).group(1))
-        status = re.search(r"status\s+(.*)", p.stdout).group(1)
+        cpu, _, _, status = soadyn_run(os.path.join(ROOT, "scenarios", scene + ".yaml"), out, method, t_end, 1, options)
+        if cpu is None:
+            return None, None, None, status
         with h5py.File(out, "r") as f:
             E = np.asarray(f["/energy/total"][...]).ravel()
             L = np.asarray(f["/momentum/angular"][...]).reshape(-1, 3)
     dE = float(np.max(np.abs(E - E[0])) / abs(E[0]))
     dL = float(np.max(np.linalg.norm(L - L[0], axis=1)) / np.linalg.norm(L[0]))
     return cpu, dE, dL, status
+
+
+def step_costs():
+    """CPU per step, variational against rk4, on the satellite and the humanoid (one run each)"""
+    lines = ["", "CPU per step (one run each; Newton iterations per step for variational)", "",
+             "| model | nv | rk4 | variational | ratio | iterations |", "|---|---|---|---|---|---|"]
+    rng = np.random.default_rng(61)
+    with tempfile.TemporaryDirectory() as tmp:
+        urdf = os.path.join(tmp, "humanoid.urdf")
+        subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "tools", "humanoid_urdf.py"), "-o", urdf], check=True,
+                       capture_output=True)
+        qd = ",".join(f"{x:.3f}" for x in rng.uniform(-0.5, 0.5, 56))
+        cases = [("satellite_two_arrays (dt 0.1, 1000 s)", os.path.join(ROOT, "scenarios", "satellite_two_arrays.yaml"), 8,
+                  ["--dt", "0.1"], 1000.0),
+                 ("humanoid, free root (dt 1 ms, 0.5 s)", urdf, 56, ["--dt", "1e-3", "--free-root", "--qd", qd], 0.5)]
+        for label, model, nv, options, t_end in cases:
+            out = os.path.join(tmp, "run.h5")
+            cpu_rk, steps_rk, _, status_rk = soadyn_run(model, out, "rk4", t_end, t_end, options)
+            cpu_v, steps_v, it_v, status_v = soadyn_run(model, out, "variational", t_end, t_end, options)
+            if cpu_rk is None or cpu_v is None:
+                lines.append(f"| {label} | {nv} | {status_rk} | {status_v} | | |")
+            else:
+                a, b = cpu_rk / steps_rk * 1e6, cpu_v / steps_v * 1e6
+                lines.append(f"| {label} | {nv} | {a:.3g} µs | {b:.3g} µs | {b / a:.2g} | {it_v / steps_v:.2f} |")
+            print(lines[-1], flush=True)
+    return lines
 
 
 def main():
@@ -63,6 +103,7 @@ def main():
         else:
             lines.append(f"| {label} | {cpu * 1e3:.3g} ms | {dE:.2g} | {dL:.2g} |")
         print(lines[-1], flush=True)
+    lines += step_costs()
     with open(a.out, "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))
