@@ -33,7 +33,6 @@ void record_locations(const Reader& rd, const YAML::Node& root, Scenario& sc) {
       sc.locations[field] = rd.file + ":" + std::to_string(m.line + 1) + ":" + std::to_string(m.column + 1);
   };
   put("simulation.limits", find(root, {"simulation", "limits"}));
-  put("simulation.method", find(root, {"simulation", "method"}));
   put("simulation.sensitivities", find(root, {"simulation", "sensitivities"}));
   put("loops", find(root, {"loops"}));
   for (const std::string& joint : sc.model.joint_names) {
