@@ -251,7 +251,7 @@ const std::vector<IntegratorInfo>& integrators() {
        nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return make_implicit_midpoint(sys, s, t0); }},
       {Method::Variational, to_string(Method::Variational),
        "variational (midpoint discrete Lagrangian) on the group by Newton, order 2, symplectic, symmetric, "
-       "conserves momentum", true, 2, true, 8, nullptr,
+       "conserves momentum", true, 2, true, 16, nullptr,
        [](System& sys, S s, double t0, const VecX&) -> P { return make_variational(sys, s.dt, t0); }},
   };
   return table;
