@@ -4,9 +4,14 @@
 origin, the vector's change over its norm), each run by `soadyn run` (build/soadyn) and read back
 from its file; then the CPU per step of variational against rk4 on the satellite and on the
 50-DOF humanoid (tools/humanoid_urdf.py, free root, a seeded random q̇, gravity, 0.5 s at 1 ms).
-Writes tools/results/long_horizon.md (Markdown tables) and prints it.
+Writes tools/results/long_horizon.md (Markdown tables) and prints it.  With --chart, also
+tools/results/long_horizon.png: the energy error and the conserved momentum's error against time on
+log axes, 10⁶ steps of every fixed-step method that takes the scene (and CVODE Adams at rtol 1e-10),
+on the satellite (|ΔL|/|L|, 1000 s at 1 ms), the heavy top (|ΔL_z|/|L_z| about the vertical through
+the pivot, 100 s at 0.1 ms) and the double pendulum (energy only, 1000 s at 1 ms); its data in
+long_horizon.csv.  Several minutes of CPU.
 
-    tools/long_horizon.py [--t-end 1000] [--scene satellite_two_arrays] [--out tools/results/long_horizon.md]
+    tools/long_horizon.py [--t-end 1000] [--scene satellite_two_arrays] [--out tools/results/long_horizon.md] [--chart]
 """
 import argparse
 import os
@@ -88,11 +93,85 @@ def step_costs():
     return lines
 
 
+# the chart's scenes: (scene, dt, t_end, the momentum drawn: "L" the angular vector, "Lz" its z, None)
+CHART = [("satellite_two_arrays", 1e-3, 1000.0, "L"), ("heavy_top", 1e-4, 100.0, "Lz"),
+         ("double_pendulum", 1e-3, 1000.0, None)]
+CHART_METHODS = ["cvode-adams", "semi-implicit-euler", "symplectic-euler", "rk4", "implicit-midpoint", "variational"]
+
+
+def chart_runs(tmp):
+    """per scene and method: (t, |ΔE|/|E0|, momentum error or None, CPU s); a refused method is left out"""
+    data = {}
+    for scene, dt, t_end, which in CHART:
+        for method in CHART_METHODS:
+            out = os.path.join(tmp, f"{scene}-{method}.h5")
+            options = ["--rtol", "1e-10", "--atol", "1e-12"] if method.startswith("cvode") else ["--dt", repr(dt)]
+            cpu, _, _, status = soadyn_run(os.path.join(ROOT, "scenarios", scene + ".yaml"), out, method, t_end,
+                                           t_end / 1000, options)
+            if cpu is None:
+                print(f"{scene} {method}: {status}", flush=True)
+                continue
+            with h5py.File(out, "r") as f:
+                t = np.asarray(f["/time"][...]).ravel()
+                E = np.asarray(f["/energy/total"][...]).ravel()
+                L = np.asarray(f["/momentum/angular"][...]).reshape(-1, 3)
+            dE = np.abs(E - E[0]) / abs(E[0])
+            dL = None
+            if which == "L":
+                dL = np.linalg.norm(L - L[0], axis=1) / np.linalg.norm(L[0])
+            elif which == "Lz":
+                dL = np.abs(L[:, 2] - L[0, 2]) / abs(L[0, 2])
+            data[(scene, method)] = (t, dE, dL, cpu)
+            print(f"{scene} {method}: CPU {cpu:.3g} s, max |ΔE|/E {dE.max():.2g}"
+                  + ("" if dL is None else f", max momentum error {dL.max():.2g}"), flush=True)
+    return data
+
+
+def chart(png, csv_path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    with tempfile.TemporaryDirectory() as tmp:
+        data = chart_runs(tmp)
+    fig, axes = plt.subplots(2, len(CHART), figsize=(5 * len(CHART), 7.5), squeeze=False)
+    rows = ["scene,method,t,energy_error,momentum_error"]
+    for c, (scene, dt, t_end, which) in enumerate(CHART):
+        for method in CHART_METHODS:
+            if (scene, method) not in data:
+                continue
+            t, dE, dL, cpu = data[(scene, method)]
+            label = f"{method} ({'rtol 1e-10' if method.startswith('cvode') else f'dt {dt:g}'}, {cpu:.2g} s)"
+            keep = t > 0
+            color = f"C{CHART_METHODS.index(method)}"  # one colour per method on every panel
+            axes[0][c].loglog(t[keep], np.maximum(dE[keep], 1e-17), label=label, lw=1, color=color)
+            if dL is not None:
+                axes[1][c].loglog(t[keep], np.maximum(dL[keep], 1e-17), label=label, lw=1, color=color)
+            # the CSV: about 150 samples per curve, spaced evenly on the log axis
+            for k in np.unique(np.round(np.logspace(0, np.log10(len(t) - 1), 150)).astype(int)):
+                rows.append(f"{scene},{method},{t[k]:.9g},{dE[k]:.6g},{'' if dL is None else f'{dL[k]:.6g}'}")
+        axes[0][c].set_title(f"{scene}: 10⁶ steps")
+        axes[0][c].set_ylabel("|E(t) − E(0)| / |E(0)|")
+        axes[1][c].set_ylabel({"L": "|L(t) − L(0)| / |L(0)|", "Lz": "|L_z(t) − L_z(0)| / |L_z(0)|"}.get(which, ""))
+        if which is None:
+            axes[1][c].text(0.5, 0.5, "no momentum conserved (the pivot and gravity)", ha="center",
+                            transform=axes[1][c].transAxes)
+        for r in (0, 1):
+            axes[r][c].set_xlabel("t (s)")
+            axes[r][c].grid(True, which="major", alpha=0.3)
+        axes[0][c].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    with open(csv_path, "w") as f:
+        f.write("\n".join(rows) + "\n")
+    print(f"wrote {png} and {csv_path}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--t-end", type=float, default=1000.0)
     ap.add_argument("--scene", default="satellite_two_arrays")
     ap.add_argument("--out", default=os.path.join(ROOT, "tools", "results", "long_horizon.md"))
+    ap.add_argument("--chart", action="store_true", help="also the 10⁶-step chart beside --out (.png, .csv)")
     a = ap.parse_args()
     lines = [f"`{a.scene}` over {a.t_end:g} s (`tools/long_horizon.py`; CPU of one run on a shared 2-core machine)",
              "", "| method | CPU | max abs ΔE / E | max abs ΔL / L |", "|---|---|---|---|"]
@@ -107,6 +186,9 @@ def main():
     with open(a.out, "w") as f:
         f.write("\n".join(lines) + "\n")
     print("\n".join(lines))
+    if a.chart:
+        stem = os.path.splitext(a.out)[0]
+        chart(stem + ".png", stem + ".csv")
 
 
 if __name__ == "__main__":
