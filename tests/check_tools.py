@@ -198,7 +198,7 @@ def check_work_precision(out, t_end):
         # observed order: the log-log slope of error against step, over the points between the
         # reference's accuracy and 10 % (at least three points, else the method is not judged here)
         for m, p in (("euler", 1.0), ("semi-implicit-euler", 1.0), ("symplectic-euler", 1.0), ("rk4", 4.0), ("implicit-midpoint", 2.0),
-                     ("implicit-midpoint/simplified", 2.0)):
+                     ("implicit-midpoint/simplified", 2.0), ("variational", 2.0)):
             pts = [(number(r["dt"]), number(r["state_error"])) for r in by.get(m, [])]
             pts = [(h, e) for h, e in pts if 1e-10 <= e <= 0.1]
             if len(pts) < 3:

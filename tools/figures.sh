@@ -8,6 +8,8 @@
 #   gradient.md               a whole run's derivatives against a plain run (tools/bench/gradient.py)
 #   python_overhead.md        what a call from Python adds to the library's time (tools/bench/python_overhead.py)
 #   identify_arm.png          soadyn identify: the logged arm, the scene 30 % off and the fitted scene (tools/plot.py --compare)
+#   long_horizon.{md,png,csv} the satellite over 1000 s per method, variational's step against rk4's, and
+#                             energy and momentum errors over 10⁶ steps (tools/long_horizon.py --chart)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/bench/run.sh
@@ -37,4 +39,5 @@ tools/ensemble_charts.py out/ensemble_stability/results.h5 -o out/ensemble_stabi
 cp out/ensemble_stability/ensemble_stability.{png,csv} tools/results/
 { tools/bench/gradient.py --repeat 7 --t-end 0.5; echo; tools/bench/gradient.py --repeat 5 --t-end 1.0 --every-body; } >tools/results/gradient.md
 tools/bench/python_overhead.py --processes 15 >tools/results/python_overhead.md
+tools/long_horizon.py --chart
 echo "figures and tables written to tools/results/"

@@ -13,7 +13,8 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SOADYN = os.environ.get("SOADYN", os.path.join(ROOT, "build", "soadyn"))
 SCENARIOS = os.path.join(ROOT, "scenarios")
-FIXED = ["euler", "semi-implicit-euler", "symplectic-euler", "rk4", "implicit-midpoint", "implicit-midpoint/simplified"]
+FIXED = ["euler", "semi-implicit-euler", "symplectic-euler", "rk4", "implicit-midpoint", "implicit-midpoint/simplified",
+         "variational"]
 CVODE = ["cvode-adams", "cvode-bdf", "cvode-bdf/dq"]
 # A method name with a variant: the settings it changes (the defaults are the analytic Jacobian and,
 # for the implicit midpoint rule, full Newton)

@@ -101,7 +101,7 @@ class SymplecticEuler : public FixedStep {
   static std::string refuses(const Model& m) {
     if (!m.has_quaternions()) return "";
     return "symplectic-euler: the model has a free or ball joint, whose quaternion makes (q, 𝓜 v) "
-           "non-canonical; use semi-implicit-euler (not symplectic), rk4 or implicit-midpoint";
+           "non-canonical; use variational (symplectic on the group, conserves momentum), rk4 or implicit-midpoint";
   }
 
  private:
@@ -249,6 +249,10 @@ const std::vector<IntegratorInfo>& integrators() {
       {Method::ImplicitMidpoint, to_string(Method::ImplicitMidpoint),
        "implicit midpoint rule, q ⊕ h v on the group, by Newton, order 2, symmetric and A-stable", true, 2, false, 24,
        nullptr, [](System& sys, S s, double t0, const VecX&) -> P { return make_implicit_midpoint(sys, s, t0); }},
+      {Method::Variational, to_string(Method::Variational),
+       "variational (midpoint discrete Lagrangian) on the group by Newton, order 2, symplectic, symmetric, "
+       "conserves momentum", true, 2, true, 16, nullptr,
+       [](System& sys, S s, double t0, const VecX&) -> P { return make_variational(sys, s.dt, t0); }},
   };
   return table;
 }

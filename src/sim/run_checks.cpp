@@ -98,6 +98,12 @@ void check_prescribed(const Scenario& sc, const SimulationSettings& s) {
   for (const PrescribedInput& p : pres)
     if (p.body < 0 || p.body >= m.nbodies || m.nv_i[p.body] != 1 || m.nq_i[p.body] != 1)
       throw Error(scene + "prescribed: joint '" + p.joint + "' is not a 1-DOF joint of the model");
+  if (s.method == Method::Variational) {  // at the first prescribed joint's line (the method may be the command line's)
+    const auto it = sc.locations.find("prescribed." + pres.front().joint);
+    throw Error((it == sc.locations.end() ? scene : it->second + ": ") +
+                "prescribed: method variational does not take prescribed motion yet; use symplectic-euler "
+                "(symplectic, no free or ball joints), rk4 or implicit-midpoint");
+  }
   if (s.limits && m.has_limits()) {
     for (const PrescribedInput& p : pres) {
       const int k = p.dof;
@@ -133,6 +139,7 @@ std::vector<std::string> check_loops(const Scenario& sc, const SimulationSetting
   if (s.limits && m.has_limits()) refuse("limits: true");
   if (s.sensitivities.any()) refuse("simulation.sensitivities");
   if (s.method == Method::SymplecticEuler) refuse("symplectic-euler (use rk4, implicit-midpoint or a CVODE method)");
+  if (s.method == Method::Variational) refuse("variational (use rk4, implicit-midpoint or a CVODE method)");
   // the rows at the initial state: A = K 𝓜⁻¹ Kᵀ's rank and margin (loops.hpp)
   if (sc.q0.size() != m.nq || sc.v0.size() != m.nv || !sc.q0.allFinite() || !sc.v0.allFinite()) return {};
   Data d(m);

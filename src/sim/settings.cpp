@@ -25,7 +25,8 @@ using R = SettingRange;
 constexpr std::pair<Method, std::string_view> kMethodWords[] = {
     {Method::CvodeAdams, "cvode-adams"}, {Method::CvodeBdf, "cvode-bdf"}, {Method::Euler, "euler"},
     {Method::SemiImplicitEuler, "semi-implicit-euler"}, {Method::SymplecticEuler, "symplectic-euler"},
-    {Method::Rk4, "rk4"}, {Method::ImplicitMidpoint, "implicit-midpoint"}};
+    {Method::Rk4, "rk4"}, {Method::ImplicitMidpoint, "implicit-midpoint"},
+    {Method::Variational, "variational"}};
 constexpr std::pair<Jacobian, std::string_view> kJacobianWords[] = {{Jacobian::Analytic, "analytic"}, {Jacobian::Dq, "dq"}};
 constexpr std::pair<Newton, std::string_view> kNewtonWords[] = {{Newton::Full, "full"}, {Newton::Simplified, "simplified"}};
 

@@ -271,7 +271,7 @@ TEST(Settings, EveryWordRoundTripsThroughItsEnum) {
     for (Method m : methods) EXPECT_NE(m, info.method) << info.name;
     methods.push_back(info.method);
   }
-  EXPECT_EQ(methods.size(), 7u);
+  EXPECT_EQ(methods.size(), 8u);
   EXPECT_EQ(parse_jacobian("dq"), Jacobian::Dq);
   EXPECT_EQ(to_string(Newton::Simplified), "simplified");
   EXPECT_THAT([] { parse_method("rk5"); },

@@ -192,6 +192,7 @@ BENCHMARK_CAPTURE(Step, euler, "euler")->Name("chain/step_euler")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, symplectic_euler, "symplectic-euler")->Name("chain/step_symplectic_euler")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, rk4, "rk4")->Name("chain/step_rk4")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, implicit_midpoint, "implicit-midpoint")->Name("chain/step_implicit_midpoint")->DenseRange(1, 1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32)->Arg(64);
+BENCHMARK_CAPTURE(Step, variational, "variational")->Name("chain/step_variational")->DenseRange(1, 1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32)->Arg(64);
 BENCHMARK(MassLiteral<true>)->Name("tree/mass_literal")->Apply(tree_sizes);
 BENCHMARK(MassComposite<true>)->Name("tree/mass_composite")->Apply(tree_sizes);
 BENCHMARK(MassFromQ<true>)->Name("tree/mass_q")->Apply(tree_sizes);

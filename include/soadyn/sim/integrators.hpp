@@ -20,6 +20,12 @@
 //                        𝓜 depends on q): the one fixed-step baseline that stays stable on stiff
 //                        scenes.  Full Newton (the Jacobian at every iterate, from y) or simplified
 //                        (once per step, at the explicit-Euler predictor)
+//   variational          the discrete Euler–Lagrange equations of the midpoint discrete Lagrangian
+//                        L_d = h L(q_k ⊕ u/2, u/h), u = q_k+1 ⊖ q_k, in position–momentum form, on the
+//                        group, forced by discrete Lagrange–d'Alembert (the forces at the midpoint),
+//                        by Newton (order 2, symplectic, symmetric; conserves momentum where no
+//                        force acts); reports v_k = 𝓜(q_k)⁻¹ p_k (variational.cpp).  Not with
+//                        prescribed motion or closed loops yet
 // Free and ball joints keep a unit quaternion: CVODE projects it (CVodeSetProjFn); the fixed-step
 // methods move it on the group, q ⊕ δ by the exponential map (configuration.hpp), so it is unit by
 // construction and never renormalized after a step (fixed_step.hpp).

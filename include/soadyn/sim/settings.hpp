@@ -30,7 +30,8 @@ enum class Method {
   SemiImplicitEuler,  // "semi-implicit-euler": v, then q, fixed steps
   SymplecticEuler,    // "symplectic-euler": symplectic Euler in the momenta, fixed steps
   Rk4,                // "rk4": classical Runge–Kutta on the group (Munthe-Kaas), fixed steps
-  ImplicitMidpoint    // "implicit-midpoint": implicit midpoint rule by Newton, fixed steps
+  ImplicitMidpoint,   // "implicit-midpoint": implicit midpoint rule by Newton, fixed steps
+  Variational         // "variational": the midpoint discrete Lagrangian's DEL equations on the group, fixed steps
 };
 // ∂f/∂y for cvode-bdf and implicit-midpoint
 enum class Jacobian {

@@ -158,7 +158,7 @@ def simulate(scene: Union[Scenario, str], method: Optional[str] = None, *, rtol:
 
     scene: a Scenario or the path of a scenario file.  Each keyword left None keeps the scene's
     own setting (scene.settings): method (cvode-adams | cvode-bdf | rk4 | euler | semi-implicit-euler |
-    symplectic-euler | implicit-midpoint), rtol, atol (CVODE), dt (fixed-step methods' step, s), t_end (s),
+    symplectic-euler | implicit-midpoint | variational), rtol, atol (CVODE), dt (fixed-step methods' step, s), t_end (s),
     output_dt (s between samples), dynamics (forward-dynamics route: aba | dense | sparse),
     jacobian (CVODE BDF's Jacobian: analytic | dq), newton (implicit midpoint: full | simplified),
     max_step, max_steps (CVODE), limits (joint limits as events), restitution, control_dt: one keyword
