@@ -15,6 +15,7 @@
 
 #include "soadyn/multibody/text.hpp"
 
+#include "mjcf_equality.hpp"
 #include "mjcf_values.hpp"
 #include "mjcf_vfs.hpp"
 
@@ -146,8 +147,9 @@ MjModelPtr compile(const std::string& xml, const std::string& path, bool from_di
   return MjModelPtr(m);
 }
 
-// What soadyn does not model, one line per kind, never silently.
-std::string ignored(const mjModel* m) {
+// What soadyn does not model, one line per kind, never silently (`equalities`: the equality
+// constraints not held as loops, and the softness of those held)
+std::string ignored(const mjModel* m, const std::vector<std::string>& equalities) {
   std::vector<std::string> kinds;
   auto count = [&](int n, const char* one, const char* many) {
     if (n > 0) kinds.push_back(std::to_string(n) + " " + (n == 1 ? one : many));
@@ -159,7 +161,7 @@ std::string ignored(const mjModel* m) {
   count(colliding, "colliding geom (contacts)", "colliding geoms (contacts)");
   count(m->npair, "contact pair", "contact pairs");
   count(m->ntendon, "tendon", "tendons");
-  count(m->neq, "equality constraint", "equality constraints");
+  kinds.insert(kinds.end(), equalities.begin(), equalities.end());
   count(m->nu, "actuator", "actuators");
   count(cones, "ball-joint range (a cone)", "ball-joint ranges (cones)");
   count(armature, "DOF armature (rotor inertia, not in 𝓜)", "DOF armatures (rotor inertia, not in 𝓜)");
@@ -429,14 +431,19 @@ static MjcfModel parse_mjcf_impl(const std::string& xml, const std::string& path
     throw Error(path + ": body '" + printable(specs.at(size_t(e.spec)).name) + "': " + e.detail);
   }
   Model& model = out.model;
-  if (const std::string what = ignored(m); !what.empty()) model.warnings.push_back("ignored: " + what);
+  const InModel in_model{model, names, tree.anchor};
+  // connect and weld as loops on the model's bodies
+  mjcf_detail::EqualityLoops equalities = mjcf_detail::equality_loops(m, [&](int b, const Placement& X, int& body) {
+    return in_model(b, X, body);
+  });
+  out.loops = std::move(equalities.loops);
+  if (const std::string what = ignored(m, equalities.ignored); !what.empty()) model.warnings.push_back("ignored: " + what);
   for (const std::string& note : notes) model.warnings.push_back(note);
   if (!names.renamed.empty()) {
     std::string list;
     for (const std::string& r : names.renamed) list += (list.empty() ? "" : ", ") + r;
     model.warnings.push_back("generated names renamed (the file already has the name): " + list);
   }
-  const InModel in_model{model, names, tree.anchor};
   add_sites(model, m, in_model);
   out.geoms = geoms(m, in_model);
   out.meshes = meshes(m);

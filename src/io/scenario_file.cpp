@@ -400,15 +400,21 @@ Scenario parse_scenario(const std::string& text, const std::string& path, bool f
   if (mjcf) {
     sc.inputs.dampers = mjcf->dampers;
     sc.inputs.springs = mjcf->springs;
+    sc.inputs.loops = mjcf->loops;  // its connects and welds, before the scenario's own loops:
   }
   if (root["initial"]) read_initial(rd, root["initial"], sc.model, sc.q0, sc.v0);
   if (root["simulation"]) read_simulation(rd, root["simulation"], sc.model, sc.simulation);
   if (root["prescribed"])
     scenario_detail::read_prescribed(rd, root["prescribed"], root["initial"], sc.model, sc.q0, sc.v0, sc.inputs.prescribed);
   if (root["inputs"]) read_inputs(rd, root["inputs"], sc.model, sc.q0, sc.inputs);
-  if (root["loops"]) {
+  if (root["loops"]) scenario_detail::read_loops(rd, root["loops"], sc.model, sc.q0, sc.inputs.loops);
+  // the initial state assembled onto every loop (the MJCF's and the file's), refused at loops: or
+  // at the model that brought them
+  if (!sc.inputs.loops.empty()) {
+    const bool own = bool(root["loops"]);
     const VecX q_file = sc.q0, v_file = sc.v0;
-    scenario_detail::read_loops(rd, root["loops"], root["initial"], sc.model, sc.q0, sc.v0, sc.inputs.loops);
+    scenario_detail::assemble_loops(rd, own ? root["loops"] : robot_node, own ? "loops" : robot_key, root["initial"],
+                                    sc.model, sc.inputs.loops, sc.q0, sc.v0);
     if (std::string note = scenario_detail::assembly_note(sc.model, q_file, v_file, sc.q0, sc.v0); !note.empty())
       sc.notes.push_back(std::move(note));
   }
@@ -436,6 +442,14 @@ Scenario load_scenario(const std::string& path, bool free_root, const std::optio
       sc.inputs.dampers = mj.dampers;
       sc.inputs.springs = mj.springs;
       sc.v0 = VecX::Zero(sc.model.nv);
+      // its connects and welds, the drawn pose closed on them (a weld's relpose may open it)
+      sc.inputs.loops = std::move(mj.loops);
+      if (!sc.inputs.loops.empty()) {
+        const std::vector<char> none(size_t(sc.model.nv), 0);
+        if (const double e = scenario_detail::close_on_loops(sc.model, sc.inputs.loops, none, none, sc.q0, sc.v0); e > kLoopClosure)
+          throw Error(path + ": the drawn pose cannot be closed on the equality constraints (largest closure error " +
+                      short_number(e) + " after 50 Newton steps): check their anchors and relpose");
+      }
       return sc;
     }
     sc.model = parse_urdf(text, path, free_root, gravity.value_or(urdf_gravity()),

@@ -1,5 +1,6 @@
 // A scenario's closed loops (scenarios/README.md, loops.hpp): each loop's bodies or frames and its
-// frames on them, and the initial state closed on the loops (assembled where the file's is not).
+// frames on them, and the initial state closed on the loops (assembled where the file's is not),
+// its own and an MJCF model's (<equality connect/weld>) alike.
 #include "scenario_reader.hpp"
 
 #include "soadyn/algorithm/frames.hpp"
@@ -76,7 +77,8 @@ LoopConstraint read_loop(const Reader& rd, const YAML::Node& e, const std::strin
   return c;
 }
 
-// the joints `initial.part` names: their DOFs, held while the state is closed on the loops
+}  // namespace
+
 std::vector<char> held_dofs(const YAML::Node& initial, const char* part, const Model& m) {
   std::vector<char> held(size_t(m.nv), 0);
   if (!initial || !initial[part] || !initial[part].IsMap()) return held;
@@ -86,42 +88,40 @@ std::vector<char> held_dofs(const YAML::Node& initial, const char* part, const M
   return held;
 }
 
-}  // namespace
-
-void read_loops(const Reader& rd, const YAML::Node& n, const YAML::Node& initial, const Model& m, VecX& q0, VecX& v0,
-                std::vector<LoopConstraint>& out) {
+void read_loops(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0, std::vector<LoopConstraint>& out) {
   if (!n.IsSequence() || n.size() == 0) rd.fail(n, "loops", "expected a list of loops, got " + Reader::show(n));
+  const size_t first = out.size();
   for (size_t k = 0; k < n.size(); ++k) out.push_back(read_loop(rd, n[k], "loops[" + std::to_string(k) + "]", m, k));
   // a distance loop without a length: the frames' distance at the initial state
   Data d(m);
   update_kinematics(m, d, q0);
-  for (LoopConstraint& c : out)
-    if (c.type == LoopType::Distance && c.distance == 0.0)
+  for (size_t k = first; k < out.size(); ++k)
+    if (LoopConstraint& c = out[k]; c.type == LoopType::Distance && c.distance == 0.0)
       c.distance = (body_frame_placement(m, d, c.body_a, c.at_a).p - body_frame_placement(m, d, c.body_b, c.at_b).p).norm();
-  // q₀ closed by Newton on φ over the joints initial.q does not name (steps of minimum norm)
-  LoopData ld(m, out);
-  const std::vector<char> hold_q = held_dofs(initial, "q", m);
+}
+
+double close_on_loops(const Model& m, const std::vector<LoopConstraint>& loops, const std::vector<char>& hold_q,
+                      const std::vector<char>& hold_v, VecX& q0, VecX& v0) {
+  // q₀ closed by Newton on φ over the DOFs not held (steps of minimum norm)
+  Data d(m);
+  LoopData ld(m, loops);
   std::vector<int> free;
   for (int k = 0; k < m.nv; ++k)
     if (!hold_q[size_t(k)]) free.push_back(k);
-  bool closed = false;
-  for (int it = 0; it < 50 && !closed; ++it) {
+  double error = 0.0;
+  for (int it = 0; it < 50; ++it) {
     update_kinematics(m, d, q0);
     update_velocities(m, d, VecX::Zero(m.nv));
-    loop_rows(m, d, out, ld);
-    closed = ld.phi.cwiseAbs().maxCoeff() <= kLoopClosure;
-    if (closed || free.empty()) break;
+    loop_rows(m, d, loops, ld);
+    error = ld.phi.size() ? ld.phi.cwiseAbs().maxCoeff() : 0.0;
+    if (error <= kLoopClosure || free.empty()) break;
     const VecX step = -Eigen::CompleteOrthogonalDecomposition<MatX>(ld.K(Eigen::all, free)).solve(ld.phi);
     VecX delta = VecX::Zero(m.nv);
     for (size_t j = 0; j < free.size(); ++j) delta(free[j]) = step(Eigen::Index(j));
     q0 = m.integrate(q0, delta, 1.0);
   }
-  if (!closed)
-    rd.fail(n, "loops", "the initial state cannot be closed on the loops (largest closure error " +
-                            Reader::show_number(ld.phi.cwiseAbs().maxCoeff()) +
-                            " after 50 Newton steps with the joints initial.q names held): check the loops' points and the initial angles");
-  // v₀ onto K v = 0, the joints initial.qd names held
-  const std::vector<char> hold_v = held_dofs(initial, "qd", m);
+  if (error > kLoopClosure) return error;
+  // v₀ onto K v = 0 over the DOFs not held
   std::vector<int> moving;
   for (int k = 0; k < m.nv; ++k)
     if (!hold_v[size_t(k)]) moving.push_back(k);
@@ -129,6 +129,15 @@ void read_loops(const Reader& rd, const YAML::Node& n, const YAML::Node& initial
     const VecX correction = Eigen::CompleteOrthogonalDecomposition<MatX>(ld.K(Eigen::all, moving)).solve(VecX(ld.K * v0));
     for (size_t j = 0; j < moving.size(); ++j) v0(moving[j]) -= correction(Eigen::Index(j));
   }
+  return error;
+}
+
+void assemble_loops(const Reader& rd, const YAML::Node& where, const std::string& field, const YAML::Node& initial,
+                    const Model& m, const std::vector<LoopConstraint>& loops, VecX& q0, VecX& v0) {
+  const double error = close_on_loops(m, loops, held_dofs(initial, "q", m), held_dofs(initial, "qd", m), q0, v0);
+  if (error > kLoopClosure)
+    rd.fail(where, field, "the initial state cannot be closed on the loops (largest closure error " + Reader::show_number(error) +
+                              " after 50 Newton steps with the joints initial.q names held): check the loops' points and the initial angles");
 }
 
 std::string assembly_note(const Model& m, const VecX& q_file, const VecX& v_file, const VecX& q0, const VecX& v0) {

@@ -167,11 +167,20 @@ void read_controllers(const Reader& rd, const YAML::Node& n, const Model& m, con
 // where `initial` (the file's initial:, may be undefined) must agree with it
 void read_prescribed(const Reader& rd, const YAML::Node& n, const YAML::Node& initial, const Model& m, VecX& q0,
                      VecX& v0, std::vector<PrescribedInput>& out);
-// scenario_loops.cpp: `loops: [{type, a, at_a, b, at_b, axis, …}]`, and the initial state closed
-// on them (assembled: q by Newton on the loops' closure, the joints `initial` names held; v
-// projected onto K v = 0, its named joints held)
-void read_loops(const Reader& rd, const YAML::Node& n, const YAML::Node& initial, const Model& m, VecX& q0, VecX& v0,
-                std::vector<LoopConstraint>& out);
+// scenario_loops.cpp: `loops: [{type, a, at_a, b, at_b, axis, …}]`, appended to `out` (after an
+// MJCF model's own; a distance loop's default length from q0)
+void read_loops(const Reader& rd, const YAML::Node& n, const Model& m, const VecX& q0, std::vector<LoopConstraint>& out);
+// the DOFs of the joints `initial.part` names (part: q or qd; initial may be undefined)
+std::vector<char> held_dofs(const YAML::Node& initial, const char* part, const Model& m);
+// The initial state closed on the loops: q0 by Newton on their closure φ over the DOFs hold_q does
+// not hold (steps of minimum norm, at most 50), then, once closed, v0 onto K v = 0 over the DOFs
+// hold_v does not hold.  Returns the largest |φ| left (≤ kLoopClosure: closed, v0 projected).
+double close_on_loops(const Model& m, const std::vector<LoopConstraint>& loops, const std::vector<char>& hold_q,
+                      const std::vector<char>& hold_v, VecX& q0, VecX& v0);
+// close_on_loops with the joints `initial` names held (q, qd), refused at `where` (field) when q0
+// cannot be closed
+void assemble_loops(const Reader& rd, const YAML::Node& where, const std::string& field, const YAML::Node& initial,
+                    const Model& m, const std::vector<LoopConstraint>& loops, VecX& q0, VecX& v0);
 // what the assembly did to the file's initial state (q_file, v_file → q0, v0), in one line for the
 // run to say ("" when it moved nothing)
 std::string assembly_note(const Model& m, const VecX& q_file, const VecX& v_file, const VecX& q0, const VecX& v0);

@@ -12,10 +12,12 @@
 // A Data's state is its Model and its result arrays.  A Scenario's: its Model, initial state,
 // settings, torques, springs and dampers, log frames, name, path and text; its controllers (which
 // may hold tables read from files) are parsed again from its text, so a scene with controllers
-// unpickles only where its files are.  An unknown tag or version, a missing or mistyped field: one
+// unpickles only where its files are (its loops likewise; an MJCF model's, from the files it
+// handed MuJoCo, which the state holds).  An unknown tag or version, a missing or mistyped field: one
 // soadyn.Error naming it.
 #include "common.hpp"
 
+#include "soadyn/io/mjcf.hpp"
 #include "soadyn/io/scenario_file.hpp"
 
 #include <string>
@@ -294,6 +296,24 @@ py::tuple scenario_state(const py::object& self) {
   return py::make_tuple("soadyn.Scenario", kScenarioStateVersion, f);
 }
 
+// The loops of a Scenario loaded from an MJCF file alone (load_scenario("robot.xml")): its
+// equalities, from its stored files (or its text), on a model of the state's bodies (freed roots
+// when the state's model has them)
+std::vector<LoopConstraint> mjcf_loops(const Scenario& sc, const Reader& r) {
+  const std::vector<ModelFile> files = sc.model_files.empty() ? std::vector<ModelFile>{{"soadyn-model.in-memory.xml", sc.text}}
+                                                              : sc.model_files;
+  MjcfOptions o;
+  o.inertia_check = InertiaCheck::Balance;
+  MjcfModel mj = parse_mjcf_files(files, sc.path, o);
+  if (mj.model.nq != sc.model.nq) {
+    o.free_root = true;
+    mj = parse_mjcf_files(files, sc.path, o);
+  }
+  if (mj.model.nq != sc.model.nq || mj.model.body_names != sc.model.body_names)
+    r.refuse("model_files", "they compile to another model than the state's");
+  return mj.loops;
+}
+
 Scenario scenario_from_state(const py::object& state) {
   const char* where = "Scenario.__setstate__";
   const Reader r{where, unpack(state, where, "soadyn.Scenario", kScenarioStateVersion)};
@@ -350,9 +370,15 @@ Scenario scenario_from_state(const py::object& state) {
   // absent from older states: none)
   const auto count = [&](const char* key) { return r.fields.contains(key) ? r.as<size_t>(key) : size_t(0); };
   const size_t controllers = count("controllers"), prescribed = count("prescribed"), loops = count("loops");
-  if (controllers + prescribed + loops > 0) {
+  if (loops > 0 && is_mjcf_text(sc.text)) {
+    // an MJCF model loaded alone: its connects and welds, compiled again from the files it handed MuJoCo
+    sc.inputs.loops = mjcf_loops(sc, r);
+    if (sc.inputs.loops.size() != loops) r.refuse("text", "its equality constraints are not the state's loops");
+  } else if (controllers + prescribed + loops > 0) {
+    // an MJCF robot compiled from the files the scene handed MuJoCo, as its runs store them
     Scenario text = parse_scenario(sc.text, sc.path, false, std::nullopt,
-                                   sc.robot_text.empty() ? std::nullopt : std::optional<std::string>(sc.robot_text));
+                                   sc.robot_text.empty() ? std::nullopt : std::optional<std::string>(sc.robot_text),
+                                   sc.model_files.empty() ? nullptr : &sc.model_files);
     if (text.inputs.controllers.size() != controllers || text.inputs.prescribed.size() != prescribed ||
         text.inputs.loops.size() != loops)
       r.refuse("text", "its controllers, prescribed motions or loops are not the state's");

@@ -1,12 +1,15 @@
 // MJCF (MuJoCo's model format) import, through MuJoCo's own compiler when soadyn is built with it
 // (Debian libmujoco-dev; mjcf_available()).  The tree part of the file becomes a Model: bodies,
 // inertias (given or inferred from geoms by MuJoCo), hinge, slide, ball and free joints, several
-// joints in one body (a chain of massless frames), sites as frames, the option's gravity.  What
-// soadyn does not model (contacts, tendons, equality constraints, actuators, ranges, armature,
-// sensors) is listed in one "ignored: …" warning (Model::warnings), never silently.
+// joints in one body (a chain of massless frames), sites as frames, the option's gravity, and the
+// active <equality connect> and <equality weld> as loops (held exactly: MuJoCo's solref/solimp
+// softness is not modelled).  What soadyn does not model (contacts, tendons, joint and tendon
+// equalities, actuators, armature, sensors) is listed in one "ignored: …" warning
+// (Model::warnings), never silently.
 #pragma once
 
 #include "soadyn/algorithm/inputs.hpp"
+#include "soadyn/algorithm/loops.hpp"
 #include "soadyn/multibody/model.hpp"
 
 #include <optional>
@@ -50,6 +53,12 @@ struct MjcfModel {
   std::vector<SpringInput> springs;           // the joints' stiffness about springref
   std::vector<MjcfGeom> geoms;                // every geom, for soadyn view
   std::vector<MjcfMesh> meshes;               // every mesh asset, for soadyn view
+  // the active <equality connect> (a point loop: body1's anchor on body2's point where it was at
+  // qpos0) and <equality weld> (a weld loop: body1's frame at relpose on body2's at its anchor;
+  // torquescale 0, no rotation held: a point loop), named by the equality's name or
+  // "equality<id>", on the model bodies their MuJoCo bodies move with.  Closed at q0 but for a
+  // weld whose relpose is not the drawn one (a scenario assembles q0 onto them).
+  std::vector<LoopConstraint> loops;
   // every file handed to MuJoCo's compiler, as handed (the name given to its virtual file system,
   // the bytes): the main text first, then the <include>s and mesh, skin, height-field and texture
   // files it read.  A run stores them (h5log.hpp /model_files) for parse_mjcf_files.
