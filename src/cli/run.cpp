@@ -233,6 +233,9 @@ void print_summary(const Scenario& sc, const SimulationSettings& s, const RunSum
   if (s.method == Method::ImplicitMidpoint)
     std::printf("method                 %s (dt %g s, %s Newton, %s Jacobian)\n", method.c_str(), s.dt, newton.c_str(),
                 jacobian.c_str());
+  else if (s.method == Method::Variational)
+    std::printf("method                 %s (dt %g s, %s)\n", method.c_str(), s.dt,
+                s.newton == Newton::Simplified ? "chord iterations with M, Newton where they stall" : "Newton");
   else if (is_fixed_step(s.method))
     std::printf("method                 %s (dt %g s)\n", method.c_str(), s.dt);
   else if (s.method == Method::CvodeBdf)

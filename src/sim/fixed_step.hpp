@@ -62,6 +62,7 @@ std::unique_ptr<Integrator> make_semi_implicit_euler(System& sys, double dt, dou
 std::unique_ptr<Integrator> make_rk4(System& sys, double dt, double t0);
 std::unique_ptr<Integrator> make_implicit_midpoint(System& sys, const SimulationSettings& settings, double t0);
 // the variational integrator of the midpoint discrete Lagrangian on the group (variational.cpp)
-std::unique_ptr<Integrator> make_variational(System& sys, double dt, double t0);
+// (settings.newton: full, Newton's iterations; simplified, the O(N) chord iterations first)
+std::unique_ptr<Integrator> make_variational(System& sys, const SimulationSettings& settings, double t0);
 
 }  // namespace soadyn

@@ -252,7 +252,7 @@ const std::vector<IntegratorInfo>& integrators() {
       {Method::Variational, to_string(Method::Variational),
        "variational (midpoint discrete Lagrangian) on the group by Newton, order 2, symplectic, symmetric, "
        "conserves momentum", true, 2, true, 16, nullptr,
-       [](System& sys, S s, double t0, const VecX&) -> P { return make_variational(sys, s.dt, t0); }},
+       [](System& sys, S s, double t0, const VecX&) -> P { return make_variational(sys, s, t0); }},
   };
   return table;
 }

@@ -124,7 +124,7 @@ const std::vector<SettingInfo>& setting_table() {
       integration(word("jacobian", word_field<&S::jacobian, jacobian_of>(), jacobian_words, "",
                        "cvode-bdf and implicit-midpoint: analytic derivatives or difference quotients (dq)")),
       integration(word("newton", word_field<&S::newton, newton_of>(), newton_words, "",
-                       "implicit-midpoint: the Jacobian at every iterate, or once per step")),
+                       "implicit-midpoint: the Jacobian at every iterate, or once per step; variational: Newton, or O(N) chord iterations with M")),
       {"limits", K::Flag, &S::limits, "", "joint limits as events (CVODE): impact, hold, release", R::Any, nullptr, "", "", "", false},
       real("restitution", &S::restitution, "1", R::UnitInterval, "coefficient of restitution at a limit"),
       real("control_dt", &S::control_dt, "s", R::NonNegative, "time between controller samples, zero-order hold (0: continuous)"),

@@ -34,6 +34,7 @@
 #include "soadyn/algorithm/kinematics.hpp"
 
 #include <Eigen/LU>
+#include <unsupported/Eigen/IterativeSolvers>
 
 #include <cmath>
 #include <limits>
@@ -81,10 +82,50 @@ Mat3 turn_rate_derivative(const Vec3& u, const Vec3& z, double s) {
   return D;
 }
 
+// 𝓜(q)⁻¹ x by the articulated-body factor forward dynamics left in data (articulated_solve, O(N)):
+// the preconditioner of Newton's Krylov solves (Eigen's GMRES asks for this shape)
+class MassPreconditioner {
+ public:
+  using Scalar = double;
+  using RealScalar = double;
+  using StorageIndex = int;
+  enum { ColsAtCompileTime = Eigen::Dynamic, MaxColsAtCompileTime = Eigen::Dynamic };
+  MassPreconditioner() = default;
+  void bind(const Model& model, const Data& data) {
+    model_ = &model;
+    data_ = &data;
+    work_ = articulated_solve_work(model);
+  }
+  template <typename M>
+  MassPreconditioner& analyzePattern(const M&) { return *this; }
+  template <typename M>
+  MassPreconditioner& factorize(const M&) { return *this; }
+  template <typename M>
+  MassPreconditioner& compute(const M&) { return *this; }
+  template <typename Rhs>
+  VecX solve(const Rhs& b) const {
+    x_ = b;
+    articulated_solve(*model_, *data_, x_, work_);
+    return x_.col(0);
+  }
+  Eigen::ComputationInfo info() const { return Eigen::Success; }
+
+ private:
+  const Model* model_ = nullptr;
+  const Data* data_ = nullptr;
+  mutable MatX work_, x_;
+};
+
+// from this many DOFs on, Newton's corrections by GMRES preconditioned with 𝓜⁻¹ (O(nv²) per
+// iteration: 7–8 products with the Jacobian) rather than a dense LU (O(nv³)): on the bench's chain
+// (chain/step_variational) even at 128 DOFs, GMRES 1.3× faster at 256
+constexpr int kKrylovFrom = 128;
+
 class Variational : public FixedStep {
  public:
-  Variational(System& s, double dt, double t0)
+  Variational(System& s, double dt, double t0, bool chord)
       : FixedStep(s, dt, t0),
+        chord_(chord),
         free_(without_gravity(s.model)),
         gravity_(!s.model.gravity.isZero(0.0)),
         dd_(s.model),
@@ -102,6 +143,10 @@ class Variational : public FixedStep {
         dq_(s.model.nv, s.model.nv),
         dv_(s.model.nv, s.model.nv),
         lu_(s.model.nv),
+        guess_(s.model.nv),
+        gq_(s.model.nv),
+        gv_(s.model.nv),
+        solve_work_(articulated_solve_work(s.model)),
         cached_y_(s.size()) {
     if (s.has_prescribed() || s.has_loops())
       throw Error("variational: prescribed motion and closed loops are not available yet: use rk4 or implicit-midpoint");
@@ -112,6 +157,10 @@ class Variational : public FixedStep {
         else if constexpr (std::is_base_of_v<joints::RigidMotion, K>) turns_.push_back({j.iv, -1.0});
       });
     blocks_.resize(turns_.size());
+    gmres_.preconditioner().bind(s.model, s.data);
+    gmres_.setTolerance(1e-13);
+    gmres_.setMaxIterations(50);
+    gmres_.set_restart(50);
   }
 
  private:
@@ -137,9 +186,8 @@ class Variational : public FixedStep {
     // p_k: the last step's when y is the state it left, else 𝓜(q_k) v_k
     const bool cached = cached_ && y == cached_y_;
     if (!cached) {
-      update_kinematics(m, sys_.data, q_);
-      mass_matrix(m, sys_.data);
-      p_.noalias() = sys_.data.M * y.segment(nq, nv);
+      delta_ = y.segment(nq, nv);
+      p_ = inverse_dynamics(free_, sys_.data, q_, zero_, delta_);  // 𝓜(q_k) v_k, O(N)
     } else {
       p_ = p_next_;
     }
@@ -169,52 +217,149 @@ class Variational : public FixedStep {
     // q_k+1 = q_k ⊕ h ξ,  v_k+1 = 𝓜(q_k+1)⁻¹ p_k+1
     sys_.integrate(q_, xi_, h, y.head(nq));
     q_ = y.head(nq);
-    update_kinematics(m, sys_.data, q_);
-    mass_matrix(m, sys_.data);
-    ltdl_factor(m, sys_.data);
-    ltdl_solve(m, sys_.data, r_);
-    y.segment(nq, nv) = r_;
+    y.segment(nq, nv) = forward_dynamics(free_, sys_.data, q_, zero_, r_);  // 𝓜(q_k+1)⁻¹ p_k+1, O(N)
     cached_y_ = y;
     cached_ = true;
   }
 
-  // Newton on F(ξ) = 0, to rounding in F's own units (momentum, so that a poorly conditioned 𝓜
-  // does not hold it back): it ends at an iterate whose residual is within ε of F's terms, or has
+  // F(ξ) = 0 to rounding in F's own units (momentum, so that a poorly conditioned 𝓜 does not hold
+  // it back): the iterations end at an iterate whose residual is within ε of F's terms, or has
   // stopped shrinking within 1000 times their rounding; that iterate's evaluation (ā, 𝓜 ξ, the
   // blocks) makes p_k+1.  (Ending at 4 ε instead saves one iteration in four but left a bias that
-  // drifted a random tree's momenta by ~5e-12 over 10⁵ steps, against ~2e-13: test_variational)
+  // drifted a random tree's momenta by ~5e-12 over 10⁵ steps, against ~2e-13: test_variational.)
+  // First the chord iterations, O(N) each; where they contract by less than half per iteration
+  // (a step that barely resolves the motion), Newton's, O(nv³) each.
   void solve(double t, double h) {
+    guess_ = xi_;
+    if (chord_ && chord(t, h)) return;
+    if (!xi_.allFinite()) xi_ = guess_;
+    newton(t, h);
+  }
+
+  // F's size at the iterate, and whether it is done: within ε of its terms, or no longer shrinking
+  // by half within 1000 times their rounding (𝓜 ξ is rounded by ε |𝓜| |ξ|, more than ε |𝓜 ξ| where
+  // light bodies move fast or the motions cancel; |𝓜| by its largest diagonal entry S_rᵀ Y_i S_r,
+  // Y_i the composite inertia the sweeps leave)
+  struct Size {
+    double size, scale, rounding;
+  };
+  Size size_of(double h) const {
     const double eps = std::numeric_limits<double>::epsilon();
+    double diagonal = 0.0;
+    for (int c = 0; c < sys_.model.nv; ++c) diagonal = std::max(diagonal, dd_.S.col(c).dot(dd_.row.col(c).head<6>()));
+    const double scale = p_.norm() + dd_.tau.norm() + 0.5 * h * a_.norm();
+    return {r_.norm(), scale, eps * (scale + diagonal * xi_.norm())};
+  }
+  // (the chord's linear convergence can slow to half per iteration well above rounding: it stops
+  // only within 10 times the rounding, and gives way to Newton above that)
+  static bool done(const Size& s, double previous, double within = 1e3) {
+    const double eps = std::numeric_limits<double>::epsilon();
+    return !std::isfinite(s.size) || s.size <= eps * s.scale || (s.size <= within * s.rounding && s.size >= 0.5 * previous);
+  }
+  [[noreturn]] void not_converged(double t, double h, const Size& s) const {
+    std::ostringstream os;
+    os << "variational: Newton did not converge at t = " << t << " s with a step of " << h << " s (residual "
+       << s.size / s.scale << " of the momenta)";
+    throw SimulationError(os.str(), t);
+  }
+
+  // G = R(u)⁻¹ F on the turns' rows (the Jacobians below are G's)
+  void turn_residual() {
+    for (size_t k = 0; k < turns_.size(); ++k) {
+      const Vec3 f = r_.segment<3>(turns_[k].at);
+      r_.segment<3>(turns_[k].at) = blocks_[k].Rinv * f;
+    }
+  }
+
+  // The chord iterations: ξ ← ξ − 𝓜(q_m)⁻¹ G, 𝓜 for G's Jacobian G' = 𝓜 + O(h) (below), so that
+  // they contract at a rate O(h |ξ|) (h times the speed the configuration turns), each one O(N):
+  // the evaluation by sweeps (evaluate_sweeps) and 𝓜⁻¹ by the articulated-body factor at q_m (one
+  // forward dynamics, then one solve).  True when they converged; false when they contracted by less
+  // than half (Newton then goes on from where they stopped) or did not converge in 30.
+  bool chord(double t, double h) {
+    const Model& m = sys_.model;
+    double previous = std::numeric_limits<double>::infinity();
+    for (int it = 0; it < 30; ++it) {
+      evaluate_sweeps(t + 0.5 * h, h);
+      residual(h);
+      const Size s = size_of(h);
+      if (done(s, previous, 10.0)) return true;
+      if (s.size > 0.5 * previous) return false;
+      previous = s.size;
+      ++stats_.nonlinear_iterations;
+      turn_residual();
+      forward_dynamics(free_, sys_.data, zero_, FdMethod::ArticulatedBody);  // the factor of 𝓜(q_m)
+      Eigen::Map<MatX> x(r_.data(), m.nv, 1);
+      articulated_solve(m, sys_.data, x, solve_work_);
+      xi_ -= r_;
+    }
+    return false;
+  }
+
+  // Newton's iterations with G's Jacobian (jacobian: analytic but for an O(h²) term), a dense LU
+  void newton(double t, double h) {
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0;; ++it) {
       evaluate(t + 0.5 * h, h);
       residual(h);
-      // F's size, and its rounding's: 𝓜 ξ is rounded by ε |𝓜| |ξ| (more than ε |𝓜 ξ| where light
-      // bodies move fast or the motions cancel)
-      const double size = r_.norm(), scale = p_.norm() + dd_.tau.norm() + 0.5 * h * a_.norm(),
-                   rounding = eps * (scale + sys_.data.M.diagonal().maxCoeff() * xi_.norm());
-      if (!std::isfinite(size)) return;  // the state check reports it
-      if (size <= eps * scale) return;
-      if (size <= 1e3 * rounding && size >= 0.5 * previous) return;
+      const Size s = size_of(h);
+      if (done(s, previous)) return;
       if (it == 50) {
-        if (size <= 1e6 * rounding) return;
-        std::ostringstream os;
-        os << "variational: Newton did not converge at t = " << t << " s with a step of " << h
-           << " s (residual " << size / scale << " of the momenta)";
-        throw SimulationError(os.str(), t);
+        if (s.size <= 1e6 * s.rounding) return;
+        not_converged(t, h, s);
       }
-      previous = size;
+      previous = s.size;
       ++stats_.nonlinear_iterations;
       ++stats_.jac_evals;
       jacobian(h);
-      lu_.compute(J_);
-      for (size_t k = 0; k < turns_.size(); ++k) {  // G = R(u)⁻¹ F on the turns' rows: G' is for G
-        const Vec3 f = r_.segment<3>(turns_[k].at);
-        r_.segment<3>(turns_[k].at) = blocks_[k].Rinv * f;
-      }
-      delta_.noalias() = lu_.solve(r_);
+      turn_residual();
+      correction();
       xi_ -= delta_;
     }
+  }
+
+  // δ = G'⁻¹ G: past kKrylovFrom DOFs by GMRES with 𝓜(q_m)⁻¹ (G' = 𝓜 + O(h): a few iterations, to
+  // 1e-13 of |G|), its LU where GMRES does not get there in 50; else the LU
+  void correction() {
+    if (sys_.model.nv >= kKrylovFrom) {
+      forward_dynamics(free_, sys_.data, zero_, FdMethod::ArticulatedBody);  // the factor of 𝓜(q_m)
+      gmres_.compute(J_);
+      delta_ = gmres_.solve(r_);
+      if (gmres_.info() == Eigen::Success) return;
+    }
+    lu_.compute(J_);
+    delta_.noalias() = lu_.solve(r_);
+  }
+
+  // the turns' blocks at the iterate: R(u), R(u/2) and their inverses, u = h ξ on the turn
+  void turn_blocks(double h) {
+    for (size_t k = 0; k < turns_.size(); ++k) {
+      const Vec3 u = h * xi_.segment<3>(turns_[k].at);
+      Blocks& b = blocks_[k];
+      b.R = turn_rate(u, turns_[k].s);
+      b.Rh = turn_rate(0.5 * u, turns_[k].s);
+      b.Rinv = b.R.inverse();
+      b.Rhinv = b.Rh.inverse();
+    }
+  }
+
+  // evaluate's quantities in O(N), without the matrices: inverse dynamics' sweeps at (q_m, 0, ξ)
+  // with gravity off give 𝓜 ξ (dd_.tau), then ½ P(ξ)ᵀ ξ = ½ (∂τ/∂q)ᵀ ξ by their transposed product;
+  // the sweeps at (q_m, 0, 0) with gravity give g
+  void evaluate_sweeps(double tm, double h) {
+    const Model& m = sys_.model;
+    sys_.integrate(q_, xi_, 0.5 * h, ym_.head(m.nq));
+    ym_.segment(m.nq, m.nv) = xi_;
+    sys_.at_state(tm, ym_.data());
+    inverse_dynamics_derivative_sweeps(free_, sys_.data, zero_, xi_, dd_);
+    inverse_dynamics_derivatives_transpose_times(free_, dd_, xi_, gq_, gv_);
+    a_ = sys_.tau;
+    a_ += 0.5 * gq_;
+    if (gravity_) {
+      inverse_dynamics_derivative_sweeps(m, sys_.data, zero_, zero_, ddg_);
+      a_ -= ddg_.tau;
+    }
+    turn_blocks(h);
   }
 
   // at the iterate ξ: q_m = q_k ⊕ (h/2) ξ; [kin], 𝓜 and the forces τ there (System::at_state);
@@ -233,14 +378,7 @@ class Variational : public FixedStep {
       inverse_dynamics_derivatives(m, sys_.data, zero_, zero_, ddg_);
       a_ -= ddg_.tau;
     }
-    for (size_t k = 0; k < turns_.size(); ++k) {
-      const Vec3 u = h * xi_.segment<3>(turns_[k].at);
-      Blocks& b = blocks_[k];
-      b.R = turn_rate(u, turns_[k].s);
-      b.Rh = turn_rate(0.5 * u, turns_[k].s);
-      b.Rinv = b.R.inverse();
-      b.Rhinv = b.Rh.inverse();
-    }
+    turn_blocks(h);
   }
 
   // r = F(ξ) = R(u) [𝓜 ξ − (h/2) R(u/2)⁻¹ ā] − p_k (R = e off the turns)
@@ -289,12 +427,16 @@ class Variational : public FixedStep {
     }
   }
 
+  bool chord_;  // the chord iterations first (newton: simplified)
   Model free_;  // the model with gravity off: 𝓜 ξ and P(ξ) from inverse dynamics' derivatives
   bool gravity_;
   DerivativeData dd_, ddg_;
   VecX q_, ym_, xi_, p_, a_, r_, delta_, zero_, p_next_;
   MatX J_, B_, dq_, dv_;
   Eigen::PartialPivLU<MatX> lu_;
+  Eigen::GMRES<MatX, MassPreconditioner> gmres_;
+  VecX guess_, gq_, gv_;  // the step's first iterate; (∂τ/∂q)ᵀ ξ and (∂τ/∂v)ᵀ ξ
+  MatX solve_work_;       // articulated_solve's
   std::vector<Turn> turns_;
   std::vector<Blocks> blocks_;
   VecX cached_y_;  // the state the last step left, whose momentum is p_next_
@@ -305,8 +447,8 @@ class Variational : public FixedStep {
 
 }  // namespace
 
-std::unique_ptr<Integrator> make_variational(System& sys, double dt, double t0) {
-  return std::make_unique<Variational>(sys, dt, t0);
+std::unique_ptr<Integrator> make_variational(System& sys, const SimulationSettings& settings, double t0) {
+  return std::make_unique<Variational>(sys, settings.dt, t0, settings.newton == Newton::Simplified);
 }
 
 }  // namespace soadyn

@@ -10,7 +10,9 @@
 //   energy bounded without drift on the double pendulum over 10⁶ steps;
 //   time reversibility: N steps, the momentum flipped, N steps return to q_0 to round-off;
 //   the quaternions unit to 1e-15 with nothing renormalizing them;
-//   Newton's iterations per step few (its Jacobian nearly exact), and the refusals.
+//   Newton's iterations per step few (its Jacobian nearly exact), and the refusals;
+//   each of these with both solvers (newton: full, Newton's iterations by LU or, past 128 DOFs,
+//   GMRES; simplified, the O(N) chord iterations with 𝓜), and the two solvers' steps agreeing.
 #include "soadyn/algorithm/derivatives.hpp"
 #include "soadyn/io/scenario_file.hpp"
 #include "soadyn/multibody/configuration.hpp"
@@ -27,9 +29,13 @@ namespace {
 
 const std::string kDir = SOADYN_SOURCE_DIR "/scenarios/";
 
-SimulationSettings fixed(const Scenario& sc, double dt, double t_end, double output_dt = 0) {
+constexpr Newton kSolvers[] = {Newton::Full, Newton::Simplified};
+const char* name(Newton n) { return n == Newton::Full ? "newton" : "chord"; }
+
+SimulationSettings fixed(const Scenario& sc, double dt, double t_end, double output_dt = 0, Newton newton = Newton::Full) {
   SimulationSettings s = sc.simulation;
   s.method = Method::Variational;
+  s.newton = newton;
   s.dt = dt;
   s.t_end = t_end;
   s.output_dt = output_dt > 0 ? output_dt : t_end;
@@ -101,6 +107,7 @@ TEST(VariationalDerivatives, KineticEnergyAlongTheTangent) {
 // and p1 = D₂L_d(q0, q1), each by central differences along q ⊕ ±ε e_i at its end; with gravity,
 // springs and a constant torque (their forces at the midpoint, h/2 to each end, are a potential's)
 TEST(VariationalDerivatives, MomentaAreTheDiscreteLagrangiansDerivatives) {
+  for (const Newton solver : kSolvers) {
   Rng rng(3);
   for (int k = 0; k < 3; ++k) {
     const Model m = floating_tree(rng, 7, Vec3(0, 0, -9.81));
@@ -113,6 +120,7 @@ TEST(VariationalDerivatives, MomentaAreTheDiscreteLagrangiansDerivatives) {
     const double h = 0.02;
     SimulationSettings s;
     s.method = Method::Variational;
+    s.newton = solver;
     s.dt = h;
     System sys(m, in, FdMethod::ArticulatedBody);
     VecX y = sys.state(random_q(rng, m), random_v(rng, m, 2.0));
@@ -131,10 +139,11 @@ TEST(VariationalDerivatives, MomentaAreTheDiscreteLagrangiansDerivatives) {
       d1(i) = (discrete_lagrangian(m, in, q0, a, h) - discrete_lagrangian(m, in, q0, b, h)) / (2 * e);
     }
     const VecX p0 = momentum_of(m, q0, v0), p1 = momentum_of(m, q1, v1);
-    EXPECT_TRUE(near_rel(p0, -d0, 1e-7)) << "tree " << k << ": " << (p0 + d0).norm() << " of " << p0.norm();
-    EXPECT_TRUE(near_rel(p1, d1, 1e-7)) << "tree " << k << ": " << (p1 - d1).norm() << " of " << p1.norm();
+    EXPECT_TRUE(near_rel(p0, -d0, 1e-7)) << name(solver) << " tree " << k << ": " << (p0 + d0).norm() << " of " << p0.norm();
+    EXPECT_TRUE(near_rel(p1, d1, 1e-7)) << name(solver) << " tree " << k << ": " << (p1 - d1).norm() << " of " << p1.norm();
     // the step moved: p changed by far more than the tolerance
     EXPECT_GT((p1 - p0).norm(), 1e-3 * p0.norm());
+  }
   }
 }
 
@@ -156,20 +165,22 @@ TEST(Variational, OrderTwoOnTheDoublePendulumTheHeavyTopAndTheDrivenPendulum) {
     ref.output_dt = c.T;
     std::vector<Sample> r;
     ASSERT_TRUE(simulate(sc, ref, nullptr, &r).completed);
+    for (const Newton solver : kSolvers) {
     std::vector<double> err;
     for (double h : {c.dt, c.dt / 2, c.dt / 4}) {
       std::vector<Sample> x;
-      const RunSummary sum = simulate(sc, fixed(sc, h, c.T), nullptr, &x);
+      const RunSummary sum = simulate(sc, fixed(sc, h, c.T, 0, solver), nullptr, &x);
       ASSERT_TRUE(sum.completed) << sum.status;
       VecX e(2 * sc.model.nv + 1);
       e << difference(sc.model, r.back().q, x.back().q), x.back().qd - r.back().qd, x.back().work_inputs - r.back().work_inputs;
       err.push_back(e.norm());
     }
     const double p1 = std::log2(err[0] / err[1]), p2 = std::log2(err[1] / err[2]);
-    std::printf("[ order ] variational %-16s errors %.3e %.3e %.3e, ratios %.3f %.3f (log2 %.3f %.3f)\n", c.scene,
-                err[0], err[1], err[2], err[0] / err[1], err[1] / err[2], p1, p2);
-    EXPECT_NEAR(p1, 2.0, 0.2) << c.scene;
-    EXPECT_NEAR(p2, 2.0, 0.2) << c.scene;
+    std::printf("[ order ] variational (%s) %-16s errors %.3e %.3e %.3e, ratios %.3f %.3f (log2 %.3f %.3f)\n",
+                name(solver), c.scene, err[0], err[1], err[2], err[0] / err[1], err[1] / err[2], p1, p2);
+    EXPECT_NEAR(p1, 2.0, 0.2) << c.scene << " " << name(solver);
+    EXPECT_NEAR(p2, 2.0, 0.2) << c.scene << " " << name(solver);
+    }
   }
 }
 
@@ -178,7 +189,7 @@ TEST(Variational, OrderTwoOnTheDoublePendulumTheHeavyTopAndTheDrivenPendulum) {
 // every 100, relative to |L0| and to Σ m_i |ṙ_i| (l = 0 here), ≤ 1e-12; the quaternions unit to
 // 1e-15 at every sample with System::normalize never called.  (Stopping Newton at 4 ε of G's terms
 // instead of ε, these drifted to 1e-12–6e-12 on such trees)
-TEST(Variational, MomentumOfAFreeFloatingTreeOver1e5Steps) {
+void momentum_over_1e5_steps(Newton solver) {
   Rng rng(17);
   const Model m = floating_tree(rng, 5, Vec3::Zero(), 0.0);  // no prismatic joint: nothing drifts apart
   const Inputs in;
@@ -199,6 +210,7 @@ TEST(Variational, MomentumOfAFreeFloatingTreeOver1e5Steps) {
   VecX y = sys.state(q0, v0);
   SimulationSettings s;
   s.method = Method::Variational;
+  s.newton = solver;
   s.dt = 1e-2;
   double t = 0.0;
   auto integrator = make_integrator(s.method, sys, s, t, y);
@@ -221,8 +233,8 @@ TEST(Variational, MomentumOfAFreeFloatingTreeOver1e5Steps) {
     for (const int at : sys.quaternions()) unit = std::max(unit, std::abs(y.segment<4>(at).norm() - 1.0));
   }
   const IntegratorStats st = integrator->stats();
-  std::printf("[ momentum ] nv %d, 1e5 steps: max rel |Δl| %.2e, |ΔL| %.2e; max |‖Q‖ − 1| %.2e; %.2f Newton iterations per step\n",
-              m.nv, worst_l, worst_a, unit, double(st.nonlinear_iterations) / double(st.steps));
+  std::printf("[ momentum ] %s, nv %d, 1e5 steps: max rel |Δl| %.2e, |ΔL| %.2e; max |‖Q‖ − 1| %.2e; %.2f iterations per step\n",
+              name(solver), m.nv, worst_l, worst_a, unit, double(st.nonlinear_iterations) / double(st.steps));
   EXPECT_EQ(st.steps, 100000);
   EXPECT_LE(worst_l, 1e-12);
   EXPECT_LE(worst_a, 1e-12);
@@ -230,6 +242,9 @@ TEST(Variational, MomentumOfAFreeFloatingTreeOver1e5Steps) {
   EXPECT_EQ(sys.normalizations, before);
   EXPECT_GT(difference(m, q0, y.head(m.nq)).norm(), 1.0);  // it moved
 }
+
+TEST(Variational, MomentumOfAFreeFloatingTreeOver1e5Steps) { momentum_over_1e5_steps(Newton::Full); }
+TEST(Variational, MomentumOfAFreeFloatingTreeOver1e5StepsByTheChord) { momentum_over_1e5_steps(Newton::Simplified); }
 
 // the largest |E(t) − E(0)| in the first and the last tenth of n steps of dt 1e-3 on the double pendulum
 std::pair<double, double> energy_tenths(long n) {
@@ -260,7 +275,8 @@ TEST(Variational, EnergyBoundedOnTheDoublePendulumOver1e6Steps) {
 }
 
 // N steps forward, the momentum flipped (v → −v, so p → −p), N steps more, flipped again: back at
-// (q0, v0) to round-off, on the heavy top, the T-handle and a random free tree under gravity
+// (q0, v0) to round-off, on the heavy top, the T-handle and a random free tree under gravity, by
+// either solver
 TEST(Variational, TimeReversible) {
   std::vector<Scenario> scenes{load_scenario(kDir + "heavy_top.yaml"), load_scenario(kDir + "tumbling_t_handle.yaml")};
   Rng rng(23);
@@ -270,6 +286,7 @@ TEST(Variational, TimeReversible) {
   tree.v0 = random_v(rng, tree.model, 2.0);
   tree.path = "random tree";
   scenes.push_back(tree);
+  for (const Newton solver : kSolvers)
   for (const Scenario& sc : scenes) {
     const Model& m = sc.model;
     System sys(m, sc.inputs, FdMethod::ArticulatedBody);
@@ -278,6 +295,7 @@ TEST(Variational, TimeReversible) {
     const VecX y0 = y;
     SimulationSettings s;
     s.method = Method::Variational;
+    s.newton = solver;
     s.dt = 1e-3;
     const int N = 1000;
     double t = 0.0;
@@ -289,10 +307,12 @@ TEST(Variational, TimeReversible) {
     y.segment(m.nq, m.nv) *= -1.0;
     const double eq = difference(m, y0.head(m.nq), y.head(m.nq)).norm();
     const double ev = (y - y0).segment(m.nq, m.nv).norm() / y0.segment(m.nq, m.nv).norm();
-    std::printf("[ reverse ] %-18s %d steps there and back: |q ⊖ q0| %.2e (moved %.3g), rel |v − v0| %.2e\n", sc.path.c_str(), N,
-                eq, moved, ev);
+    std::printf("[ reverse ] %s %-18s %d steps there and back: |q ⊖ q0| %.2e (moved %.3g), rel |v − v0| %.2e\n", name(solver),
+                sc.path.c_str(), N, eq, moved, ev);
     EXPECT_GT(moved, 0.1) << sc.path;
-    EXPECT_LE(eq, 1e-12 * std::max(1.0, moved)) << sc.path;  // rounding, relative to the motion's size
+    // rounding: 2e-15 per step of the 2N, relative to the motion's size (measured: Newton 3.8e-13 on
+    // the top, the chord 2.3e-12, each step's momenta solved to ε of their size by both)
+    EXPECT_LE(eq, 2e-15 * 2 * N * std::max(1.0, moved)) << sc.path << " " << name(solver);
     EXPECT_LE(ev, 1e-12) << sc.path;
   }
 }
@@ -307,6 +327,46 @@ TEST(Variational, NewtonConvergesInFewIterations) {
     ASSERT_TRUE(r.completed) << r.status;
     std::printf("[ newton ] %-22s %.2f iterations per step\n", scene, double(r.stats.nonlinear_iterations) / double(r.stats.steps));
     EXPECT_LE(r.stats.nonlinear_iterations, 5 * r.stats.steps) << scene;
+  }
+}
+
+// The two solvers solve the same equations by different iterations: from one state, 20 steps of
+// 1 ms by each agree to rounding (q within 1e-12 of the motion, v within 1e-11 relative) on a
+// random free tree under gravity of about 20 DOFs (Newton by LU) and one past 128 (Newton's
+// corrections by GMRES with 𝓜⁻¹); on the small one the chord iterations never give way to Newton
+TEST(Variational, TheSolversAgree) {
+  Rng rng(29);
+  for (const int n : {8, 74}) {
+    const Model m = floating_tree(rng, n, Vec3(0, 0, -9.81));
+    const Inputs in;
+    const VecX q0 = random_q(rng, m), v0 = random_v(rng, m, 1.0);
+    std::vector<VecX> end;
+    std::vector<IntegratorStats> stats;
+    for (const Newton solver : kSolvers) {
+      System sys(m, in, FdMethod::ArticulatedBody);
+      VecX y = sys.state(q0, v0);
+      SimulationSettings s;
+      s.method = Method::Variational;
+      s.newton = solver;
+      s.dt = 1e-3;
+      double t = 0.0;
+      auto integrator = make_integrator(s.method, sys, s, t, y);
+      integrator->advance(20 * s.dt, t, y);
+      end.push_back(y);
+      stats.push_back(integrator->stats());
+    }
+    const double moved = difference(m, q0, end[0].head(m.nq)).norm();
+    const double dq = difference(m, end[0].head(m.nq), end[1].head(m.nq)).norm();
+    const double dv = (end[0] - end[1]).segment(m.nq, m.nv).norm() / end[0].segment(m.nq, m.nv).norm();
+    std::printf("[ solvers ] nv %d, 20 steps: |q_newton ⊖ q_chord| %.2e (moved %.3g), rel |Δv| %.2e; iterations per step "
+                "%.2f (Newton), %.2f (chord, %.2f of them Newton's)\n",
+                m.nv, dq, moved, dv, double(stats[0].nonlinear_iterations) / 20.0, double(stats[1].nonlinear_iterations) / 20.0,
+                double(stats[1].jac_evals) / 20.0);
+    EXPECT_GT(moved, 1e-3);
+    EXPECT_LE(dq, 1e-12 * std::max(1.0, moved)) << m.nv;
+    EXPECT_LE(dv, 1e-11) << m.nv;
+    if (n > 8) EXPECT_GE(m.nv, 128);  // the GMRES corrections
+    else EXPECT_EQ(stats[1].jac_evals, 0);
   }
 }
 

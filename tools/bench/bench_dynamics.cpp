@@ -132,12 +132,13 @@ template <bool B, int Every> void Hybrid(benchmark::State& st) {
 // one step of a fixed-step method, h = 1 ms, on the chain (O(N) route inside).  A method that
 // cannot take the step (symplectic-euler's Newton not converging on a long chain) is a row marked
 // failed with the integrator's reason (report.py lists it under "Not timed"), and the run goes on.
-void Step(benchmark::State& st, const char* method) {
+void Step(benchmark::State& st, const char* method, Newton newton = Newton::Full) {
   const Model model = bench::make_tree(int(st.range(0)), false);
   const Inputs none;
   System sys(model, none, FdMethod::ArticulatedBody);
   SimulationSettings s;
   s.dt = 1e-3;
+  s.newton = newton;
   VecX y(sys.size());
   y << bench::random_vector(model.nq, 1, 0.3), bench::random_vector(model.nv, 2, 0.1);
   const VecX y0 = y;
@@ -163,6 +164,13 @@ void Step(benchmark::State& st, const char* method) {
       break;
     }
     benchmark::DoNotOptimize(y.data());
+  }
+  // the nonlinear iterations per step, and the Jacobians formed per step (variational: its chord
+  // iterations gave way to Newton's)
+  const IntegratorStats stats = integrator->stats();
+  if (stats.steps > 0) {
+    st.counters["iterations"] = double(stats.nonlinear_iterations) / double(stats.steps);
+    st.counters["jacobians"] = double(stats.jac_evals) / double(stats.steps);
   }
 }
 
@@ -192,7 +200,10 @@ BENCHMARK_CAPTURE(Step, euler, "euler")->Name("chain/step_euler")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, symplectic_euler, "symplectic-euler")->Name("chain/step_symplectic_euler")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, rk4, "rk4")->Name("chain/step_rk4")->Apply(sizes);
 BENCHMARK_CAPTURE(Step, implicit_midpoint, "implicit-midpoint")->Name("chain/step_implicit_midpoint")->DenseRange(1, 1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32)->Arg(64);
-BENCHMARK_CAPTURE(Step, variational, "variational")->Name("chain/step_variational")->DenseRange(1, 1)->Arg(2)->Arg(4)->Arg(8)->Arg(16)->Arg(32)->Arg(64);
+BENCHMARK_CAPTURE(Step, variational, "variational")->Name("chain/step_variational")->Apply(sizes);
+BENCHMARK_CAPTURE(Step, variational_simplified, "variational", Newton::Simplified)
+    ->Name("chain/step_variational_simplified")
+    ->Apply(sizes);
 BENCHMARK(MassLiteral<true>)->Name("tree/mass_literal")->Apply(tree_sizes);
 BENCHMARK(MassComposite<true>)->Name("tree/mass_composite")->Apply(tree_sizes);
 BENCHMARK(MassFromQ<true>)->Name("tree/mass_q")->Apply(tree_sizes);

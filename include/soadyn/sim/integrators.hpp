@@ -24,8 +24,12 @@
 //                        L_d = h L(q_k ⊕ u/2, u/h), u = q_k+1 ⊖ q_k, in position–momentum form, on the
 //                        group, forced by discrete Lagrange–d'Alembert (the forces at the midpoint),
 //                        by Newton (order 2, symplectic, symmetric; conserves momentum where no
-//                        force acts); reports v_k = 𝓜(q_k)⁻¹ p_k (variational.cpp).  Not with
-//                        prescribed motion or closed loops yet
+//                        force acts); reports v_k = 𝓜(q_k)⁻¹ p_k (variational.cpp).  Full Newton
+//                        (analytic Jacobian, dense LU: O(nv³) per iteration) or simplified: chord
+//                        iterations with 𝓜(q_m) by the articulated-body factor, O(N) each, Newton's
+//                        where they contract by less than half (faster from about 16 DOFs on:
+//                        chain/step_variational{,_simplified}).  Not with prescribed motion or
+//                        closed loops yet
 // Free and ball joints keep a unit quaternion: CVODE projects it (CVodeSetProjFn); the fixed-step
 // methods move it on the group, q ⊕ δ by the exponential map (configuration.hpp), so it is unit by
 // construction and never renormalized after a step (fixed_step.hpp).

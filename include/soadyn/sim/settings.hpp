@@ -38,10 +38,10 @@ enum class Jacobian {
   Analytic,  // "analytic": the analytic derivatives (derivatives.hpp)
   Dq         // "dq": difference quotients
 };
-// implicit-midpoint's Newton iteration
+// implicit-midpoint's and variational's Newton iteration (variational's simplified: the chord iterations with 𝓜)
 enum class Newton {
   Full,       // "full": the Jacobian at every iterate
-  Simplified  // "simplified": once per step, at the explicit-Euler predictor
+  Simplified  // "simplified": once per step, at the explicit-Euler predictor (variational: 𝓜(q_m), O(N))
 };
 // Each one's word (the scenario's, the command line's, Python's, the run file's): Method's from
 // kMethodWords (settings.cpp; integrators() describes each), FdMethod's (fd_method.hpp) from fd_methods()
@@ -65,7 +65,7 @@ struct IntegrationSettings {
   long max_steps = 100000000;          // CVODE steps allowed in the whole run (in each rollout)
   FdMethod dynamics = FdMethod::ArticulatedBody;  // forward-dynamics route: dense | sparse | aba ("on" taken too)
   Jacobian jacobian = Jacobian::Analytic;        // ∂f/∂y for cvode-bdf and implicit-midpoint
-  Newton newton = Newton::Full;                  // implicit-midpoint's Newton iteration
+  Newton newton = Newton::Full;                  // implicit-midpoint's and variational's Newton iteration
 };
 
 struct SimulationSettings : IntegrationSettings {
