@@ -1,15 +1,18 @@
 #!/usr/bin/python3
 """The data behind the chart tools' figures, checked against the run files, against runs made
-here, and against what the physics says (ctest: tool_plot, tool_work_precision, tool_stability).
+here, and against what the physics says (ctest: tool_plot, tool_work_precision, tool_stability,
+tool_crossover).
 
     check_tools.py plot RUN.h5 EXACT.csv BINNED.csv JOINTS.csv JOINT FIG.svg
                                                   curves tools/plot.py drew (its --data dumps: all
                                                   rows, --bins 20, --joints JOINT) and its SVG
     check_tools.py work_precision DIR T_END       DIR/wp_*.csv from tools/work_precision.py
     check_tools.py stability DIR T_END            DIR/stability.{csv,md} from tools/stability.py
+    check_tools.py crossover DIR                  DIR/crossover.{csv,md} from tools/crossover.py --quick
 """
 import csv
 import math
+import re
 import os
 import sys
 
@@ -265,6 +268,25 @@ def check_stability(out, t_end):
         expect(beyond.startswith(seen), f"stability: {s} {m} at {2 * dt:g} s: '{beyond}' reported, '{seen}' seen")
 
 
+def check_crossover(out):
+    """tools/crossover.py --quick: per method, the finer setting's energy error below the coarser's
+    (each converges) on the double pendulum; on the satellite, variational holds |ΔL|/L ≤ 1e-10 over
+    1000 s at its coarsest step (0.2 s: 5000 steps), where rk4 at 0.2 s does not"""
+    with open(os.path.join(out, "crossover.csv")) as f:
+        rows = list(csv.DictReader(f))
+    by = {}
+    for r in rows:
+        by.setdefault(r["method"], []).append((float(r["setting"]), float(r["max_energy_error"])))
+    expect(set(by) >= {"cvode-adams", "rk4", "implicit-midpoint", "symplectic-euler", "variational"},
+           f"crossover: methods {sorted(by)}")
+    for m, pts in by.items():
+        pts.sort(reverse=True)  # coarse first
+        expect(all(b[1] < a[1] for a, b in zip(pts, pts[1:])), f"crossover: {m}'s energy error does not fall: {pts}")
+    md = open(os.path.join(out, "crossover.md")).read()
+    expect(re.search(r"\| variational \| dt 0\.2 \|", md) is not None, "crossover: variational does not hold 1e-10 at dt 0.2")
+    expect(re.search(r"\| rk4 \| dt 0\.2 \|", md) is None, "crossover: rk4 holds 1e-10 at dt 0.2")
+
+
 if __name__ == "__main__":
     what = sys.argv[1]
     if what == "plot":
@@ -273,6 +295,8 @@ if __name__ == "__main__":
         check_work_precision(sys.argv[2], float(sys.argv[3]))
     elif what == "stability":
         check_stability(sys.argv[2], float(sys.argv[3]))
+    elif what == "crossover":
+        check_crossover(sys.argv[2])
     else:
         sys.exit(__doc__)
     if failures:

@@ -10,6 +10,8 @@
 #   identify_arm.png          soadyn identify: the logged arm, the scene 30 % off and the fitted scene (tools/plot.py --compare)
 #   long_horizon.{md,png,csv} the satellite over 1000 s per method, variational's step against rk4's, and
 #                             energy and momentum errors over 10⁶ steps (tools/long_horizon.py --chart)
+#   crossover.{md,png,csv}    the double pendulum's energy error over 10³ and 10⁴ periods against CPU, the
+#                             cheapest run per error, the CPU to hold the satellite's |ΔL|/L ≤ 1e-10 (tools/crossover.py)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/bench/run.sh
@@ -40,4 +42,5 @@ cp out/ensemble_stability/ensemble_stability.{png,csv} tools/results/
 { tools/bench/gradient.py --repeat 7 --t-end 0.5; echo; tools/bench/gradient.py --repeat 5 --t-end 1.0 --every-body; } >tools/results/gradient.md
 tools/bench/python_overhead.py --processes 15 >tools/results/python_overhead.md
 tools/long_horizon.py --chart
+tools/crossover.py
 echo "figures and tables written to tools/results/"
