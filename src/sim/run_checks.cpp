@@ -98,12 +98,6 @@ void check_prescribed(const Scenario& sc, const SimulationSettings& s) {
   for (const PrescribedInput& p : pres)
     if (p.body < 0 || p.body >= m.nbodies || m.nv_i[p.body] != 1 || m.nq_i[p.body] != 1)
       throw Error(scene + "prescribed: joint '" + p.joint + "' is not a 1-DOF joint of the model");
-  if (s.method == Method::Variational) {  // at the first prescribed joint's line (the method may be the command line's)
-    const auto it = sc.locations.find("prescribed." + pres.front().joint);
-    throw Error((it == sc.locations.end() ? scene : it->second + ": ") +
-                "prescribed: method variational does not take prescribed motion yet; use symplectic-euler "
-                "(symplectic, no free or ball joints), rk4 or implicit-midpoint");
-  }
   if (s.limits && m.has_limits()) {
     for (const PrescribedInput& p : pres) {
       const int k = p.dof;

@@ -28,9 +28,11 @@
 // one); p_k is kept from the step before rather than recomputed as 𝓜 v_k when the state is the one
 // the last step left.
 #include "fixed_step.hpp"
+#include "variational_blocks.hpp"
 
 #include "soadyn/algorithm/algorithms.hpp"
 #include "soadyn/algorithm/derivatives.hpp"
+#include "soadyn/algorithm/hybrid.hpp"
 #include "soadyn/algorithm/kinematics.hpp"
 
 #include <Eigen/LU>
@@ -45,76 +47,7 @@ namespace soadyn {
 
 namespace {
 
-// c(θ) = (1 − (θ/2) cot(θ/2)) / θ² and dc/d(θ²), by their series where θ is small
-void turn_coefficient(double t2, double& c, double& dc) {
-  if (t2 < 1e-2) {
-    c = 1.0 / 12 + t2 * (1.0 / 720 + t2 * (1.0 / 30240 + t2 / 1209600));
-    dc = 1.0 / 720 + t2 * (2.0 / 30240 + t2 * 3.0 / 1209600);
-    return;
-  }
-  const double x = 0.5 * std::sqrt(t2), xc = x / std::tan(x), s = std::sin(x);
-  c = (1.0 - xc) / t2;
-  // dc/d(θ²) = (x cot x + x²/sin²x − 2) / (32 x⁴), x = θ/2
-  dc = (xc + x * x / (s * s) - 2.0) / (32.0 * x * x * x * x);
-}
-
-Mat3 hat(const Vec3& u) {
-  Mat3 H;
-  H << 0, -u.z(), u.y(), u.z(), 0, -u.x(), -u.y(), u.x(), 0;
-  return H;
-}
-
-// R(u) = e + (s/2) û + c û²
-Mat3 turn_rate(const Vec3& u, double s) {
-  double c = 0, dc = 0;
-  turn_coefficient(u.squaredNorm(), c, dc);
-  const Mat3 H = hat(u);
-  return Mat3::Identity() + (0.5 * s) * H + c * H * H;
-}
-
-// ∂(R(u) z)/∂u = −(s/2) ẑ + 2 c' (u × (u × z)) uᵀ + c ((u·z) e + u zᵀ − 2 z uᵀ)
-Mat3 turn_rate_derivative(const Vec3& u, const Vec3& z, double s) {
-  double c = 0, dc = 0;
-  turn_coefficient(u.squaredNorm(), c, dc);
-  Mat3 D = (-0.5 * s) * hat(z);
-  D.noalias() += (2.0 * dc) * u.cross(u.cross(z)) * u.transpose();
-  D += c * (u.dot(z) * Mat3::Identity() + u * z.transpose() - 2.0 * z * u.transpose());
-  return D;
-}
-
-// 𝓜(q)⁻¹ x by the articulated-body factor forward dynamics left in data (articulated_solve, O(N)):
-// the preconditioner of Newton's Krylov solves (Eigen's GMRES asks for this shape)
-class MassPreconditioner {
- public:
-  using Scalar = double;
-  using RealScalar = double;
-  using StorageIndex = int;
-  enum { ColsAtCompileTime = Eigen::Dynamic, MaxColsAtCompileTime = Eigen::Dynamic };
-  MassPreconditioner() = default;
-  void bind(const Model& model, const Data& data) {
-    model_ = &model;
-    data_ = &data;
-    work_ = articulated_solve_work(model);
-  }
-  template <typename M>
-  MassPreconditioner& analyzePattern(const M&) { return *this; }
-  template <typename M>
-  MassPreconditioner& factorize(const M&) { return *this; }
-  template <typename M>
-  MassPreconditioner& compute(const M&) { return *this; }
-  template <typename Rhs>
-  VecX solve(const Rhs& b) const {
-    x_ = b;
-    articulated_solve(*model_, *data_, x_, work_);
-    return x_.col(0);
-  }
-  Eigen::ComputationInfo info() const { return Eigen::Success; }
-
- private:
-  const Model* model_ = nullptr;
-  const Data* data_ = nullptr;
-  mutable MatX work_, x_;
-};
+using namespace variational;
 
 // from this many DOFs on, Newton's corrections by GMRES preconditioned with 𝓜⁻¹ (O(nv²) per
 // iteration: 7–8 products with the Jacobian) rather than a dense LU (O(nv³)): on the bench's chain
@@ -126,45 +59,52 @@ class Variational : public FixedStep {
   Variational(System& s, double dt, double t0, bool chord)
       : FixedStep(s, dt, t0),
         chord_(chord),
+        prescribed_(s.has_prescribed()),
         free_(without_gravity(s.model)),
         gravity_(!s.model.gravity.isZero(0.0)),
+        vi_(s.v_index()),
         dd_(s.model),
         ddg_(s.model),
-        q_(s.model.nq),
+        qk_(s.nq_state()),
         ym_(VecX::Zero(s.size())),
+        xf_(s.nv_state()),
         xi_(s.model.nv),
         p_(s.model.nv),
         a_(s.model.nv),
         r_(s.model.nv),
-        delta_(s.model.nv),
+        rf_(s.nv_state()),
+        delta_(s.nv_state()),
         zero_(VecX::Zero(s.model.nv)),
+        x_(s.model.nv),
+        vp_(VecX::Zero(s.model.nv)),
         J_(s.model.nv, s.model.nv),
         B_(s.model.nv, s.model.nv),
         dq_(s.model.nv, s.model.nv),
         dv_(s.model.nv, s.model.nv),
-        lu_(s.model.nv),
-        guess_(s.model.nv),
+        lu_(s.nv_state()),
+        guess_(s.nv_state()),
         gq_(s.model.nv),
         gv_(s.model.nv),
+        held_(s.model.nv),
         solve_work_(articulated_solve_work(s.model)),
         cached_y_(s.size()) {
-    if (s.has_prescribed() || s.has_loops())
-      throw Error("variational: prescribed motion and closed loops are not available yet: use rk4 or implicit-midpoint");
+    if (s.has_loops()) throw Error("variational: closed loops are not available yet: use rk4 or implicit-midpoint");
     for (const System::StateJoint& j : s.state_joints())
       visit_joint(s.model, j.body, [&](const auto& kind) {
         using K = std::decay_t<decltype(kind)>;
-        if constexpr (std::is_base_of_v<joints::Rotation, K>) turns_.push_back({j.iv, 1.0});
-        else if constexpr (std::is_base_of_v<joints::RigidMotion, K>) turns_.push_back({j.iv, -1.0});
+        const int at = s.model.idx_v[size_t(j.body)];
+        if constexpr (std::is_base_of_v<joints::Rotation, K>) turns_.push_back({at, 1.0});
+        else if constexpr (std::is_base_of_v<joints::RigidMotion, K>) turns_.push_back({at, -1.0});
       });
     blocks_.resize(turns_.size());
-    gmres_.preconditioner().bind(s.model, s.data);
+    gmres_.preconditioner().bind(s.model, s.data, vi_);
     gmres_.setTolerance(1e-13);
     gmres_.setMaxIterations(50);
     gmres_.set_restart(50);
   }
 
  private:
-  // a free or ball joint's turn: where it sits in v, its side s, and its blocks at the iterate
+  // a free or ball joint's turn: where it sits in the model's v, its side s
   struct Turn {
     int at;
     double s;
@@ -179,45 +119,83 @@ class Variational : public FixedStep {
     return f;
   }
 
+  // the model's v at t with only the prescribed joints' q̇*(t) (into vp_)
+  void prescribed_velocity(double t) {
+    double q = 0, qdd = 0;
+    for (const PrescribedInput& pi : sys_.inputs.prescribed) pi.at(t, q, vp_(pi.dof), qdd);
+  }
+  // W_p += Σ (impulse on prescribed joint j) · q̇*_j(t)
+  double prescribed_work(const VecX& impulse, double t) {
+    prescribed_velocity(t);
+    double w = 0.0;
+    for (const PrescribedInput& pi : sys_.inputs.prescribed) w += impulse(pi.dof) * vp_(pi.dof);
+    return w;
+  }
+
+  // One step (the free joints' q and v in y; the model's at t from System::expand).  With prescribed
+  // motion, only the free rows of the DEL equations hold: the prescribed joints' q and q̇ at t_m are
+  // their given motion's, ξ_f is the unknown, and the impulses the prescribed rows miss are what held
+  // the motion: at node k, p⁻_k − p_k on the way out (p⁻_k = b − (h/2) ā of the step from it, p_k =
+  // 𝓜(q_k) v_k the continuous momentum) and p_k+1 − p⁺_k+1 on the way in, each ≈ ∫ τ_p over its half
+  // step, their work counted in W_p at the half step's midpoint velocity q̇*(t_k + h/4), q̇*(t_k+1 − h/4)
   void step(double t, double h, VecX& y) override {
-    const Model& m = sys_.model;
-    const int nq = m.nq, nv = m.nv;
-    q_ = y.head(nq);
+    const int nqs = sys_.nq_state(), nvs = sys_.nv_state();
+    qk_ = y.head(nqs);
     // p_k: the last step's when y is the state it left, else 𝓜(q_k) v_k
     const bool cached = cached_ && y == cached_y_;
     if (!cached) {
-      delta_ = y.segment(nq, nv);
-      p_ = inverse_dynamics(free_, sys_.data, q_, zero_, delta_);  // 𝓜(q_k) v_k, O(N)
+      sys_.expand(t, y.data());
+      p_ = inverse_dynamics(free_, sys_.data, sys_.q, zero_, sys_.v);  // 𝓜(q_k) v_k, O(N)
+      held_ = p_;  // the continuous momentum at t_k (its prescribed rows)
     } else {
       p_ = p_next_;
     }
     // ξ from v_k, or 2 v_k − ξ_k−1 (v at t_k + h/2 to O(h²)) after a step of the same h
-    xi_ = y.segment(nq, nv);
-    if (cached && h == last_h_) xi_ = 2.0 * xi_ - last_xi_;
+    xf_ = y.segment(nqs, nvs);
+    if (cached && h == last_h_) xf_ = 2.0 * xf_ - last_xf_;
     solve(t, h);
-    last_xi_ = xi_;
+    last_xf_ = xf_;
     last_h_ = h;
     // W, D += h (P, D)(t_m, ξ) at the last evaluation (the midpoint)
+    const int w = nqs + nvs;
     if (nw_ > 0) {
       const Inputs::Power pw = sys_.inputs.power(t + 0.5 * h, xi_);
       double controller = 0.0;
       if (sys_.control_work) controller = sys_.feedback_tau.dot(xi_) + (sys_.controlled ? sys_.control.dot(xi_) : 0.0);
-      y(nq + nv) += h * (pw.inputs + controller);
-      y(nq + nv + 1) += h * pw.dissipated;
+      y(w) += h * (pw.inputs + controller);
+      y(w + 1) += h * pw.dissipated;
+    }
+    if (prescribed_) {  // the holding impulse out of node k: p⁻_k − p_k
+      r_ = dd_.tau - (0.5 * h) * a_ - held_;
+      y(w + 2) += prescribed_work(r_, t + 0.25 * h);
     }
     // p_k+1 = R(u)ᵀ [b + (h/2) R(u/2)⁻ᵀ ā]
     r_ = a_;
     for (size_t k = 0; k < turns_.size(); ++k) r_.segment<3>(turns_[k].at) = blocks_[k].Rhinv.transpose() * a_.segment<3>(turns_[k].at);
     r_ = dd_.tau + (0.5 * h) * r_;
     for (size_t k = 0; k < turns_.size(); ++k) {
-      const Vec3 w = r_.segment<3>(turns_[k].at);
-      r_.segment<3>(turns_[k].at) = blocks_[k].R.transpose() * w;
+      const Vec3 u = r_.segment<3>(turns_[k].at);
+      r_.segment<3>(turns_[k].at) = blocks_[k].R.transpose() * u;
     }
     p_next_ = r_;
-    // q_k+1 = q_k ⊕ h ξ,  v_k+1 = 𝓜(q_k+1)⁻¹ p_k+1
-    sys_.integrate(q_, xi_, h, y.head(nq));
-    q_ = y.head(nq);
-    y.segment(nq, nv) = forward_dynamics(free_, sys_.data, q_, zero_, r_);  // 𝓜(q_k+1)⁻¹ p_k+1, O(N)
+    // q_k+1 = q_k ⊕ h ξ,  v_k+1 from p_k+1
+    sys_.integrate(qk_, xf_, h, y.head(nqs));
+    if (!prescribed_) {
+      y.segment(nqs, nvs) = forward_dynamics(free_, sys_.data, y.head(nqs), zero_, r_);  // 𝓜⁻¹ p_k+1, O(N)
+    } else {
+      // v_f = 𝓜_ff⁻¹ (p_f − 𝓜_fp q̇*_p): the hybrid dynamics at (q_k+1, 0) with gravity off, τ_f = p_f
+      // and q̈*_p = q̇*_p(t_k+1); then p_k+1 = 𝓜(q_k+1) v_k+1 and the impulse into node k+1
+      sys_.expand(t + h, y.data());
+      update_kinematics(free_, sys_.data, sys_.q);
+      update_velocities(free_, sys_.data, zero_);
+      prescribed_velocity(t + h);
+      hybrid_dynamics(free_, sys_.data, sys_.prescribed_joints(), r_, vp_, x_);
+      for (int i = 0; i < nvs; ++i) y(nqs + i) = sys_.data.qdd(vi_[size_t(i)]);
+      sys_.expand(t + h, y.data());
+      held_ = inverse_dynamics(free_, sys_.data, sys_.q, zero_, sys_.v);
+      r_ = held_ - p_next_;
+      y(w + 2) += prescribed_work(r_, t + 0.75 * h);
+    }
     cached_y_ = y;
     cached_ = true;
   }
@@ -227,19 +205,20 @@ class Variational : public FixedStep {
   // stopped shrinking within 1000 times their rounding; that iterate's evaluation (ā, 𝓜 ξ, the
   // blocks) makes p_k+1.  (Ending at 4 ε instead saves one iteration in four but left a bias that
   // drifted a random tree's momenta by ~5e-12 over 10⁵ steps, against ~2e-13: test_variational.)
-  // First the chord iterations, O(N) each; where they contract by less than half per iteration
-  // (a step that barely resolves the motion), Newton's, O(nv³) each.
+  // First the chord iterations, O(N) each, when asked for (newton: simplified); where they
+  // contract by less than half per iteration (a step that barely resolves the motion), Newton's.
+  // With prescribed motion F and ξ are their free rows.
   void solve(double t, double h) {
-    guess_ = xi_;
+    guess_ = xf_;
     if (chord_ && chord(t, h)) return;
-    if (!xi_.allFinite()) xi_ = guess_;
+    if (!xf_.allFinite()) xf_ = guess_;
     newton(t, h);
   }
 
-  // F's size at the iterate, and whether it is done: within ε of its terms, or no longer shrinking
-  // by half within 1000 times their rounding (𝓜 ξ is rounded by ε |𝓜| |ξ|, more than ε |𝓜 ξ| where
-  // light bodies move fast or the motions cancel; |𝓜| by its largest diagonal entry S_rᵀ Y_i S_r,
-  // Y_i the composite inertia the sweeps leave)
+  // F's size at the iterate (its free rows), and whether it is done: within ε of its terms, or no
+  // longer shrinking by half within `within` times their rounding (𝓜 ξ is rounded by ε |𝓜| |ξ|, more
+  // than ε |𝓜 ξ| where light bodies move fast or the motions cancel; |𝓜| by its largest diagonal
+  // entry S_rᵀ Y_i S_r, Y_i the composite inertia the sweeps leave)
   struct Size {
     double size, scale, rounding;
   };
@@ -248,7 +227,7 @@ class Variational : public FixedStep {
     double diagonal = 0.0;
     for (int c = 0; c < sys_.model.nv; ++c) diagonal = std::max(diagonal, dd_.S.col(c).dot(dd_.row.col(c).head<6>()));
     const double scale = p_.norm() + dd_.tau.norm() + 0.5 * h * a_.norm();
-    return {r_.norm(), scale, eps * (scale + diagonal * xi_.norm())};
+    return {rf_.norm(), scale, eps * (scale + diagonal * xi_.norm())};
   }
   // (the chord's linear convergence can slow to half per iteration well above rounding: it stops
   // only within 10 times the rounding, and gives way to Newton above that)
@@ -263,19 +242,30 @@ class Variational : public FixedStep {
     throw SimulationError(os.str(), t);
   }
 
-  // G = R(u)⁻¹ F on the turns' rows (the Jacobians below are G's)
+  // G = R(u)⁻¹ F on the turns' rows (the Jacobians below are G's), into rf_ (the free rows)
   void turn_residual() {
     for (size_t k = 0; k < turns_.size(); ++k) {
       const Vec3 f = r_.segment<3>(turns_[k].at);
       r_.segment<3>(turns_[k].at) = blocks_[k].Rinv * f;
     }
+    gather(r_, rf_);
+  }
+  void gather(const VecX& model, VecX& state) const {
+    for (size_t i = 0; i < vi_.size(); ++i) state(Eigen::Index(i)) = model(vi_[i]);
+  }
+  // the articulated-body factor of 𝓜(q_m) in data (the hybrid dynamics', prescribed joints locked,
+  // with prescribed motion), with gravity off (the factor does not depend on it)
+  void mass_factor() {
+    if (prescribed_) hybrid_dynamics(free_, sys_.data, sys_.prescribed_joints(), zero_, zero_, x_);
+    else forward_dynamics(free_, sys_.data, zero_, FdMethod::ArticulatedBody);
   }
 
-  // The chord iterations: ξ ← ξ − 𝓜(q_m)⁻¹ G, 𝓜 for G's Jacobian G' = 𝓜 + O(h) (below), so that
-  // they contract at a rate O(h |ξ|) (h times the speed the configuration turns), each one O(N):
-  // the evaluation by sweeps (evaluate_sweeps) and 𝓜⁻¹ by the articulated-body factor at q_m (one
-  // forward dynamics, then one solve).  True when they converged; false when they contracted by less
-  // than half (Newton then goes on from where they stopped) or did not converge in 30.
+  // The chord iterations: ξ ← ξ − 𝓜(q_m)⁻¹ G (𝓜_ff with prescribed motion), 𝓜 for G's Jacobian
+  // G' = 𝓜 + O(h) (below), so that they contract at a rate O(h |ξ|) (h times the speed the
+  // configuration turns), each one O(N): the evaluation by sweeps (evaluate_sweeps) and 𝓜⁻¹ by the
+  // articulated-body factor at q_m (one forward dynamics, then one solve).  True when they
+  // converged; false when they contracted by less than half (Newton then goes on from where they
+  // stopped) or did not converge in 30.
   bool chord(double t, double h) {
     const Model& m = sys_.model;
     double previous = std::numeric_limits<double>::infinity();
@@ -288,15 +278,18 @@ class Variational : public FixedStep {
       previous = s.size;
       ++stats_.nonlinear_iterations;
       turn_residual();
-      forward_dynamics(free_, sys_.data, zero_, FdMethod::ArticulatedBody);  // the factor of 𝓜(q_m)
-      Eigen::Map<MatX> x(r_.data(), m.nv, 1);
+      mass_factor();
+      x_.setZero();
+      for (size_t i = 0; i < vi_.size(); ++i) x_(vi_[i]) = rf_(Eigen::Index(i));
+      Eigen::Map<MatX> x(x_.data(), m.nv, 1);
       articulated_solve(m, sys_.data, x, solve_work_);
-      xi_ -= r_;
+      gather(x_, delta_);
+      xf_ -= delta_;
     }
     return false;
   }
 
-  // Newton's iterations with G's Jacobian (jacobian: analytic but for an O(h²) term), a dense LU
+  // Newton's iterations with G's Jacobian (jacobian: analytic but for an O(h²) term)
   void newton(double t, double h) {
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0;; ++it) {
@@ -314,21 +307,23 @@ class Variational : public FixedStep {
       jacobian(h);
       turn_residual();
       correction();
-      xi_ -= delta_;
+      xf_ -= delta_;
     }
   }
 
-  // δ = G'⁻¹ G: past kKrylovFrom DOFs by GMRES with 𝓜(q_m)⁻¹ (G' = 𝓜 + O(h): a few iterations, to
-  // 1e-13 of |G|), its LU where GMRES does not get there in 50; else the LU
+  // δ = G'_ff⁻¹ G_f: past kKrylovFrom DOFs by GMRES with 𝓜_ff(q_m)⁻¹ (G' = 𝓜 + O(h): a few
+  // iterations, to 1e-13 of |G|), its LU where GMRES does not get there in 50; else the LU
   void correction() {
-    if (sys_.model.nv >= kKrylovFrom) {
-      forward_dynamics(free_, sys_.data, zero_, FdMethod::ArticulatedBody);  // the factor of 𝓜(q_m)
-      gmres_.compute(J_);
-      delta_ = gmres_.solve(r_);
+    if (prescribed_) Jf_ = J_(vi_, vi_);
+    const MatX& J = prescribed_ ? Jf_ : J_;
+    if (sys_.nv_state() >= kKrylovFrom) {
+      mass_factor();
+      gmres_.compute(J);
+      delta_ = gmres_.solve(rf_);
       if (gmres_.info() == Eigen::Success) return;
     }
-    lu_.compute(J_);
-    delta_.noalias() = lu_.solve(r_);
+    lu_.compute(J);
+    delta_.noalias() = lu_.solve(rf_);
   }
 
   // the turns' blocks at the iterate: R(u), R(u/2) and their inverses, u = h ξ on the turn
@@ -343,14 +338,22 @@ class Variational : public FixedStep {
     }
   }
 
+  // q_m = q_k ⊕ (h/2) ξ, the state there ([kin], [vel] at the model's (q_m, ξ), the prescribed
+  // joints' at their motion's t_m) and τ (System::at_state); ξ the model's v there
+  void midpoint(double tm, double h) {
+    const int nqs = sys_.nq_state(), nvs = sys_.nv_state();
+    sys_.integrate(qk_, xf_, 0.5 * h, ym_.head(nqs));
+    ym_.segment(nqs, nvs) = xf_;
+    sys_.at_state(tm, ym_.data());
+    xi_ = sys_.v;
+  }
+
   // evaluate's quantities in O(N), without the matrices: inverse dynamics' sweeps at (q_m, 0, ξ)
   // with gravity off give 𝓜 ξ (dd_.tau), then ½ P(ξ)ᵀ ξ = ½ (∂τ/∂q)ᵀ ξ by their transposed product;
   // the sweeps at (q_m, 0, 0) with gravity give g
   void evaluate_sweeps(double tm, double h) {
     const Model& m = sys_.model;
-    sys_.integrate(q_, xi_, 0.5 * h, ym_.head(m.nq));
-    ym_.segment(m.nq, m.nv) = xi_;
-    sys_.at_state(tm, ym_.data());
+    midpoint(tm, h);
     inverse_dynamics_derivative_sweeps(free_, sys_.data, zero_, xi_, dd_);
     inverse_dynamics_derivatives_transpose_times(free_, dd_, xi_, gq_, gv_);
     a_ = sys_.tau;
@@ -362,14 +365,12 @@ class Variational : public FixedStep {
     turn_blocks(h);
   }
 
-  // at the iterate ξ: q_m = q_k ⊕ (h/2) ξ; [kin], 𝓜 and the forces τ there (System::at_state);
-  // 𝓜 ξ and P(ξ) (inverse dynamics' ∂τ/∂q at (q_m, 0, ξ) with gravity off: its τ is 𝓜 ξ); g and
-  // ∂g/∂δ (at (q_m, 0, 0) with gravity); ā = ½ P(ξ)ᵀ ξ − g + τ; the turns' blocks
+  // at the iterate: the midpoint, 𝓜 and the forces τ there; 𝓜 ξ and P(ξ) (inverse dynamics' ∂τ/∂q
+  // at (q_m, 0, ξ) with gravity off: its τ is 𝓜 ξ); g and ∂g/∂δ (at (q_m, 0, 0) with gravity);
+  // ā = ½ P(ξ)ᵀ ξ − g + τ; the turns' blocks
   void evaluate(double tm, double h) {
     const Model& m = sys_.model;
-    sys_.integrate(q_, xi_, 0.5 * h, ym_.head(m.nq));
-    ym_.segment(m.nq, m.nv) = xi_;
-    sys_.at_state(tm, ym_.data());
+    midpoint(tm, h);
     mass_matrix(m, sys_.data);
     inverse_dynamics_derivatives(free_, sys_.data, zero_, xi_, dd_);
     a_ = sys_.tau;
@@ -381,7 +382,8 @@ class Variational : public FixedStep {
     turn_blocks(h);
   }
 
-  // r = F(ξ) = R(u) [𝓜 ξ − (h/2) R(u/2)⁻¹ ā] − p_k (R = e off the turns)
+  // r = F(ξ) = R(u) [𝓜 ξ − (h/2) R(u/2)⁻¹ ā] − p_k (R = e off the turns; every row of the model),
+  // its free rows in rf_
   void residual(double h) {
     r_ = dd_.tau - (0.5 * h) * a_ - p_;
     for (size_t k = 0; k < turns_.size(); ++k) {
@@ -389,6 +391,7 @@ class Variational : public FixedStep {
       const Blocks& b = blocks_[k];
       r_.segment<3>(at) = b.R * (dd_.tau.segment<3>(at) - (0.5 * h) * (b.Rhinv * a_.segment<3>(at))) - p_.segment<3>(at);
     }
+    gather(r_, rf_);
   }
 
   // G'(ξ) = 𝓜 + (h/2) P Δ − (h/2) R(u/2)⁻¹ [(h/2) K Δ + P ᵀ + ∂τ/∂v]
@@ -427,21 +430,26 @@ class Variational : public FixedStep {
     }
   }
 
-  bool chord_;  // the chord iterations first (newton: simplified)
-  Model free_;  // the model with gravity off: 𝓜 ξ and P(ξ) from inverse dynamics' derivatives
+  bool chord_;       // the chord iterations first (newton: simplified)
+  bool prescribed_;  // the state holds the free joints alone
+  Model free_;       // the model with gravity off: 𝓜 ξ and P(ξ) from inverse dynamics' derivatives
   bool gravity_;
+  const std::vector<int>& vi_;  // the state's v entries in the model's v
   DerivativeData dd_, ddg_;
-  VecX q_, ym_, xi_, p_, a_, r_, delta_, zero_, p_next_;
-  MatX J_, B_, dq_, dv_;
+  VecX qk_, ym_, xf_;                        // q_k and the unknown ξ (the state's)
+  VecX xi_, p_, a_, r_, rf_, delta_, zero_;  // the model's ξ, p_k, ā, F; F's free rows, the correction
+  VecX x_, vp_, p_next_;
+  MatX J_, B_, dq_, dv_, Jf_;
   Eigen::PartialPivLU<MatX> lu_;
   Eigen::GMRES<MatX, MassPreconditioner> gmres_;
   VecX guess_, gq_, gv_;  // the step's first iterate; (∂τ/∂q)ᵀ ξ and (∂τ/∂v)ᵀ ξ
+  VecX held_;             // with prescribed motion, 𝓜(q_k) v_k (the continuous momentum at the node)
   MatX solve_work_;       // articulated_solve's
   std::vector<Turn> turns_;
   std::vector<Blocks> blocks_;
   VecX cached_y_;  // the state the last step left, whose momentum is p_next_
   bool cached_ = false;
-  VecX last_xi_;         // the last step's ξ
+  VecX last_xf_;         // the last step's ξ
   double last_h_ = 0.0;  // and its h
 };
 

@@ -28,8 +28,9 @@
 //                        (analytic Jacobian, dense LU: O(nv³) per iteration) or simplified: chord
 //                        iterations with 𝓜(q_m) by the articulated-body factor, O(N) each, Newton's
 //                        where they contract by less than half (faster from about 16 DOFs on:
-//                        chain/step_variational{,_simplified}).  Not with prescribed motion or
-//                        closed loops yet
+//                        chain/step_variational{,_simplified}).  With prescribed motion, the free
+//                        rows of the DEL equations (the holding work from the impulses the
+//                        prescribed rows miss).  Not with closed loops yet
 // Free and ball joints keep a unit quaternion: CVODE projects it (CVodeSetProjFn); the fixed-step
 // methods move it on the group, q ⊕ δ by the exponential map (configuration.hpp), so it is unit by
 // construction and never renormalized after a step (fixed_step.hpp).

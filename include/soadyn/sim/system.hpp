@@ -45,6 +45,8 @@ class System {
   int nq_state() const { return nq_state_; }
   int nv_state() const { return nv_state_; }
   bool has_prescribed() const { return locked_.any(); }
+  // the joints whose motion is given (hybrid_dynamics' locked set)
+  const PrescribedJoints& prescribed_joints() const { return locked_; }
   // closed loops (inputs.loops): q̈ by loop_forward_dynamics, their multipliers and rows at the
   // last evaluation in loop_data()
   bool has_loops() const { return loops_.m > 0; }
