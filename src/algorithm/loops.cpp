@@ -74,6 +74,9 @@ LoopData::LoopData(const Model& model, const std::vector<LoopConstraint>& loops)
   J_a = MatX::Zero(6, model.nv);
   J_b = MatX::Zero(6, model.nv);
   work = articulated_solve_work(model);
+  cod = Eigen::CompleteOrthogonalDecomposition<MatX>(m, m);
+  cod.setThreshold(kLoopRankTolerance);
+  b = VecX::Zero(m);
 }
 
 namespace {
@@ -177,16 +180,19 @@ void loop_rows(const Model& model, const Data& data, const std::vector<LoopConst
 
 namespace {
 
-// λ of minimum norm for A λ = b by a complete orthogonal decomposition with the loops' rank
-// tolerance; records the rank and the margin (the smallest kept pivot of the complete orthogonal
-// factor T over the largest column pivot)
-void solve_multipliers(LoopData& ld, const VecX& b) {
-  Eigen::CompleteOrthogonalDecomposition<MatX> cod(ld.A.rows(), ld.A.cols());
-  cod.setThreshold(kLoopRankTolerance);
-  cod.compute(ld.A);
-  ld.rank = int(cod.rank());
-  ld.margin = ld.rank > 0 ? cod.matrixT().diagonal().head(ld.rank).cwiseAbs().minCoeff() / std::abs(cod.maxPivot()) : 0.0;
-  ld.lambda = cod.solve(b);
+// the margin of a decomposition of rank `rank`: the smallest kept pivot of the complete orthogonal
+// factor T over the largest column pivot (0 at rank 0)
+double kept_margin(const Eigen::CompleteOrthogonalDecomposition<MatX>& cod, int rank) {
+  return rank > 0 ? cod.matrixT().diagonal().head(rank).cwiseAbs().minCoeff() / std::abs(cod.maxPivot()) : 0.0;
+}
+
+// λ of minimum norm for A λ = ld.b by the complete orthogonal decomposition with the loops' rank
+// tolerance (ld.cod, sized once); records the rank and the margin
+void solve_multipliers(LoopData& ld) {
+  ld.cod.compute(ld.A);
+  ld.rank = int(ld.cod.rank());
+  ld.margin = kept_margin(ld.cod, ld.rank);
+  ld.lambda = ld.cod.solve(ld.b);
 }
 
 // the rank and margin of one loop's diagonal block of A
@@ -197,8 +203,7 @@ std::pair<int, double> block_rank(const LoopData& ld, int loop) {
   Eigen::CompleteOrthogonalDecomposition<MatX> cod(ld.A(rows, rows));
   cod.setThreshold(kLoopRankTolerance);
   const int rank = int(cod.rank());
-  const double margin = rank > 0 ? cod.matrixT().diagonal().head(rank).cwiseAbs().minCoeff() / std::abs(cod.maxPivot()) : 0.0;
-  return {rank, margin};
+  return {rank, kept_margin(cod, rank)};
 }
 
 }  // namespace
@@ -231,9 +236,13 @@ void loop_forward_dynamics(const Model& model, Data& data, const std::vector<Loo
   articulated_solve(model, data, ld.MinvKt, ld.work);
   ld.A.noalias() = ld.K * ld.MinvKt;
   // A λ = K q̈₀ + k̇ (+ 2 s K v + s² φ), q̈ = q̈₀ − 𝓜⁻¹ Kᵀ λ
-  VecX b = ld.K * data.qdd + ld.kdot;
-  if (stabilize > 0) b += 2 * stabilize * (ld.K * v) + stabilize * stabilize * ld.phi;
-  solve_multipliers(ld, b);
+  ld.b.noalias() = ld.K * data.qdd;
+  ld.b += ld.kdot;
+  if (stabilize > 0) {
+    ld.b.noalias() += (2 * stabilize) * (ld.K * v);
+    ld.b += (stabilize * stabilize) * ld.phi;
+  }
+  solve_multipliers(ld);
   data.qdd.noalias() -= ld.MinvKt * ld.lambda;
 }
 

@@ -24,6 +24,10 @@ BuiltinControllers::BuiltinControllers(const Model& model, std::vector<Controlle
     if (c.at_effort)
       for (int k = 0; k < model.nv; ++k) b(k) = std::min(b(k), model.effort[size_t(k)]);
     bound_.push_back(std::move(b));
+    std::vector<char> passive(size_t(model.nv), 1);
+    for (const int k : c.actuated)
+      if (k >= 0 && k < model.nv) passive[size_t(k)] = 0;
+    passive_.push_back(std::move(passive));
   }
 }
 
@@ -69,7 +73,7 @@ void BuiltinControllers::operator()(double t, const VecX& q, const VecX& v, Eige
         } else {
           // the actuators' q̈ commanded, the passive DOFs' from the loops: τ on the actuators
           for (int k = 0; k < model_.nv; ++k)
-            if (std::find(c.actuated.begin(), c.actuated.end(), k) == c.actuated.end()) a_(k) = 0.0;
+            if (passive_[i][size_t(k)]) a_(k) = 0.0;
           part_ = loop_inverse_dynamics(model_, data_, loops_, c.actuated, a_, loop_data_);
         }
         break;

@@ -203,12 +203,12 @@ void Scheduler::at_roots(double t, VecX& y, const std::vector<int>& which) {
 }
 
 LoopSingularity::LoopSingularity(System& sys)
-    : sys_(sys), data_(sys.model), ld_(sys.model, sys.inputs.loops), ydot_(sys.size()) {}
+    : sys_(sys), data_(sys.model), ld_(sys.model, sys.inputs.loops), ydot_(sys.size()), zero_(VecX::Zero(sys.model.nv)) {}
 
 void LoopSingularity::rows_at(const double* y) {
   // the state's q is the model's (loops and prescribed motion are not taken together)
   update_kinematics(sys_.model, data_, Eigen::Map<const VecX>(y, sys_.model.nq));
-  update_velocities(sys_.model, data_, VecX::Zero(sys_.model.nv));
+  update_velocities(sys_.model, data_, zero_);
   loop_rows(sys_.model, data_, sys_.inputs.loops, ld_);
 }
 

@@ -149,7 +149,7 @@ class LoopSingularity : public EventKind {
   Data data_;
   LoopData ld_;
   std::vector<int> rows_, cols_;
-  VecX ydot_;
+  VecX ydot_, zero_;  // zero_: the velocities K is taken at (K does not depend on them)
 };
 
 // The run's schedule: the output grid (outputs every output_interval, the last at t_end), the

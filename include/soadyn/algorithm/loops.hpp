@@ -24,6 +24,8 @@
 #include "soadyn/multibody/data.hpp"
 #include "soadyn/multibody/model.hpp"
 
+#include <Eigen/QR>
+
 #include <string>
 #include <string_view>
 #include <vector>
@@ -66,6 +68,10 @@ struct LoopData {
                      // it falls towards 0 as the loops near a singular configuration (a dead point)
   std::vector<int> row_loop;  // the loop of each row
   MatX J_a, J_b, work;        // 6 × nv each; articulated_solve's workspace
+  // A's complete orthogonal decomposition and the solve's right-hand side, sized once (m × m, m):
+  // an evaluation allocates neither
+  Eigen::CompleteOrthogonalDecomposition<MatX> cod;
+  VecX b;
 };
 
 // [kin][vel] K, k̇ and φ of the loops at the current state (O(m · depth))

@@ -40,6 +40,7 @@ class BuiltinControllers {
   const Model& model_;
   std::vector<ControllerInput> controllers_;
   std::vector<VecX> bound_;  // each controller's clamp, per DOF: max_torque, and the effort if asked
+  std::vector<std::vector<char>> passive_;  // per controller, per DOF: not among its `actuated` (loops)
   Data data_;
   VecX zero_, a_, part_;
   std::vector<LoopConstraint> loops_;
