@@ -86,7 +86,6 @@ class Variational : public FixedStep {
         gq_(s.model.nv),
         gv_(s.model.nv),
         held_(s.model.nv),
-        solve_work_(articulated_solve_work(s.model)),
         cached_y_(s.size()) {
     if (s.has_loops()) throw Error("variational: closed loops are not available yet: use rk4 or implicit-midpoint");
     for (const System::StateJoint& j : s.state_joints())
@@ -185,14 +184,15 @@ class Variational : public FixedStep {
     } else {
       // v_f = 𝓜_ff⁻¹ (p_f − 𝓜_fp q̇*_p): the hybrid dynamics at (q_k+1, 0) with gravity off, τ_f = p_f
       // and q̈*_p = q̇*_p(t_k+1); then p_k+1 = 𝓜(q_k+1) v_k+1 and the impulse into node k+1
+      // (System::expand puts q̇*(t_k+1) on the prescribed rows of sys_.v, the only ones read there)
       sys_.expand(t + h, y.data());
       update_kinematics(free_, sys_.data, sys_.q);
       update_velocities(free_, sys_.data, zero_);
-      prescribed_velocity(t + h);
-      hybrid_dynamics(free_, sys_.data, sys_.prescribed_joints(), r_, vp_, x_);
+      hybrid_dynamics(free_, sys_.data, sys_.prescribed_joints(), r_, sys_.v, x_);
       for (int i = 0; i < nvs; ++i) y(nqs + i) = sys_.data.qdd(vi_[size_t(i)]);
-      sys_.expand(t + h, y.data());
-      held_ = inverse_dynamics(free_, sys_.data, sys_.q, zero_, sys_.v);
+      sys_.expand(t + h, y.data());  // v_k+1 whole; [kin] at q_k+1 and v = 0 still hold
+      inverse_dynamics(free_, sys_.data, sys_.v);
+      held_ = sys_.data.tau;
       r_ = held_ - p_next_;
       y(w + 2) += prescribed_work(r_, t + 0.75 * h);
     }
@@ -253,7 +253,7 @@ class Variational : public FixedStep {
   void gather(const VecX& model, VecX& state) const {
     for (size_t i = 0; i < vi_.size(); ++i) state(Eigen::Index(i)) = model(vi_[i]);
   }
-  // the articulated-body factor of 𝓜(q_m) in data (the hybrid dynamics', prescribed joints locked,
+  // the articulated-body factor of 𝓜(q_m) in data (MassPreconditioner then applies 𝓜⁻¹) (the hybrid dynamics', prescribed joints locked,
   // with prescribed motion), with gravity off (the factor does not depend on it)
   void mass_factor() {
     if (prescribed_) hybrid_dynamics(free_, sys_.data, sys_.prescribed_joints(), zero_, zero_, x_);
@@ -267,7 +267,6 @@ class Variational : public FixedStep {
   // converged; false when they contracted by less than half (Newton then goes on from where they
   // stopped) or did not converge in 30.
   bool chord(double t, double h) {
-    const Model& m = sys_.model;
     double previous = std::numeric_limits<double>::infinity();
     for (int it = 0; it < 30; ++it) {
       evaluate_sweeps(t + 0.5 * h, h);
@@ -279,11 +278,7 @@ class Variational : public FixedStep {
       ++stats_.nonlinear_iterations;
       turn_residual();
       mass_factor();
-      x_.setZero();
-      for (size_t i = 0; i < vi_.size(); ++i) x_(vi_[i]) = rf_(Eigen::Index(i));
-      Eigen::Map<MatX> x(x_.data(), m.nv, 1);
-      articulated_solve(m, sys_.data, x, solve_work_);
-      gather(x_, delta_);
+      gmres_.preconditioner().apply(rf_, delta_);  // 𝓜⁻¹ G on the free rows
       xf_ -= delta_;
     }
     return false;
@@ -444,7 +439,6 @@ class Variational : public FixedStep {
   Eigen::GMRES<MatX, MassPreconditioner> gmres_;
   VecX guess_, gq_, gv_;  // the step's first iterate; (∂τ/∂q)ᵀ ξ and (∂τ/∂v)ᵀ ξ
   VecX held_;             // with prescribed motion, 𝓜(q_k) v_k (the continuous momentum at the node)
-  MatX solve_work_;       // articulated_solve's
   std::vector<Turn> turns_;
   std::vector<Blocks> blocks_;
   VecX cached_y_;  // the state the last step left, whose momentum is p_next_
