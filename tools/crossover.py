@@ -18,12 +18,9 @@ tools/results/crossover.{md,png,csv}.  About 10 minutes of one core.
 """
 import argparse
 import os
-import tempfile
 
-import h5py
-import numpy as np
-
-from long_horizon import ROOT, soadyn_run
+import long_horizon
+from long_horizon import ROOT
 
 PERIOD = 2.344  # s: the double pendulum's lowest small-oscillation mode
 HORIZONS = [1000, 10000]  # periods
@@ -44,36 +41,24 @@ def options(method, value):
     return ["--dt", repr(value)]
 
 
-def run(scene, method, value, t_end, tmp):
-    """(CPU s, max |ΔE|/|E0|, max |ΔL|/|L0|) or None with the reason"""
-    out = os.path.join(tmp, "run.h5")
-    cpu, _, _, status = soadyn_run(os.path.join(ROOT, "scenarios", scene + ".yaml"), out, method, t_end,
-                                   t_end / 2000, options(method, value))
-    if cpu is None:
-        return None, status
-    with h5py.File(out, "r") as f:
-        E = np.asarray(f["/energy/total"][...]).ravel()
-        L = np.asarray(f["/momentum/angular"][...]).reshape(-1, 3)
-    if not (np.all(np.isfinite(E)) and np.all(np.isfinite(L))):
-        return None, "not finite"
-    dE = float(np.max(np.abs(E - E[0])) / abs(E[0]))
-    L0 = np.linalg.norm(L[0])  # zero on the double pendulum, at rest at the start
-    dL = float(np.max(np.linalg.norm(L - L[0], axis=1)) / L0) if L0 > 0 else float("nan")
-    return (cpu, dE, dL), status
+def run(scene, method, value, t_end):
+    """(CPU s, max |ΔE|/|E0|, max |ΔL|/|L0|) or None, and the run's status line"""
+    cpu, dE, dL, status = long_horizon.run(scene, method, options(method, value), t_end, output_dt=t_end / 2000)
+    return (None if cpu is None else (cpu, dE, dL)), status
 
 
 def label(method, value):
     return f"{method}, {'rtol' if method.startswith('cvode') else 'dt'} {value:g}"
 
 
-def work_precision(tmp, quick):
+def work_precision(quick):
     """{horizon: [(method, value, CPU, error)]} on the double pendulum"""
     data = {}
     for periods in HORIZONS[:1] if quick else HORIZONS:
         rows = []
         for method, (_, values) in SETTINGS.items():
             for value in (values[:2] if quick else values):
-                r, status = run("double_pendulum", method, value, periods * PERIOD, tmp)
+                r, status = run("double_pendulum", method, value, periods * PERIOD)
                 if r is None:
                     print(f"{periods} periods, {label(method, value)}: {status}", flush=True)
                     continue
@@ -83,7 +68,7 @@ def work_precision(tmp, quick):
     return data
 
 
-def momentum_budget(tmp, quick):
+def momentum_budget(quick):
     """per method: (the setting that first holds |ΔL|/L ≤ 1e-10 over 1000 s, CPU, ΔL) or the finest tried"""
     searches = {"cvode-adams": [1e-7 / 10**k for k in range(7)], "cvode-bdf": [1e-7 / 10**k for k in range(7)]}
     for method in ("rk4", "variational", "implicit-midpoint", "semi-implicit-euler"):
@@ -92,7 +77,7 @@ def momentum_budget(tmp, quick):
     for method, values in searches.items():
         best = None
         for value in (values[:3] if quick else values):
-            r, status = run("satellite_two_arrays", method, value, 1000.0, tmp)
+            r, status = run("satellite_two_arrays", method, value, 1000.0)
             if r is None:
                 print(f"satellite {label(method, value)}: {status}", flush=True)
                 continue
@@ -162,9 +147,8 @@ def main():
     ap.add_argument("--out", default=os.path.join(ROOT, "tools", "results", "crossover.md"))
     ap.add_argument("--quick", action="store_true", help="two settings per method, 10³ periods, three budget steps (a check)")
     a = ap.parse_args()
-    with tempfile.TemporaryDirectory() as tmp:
-        data = work_precision(tmp, a.quick)
-        budget = momentum_budget(tmp, a.quick)
+    data = work_precision(a.quick)
+    budget = momentum_budget(a.quick)
     os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
     stem = os.path.splitext(a.out)[0]
     write(data, budget, a.out, stem + ".png", stem + ".csv")

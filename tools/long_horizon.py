@@ -52,18 +52,22 @@ def soadyn_run(model, out, method, t_end, output_dt, options):
             re.search(r"status\s+(.*)", p.stdout).group(1))
 
 
-def run(scene, method, options, t_end):
-    """(CPU s, max |ΔE|/|E0|, max |ΔL|/|L0|, the run's status line)"""
+def run(scene, method, options, t_end, output_dt=1.0):
+    """(CPU s, max |ΔE|/|E0|, max |ΔL|/|L0| (nan where L0 = 0), the run's status line)"""
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "run.h5")
-        cpu, _, _, status = soadyn_run(os.path.join(ROOT, "scenarios", scene + ".yaml"), out, method, t_end, 1, options)
+        cpu, _, _, status = soadyn_run(os.path.join(ROOT, "scenarios", scene + ".yaml"), out, method, t_end, output_dt,
+                                       options)
         if cpu is None:
             return None, None, None, status
         with h5py.File(out, "r") as f:
             E = np.asarray(f["/energy/total"][...]).ravel()
             L = np.asarray(f["/momentum/angular"][...]).reshape(-1, 3)
+    if not (np.all(np.isfinite(E)) and np.all(np.isfinite(L))):
+        return None, None, None, "not finite"
     dE = float(np.max(np.abs(E - E[0])) / abs(E[0]))
-    dL = float(np.max(np.linalg.norm(L - L[0], axis=1)) / np.linalg.norm(L[0]))
+    L0 = np.linalg.norm(L[0])  # zero where the scene starts at rest (the double pendulum)
+    dL = float(np.max(np.linalg.norm(L - L[0], axis=1)) / L0) if L0 > 0 else float("nan")
     return cpu, dE, dL, status
 
 
