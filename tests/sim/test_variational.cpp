@@ -18,6 +18,7 @@
 #include "soadyn/multibody/configuration.hpp"
 #include "soadyn/sim/simulate.hpp"
 
+#include "order_util.hpp"
 #include "test_util.hpp"
 
 #include <cstdio>
@@ -31,6 +32,15 @@ const std::string kDir = SOADYN_SOURCE_DIR "/scenarios/";
 
 constexpr Newton kSolvers[] = {Newton::Full, Newton::Simplified};
 const char* name(Newton n) { return n == Newton::Full ? "newton" : "chord"; }
+
+// variational at dt by `solver`, everything else default: the tests that step an integrator by hand
+SimulationSettings stepping(double dt, Newton solver) {
+  SimulationSettings s;
+  s.method = Method::Variational;
+  s.newton = solver;
+  s.dt = dt;
+  return s;
+}
 
 SimulationSettings fixed(const Scenario& sc, double dt, double t_end, double output_dt = 0, Newton newton = Newton::Full) {
   SimulationSettings s = sc.simulation;
@@ -118,10 +128,7 @@ TEST(VariationalDerivatives, MomentaAreTheDiscreteLagrangiansDerivatives) {
         if (in.torques.empty()) in.torques.push_back({m.joint_names[i], m.idx_v[i], rng.uniform(0.5, 2.0)});
       }
     const double h = 0.02;
-    SimulationSettings s;
-    s.method = Method::Variational;
-    s.newton = solver;
-    s.dt = h;
+    const SimulationSettings s = stepping(h, solver);
     System sys(m, in, FdMethod::ArticulatedBody);
     VecX y = sys.state(random_q(rng, m), random_v(rng, m, 2.0));
     const VecX q0 = y.head(m.nq), v0 = y.segment(m.nq, m.nv);
@@ -157,24 +164,12 @@ TEST(Variational, OrderTwoOnTheDoublePendulumTheHeavyTopAndTheDrivenPendulum) {
   };
   for (const Case& c : {Case{"double_pendulum", 1e-2, 2.0}, Case{"heavy_top", 1e-3, 0.5}, Case{"driven_pendulum", 1e-2, 2.0}}) {
     const Scenario sc = load_scenario(kDir + c.scene + ".yaml");
-    SimulationSettings ref = sc.simulation;
-    ref.method = Method::CvodeAdams;
-    ref.rtol = 1e-12;
-    ref.atol = 1e-14;
-    ref.t_end = c.T;
-    ref.output_dt = c.T;
-    std::vector<Sample> r;
-    ASSERT_TRUE(simulate(sc, ref, nullptr, &r).completed);
     for (const Newton solver : kSolvers) {
+    Sample ref;
     std::vector<double> err;
-    for (double h : {c.dt, c.dt / 2, c.dt / 4}) {
-      std::vector<Sample> x;
-      const RunSummary sum = simulate(sc, fixed(sc, h, c.T, 0, solver), nullptr, &x);
-      ASSERT_TRUE(sum.completed) << sum.status;
-      VecX e(2 * sc.model.nv + 1);
-      e << difference(sc.model, r.back().q, x.back().q), x.back().qd - r.back().qd, x.back().work_inputs - r.back().work_inputs;
-      err.push_back(e.norm());
-    }
+    ASSERT_NO_FATAL_FAILURE(halving_errors(
+        sc, c.dt, c.T, [&](double h) { return fixed(sc, h, c.T, 0, solver); }, ref, err,
+        [](const Sample& x) { return x.work_inputs; }));
     const double p1 = std::log2(err[0] / err[1]), p2 = std::log2(err[1] / err[2]);
     std::printf("[ order ] variational (%s) %-16s errors %.3e %.3e %.3e, ratios %.3f %.3f (log2 %.3f %.3f)\n",
                 name(solver), c.scene, err[0], err[1], err[2], err[0] / err[1], err[1] / err[2], p1, p2);
@@ -208,10 +203,7 @@ void momentum_over_1e5_steps(Newton solver) {
     v0.segment<3>(3) -= momentum(m, d).linear / d.M(3, 3);
   }
   VecX y = sys.state(q0, v0);
-  SimulationSettings s;
-  s.method = Method::Variational;
-  s.newton = solver;
-  s.dt = 1e-2;
+  const SimulationSettings s = stepping(1e-2, solver);
   double t = 0.0;
   auto integrator = make_integrator(s.method, sys, s, t, y);
   Data d(m);
@@ -293,10 +285,7 @@ TEST(Variational, TimeReversible) {
     VecX y = sys.state(sc.q0, sc.v0);
     sys.normalize(y.head(m.nq));
     const VecX y0 = y;
-    SimulationSettings s;
-    s.method = Method::Variational;
-    s.newton = solver;
-    s.dt = 1e-3;
+    const SimulationSettings s = stepping(1e-3, solver);
     const int N = 1000;
     double t = 0.0;
     make_integrator(s.method, sys, s, t, y)->advance(N * s.dt, t, y);
@@ -345,10 +334,7 @@ TEST(Variational, TheSolversAgree) {
     for (const Newton solver : kSolvers) {
       System sys(m, in, FdMethod::ArticulatedBody);
       VecX y = sys.state(q0, v0);
-      SimulationSettings s;
-      s.method = Method::Variational;
-      s.newton = solver;
-      s.dt = 1e-3;
+      const SimulationSettings s = stepping(1e-3, solver);
       double t = 0.0;
       auto integrator = make_integrator(s.method, sys, s, t, y);
       integrator->advance(20 * s.dt, t, y);
