@@ -1,12 +1,18 @@
 // A planar four-bar closed by a hinge, at a closed configuration and moving on its loop: shared by
-// the loop tests of the algorithm (test_loops) and of a run (test_loops_run).
+// the loop tests of the algorithm (test_loops) and of a run (test_loops_run); and two closed scenes
+// run side by side (test_loop_mechanisms, test_mjcf_loops).
 #pragma once
 
 #include "soadyn/algorithm/kinematics.hpp"
 #include "soadyn/algorithm/loops.hpp"
 #include "soadyn/multibody/model.hpp"
+#include "soadyn/sim/simulate.hpp"
+
+#include <gtest/gtest.h>
 
 #include <Eigen/LU>
+
+#include <algorithm>
 
 #include <cmath>
 #include <vector>
@@ -65,6 +71,30 @@ inline FourBar four_bar(double theta, double omega, const FourBarShape& shape = 
   const MatX kernel = lu.kernel();
   f.v = kernel.col(0) * (omega / kernel(0, 0));
   return f;
+}
+
+// Two scenes, each run with its own settings, compared sample by sample: the largest |q_a − q_b|,
+// how far a's q moved from its first sample, and a's run (a fatal failure where either run does not
+// complete or their samples differ in number)
+struct MotionGap {
+  double gap = 0.0, moved = 0.0;
+  size_t samples = 0;
+  double t_end = 0.0;
+  RunSummary run_a;
+};
+inline void motion_gap(const Scenario& a, const Scenario& b, MotionGap& out) {
+  std::vector<Sample> sa, sb;
+  out.run_a = simulate(a, a.simulation, nullptr, &sa);
+  const RunSummary rb = simulate(b, b.simulation, nullptr, &sb);
+  ASSERT_TRUE(out.run_a.completed) << out.run_a.status;
+  ASSERT_TRUE(rb.completed) << rb.status;
+  ASSERT_EQ(sa.size(), sb.size());
+  for (size_t k = 0; k < sa.size(); ++k) {
+    out.gap = std::max(out.gap, (sa[k].q - sb[k].q).cwiseAbs().maxCoeff());
+    out.moved = std::max(out.moved, (sa[k].q - sa[0].q).cwiseAbs().maxCoeff());
+  }
+  out.samples = sa.size();
+  out.t_end = sa.back().t;
 }
 
 }  // namespace soadyn::test

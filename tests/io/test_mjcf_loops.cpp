@@ -22,7 +22,10 @@
 #include <memory>
 #include <random>
 
+#include "loop_util.hpp"
+
 using namespace soadyn;
+using namespace soadyn::test;
 using ::testing::HasSubstr;
 
 namespace {
@@ -111,20 +114,12 @@ void expect_same_motion(const Scenario& a, const Scenario& b, double bound) {
   ASSERT_EQ(a.q0.size(), b.q0.size());
   EXPECT_LE((a.q0 - b.q0).cwiseAbs().maxCoeff(), 1e-12);
   EXPECT_LE((a.v0 - b.v0).cwiseAbs().maxCoeff(), 1e-12);
-  std::vector<Sample> sa, sb;
-  const RunSummary ra = simulate(a, a.simulation, nullptr, &sa), rb = simulate(b, b.simulation, nullptr, &sb);
-  ASSERT_TRUE(ra.completed) << ra.status;
-  ASSERT_TRUE(rb.completed) << rb.status;
-  ASSERT_EQ(sa.size(), sb.size());
-  double gap = 0.0, moved = 0.0;
-  for (size_t k = 0; k < sa.size(); ++k) {
-    gap = std::max(gap, (sa[k].q - sb[k].q).cwiseAbs().maxCoeff());
-    moved = std::max(moved, (sa[k].q - a.q0).cwiseAbs().maxCoeff());
-  }
-  std::printf("  %zu samples over %.1f s: largest |q_mjcf - q_scenario| %.1e (q moved up to %.2f)\n", sa.size(),
-              sa.back().t, gap, moved);
-  EXPECT_LE(gap, bound);
-  EXPECT_GT(moved, 0.3);  // it moves
+  MotionGap g;
+  ASSERT_NO_FATAL_FAILURE(motion_gap(a, b, g));
+  std::printf("  %zu samples over %.1f s: largest |q_mjcf - q_scenario| %.1e (q moved up to %.2f)\n", g.samples,
+              g.t_end, g.gap, g.moved);
+  EXPECT_LE(g.gap, bound);
+  EXPECT_GT(g.moved, 0.3);  // it moves
 }
 
 std::string ignored_line(const Model& m) {
