@@ -47,14 +47,23 @@ std::vector<int> actuated_dofs(const Model& m, const py::iterable& actuated) {
   return out;
 }
 
-// kinematics and velocities at (q, v), checked
-void at_state(const Model& m, Data& d, const char* where, const ArrayIn& q_in, const ArrayIn& v_in, VecX& q, VecX& v) {
-  q = read_vector(where, "q", q_in, m.nq);
-  m.check_unit_quaternions(q, where);
-  v = read_vector(where, "v", v_in, m.nv);
-  update_kinematics(m, d, q);
-  update_velocities(m, d, v);
-}
+// what both bindings begin with: the scene's loops (refused without any), then (q, v) checked and
+// the kinematics and velocities there, and the loops' workspace
+struct LoopCall {
+  const Model& model;
+  const std::vector<LoopConstraint>& loops;
+  Data d;
+  VecX q, v;
+  LoopData ld;
+  LoopCall(const Scenario& sc, const char* where, const ArrayIn& q_in, const ArrayIn& v_in)
+      : model(sc.model), loops(loops_of(sc, where)), d(model), ld(model, loops) {
+    q = read_vector(where, "q", q_in, model.nq);
+    model.check_unit_quaternions(q, where);
+    v = read_vector(where, "v", v_in, model.nv);
+    update_kinematics(model, d, q);
+    update_velocities(model, d, v);
+  }
+};
 
 }  // namespace
 
@@ -67,15 +76,10 @@ void bind_loops(py::module_& m) {
 
   m.def("loop_forward_dynamics", [](const Scenario& sc, const ArrayIn& q_in, const ArrayIn& v_in, const std::optional<ArrayIn>& tau_in) {
         const char* where = "loop_forward_dynamics";
-        const Model& model = sc.model;
-        const std::vector<LoopConstraint>& loops = loops_of(sc, where);
-        Data d(model);
-        VecX q, v;
-        at_state(model, d, where, q_in, v_in, q, v);
-        const VecX tau = tau_in ? read_vector(where, "tau", *tau_in, model.nv) : VecX::Zero(model.nv);
-        LoopData ld(model, loops);
-        loop_forward_dynamics(model, d, loops, v, tau, ld);
-        return py::make_tuple(owned(VecX(d.qdd)), owned(VecX(ld.lambda)));
+        LoopCall c(sc, where, q_in, v_in);
+        const VecX tau = tau_in ? read_vector(where, "tau", *tau_in, c.model.nv) : VecX::Zero(c.model.nv);
+        loop_forward_dynamics(c.model, c.d, c.loops, c.v, tau, c.ld);
+        return py::make_tuple(owned(VecX(c.d.qdd)), owned(VecX(c.ld.lambda)));
       }, "scene"_a, "q"_a, "v"_a, "tau"_a = py::none(),
       R"(q̈ of the scene's tree closed by its loops under τ (default 0), and the loops' forces λ.
 
@@ -86,17 +90,12 @@ lam (m,)), lam's entries named by scene.loop_rows (N or N m: scene.loop_units).)
   m.def("loop_inverse_dynamics", [](const Scenario& sc, const ArrayIn& q_in, const ArrayIn& v_in, const ArrayIn& qdd_in,
                                     const py::iterable& actuated) {
         const char* where = "loop_inverse_dynamics";
-        const Model& model = sc.model;
-        const std::vector<LoopConstraint>& loops = loops_of(sc, where);
-        Data d(model);
-        VecX q, v;
-        at_state(model, d, where, q_in, v_in, q, v);
-        VecX qdd = read_vector(where, "qdd", qdd_in, model.nv);
-        const std::vector<int> dofs = actuated_dofs(model, actuated);
+        LoopCall c(sc, where, q_in, v_in);
+        VecX qdd = read_vector(where, "qdd", qdd_in, c.model.nv);
+        const std::vector<int> dofs = actuated_dofs(c.model, actuated);
         if (dofs.empty()) throw Error("loop_inverse_dynamics: actuated: expected at least one joint or DOF");
-        LoopData ld(model, loops);
-        const VecX tau = loop_inverse_dynamics(model, d, loops, dofs, qdd, ld);
-        return py::make_tuple(owned(VecX(tau)), owned(VecX(ld.lambda)), owned(std::move(qdd)));
+        const VecX tau = loop_inverse_dynamics(c.model, c.d, c.loops, dofs, qdd, c.ld);
+        return py::make_tuple(owned(VecX(tau)), owned(VecX(c.ld.lambda)), owned(std::move(qdd)));
       }, "scene"_a, "q"_a, "v"_a, "qdd"_a, "actuated"_a,
       R"(The actuators' torques that make a motion of the scene's closed mechanism (constrained inverse dynamics).
 
